@@ -1,0 +1,71 @@
+"""A small on-disk cache of JSON documents keyed by content hashes, written atomically."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import mobot_cli
+
+# Bump when the layout of a cached document changes, so old entries are simply missed.
+CACHE_FORMAT = 1
+
+
+def cache_dir() -> Path:
+    """MOBOT_CACHE_DIR, else $XDG_CACHE_HOME/mobot, else ~/.cache/mobot."""
+    explicit = os.environ.get("MOBOT_CACHE_DIR")
+    if explicit:
+        return Path(explicit).expanduser()
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    if xdg:
+        return Path(xdg).expanduser() / "mobot"
+    return Path.home() / ".cache" / "mobot"
+
+
+def digest(*parts: str | bytes) -> str:
+    """SHA-256 over the parts, each length-prefixed so ('ab','c') differs from ('a','bc')."""
+    sha = hashlib.sha256()
+    sha.update(f"mobot {mobot_cli.__version__} cache {CACHE_FORMAT}".encode())
+    for part in parts:
+        data = part.encode("utf-8") if isinstance(part, str) else part
+        sha.update(len(data).to_bytes(8, "little"))
+        sha.update(data)
+    return sha.hexdigest()
+
+
+def file_digest(path: Path) -> str | None:
+    """SHA-256 of a file's bytes, or None when it cannot be read."""
+    try:
+        return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    except OSError:
+        return None
+
+
+def load(kind: str, key: str) -> Any | None:
+    """The cached document, or None when absent or unreadable (a cache never fails a run)."""
+    path = cache_dir() / kind / f"{key}.json"
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+
+
+def store(kind: str, key: str, document: Any) -> None:
+    """Write the document atomically; a read-only or full disk only costs the cache."""
+    folder = cache_dir() / kind
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{key}.", suffix=".tmp")
+        try:
+            with os.fdopen(fd, "w", encoding="utf-8") as out:
+                json.dump(document, out)
+            os.replace(tmp, folder / f"{key}.json")
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+    except OSError:
+        pass

@@ -1,0 +1,16 @@
+"""Parsing of command-line arguments shared by several commands."""
+
+from __future__ import annotations
+
+from mobot_cli.errors import UsageError
+
+
+def parse_mappings(items: list[str]) -> dict[str, str]:
+    """xacro-style ``NAME:=VALUE`` arguments to a dict; anything else is a usage error."""
+    out: dict[str, str] = {}
+    for item in items:
+        name, sep, value = item.partition(":=")
+        if not sep or not name:
+            raise UsageError(f"argument '{item}' is not NAME:=VALUE", hint="e.g. lidar:=true")
+        out[name] = value
+    return out

@@ -1,0 +1,29 @@
+"""`mobot inspect ROBOT [NAME:=VALUE]...`: links and joints, mass, footprint, drive wheels."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from mobot_cli.cli import output
+from mobot_cli.cli.args import parse_mappings
+from mobot_cli.errors import ExitCode
+
+
+def inspect(
+    robot: str = typer.Argument(..., help="A bundled robot name or a .urdf/.xacro path."),
+    mappings: list[str] = typer.Argument(None, metavar="[NAME:=VALUE]...", help="xacro arguments."),
+    json_: bool = typer.Option(False, "--json", help="Print the result as JSON."),
+) -> int:
+    """Show a robot's link/joint tree, total mass, footprint and detected drive."""
+    from mobot_cli.assets.description import inspect_summary, load_robot
+
+    desc = load_robot(robot, parse_mappings(mappings or []), Path.cwd())
+    summary = inspect_summary(desc)
+    if json_:
+        output.emit_json(summary)
+    else:
+        output.notices(str(n) for n in desc.notices)
+        output.inspect_tree(summary)
+    return ExitCode.OK

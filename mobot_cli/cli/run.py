@@ -1,0 +1,75 @@
+"""`mobot run SCENARIO`: run a scenario to its end and write the run folder."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from mobot_cli.cli import output
+from mobot_cli.errors import ExitCode
+
+
+def run(
+    scenario: Path = typer.Argument(..., help="The scenario YAML file."),
+    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Run folder [default: runs/<name>-<time>]."),
+    set_: list[str] = typer.Option([], "--set", help="Override a key, e.g. robots.mobot.pose.x=2.0 (repeatable)."),
+    seed: Optional[int] = typer.Option(None, "--seed", help="Override the scenario's seed."),
+    duration: Optional[float] = typer.Option(None, "--duration", help="Override the duration, in seconds."),
+    realtime: bool = typer.Option(False, "--realtime", help="Pace the run to the wall clock."),
+    json_: bool = typer.Option(False, "--json", help="Print summary.json on stdout."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),
+) -> int:
+    """Run a scenario to its end and write odometry, a summary and the resolved scenario."""
+    from mobot_cli.run.execute import execute
+    from mobot_cli.run.prepare import prepare
+
+    overrides = list(set_)
+    if seed is not None:
+        overrides.append(f"seed={seed}")
+    if duration is not None:
+        overrides.append(f"duration={duration}")
+    prepared = prepare(scenario, overrides)
+    output.notices(prepared.plan.notices, quiet=quiet or json_)
+    out_dir = out or _default_out(prepared.plan.name)
+    bar = None if (quiet or json_) else output.progress_bar(prepared.plan.total_steps, prepared.plan.name)
+    progress = _progress(bar, realtime, prepared.plan.physics.rate_hz)
+    if bar:
+        bar.start()
+    try:
+        result = execute(prepared.plan, prepared.resolved_yaml, out_dir, progress=progress)
+    finally:
+        if bar:
+            bar.stop()
+    if json_:
+        output.emit_json(result.summary)
+    elif not quiet:
+        output.run_table(result.summary, result.out_dir)
+    return ExitCode.OK
+
+
+def _default_out(name: str) -> Path:
+    base = Path("runs") / f"{name}-{time.strftime('%Y%m%d-%H%M%S')}"
+    candidate, n = base, 1
+    while candidate.exists():
+        candidate, n = base.with_name(f"{base.name}-{n}"), n + 1
+    return candidate
+
+
+def _progress(bar, realtime: bool, rate_hz: int):
+    """Advance the bar and, with --realtime, sleep so sim time never runs ahead of the clock."""
+    if bar is None and not realtime:
+        return None
+    start = time.perf_counter()
+
+    def update(step: int, total: int) -> None:
+        if bar is not None:
+            bar.update(bar.task_ids[0], completed=step)
+        if realtime:
+            ahead = step / rate_hz - (time.perf_counter() - start)
+            if ahead > 0:
+                time.sleep(ahead)
+
+    return update

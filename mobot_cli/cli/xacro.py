@@ -1,0 +1,21 @@
+"""`mobot xacro FILE [NAME:=VALUE]...`: print the expanded URDF, like ROS's xacro."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import typer
+
+from mobot_cli.cli.args import parse_mappings
+
+
+def xacro(
+    file: str = typer.Argument(..., help="A .xacro/.urdf path or a bundled robot name."),
+    mappings: list[str] = typer.Argument(None, metavar="[NAME:=VALUE]...", help="xacro arguments."),
+) -> None:
+    """Print the expanded URDF of a xacro file or bundled robot, mesh paths resolved."""
+    from mobot_cli.assets.description import expand_to_text
+
+    text = expand_to_text(file, parse_mappings(mappings or []), Path.cwd())
+    sys.stdout.write(text if text.endswith("\n") else text + "\n")

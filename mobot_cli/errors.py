@@ -1,0 +1,111 @@
+"""One exception family and one table of exit codes for every stage of mobot.
+
+Every error carries where it happened (file, line, key) and a hint saying what to do.
+Only ``mobot_cli.cli`` turns these into printed text and exit codes.
+"""
+
+from __future__ import annotations
+
+import difflib
+from dataclasses import dataclass
+from enum import IntEnum
+from pathlib import Path
+from typing import Iterable
+
+
+class ExitCode(IntEnum):
+    """Process exit codes, as DESIGN.md lists them."""
+
+    OK = 0
+    EXPECTATION_FAILED = 1
+    BAD_INPUT = 2
+    SIMULATION_FAULT = 3
+    NO_LIVE_WORLD = 4
+    INTERRUPTED = 130
+
+
+@dataclass(frozen=True)
+class Location:
+    """Where an error is: a file, optionally a 1-based line, optionally a dotted key."""
+
+    file: str | Path | None = None
+    line: int | None = None
+    key: str | None = None
+
+    def __str__(self) -> str:
+        parts = []
+        if self.file is not None:
+            parts.append(str(self.file) + (f":{self.line}" if self.line else ""))
+        if self.key:
+            parts.append(f"key '{self.key}'")
+        return ", ".join(parts)
+
+
+class MobotError(Exception):
+    """Base of every error mobot reports to a user; never shown with a traceback."""
+
+    exit_code: ExitCode = ExitCode.BAD_INPUT
+
+    def __init__(self, message: str, *, location: Location | None = None, hint: str | None = None):
+        super().__init__(message)
+        self.message = message
+        self.location = location or Location()
+        self.hint = hint
+
+    def __str__(self) -> str:
+        where = str(self.location)
+        text = f"{where}: {self.message}" if where else self.message
+        return f"{text} {self.hint}" if self.hint else text
+
+
+class UsageError(MobotError):
+    """Command-line arguments are malformed."""
+
+
+class ScenarioError(MobotError):
+    """The scenario file or a --set override is malformed or invalid."""
+
+
+class ResourceError(MobotError):
+    """A file, package or URI could not be found or read."""
+
+
+class DescriptionError(MobotError):
+    """A robot description (URDF, xacro) is broken."""
+
+
+class WorldError(MobotError):
+    """A world file is broken."""
+
+
+class SpawnError(MobotError):
+    """A robot cannot be placed where it was asked to be."""
+
+
+class SimulationFault(MobotError):
+    """The physics went wrong during a run (NaN state, a robot left the world)."""
+
+    exit_code = ExitCode.SIMULATION_FAULT
+
+
+@dataclass(frozen=True)
+class Notice:
+    """A problem worth telling the user that does not stop the run."""
+
+    message: str
+    location: Location = Location()
+
+    def __str__(self) -> str:
+        where = str(self.location)
+        return f"{where}: {self.message}" if where else self.message
+
+
+def did_you_mean(word: str, choices: Iterable[str]) -> str:
+    """Return ' Did you mean 'x'?' for the closest choice, or a list of valid ones."""
+    choices = sorted(set(choices))
+    close = difflib.get_close_matches(word, choices, n=1, cutoff=0.6)
+    if close:
+        return f"Did you mean '{close[0]}'?"
+    if choices and len(choices) <= 12:
+        return "Valid: " + ", ".join(f"'{c}'" for c in choices) + "."
+    return ""

@@ -1,0 +1,94 @@
+"""The resolved scenario: one YAML document that reloads to the same Plan.
+
+Fleets are expanded, defaults and detected drive values filled in, paths made absolute and
+times written as the exact step times they were rounded to.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from mobot_cli.scenario.model import RobotSpec, Scenario
+from mobot_cli.sim.plan import DriveSpec, Plan, RobotPlan
+
+DRIVE_KEYS = ("odometry", "left_joints", "right_joints", "wheel_radius", "wheel_separation",
+              "wheel_separation_multiplier", "wheel_radius_multiplier", "max_wheel_torque",
+              "max_wheel_acceleration")
+
+
+def resolved_document(scenario: Scenario, plan: Plan, base_dir: Path) -> dict[str, Any]:
+    """A plain dict that validates as a Scenario and resolves to ``plan`` again."""
+    rate = plan.physics.rate_hz
+    by_name = {robot.name: robot for robot in plan.robots}
+    robots = []
+    for spec in scenario.robots:
+        names = [spec.name] if spec.count is None else [spec.name.replace("{i}", str(i)) for i in range(spec.count)]
+        robots.extend(_robot(spec, by_name[name], base_dir, rate) for name in names)
+    return {
+        "version": 1,
+        "name": scenario.name,
+        "world": scenario.world,
+        "physics": {"rate_hz": rate, "gravity": list(plan.physics.gravity),
+                    "solver_iterations": plan.physics.solver_iterations},
+        "duration": plan.total_steps / rate,
+        "seed": plan.seed,
+        "settle": plan.settle_steps / rate,
+        "log": {"rate_hz": scenario.log.rate_hz, "formats": list(scenario.log.formats)},
+        "robots": robots,
+    }
+
+
+def _robot(spec: RobotSpec, robot: RobotPlan, base_dir: Path, rate: int) -> dict[str, Any]:
+    local = base_dir / spec.description
+    description = str(local.resolve()) if local.exists() else spec.description
+    pose = robot.pose
+    out: dict[str, Any] = {
+        "name": robot.name,
+        "namespace": robot.namespace,
+        "description": description,
+        "args": {k: v if isinstance(v, str) else _text(v) for k, v in spec.args.items()},
+        "pose": {"xyz": [pose.xyz[0], pose.xyz[1], "auto" if pose.z_auto else pose.xyz[2]],
+                 "quat": list(pose.quat)},
+    }
+    if robot.drive is not None:
+        out["drive"] = _drive(robot.drive)
+    out["commands"] = _commands(robot, rate)
+    return out
+
+
+def _drive(drive: DriveSpec) -> dict[str, Any]:
+    out: dict[str, Any] = {"type": "diff_drive"}
+    for key in DRIVE_KEYS:
+        value = getattr(drive, key)
+        if value is not None:
+            out[key] = list(value) if isinstance(value, tuple) else value
+    return out
+
+
+def _commands(robot: RobotPlan, rate: int) -> list[dict[str, Any]]:
+    """Commands as written: a stop that ends a command becomes that command's ``for``."""
+    out: list[dict[str, Any]] = []
+    cmds = robot.commands
+    i = 0
+    while i < len(cmds):
+        cmd = cmds[i]
+        entry: dict[str, Any] = {"at": cmd.step / rate, "linear": cmd.linear, "angular": cmd.angular}
+        nxt = cmds[i + 1] if i + 1 < len(cmds) else None
+        if nxt is not None and nxt.linear == 0.0 and nxt.angular == 0.0 and (cmd.linear or cmd.angular):
+            entry["for"] = (nxt.step - cmd.step) / rate
+            i += 1
+        out.append(entry)
+        i += 1
+    return out
+
+
+def _text(value: Any) -> str:
+    return ("true" if value else "false") if isinstance(value, bool) else str(value)
+
+
+def to_yaml(document: dict[str, Any]) -> str:
+    """Dump a resolved document as block-style YAML, keys in the order given."""
+    return yaml.safe_dump(document, sort_keys=False, default_flow_style=None, width=100)

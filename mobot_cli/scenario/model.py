@@ -1,0 +1,159 @@
+"""The typed scenario, version 1: what a user may write, validated at load.
+
+Field names and defaults here are the scenario format; DESIGN.md shows an example.
+Checks that need more than one field (pose forms, fleets, command order) live in validators
+so that a scenario which constructs is one that can be resolved.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Annotated, Literal, Optional, Union
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+FLEET_NAME_RE = re.compile(r"^[A-Za-z_]([A-Za-z0-9_]|\{i\})*$")
+NAMESPACE_RE = re.compile(r"^(/[A-Za-z_][A-Za-z0-9_]*)+$")
+
+PositiveFloat = Annotated[float, Field(gt=0)]
+NonNegativeFloat = Annotated[float, Field(ge=0)]
+Vector3 = tuple[float, float, float]
+
+
+class Strict(BaseModel):
+    """Base: unknown keys and NaN/inf numbers are errors."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+
+
+class PhysicsSpec(Strict):
+    rate_hz: Annotated[int, Field(gt=0, le=10_000)] = 240
+    gravity: Vector3 = (0.0, 0.0, -9.81)
+    solver_iterations: Annotated[int, Field(gt=0, le=1000)] = 50
+
+
+class LogSpec(Strict):
+    rate_hz: Annotated[float, Field(gt=0)] = 50.0
+    formats: list[Literal["csv"]] = Field(default_factory=lambda: ["csv"])
+
+
+class PoseSpec(Strict):
+    """A spawn pose: {x, y, z, roll, pitch, yaw}, {xyz, rpy} or {xyz, quat: [x, y, z, w]}."""
+
+    x: Optional[float] = None
+    y: Optional[float] = None
+    z: Union[float, Literal["auto"], None] = None
+    roll: Optional[float] = None
+    pitch: Optional[float] = None
+    yaw: Optional[float] = None
+    xyz: Optional[tuple[float, float, Union[float, Literal["auto"]]]] = None
+    rpy: Optional[Vector3] = None
+    quat: Optional[tuple[float, float, float, float]] = None
+
+    @model_validator(mode="after")
+    def _one_form(self) -> "PoseSpec":
+        flat = [k for k in ("x", "y", "z", "roll", "pitch", "yaw") if getattr(self, k) is not None]
+        if self.xyz is None and (self.rpy is not None or self.quat is not None):
+            raise ValueError("'rpy' and 'quat' need 'xyz' beside them")
+        if self.xyz is not None and flat:
+            raise ValueError(f"mixes the xyz form with '{flat[0]}': use either x/y/z/roll/pitch/yaw or xyz with rpy or quat")
+        if self.rpy is not None and self.quat is not None:
+            raise ValueError("gives both 'rpy' and 'quat': use one")
+        if self.quat is not None and math.sqrt(sum(q * q for q in self.quat)) < 1e-9:
+            raise ValueError("quat has zero length: give [x, y, z, w], e.g. [0, 0, 0, 1]")
+        return self
+
+
+class DriveOverrides(Strict):
+    """Anything detected from the URDF can be overridden here."""
+
+    type: Literal["diff_drive"] = "diff_drive"
+    odometry: Literal["encoder", "ground_truth"] = "encoder"
+    left_joints: Optional[list[str]] = None
+    right_joints: Optional[list[str]] = None
+    wheel_radius: Optional[PositiveFloat] = None
+    wheel_separation: Optional[PositiveFloat] = None
+    wheel_separation_multiplier: Optional[PositiveFloat] = None
+    wheel_radius_multiplier: Optional[PositiveFloat] = None
+    max_wheel_torque: Optional[PositiveFloat] = None
+    max_wheel_acceleration: Optional[PositiveFloat] = None
+
+
+class CommandSpec(Strict):
+    """From ``at`` on, drive with this twist; ``for`` ends it with a stop."""
+
+    at: NonNegativeFloat
+    linear: float = 0.0
+    angular: float = 0.0
+    for_: Optional[PositiveFloat] = Field(default=None, alias="for")
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True, populate_by_name=True)
+
+
+class RobotSpec(Strict):
+    name: str
+    namespace: Optional[str] = None
+    description: str = "mobot"
+    args: dict[str, Union[str, bool, int, float]] = Field(default_factory=dict)
+    pose: PoseSpec = Field(default_factory=PoseSpec)
+    drive: Optional[DriveOverrides] = None
+    commands: list[CommandSpec] = Field(default_factory=list)
+    count: Optional[Annotated[int, Field(ge=1, le=1000)]] = None
+    poses: Optional[list[Vector3]] = None
+
+    @field_validator("name")
+    @classmethod
+    def _name(cls, v: str) -> str:
+        if not FLEET_NAME_RE.match(v):
+            raise ValueError(f"'{v}' is not a valid robot name: use letters, digits and '_', "
+                             "not starting with a digit ('{i}' allowed in fleets)")
+        return v
+
+    @field_validator("namespace")
+    @classmethod
+    def _namespace(cls, v: Optional[str]) -> Optional[str]:
+        if v is not None and not NAMESPACE_RE.match(v):
+            raise ValueError(f"'{v}' is not a valid ROS namespace: it must start with '/' and "
+                             "hold names of letters, digits and '_' separated by '/', e.g. /robot1")
+        return v
+
+    @model_validator(mode="after")
+    def _fleet(self) -> "RobotSpec":
+        templated = "{i}" in self.name
+        if self.count is None:
+            if templated:
+                raise ValueError("name contains '{i}' but 'count' is missing")
+            if self.poses is not None:
+                raise ValueError("'poses' needs 'count' (a fleet); a single robot uses 'pose'")
+            return self
+        if not templated:
+            raise ValueError(f"a fleet (count: {self.count}) needs '{{i}}' in its name, e.g. '{self.name}_{{i}}'")
+        if self.namespace is not None:
+            raise ValueError("a fleet cannot share one 'namespace': each robot gets /<name>")
+        if self.poses is None or len(self.poses) != self.count:
+            got = "none" if self.poses is None else len(self.poses)
+            raise ValueError(f"a fleet of count {self.count} needs {self.count} 'poses' ([x, y, yaw] each), got {got}")
+        return self
+
+
+class Scenario(Strict):
+    """A whole scenario file, version 1."""
+
+    version: Literal[1]
+    name: str = "scenario"
+    world: str = "empty"
+    physics: PhysicsSpec = Field(default_factory=PhysicsSpec)
+    duration: Annotated[float, Field(gt=0, le=1e6)]
+    seed: Annotated[int, Field(ge=0, lt=2**32)] = 0
+    settle: Annotated[float, Field(ge=0)] = 0.5
+    log: LogSpec = Field(default_factory=LogSpec)
+    robots: list[RobotSpec] = Field(default_factory=list)
+
+    @field_validator("name")
+    @classmethod
+    def _name(cls, v: str) -> str:
+        if not re.match(r"^[A-Za-z0-9_.-]+$", v):
+            raise ValueError(f"'{v}' is not a valid scenario name: use letters, digits, '_', '-' and '.'")
+        return v

@@ -1,0 +1,90 @@
+"""Putting a freshly loaded robot where it was asked to be: on the floor, not inside things."""
+
+from __future__ import annotations
+
+import pybullet as p
+
+from mobot_cli.errors import SpawnError
+
+# How far below the floor (or into another body) a spawned robot may reach. Gazebo users
+# spawn at z = 0 with wheels whose meshes dip a few millimetres into the floor; more than
+# this is a mistake worth stopping for.
+MAX_SPAWN_PENETRATION = 0.01  # m
+# Rays looking for the floor start this far above the top of the robot resting at z = 0.
+FLOOR_PROBE_CLEARANCE = 0.05  # m
+FLOOR_PROBE_DEPTH = 100.0  # m below z = 0
+# Where a robot waits while its floor is probed, so rays do not hit the robot itself.
+PARKING_HEIGHT = 200.0  # m
+
+
+def lowest_points(cid: int, body: int, probe: int) -> dict[int, float]:
+    """Height above ``probe`` (a horizontal plane at z = 0) of each link's lowest collision point."""
+    lowest: dict[int, float] = {}
+    for pt in p.getClosestPoints(body, probe, 2.0 * PARKING_HEIGHT, physicsClientId=cid):
+        link, dist = pt[3], pt[8]
+        if dist < lowest.get(link, float("inf")):
+            lowest[link] = dist
+    return lowest
+
+
+def floor_height(cid: int, body: int, floors: set[int], top: float, name: str) -> float:
+    """Height of the highest floor (ground or static body) under the robot, probing from ``top``."""
+    (x0, y0, _), (x1, y1, _) = p.getAABB(body, -1, physicsClientId=cid)
+    for link in range(p.getNumJoints(body, physicsClientId=cid)):
+        (a, b, _), (c, d, _) = p.getAABB(body, link, physicsClientId=cid)
+        x0, y0, x1, y1 = min(x0, a), min(y0, b), max(x1, c), max(y1, d)
+    xs, ys = (x0, (x0 + x1) / 2, x1), (y0, (y0 + y1) / 2, y1)
+    starts = [(x, y, top) for x in xs for y in ys]
+    ends = [(x, y, -FLOOR_PROBE_DEPTH) for x, y, _ in starts]
+    rays = p.rayTestBatch(starts, ends, physicsClientId=cid)
+    hits = [r[3][2] for r in rays if r[0] in floors]  # another robot is not a floor
+    if not hits:
+        raise SpawnError(
+            f"robot '{name}' has nothing to rest on below ({(x0 + x1) / 2:.3f}, {(y0 + y1) / 2:.3f})",
+            hint="Give the pose an explicit z, or enable the ground plane.")
+    return max(hits)
+
+
+def rest_on_floor(cid: int, body: int, probe: int, floors: set[int], xyz, quat, name: str) -> tuple[float, float, float]:
+    """Move the robot so its lowest collision point touches the floor below (x, y); return the pose."""
+    p.resetBasePositionAndOrientation(body, (xyz[0], xyz[1], PARKING_HEIGHT), quat, physicsClientId=cid)
+    base_z = link_frame_z(cid, body)
+    lowest = min(lowest_points(cid, body, probe).values())  # height of the lowest point above z = 0
+    height = _top(cid, body) - lowest
+    floor = floor_height(cid, body, floors, height + FLOOR_PROBE_CLEARANCE, name)
+    z = floor + (base_z - lowest)
+    _place(cid, body, (xyz[0], xyz[1], z), quat)
+    return xyz[0], xyz[1], z
+
+
+def _top(cid: int, body: int) -> float:
+    top = p.getAABB(body, -1, physicsClientId=cid)[1][2]
+    for link in range(p.getNumJoints(body, physicsClientId=cid)):
+        top = max(top, p.getAABB(body, link, physicsClientId=cid)[1][2])
+    return top
+
+
+def link_frame_z(cid: int, body: int) -> float:
+    """z of the base's URDF link frame (PyBullet tracks the inertial frame)."""
+    pos, orn = p.getBasePositionAndOrientation(body, physicsClientId=cid)
+    dyn = p.getDynamicsInfo(body, -1, physicsClientId=cid)
+    inv = p.invertTransform(dyn[3], dyn[4])
+    return p.multiplyTransforms(pos, orn, inv[0], inv[1])[0][2]
+
+
+def _place(cid: int, body: int, link_xyz, quat) -> None:
+    """Put the base's URDF link frame (not its centre of mass) at ``link_xyz``."""
+    dyn = p.getDynamicsInfo(body, -1, physicsClientId=cid)
+    pos, orn = p.multiplyTransforms(link_xyz, quat, dyn[3], dyn[4])
+    p.resetBasePositionAndOrientation(body, pos, orn, physicsClientId=cid)
+
+
+def check_clear(cid: int, body: int, others: dict[int, str], name: str, z: float) -> None:
+    """Refuse a robot that reaches into the floor or another body by more than a centimetre."""
+    for other, label in others.items():
+        points = p.getClosestPoints(body, other, 0.0, physicsClientId=cid)
+        depth = -min((pt[8] for pt in points), default=0.0)
+        if depth > MAX_SPAWN_PENETRATION:
+            raise SpawnError(
+                f"robot '{name}' spawned at z={z:.3f} reaches {depth * 100:.1f} cm into {label}",
+                hint="Raise z, move the robot, or use z: auto to rest it on the floor.")

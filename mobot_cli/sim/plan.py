@@ -1,0 +1,110 @@
+"""The plan the simulation takes: plain frozen data, every path absolute, every time in steps.
+
+Loading and resolving (``mobot_cli.scenario``, ``mobot_cli.assets``) produce these; the
+simulation core consumes them and never reads YAML or searches for files.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass(frozen=True)
+class Physics:
+    """Fixed-step physics settings."""
+
+    rate_hz: int = 240
+    gravity: tuple[float, float, float] = (0.0, 0.0, -9.81)
+    solver_iterations: int = 50
+
+    @property
+    def dt(self) -> float:
+        return 1.0 / self.rate_hz
+
+
+@dataclass(frozen=True)
+class SpawnPose:
+    """Where a robot's root link starts, in the world frame; quaternion is (x, y, z, w) as in ROS."""
+
+    xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    quat: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
+    z_auto: bool = False  # when true, xyz[2] is ignored: rest the lowest collision point on the floor
+
+
+@dataclass(frozen=True)
+class DriveSpec:
+    """A differential (or skid-steer) drive, fully resolved: detected values merged with overrides."""
+
+    left_joints: tuple[str, ...]
+    right_joints: tuple[str, ...]
+    wheel_radius: float  # metres
+    wheel_separation: float  # metres, between left and right wheel contact lines
+    wheel_separation_multiplier: float = 1.0  # as ros2_control's diff_drive_controller
+    wheel_radius_multiplier: float = 1.0
+    max_wheel_torque: float = 20.0  # N*m per wheel
+    max_wheel_acceleration: float | None = None  # rad/s^2 at the wheel; None = unlimited
+    odometry: str = "encoder"  # "encoder" | "ground_truth": what odom_* reports
+    source: str = "urdf"  # where the wheel layout came from: "urdf" | "plugin" | "scenario"
+    # joint name -> +1.0 / -1.0: a positive joint velocity times the sign rolls that wheel
+    # forward (+x of the root link). A wheel whose axis points along -y needs -1.0.
+    # Joints not listed count as +1.0.
+    joint_signs: tuple[tuple[str, float], ...] = ()
+
+
+@dataclass(frozen=True)
+class CommandStep:
+    """From physics step ``step`` on, command this body twist (m/s, rad/s) until the next one."""
+
+    step: int
+    linear: float
+    angular: float
+
+
+@dataclass(frozen=True)
+class RobotPlan:
+    """One robot to spawn: its expanded URDF text and everything needed to drive it."""
+
+    name: str
+    namespace: str  # "/name" by default
+    frame_prefix: str  # "name/" by default
+    urdf: str  # expanded URDF; every mesh filename is an absolute path
+    root_link: str
+    pose: SpawnPose
+    drive: DriveSpec | None
+    commands: tuple[CommandStep, ...] = ()
+    spawn_step: int = 0
+    source: str = ""  # the description file, for messages
+
+
+@dataclass(frozen=True)
+class StaticBody:
+    """A piece of static world geometry (issue 3 fills these from SDF worlds)."""
+
+    name: str
+    urdf: str  # a single-link URDF with absolute mesh paths
+    xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    quat: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
+
+
+@dataclass(frozen=True)
+class WorldPlan:
+    """The static world: a ground plane and static bodies."""
+
+    name: str = "empty"
+    ground_plane: bool = True
+    bodies: tuple[StaticBody, ...] = ()
+
+
+@dataclass(frozen=True)
+class Plan:
+    """Everything a run needs, with all times already in whole physics steps."""
+
+    name: str
+    physics: Physics
+    world: WorldPlan
+    robots: tuple[RobotPlan, ...]
+    total_steps: int
+    settle_steps: int
+    log_every: int  # physics steps between two log rows
+    seed: int = 0
+    notices: tuple[str, ...] = field(default=())

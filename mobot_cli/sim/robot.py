@@ -1,0 +1,184 @@
+"""One spawned robot: its joints, its drive controller and its odometry."""
+
+from __future__ import annotations
+
+import math
+
+import pybullet as p
+
+from mobot_cli.sim.drive import Odometry, body_twist, ramp, wheel_speeds, wrap_angle
+from mobot_cli.sim.plan import DriveSpec, RobotPlan
+from mobot_cli.sim.state import RobotState
+
+
+class SimRobot:
+    """A robot body in one PyBullet client, driven like ros2_control's diff_drive_controller."""
+
+    def __init__(self, cid: int, body: int, plan: RobotPlan, dt: float):
+        self.cid = cid
+        self.body = body
+        self.plan = plan
+        self.name = plan.name
+        self.dt = dt
+        self.cmd = (0.0, 0.0)
+        self.joints: dict[str, int] = {}  # every non-fixed joint
+        self.links: dict[str, int] = {p.getBodyInfo(body, physicsClientId=cid)[0].decode(): -1}
+        for index in range(p.getNumJoints(body, physicsClientId=cid)):
+            info = p.getJointInfo(body, index, physicsClientId=cid)
+            self.links[info[12].decode()] = index
+            if info[2] != p.JOINT_FIXED:
+                self.joints[info[1].decode()] = index
+        # PyBullet's base frame is the base link's inertial frame; remember how to get back
+        # to the URDF link frame, which is what the ground truth reports.
+        dyn = p.getDynamicsInfo(body, -1, physicsClientId=cid)
+        self.com_to_link = p.invertTransform(dyn[3], dyn[4])
+        self._free_joints()
+        self.drive: _Drive | None = None
+        if plan.drive is not None:
+            self.drive = _Drive(self, plan.drive)
+        x, y, _, _, _, yaw = self.link_pose_rpy()
+        self.spawn_xy_yaw = (x, y, yaw)
+
+    def _free_joints(self) -> None:
+        """Turn off the velocity motor PyBullet puts on every joint, so joints move freely."""
+        indices = list(self.joints.values())
+        if indices:
+            p.setJointMotorControlArray(
+                self.body, indices, p.VELOCITY_CONTROL, targetVelocities=[0.0] * len(indices),
+                forces=[0.0] * len(indices), physicsClientId=self.cid)
+
+    def link_pose(self) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        """World position and quaternion of the root link's URDF frame."""
+        pos, orn = p.getBasePositionAndOrientation(self.body, physicsClientId=self.cid)
+        return p.multiplyTransforms(pos, orn, self.com_to_link[0], self.com_to_link[1])
+
+    def link_pose_rpy(self) -> tuple[float, float, float, float, float, float]:
+        """Root link (x, y, z, roll, pitch, yaw) in the world."""
+        pos, orn = self.link_pose()
+        roll, pitch, yaw = p.getEulerFromQuaternion(orn)
+        return pos[0], pos[1], pos[2], roll, pitch, yaw
+
+    def set_command(self, linear: float, angular: float) -> None:
+        """Take a cmd_vel body twist; robots without a drive refuse it."""
+        if self.drive is None:
+            raise ValueError(f"robot '{self.name}' has no drive: it cannot take velocity commands")
+        self.cmd = (float(linear), float(angular))
+        self.drive.command(linear, angular)
+
+    def state(self) -> RobotState:
+        """Command, odometry and truth now."""
+        pos, orn = self.link_pose()
+        roll, pitch, yaw = p.getEulerFromQuaternion(orn)
+        lin, ang = p.getBaseVelocity(self.body, physicsClientId=self.cid)
+        rot = p.getMatrixFromQuaternion(orn)
+        # Velocity of the link origin, not the centre of mass: v + w x (link - com).
+        com = p.getBasePositionAndOrientation(self.body, physicsClientId=self.cid)[0]
+        r = (pos[0] - com[0], pos[1] - com[1], pos[2] - com[2])
+        v = (lin[0] + ang[1] * r[2] - ang[2] * r[1],
+             lin[1] + ang[2] * r[0] - ang[0] * r[2],
+             lin[2] + ang[0] * r[1] - ang[1] * r[0])
+        true_vx = v[0] * rot[0] + v[1] * rot[3] + v[2] * rot[6]  # along the body x axis
+        true_wz = ang[0] * rot[2] + ang[1] * rot[5] + ang[2] * rot[8]  # about the body z axis
+        if self.drive is not None and self.plan.drive.odometry == "encoder":
+            odom = self.drive.odometry_now()
+        else:
+            x0, y0, yaw0 = self.spawn_xy_yaw
+            dx, dy = pos[0] - x0, pos[1] - y0
+            c, s = math.cos(yaw0), math.sin(yaw0)
+            odom = (c * dx + s * dy, -s * dx + c * dy, wrap_angle(yaw - yaw0), true_vx, true_wz)
+        return RobotState(
+            self.cmd[0], self.cmd[1], *odom, pos[0], pos[1], pos[2], roll, pitch, yaw,
+            true_vx, true_wz, joint_positions=self.joint_positions())
+
+    def joint_positions(self) -> dict[str, float]:
+        """Position of every non-fixed joint, by name."""
+        if not self.joints:
+            return {}
+        states = p.getJointStates(self.body, list(self.joints.values()), physicsClientId=self.cid)
+        return {name: s[0] for name, s in zip(self.joints, states)}
+
+
+class _Drive:
+    """Wheel motors and encoder odometry for one robot."""
+
+    def __init__(self, robot: SimRobot, spec: DriveSpec):
+        self.robot = robot
+        self.spec = spec
+        missing = [j for j in spec.left_joints + spec.right_joints if j not in robot.joints]
+        if missing:
+            raise ValueError(f"robot '{robot.name}': drive joints not in the URDF or fixed: {missing}")
+        self.left = [robot.joints[j] for j in spec.left_joints]
+        self.right = [robot.joints[j] for j in spec.right_joints]
+        self.wheels = self.left + self.right
+        given = dict(getattr(spec, "joint_signs", ()) or ())
+        self.signs = [float(given.get(j, 0.0)) or _forward_sign(robot, robot.joints[j])
+                      for j in spec.left_joints + spec.right_joints]
+        self.radius = spec.wheel_radius * spec.wheel_radius_multiplier
+        self.separation = spec.wheel_separation * spec.wheel_separation_multiplier
+        self.odometry = Odometry(self.separation)
+        self.last = self._positions()
+        self.rates = [0.0] * len(self.wheels)  # wheel targets in rad/s, as commanded now
+        self.goal = list(self.rates)  # where ramping is heading (acceleration limit)
+        self.max_step = (spec.max_wheel_acceleration or 0.0) * robot.dt
+        self.forces = [spec.max_wheel_torque] * len(self.wheels)
+        self._apply()
+
+    def _positions(self) -> list[float]:
+        states = p.getJointStates(self.robot.body, self.wheels, physicsClientId=self.robot.cid)
+        return [s[0] for s in states]
+
+    def command(self, linear: float, angular: float) -> None:
+        """Wheel speed targets for a body twist; ramped later when acceleration is limited."""
+        left, right = wheel_speeds(linear, angular, self.separation, self.radius, self.radius)
+        n_left = len(self.left)
+        self.goal = [(left if i < n_left else right) * sign for i, sign in enumerate(self.signs)]
+        if self.max_step <= 0.0:
+            self.rates = list(self.goal)
+            self._apply()
+
+    @property
+    def ramping(self) -> bool:
+        return self.max_step > 0.0 and self.rates != self.goal
+
+    def ramp_step(self) -> None:
+        """Advance wheel targets one physics step toward the goal, at most the acceleration limit."""
+        self.rates = [ramp(r, g, self.max_step) for r, g in zip(self.rates, self.goal)]
+        self._apply()
+
+    def _apply(self) -> None:
+        p.setJointMotorControlArray(
+            self.robot.body, self.wheels, p.VELOCITY_CONTROL, targetVelocities=self.rates,
+            forces=self.forces, physicsClientId=self.robot.cid)
+
+    def integrate(self) -> None:
+        """Fold the wheel travel since the last call into the odometry."""
+        now = self._positions()
+        travel = [(a - b) * s * self.radius for a, b, s in zip(now, self.last, self.signs)]
+        self.last = now
+        n_left = len(self.left)
+        left = sum(travel[:n_left]) / n_left
+        right = sum(travel[n_left:]) / (len(travel) - n_left)
+        self.odometry.advance(left, right)
+
+    def odometry_now(self) -> tuple[float, float, float, float, float]:
+        """Odometry pose (odom frame) and twist from the wheel encoders, brought up to date."""
+        self.integrate()
+        states = p.getJointStates(self.robot.body, self.wheels, physicsClientId=self.robot.cid)
+        rim = [st[1] * s * self.radius for st, s in zip(states, self.signs)]
+        n_left = len(self.left)
+        vx, wz = body_twist(sum(rim[:n_left]) / n_left, sum(rim[n_left:]) / (len(rim) - n_left),
+                            self.separation)
+        odo = self.odometry
+        return odo.x, odo.y, wrap_angle(odo.yaw), vx, wz
+
+
+def _forward_sign(robot: SimRobot, joint: int) -> float:
+    """+1 when positive joint velocity rolls this wheel forward (axis along the body's +y)."""
+    cid, body = robot.cid, robot.body
+    axis = p.getJointInfo(body, joint, physicsClientId=cid)[13]
+    link_orn = p.getLinkState(body, joint, computeForwardKinematics=True, physicsClientId=cid)[5]
+    base_orn = robot.link_pose()[1]
+    rel = p.multiplyTransforms((0, 0, 0), p.invertTransform((0, 0, 0), base_orn)[1], (0, 0, 0), link_orn)[1]
+    m = p.getMatrixFromQuaternion(rel)
+    axis_y = m[3] * axis[0] + m[4] * axis[1] + m[5] * axis[2]
+    return 1.0 if axis_y >= 0.0 else -1.0

@@ -1,0 +1,41 @@
+"""What a robot looks like from outside at one instant: its odometry and the ground truth."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass(frozen=True)
+class RobotState:
+    """One robot's command, odometry (odom frame = spawn pose) and world-frame truth.
+
+    Velocities are in the robot's own frame and signed: driving backwards gives negative
+    ``odom_vx`` and ``true_vx``. Angles are radians wrapped to [-pi, pi).
+    """
+
+    cmd_linear: float
+    cmd_angular: float
+    odom_x: float
+    odom_y: float
+    odom_yaw: float
+    odom_vx: float
+    odom_wz: float
+    true_x: float
+    true_y: float
+    true_z: float
+    true_roll: float
+    true_pitch: float
+    true_yaw: float
+    true_vx: float
+    true_wz: float
+    joint_positions: dict[str, float] = field(default_factory=dict, compare=True)
+
+    # Column order of the odom CSV (DESIGN.md), without the leading time column.
+    CSV_FIELDS = (
+        "cmd_linear", "cmd_angular", "odom_x", "odom_y", "odom_yaw", "odom_vx", "odom_wz",
+        "true_x", "true_y", "true_z", "true_roll", "true_pitch", "true_yaw", "true_vx", "true_wz",
+    )
+
+    def row(self) -> tuple[float, ...]:
+        """The CSV columns of this state, in DESIGN.md's order."""
+        return tuple(getattr(self, name) for name in self.CSV_FIELDS)

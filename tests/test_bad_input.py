@@ -1,0 +1,86 @@
+"""Every bad scenario in tests/bad gets its exact one-paragraph error, exit 2 and no run folder.
+
+The expected texts are golden files beside the inputs; regenerate them after a deliberate
+message change with MOBOT_UPDATE_GOLDEN=1 and review the diff.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from mobot_cli.cli import _dispatch
+
+HERE = Path(__file__).parent
+BAD = sorted((HERE / "bad").glob("*.yaml"))
+
+
+def run_cli(args: list[str], capsys) -> tuple[int, str, str]:
+    code = _dispatch(args)
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+@pytest.mark.parametrize("path", BAD, ids=[p.stem for p in BAD])
+def test_bad_scenario_error_text(path: Path, capsys, monkeypatch):
+    monkeypatch.chdir(HERE)
+    code, out, err = run_cli(["check", f"bad/{path.name}"], capsys)
+    assert code == 2
+    assert out == ""
+    assert "Traceback" not in err
+    assert err.count("\n") == 1, "an error is one paragraph on one line"
+    golden = path.with_suffix(".expected")
+    if os.environ.get("MOBOT_UPDATE_GOLDEN"):
+        golden.write_text(err)
+    assert err == golden.read_text()
+
+
+@pytest.mark.parametrize("path", BAD, ids=[p.stem for p in BAD])
+def test_bad_scenario_leaves_no_run_folder(path: Path, capsys, monkeypatch, tmp_path):
+    monkeypatch.chdir(HERE)
+    out_dir = tmp_path / "run"
+    code, _, err = run_cli(["run", f"bad/{path.name}", "--out", str(out_dir), "--quiet"], capsys)
+    assert code == 2, err
+    assert not out_dir.exists()
+
+
+def test_real_process_exit_code_and_no_traceback(tmp_path):
+    result = subprocess.run([sys.executable, "-m", "mobot_cli", "run", str(HERE / "bad" / "unknown_key.yaml"),
+                             "--out", str(tmp_path / "x")], capture_output=True, text=True, timeout=60)
+    assert result.returncode == 2
+    assert "Traceback" not in result.stderr
+    assert "unknown key 'poze' Did you mean 'pose'?" in result.stderr
+    assert not (tmp_path / "x").exists()
+
+
+def test_traceback_flag_shows_one(tmp_path):
+    result = subprocess.run([sys.executable, "-m", "mobot_cli", "--traceback", "check",
+                             str(HERE / "bad" / "unknown_key.yaml")], capture_output=True, text=True, timeout=60)
+    assert result.returncode != 0
+    assert "Traceback" in result.stderr
+
+
+def test_missing_scenario_file(capsys, tmp_path):
+    code, _, err = run_cli(["run", str(tmp_path / "nope.yaml"), "--out", str(tmp_path / "r")], capsys)
+    assert code == 2
+    assert "scenario file not found" in err
+    assert not (tmp_path / "r").exists()
+
+
+@pytest.mark.parametrize("override, message", [
+    ("robots.mobt.pose.x=1", "no item named 'mobt' in 'robots' Did you mean 'mobot'?"),
+    ("physics.rate=100", "unknown key 'rate' Did you mean 'rate_hz'?"),
+    ("duration=0", "key 'duration': Input should be greater than 0, got 0"),
+    ("robots.mobot.pose.z=.nan", "Input should be a finite number, got nan"),
+    ("nonsense", "--set 'nonsense' is not KEY=VALUE"),
+])
+def test_bad_set_override(override, message, capsys, tmp_path):
+    scenario = HERE.parent / "scenarios" / "quickstart.yaml"
+    code, _, err = run_cli(["run", str(scenario), "--set", override, "--out", str(tmp_path / "r")], capsys)
+    assert code == 2
+    assert message in err
+    assert not (tmp_path / "r").exists()
