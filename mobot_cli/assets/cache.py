@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import os
@@ -26,10 +27,23 @@ def cache_dir() -> Path:
     return Path.home() / ".cache" / "mobot"
 
 
+@functools.lru_cache(maxsize=1)
+def _code_version() -> str:
+    # The code that builds cached results is part of every key, so an edited checkout (an
+    # editable install keeps its version number) never reads entries an older build wrote.
+    sha = hashlib.sha256(f"mobot {mobot_cli.__version__} cache {CACHE_FORMAT}".encode())
+    package = Path(__file__).resolve().parent
+    for source in sorted([*package.glob("*.py"), package.parent / "sim" / "plan.py"]):
+        try:
+            sha.update(source.read_bytes())
+        except OSError:
+            pass
+    return sha.hexdigest()
+
+
 def digest(*parts: str | bytes) -> str:
     """SHA-256 over the parts, each length-prefixed so ('ab','c') differs from ('a','bc')."""
-    sha = hashlib.sha256()
-    sha.update(f"mobot {mobot_cli.__version__} cache {CACHE_FORMAT}".encode())
+    sha = hashlib.sha256(_code_version().encode())
     for part in parts:
         data = part.encode("utf-8") if isinstance(part, str) else part
         sha.update(len(data).to_bytes(8, "little"))

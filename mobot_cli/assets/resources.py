@@ -153,6 +153,14 @@ class ResourceResolver:
                 return hit
             if (root / name).is_dir():
                 return root / name
+        # Last resort: the package the referencing file itself lives in, so a description
+        # naming its own package (package://my_robot/meshes/... from my_robot/urdf/) works
+        # before any search path is set.
+        own = None
+        if referenced_from is not None:
+            own = _enclosing_package(Path(referenced_from).resolve().parent)
+        if own is not None and name in (_package_name(own / "package.xml"), own.name):
+            return own
         raise self._missing(what, referenced_from)
 
     def find_model(self, name: str, referenced_from: Path | None = None) -> Path:
@@ -227,6 +235,29 @@ class ResourceResolver:
             f"{what} not found. Folders searched: {listing}.",
             location=Location(file=referenced_from),
             hint=HINT.format(sep=os.pathsep))
+
+
+def model_sdf(model_dir: Path) -> Path:
+    """The SDF file of a Gazebo model folder, as its model.config names it (newest version)."""
+    import xml.etree.ElementTree as ET
+
+    config = Path(model_dir) / "model.config"
+    candidates: list[tuple[tuple[int, ...], str]] = []
+    try:
+        for sdf in ET.parse(config).getroot().findall("sdf"):
+            version = tuple(int(p) for p in (sdf.get("version") or "0").split(".") if p.isdigit())
+            if (sdf.text or "").strip():
+                candidates.append((version, sdf.text.strip()))
+    except (OSError, ET.ParseError):
+        pass  # no or broken model.config: Gazebo falls back to model.sdf as well
+    names = [name for _, name in sorted(candidates, key=lambda c: c[0], reverse=True)]
+    for name in [*names, "model.sdf"]:
+        if (Path(model_dir) / name).is_file():
+            return (Path(model_dir) / name).resolve()
+    raise ResourceError(f"model folder {model_dir} has no SDF file "
+                        f"(model.config names: {', '.join(names) or 'none'})",
+                        location=Location(file=config),
+                        hint="A Gazebo model folder needs model.config and the SDF file it names.")
 
 
 def _enclosing_package(folder: Path) -> Path | None:
