@@ -26,7 +26,7 @@ def test_defaults(tmp_path):
     assert scenario.physics.gravity == (0.0, 0.0, -9.81)
     assert scenario.physics.solver_iterations == 50
     assert scenario.settle == 0.5
-    assert scenario.log.rate_hz == 50 and scenario.log.formats == ["csv"]
+    assert scenario.log.rate_hz is None and scenario.log.formats == ["csv"]
     assert scenario.world == "empty" and scenario.seed == 0 and scenario.robots == []
 
 
@@ -79,7 +79,7 @@ def test_error_names_file_line_key_and_suggests(tmp_path):
     path = write(tmp_path, "version: 1\nduration: 2\nrobots:\n  - name: r\n    comands: []\n")
     with pytest.raises(ScenarioError) as info:
         load_scenario(path)
-    assert str(info.value) == f"{path}:5, key 'robots.r.comands': unknown key 'comands' Did you mean 'commands'?"
+    assert str(info.value) == f"{path}:5, key 'robots.r.comands': unknown key 'comands'. Did you mean 'commands'?"
 
 
 @pytest.mark.parametrize("path", sorted(SCENARIOS.glob("*.yaml")), ids=lambda p: p.stem)

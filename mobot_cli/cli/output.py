@@ -81,3 +81,31 @@ def check_result(result: dict[str, Any]) -> None:
     else:
         line = f"ok: robot '{result.get('name', result['path'])}' ({result['path']})"
     sys.stdout.write(line + "\n")
+
+
+def inspect_tree(summary: dict[str, Any]) -> None:
+    """The link/joint tree, mass, footprint and drive of a robot, as a Rich tree."""
+    from rich.tree import Tree
+
+    def add(branch, node: dict[str, Any]) -> None:
+        for child in node["children"]:
+            label = f"{child['link']}  [dim]({child['type']} joint {child['joint']}, {child['mass']:g} kg)[/]"
+            add(branch.add(label), child)
+
+    root = summary["tree"]
+    tree = Tree(f"[bold]{root['link']}[/]  [dim]({root['mass']:g} kg)[/]")
+    add(tree, root)
+    console = stdout_console()
+    console.print(f"[bold]{summary['name']}[/]  {summary['source']}")
+    console.print(tree)
+    fp = summary["footprint"]
+    console.print(f"total mass {summary['total_mass']:.3f} kg; footprint {fp['length']:.3f} x {fp['width']:.3f} m "
+                  f"(x {fp['xmin']:.3f}..{fp['xmax']:.3f}, y {fp['ymin']:.3f}..{fp['ymax']:.3f})")
+    drive = summary["drive"]
+    if drive is None:
+        console.print("drive: none detected (set drive: in the scenario to command this robot)")
+        return
+    console.print(f"drive ({drive['source']}): left {', '.join(drive['left_joints'])}; right "
+                  f"{', '.join(drive['right_joints'])}; wheel radius {drive['wheel_radius']:.4f} m, separation "
+                  f"{drive['wheel_separation']:.4f} m x {drive['wheel_separation_multiplier']:g}; "
+                  f"max torque {drive['max_wheel_torque']:g} N*m")

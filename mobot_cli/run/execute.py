@@ -15,7 +15,7 @@ from mobot_cli.errors import MobotError
 from mobot_cli.run.sinks import OdomCsv, write_json_atomic, write_text_atomic
 from mobot_cli.run.timeline import Sample, simulate
 from mobot_cli.sim.plan import Plan
-from mobot_cli.sim.world import RobotState
+from mobot_cli.sim.state import RobotState
 
 Progress = Callable[[int, int], None]
 

@@ -8,10 +8,9 @@ import os
 from pathlib import Path
 from typing import Any
 
-from mobot_cli.sim.world import RobotState
+from mobot_cli.sim.state import RobotState
 
-CSV_COLUMNS = ("t", "cmd_linear", "cmd_angular", "odom_x", "odom_y", "odom_yaw", "odom_vx", "odom_wz",
-               "true_x", "true_y", "true_z", "true_roll", "true_pitch", "true_yaw", "true_vx", "true_wz")
+CSV_COLUMNS = ("t",) + RobotState.CSV_FIELDS
 FLUSH_EVERY_ROWS = 50
 
 
@@ -31,8 +30,7 @@ class OdomCsv:
         self._rows = 0
 
     def write(self, t: float, state: RobotState) -> None:
-        values = [t] + [getattr(state, column) for column in CSV_COLUMNS[1:]]
-        self._file.write(",".join(number(v) for v in values) + "\n")
+        self._file.write(",".join(number(v) for v in (t, *state.row())) + "\n")
         self._rows += 1
         if self._rows % FLUSH_EVERY_ROWS == 0:
             self._file.flush()

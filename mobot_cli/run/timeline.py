@@ -10,7 +10,8 @@ from dataclasses import dataclass
 from typing import Iterator
 
 from mobot_cli.sim.plan import Plan
-from mobot_cli.sim.world import RobotState, World
+from mobot_cli.sim.state import RobotState
+from mobot_cli.sim.world import World
 
 
 @dataclass(frozen=True)
@@ -32,10 +33,10 @@ def simulate(plan: Plan) -> Iterator[Sample]:
             world.spawn(robot)
         names = [robot.name for robot in plan.robots]
         for step in range(plan.total_steps + 1):
-            if step % plan.log_every == 0 or step == plan.total_steps:
-                yield Sample(step, {name: world.read(name) for name in names})
-            if step == plan.total_steps:
-                break
+            # A command "at" t is in force from t on, so the row logged at t already shows it.
             for name, linear, angular in schedule.get(step, ()):
                 world.set_command(name, linear, angular)
-            world.step()
+            if step % plan.log_every == 0 or step == plan.total_steps:
+                yield Sample(step, {name: world.read(name) for name in names})
+            if step < plan.total_steps:
+                world.step()

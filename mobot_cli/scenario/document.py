@@ -36,7 +36,7 @@ def resolved_document(scenario: Scenario, plan: Plan, base_dir: Path) -> dict[st
         "duration": plan.total_steps / rate,
         "seed": plan.seed,
         "settle": plan.settle_steps / rate,
-        "log": {"rate_hz": scenario.log.rate_hz, "formats": list(scenario.log.formats)},
+        "log": {"rate_hz": scenario.log.rate_hz or rate / plan.log_every, "formats": list(scenario.log.formats)},
         "robots": robots,
     }
 

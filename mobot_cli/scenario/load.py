@@ -89,12 +89,13 @@ def _list_index(items: list, part: str, item: str, path: PathKey, source: Source
             return index
     if part.isdigit() and int(part) < len(items):
         return int(part)
-    raise ScenarioError(f"--set {item.partition('=')[0]}: no item named '{part}' in '{_dotted(path, source)}'",
+    raise ScenarioError(f"--set {item.partition('=')[0]}: no item named '{part}' in '{source.key_text(path)}'",
                         location=source.locate(path), hint=did_you_mean(part, [str(n) for n in names if n]))
 
 
 def _to_scenario_error(exc: ValidationError, source: Source) -> ScenarioError:
-    err = exc.errors()[0]
+    # A mistyped key also makes the real one "missing": report the unknown key first.
+    err = sorted(exc.errors(), key=lambda e: e["type"] != "extra_forbidden")[0]
     path = _data_path(err["loc"], source.data)
     kind = err["type"]
     message = err["msg"].removeprefix("Value error, ")
@@ -112,9 +113,7 @@ def _to_scenario_error(exc: ValidationError, source: Source) -> ScenarioError:
     more = len({_data_path(e["loc"], source.data) for e in exc.errors()}) - 1
     if more:
         message += f" (and {more} more problem{'s' if more > 1 else ''})"
-    location = source.locate(path)
-    location = Location(file=location.file, line=location.line, key=_dotted(path, source))
-    return ScenarioError(message, location=location, hint=hint)
+    return ScenarioError(message, location=source.locate_key(path), hint=hint)
 
 
 def _data_path(loc: tuple, data: Any) -> PathKey:
@@ -131,24 +130,6 @@ def _data_path(loc: tuple, data: Any) -> PathKey:
             break
         path += (key,)
     return path
-
-
-def _dotted(path: PathKey, source: Source) -> str:
-    """Render ('robots', 0, 'pose', 'x') as 'robots.mobot.pose.x', the --set spelling."""
-    out: list[str] = []
-    node = source.data
-    for part in path:
-        if isinstance(part, int) and isinstance(node, list):
-            item = node[part] if part < len(node) else None
-            name = item.get("name") if isinstance(item, dict) else None
-            out.append(str(name) if isinstance(name, str) else f"[{part}]")
-        else:
-            out.append(str(part))
-        try:
-            node = node[part]
-        except (KeyError, IndexError, TypeError):
-            node = None
-    return ".".join(out).replace(".[", "[")
 
 
 def _fields_at(path: PathKey) -> list[str]:

@@ -35,7 +35,8 @@ class PhysicsSpec(Strict):
 
 
 class LogSpec(Strict):
-    rate_hz: Annotated[float, Field(gt=0)] = 50.0
+    # None: about 50 Hz, rounded down to a whole number of physics steps (48 Hz at 240 Hz).
+    rate_hz: Optional[Annotated[float, Field(gt=0)]] = None
     formats: list[Literal["csv"]] = Field(default_factory=lambda: ["csv"])
 
 

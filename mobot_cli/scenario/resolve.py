@@ -3,17 +3,19 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 from pathlib import Path
 from typing import Any
 
 from mobot_cli.assets.description import RobotDescription, load_robot
-from mobot_cli.errors import Location, MobotError, ScenarioError, did_you_mean
+from mobot_cli.errors import MobotError, ScenarioError, did_you_mean
 from mobot_cli.scenario.model import RobotSpec, Scenario
 from mobot_cli.scenario.units import quat_from_rpy, spawn_pose, steps
 from mobot_cli.scenario.yamlsource import Source
 from mobot_cli.sim.plan import CommandStep, DriveSpec, Physics, Plan, RobotPlan, SpawnPose, WorldPlan
 
 BUNDLED_WORLDS = ("empty",)
+DEFAULT_LOG_RATE_HZ = 50  # the log runs at most this fast when log.rate_hz is not given
 
 
 def resolve(scenario: Scenario, source: Source) -> Plan:
@@ -22,13 +24,14 @@ def resolve(scenario: Scenario, source: Source) -> Plan:
     total = steps(scenario.duration, rate)
     if total < 1:
         raise ScenarioError(f"duration {scenario.duration} s is shorter than one physics step",
-                            location=_loc(source, ("duration",)))
-    if scenario.log.rate_hz > rate:
-        raise ScenarioError(f"log.rate_hz {scenario.log.rate_hz:g} is above physics.rate_hz {rate}",
-                            location=_loc(source, ("log", "rate_hz")), hint="Log at most once per physics step.")
-    log_every = max(1, steps(1.0 / scenario.log.rate_hz, rate))
+                            location=source.locate_key(("duration",)))
+    log_rate = scenario.log.rate_hz
+    if log_rate is not None and log_rate > rate:
+        raise ScenarioError(f"log.rate_hz {log_rate:g} is above physics.rate_hz {rate}",
+                            location=source.locate_key(("log", "rate_hz")), hint="Log at most once per physics step.")
+    log_every = max(1, steps(1.0 / log_rate, rate)) if log_rate else math.ceil(rate / DEFAULT_LOG_RATE_HZ)
     notices = []
-    if abs(rate / log_every - scenario.log.rate_hz) > 1e-9:
+    if log_rate is not None and abs(rate / log_every - log_rate) > 1e-9:
         notices.append(f"log.rate_hz {scenario.log.rate_hz:g} is not a whole number of physics steps at "
                        f"{rate} Hz: logging every {log_every} steps ({rate / log_every:.4g} Hz)")
     physics = Physics(rate_hz=rate, gravity=tuple(scenario.physics.gravity),
@@ -44,7 +47,7 @@ def resolve(scenario: Scenario, source: Source) -> Plan:
 def _world(scenario: Scenario, source: Source) -> WorldPlan:
     if scenario.world in BUNDLED_WORLDS:
         return WorldPlan(name=scenario.world)
-    raise ScenarioError(f"world '{scenario.world}' is not available", location=_loc(source, ("world",)),
+    raise ScenarioError(f"world '{scenario.world}' is not available", location=source.locate_key(("world",)),
                         hint=("Loading Gazebo SDF worlds is not implemented in this version; "
                               if scenario.world.endswith((".world", ".sdf")) else "")
                         + did_you_mean(scenario.world, BUNDLED_WORLDS))
@@ -69,7 +72,7 @@ class _Context:
         commands = self.commands(spec, path)
         if commands and drive is None:
             raise ScenarioError(f"robot '{spec.name}' has commands but no drive wheels were detected in "
-                                f"'{spec.description}'", location=_loc(self.source, path + ("commands",)),
+                                f"'{spec.description}'", location=self.source.locate_key(path + ("commands",)),
                                 hint="Add drive: {left_joints, right_joints, wheel_radius, wheel_separation}.")
         if spec.count is None:
             members = [(spec.name, spec.namespace, spawn_pose(spec.pose))]
@@ -86,11 +89,11 @@ class _Context:
 
     def claim(self, name: str, namespace: str, path: tuple) -> None:
         if name in self.names:
-            raise ScenarioError(f"robot name '{name}' is used twice", location=_loc(self.source, path + ("name",)),
+            raise ScenarioError(f"robot name '{name}' is used twice", location=self.source.locate_key(path + ("name",)),
                                 hint="Every robot needs a unique name, as Gazebo entities do.")
         if namespace in self.namespaces:
             raise ScenarioError(f"namespace '{namespace}' of '{name}' is already used by "
-                                f"'{self.namespaces[namespace]}'", location=_loc(self.source, path + ("namespace",)),
+                                f"'{self.namespaces[namespace]}'", location=self.source.locate_key(path + ("namespace",)),
                                 hint="Two robots in one namespace would share topics and TF frames.")
         self.names[name] = path
         self.namespaces[namespace] = name
@@ -103,7 +106,7 @@ class _Context:
                 self.loaded[key] = load_robot(spec.description, args, self.base_dir)
             except MobotError as exc:
                 raise type(exc)(f"robot '{spec.name}': {exc}",
-                                location=_loc(self.source, path + ("description",))) from None
+                                location=self.source.locate_key(path + ("description",))) from None
             self.notices.extend(str(n) for n in self.loaded[key].notices)
         return self.loaded[key]
 
@@ -121,7 +124,7 @@ class _Context:
         missing = [k for k in needed if k not in fields]
         if missing:
             raise ScenarioError(f"no drive wheels were detected in '{spec.description}' and drive: lacks "
-                                + ", ".join(missing), location=_loc(self.source, path + ("drive",)),
+                                + ", ".join(missing), location=self.source.locate_key(path + ("drive",)),
                                 hint="Name the wheel joints and give their radius and separation.")
         return DriveSpec(source="scenario", **fields)
 
@@ -129,15 +132,16 @@ class _Context:
         rate, out = self.scenario.physics.rate_hz, []
         free_from = self.settle
         for i, cmd in enumerate(spec.commands):
-            where = _loc(self.source, path + ("commands", i, "at"))
+            where = self.source.locate_key(path + ("commands", i, "at"))
             at = steps(cmd.at, rate)
             if at < self.settle:
                 raise ScenarioError(f"command at {cmd.at:g} s falls inside the settle window "
                                     f"(the first {self.scenario.settle:g} s)", location=where,
                                     hint="Robots hold still while they settle; start commands at or after 'settle'.")
-            if at >= self.total:
-                raise ScenarioError(f"command at {cmd.at:g} s is at or after the end of the run "
-                                    f"({self.scenario.duration:g} s)", location=where)
+            if at >= self.total:  # e.g. a run shortened with --duration: say so, don't refuse
+                self.notices.append(f"{where}: command at {cmd.at:g} s is at or after the end of the run "
+                                    f"({self.total / rate:g} s) and is never sent")
+                break
             if at < free_from or (out and at <= out[-1].step):
                 raise ScenarioError(f"command at {cmd.at:g} s starts before the previous one ends",
                                     location=where, hint="List commands in time order, each after the last 'for' ends.")
@@ -161,7 +165,3 @@ def _arg_text(value: Any) -> str:
     return str(value)
 
 
-def _loc(source: Source, path: tuple) -> Location:
-    where = source.locate(path)
-    return Location(file=where.file, line=where.line, key=".".join(
-        str(p) if not isinstance(p, int) else f"[{p}]" for p in path).replace(".[", "["))

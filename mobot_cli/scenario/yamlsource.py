@@ -42,6 +42,29 @@ class Source:
         return Location(file=self.file)
 
 
+    def key_text(self, path: PathKey) -> str:
+        """Render ('robots', 0, 'pose', 'x') as 'robots.mobot.pose.x', the --set spelling."""
+        out: list[str] = []
+        node = self.data
+        for part in path:
+            if isinstance(part, int) and isinstance(node, list):
+                item = node[part] if part < len(node) else None
+                name = item.get("name") if isinstance(item, dict) else None
+                out.append(str(name) if isinstance(name, str) else f"[{part}]")
+            else:
+                out.append(str(part))
+            try:
+                node = node[part]
+            except (KeyError, IndexError, TypeError):
+                node = None
+        return ".".join(out).replace(".[", "[")
+
+    def locate_key(self, path: PathKey) -> Location:
+        """Like ``locate`` but also naming the key, for errors about one value."""
+        where = self.locate(path)
+        return Location(file=where.file, line=where.line, key=self.key_text(path))
+
+
 def parse_yaml(text: str, file: Path | None) -> Source:
     """Parse one YAML document; duplicate keys and syntax errors are located ScenarioErrors."""
     try:
@@ -53,7 +76,7 @@ def parse_yaml(text: str, file: Path | None) -> Source:
         raise ScenarioError(
             f"malformed YAML: {problem}",
             location=Location(file=file, line=line),
-            hint="Check indentation and that every 'key: value' pair has a space after the colon.",
+            hint="Fix the YAML syntax at or just before that line.",
         ) from None
     source = Source(data=None, file=file)
     if node is None:

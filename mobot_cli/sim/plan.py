@@ -44,7 +44,8 @@ class DriveSpec:
     max_wheel_torque: float = 20.0  # N*m per wheel
     max_wheel_acceleration: float | None = None  # rad/s^2 at the wheel; None = unlimited
     odometry: str = "encoder"  # "encoder" | "ground_truth": what odom_* reports
-    source: str = "urdf"  # where the wheel layout came from: "urdf" | "plugin" | "scenario"
+    # Where the wheel layout came from ("urdf" | "plugin" | "scenario"): a note, not a setting.
+    source: str = field(default="urdf", compare=False)
     # joint name -> +1.0 / -1.0: a positive joint velocity times the sign rolls that wheel
     # forward (+x of the root link). A wheel whose axis points along -y needs -1.0.
     # Joints not listed count as +1.0.
