@@ -10,20 +10,26 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-# Skid-steer robots (several wheels per side) cannot turn without scrubbing the wheels
-# sideways, so the body turns slower than an ideal two-wheel robot of the same track.
-# For four equally loaded wheels with Coulomb friction the ideal-track model turns into an
-# effective track of (track^2 + wheelbase^2) / track. Measured in PyBullet with the
-# default friction (1.0) and torques, yaw rate reached / commanded at 1.0 rad/s:
-#   husky  (track 0.571, wheelbase 0.512): multiplier 1.0 -> see SKID_STEER_MEASUREMENTS
-SKID_STEER_MEASUREMENTS = "filled in below"
+# Skid-steer fit: multiplier = 1 + SKID_STEER_GAIN * (wheelbase / track)^2.
+SKID_STEER_GAIN = 0.3
 
 
 def default_separation_multiplier(track: float, wheelbase: float) -> float:
-    """Wheel-separation multiplier for a skid-steer base: 1 + (wheelbase / track)^2."""
+    """Wheel-separation multiplier for skid steer: 1 + 0.3 * (wheelbase / track)^2 (measured).
+
+    Skid-steer bases (several wheels per side) turn slower than their wheel speeds say, as the
+    wheels scrub sideways. The (wheelbase/track)^2 shape is the classic effective-track result;
+    the gain is fitted in PyBullet with mobot's defaults (pyramid friction, axial wheel friction
+    0.5, torque 20 N*m), commanding a 90 deg turn in place:
+      multiplier 1.0:   husky 66.5 deg (0.5 rad/s), jackal 76.1, linorobot2 4wd 73.0 (1 rad/s)
+      multiplier 1.5:   husky 113, jackal 120, linorobot2 4wd 114 (0.3..1 rad/s)
+      this model:       husky 1.241 -> 90.2, jackal 1.146 -> 89.0, linorobot2 4wd 1.235 -> 93.1;
+                        over 0.3..1.5 rad/s: husky 80..92, jackal 89..91, linorobot2 4wd 92..93.
+    1 + (wheelbase/track)^2 (1.49..1.80) would over-turn by 25-35 %.
+    """
     if track <= 0.0:
         raise ValueError(f"track must be positive, got {track}")
-    return 1.0 + (wheelbase / track) ** 2
+    return 1.0 + SKID_STEER_GAIN * (wheelbase / track) ** 2
 
 
 def wheel_speeds(linear: float, angular: float, separation: float,

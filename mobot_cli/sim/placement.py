@@ -2,9 +2,8 @@
 
 from __future__ import annotations
 
-import pybullet as p
-
 from mobot_cli.errors import SpawnError
+from mobot_cli.sim.bullet import p
 
 # How far below the floor (or into another body) a spawned robot may reach. Gazebo users
 # spawn at z = 0 with wheels whose meshes dip a few millimetres into the floor; more than
@@ -18,7 +17,7 @@ PARKING_HEIGHT = 200.0  # m
 
 
 def lowest_points(cid: int, body: int, probe: int) -> dict[int, float]:
-    """Height above ``probe`` (a horizontal plane at z = 0) of each link's lowest collision point."""
+    """Height above ``probe`` (a plane at z = 0) of each link's lowest collision point."""
     lowest: dict[int, float] = {}
     for pt in p.getClosestPoints(body, probe, 2.0 * PARKING_HEIGHT, physicsClientId=cid):
         link, dist = pt[3], pt[8]
@@ -28,7 +27,7 @@ def lowest_points(cid: int, body: int, probe: int) -> dict[int, float]:
 
 
 def floor_height(cid: int, body: int, floors: set[int], top: float, name: str) -> float:
-    """Height of the highest floor (ground or static body) under the robot, probing from ``top``."""
+    """Height of the highest floor (ground or static body) under the robot, probed from ``top``."""
     (x0, y0, _), (x1, y1, _) = p.getAABB(body, -1, physicsClientId=cid)
     for link in range(p.getNumJoints(body, physicsClientId=cid)):
         (a, b, _), (c, d, _) = p.getAABB(body, link, physicsClientId=cid)
@@ -39,17 +38,20 @@ def floor_height(cid: int, body: int, floors: set[int], top: float, name: str) -
     rays = p.rayTestBatch(starts, ends, physicsClientId=cid)
     hits = [r[3][2] for r in rays if r[0] in floors]  # another robot is not a floor
     if not hits:
+        x, y = (x0 + x1) / 2, (y0 + y1) / 2
         raise SpawnError(
-            f"robot '{name}' has nothing to rest on below ({(x0 + x1) / 2:.3f}, {(y0 + y1) / 2:.3f})",
+            f"robot '{name}' has nothing to rest on below ({x:.3f}, {y:.3f})",
             hint="Give the pose an explicit z, or enable the ground plane.")
     return max(hits)
 
 
-def rest_on_floor(cid: int, body: int, probe: int, floors: set[int], xyz, quat, name: str) -> tuple[float, float, float]:
-    """Move the robot so its lowest collision point touches the floor below (x, y); return the pose."""
-    p.resetBasePositionAndOrientation(body, (xyz[0], xyz[1], PARKING_HEIGHT), quat, physicsClientId=cid)
+def rest_on_floor(cid: int, body: int, probe: int, floors: set[int], xyz, quat,
+                  name: str) -> tuple[float, float, float]:
+    """Move the robot so its lowest collision point touches the floor below (x, y); return xyz."""
+    p.resetBasePositionAndOrientation(body, (xyz[0], xyz[1], PARKING_HEIGHT), quat,
+                                      physicsClientId=cid)
     base_z = link_frame_z(cid, body)
-    lowest = min(lowest_points(cid, body, probe).values())  # height of the lowest point above z = 0
+    lowest = min(lowest_points(cid, body, probe).values())  # lowest point's height above z = 0
     height = _top(cid, body) - lowest
     floor = floor_height(cid, body, floors, height + FLOOR_PROBE_CLEARANCE, name)
     z = floor + (base_z - lowest)

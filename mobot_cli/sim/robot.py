@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import math
 
-import pybullet as p
-
+from mobot_cli.errors import SpawnError
+from mobot_cli.sim.bullet import p
 from mobot_cli.sim.drive import Odometry, body_twist, ramp, wheel_speeds, wrap_angle
 from mobot_cli.sim.plan import DriveSpec, RobotPlan
 from mobot_cli.sim.state import RobotState
@@ -32,6 +32,9 @@ class SimRobot:
         # to the URDF link frame, which is what the ground truth reports.
         dyn = p.getDynamicsInfo(body, -1, physicsClientId=cid)
         self.com_to_link = p.invertTransform(dyn[3], dyn[4])
+        offset = dyn[3] != (0.0, 0.0, 0.0) or dyn[4] != (0.0, 0.0, 0.0, 1.0)
+        self.com_offset = offset  # most root links (base_footprint) have none: skip the maths
+        self.joint_indices = list(self.joints.values())
         self._free_joints()
         self.drive: _Drive | None = None
         if plan.drive is not None:
@@ -50,6 +53,8 @@ class SimRobot:
     def link_pose(self) -> tuple[tuple[float, ...], tuple[float, ...]]:
         """World position and quaternion of the root link's URDF frame."""
         pos, orn = p.getBasePositionAndOrientation(self.body, physicsClientId=self.cid)
+        if not self.com_offset:
+            return pos, orn
         return p.multiplyTransforms(pos, orn, self.com_to_link[0], self.com_to_link[1])
 
     def link_pose_rpy(self) -> tuple[float, float, float, float, float, float]:
@@ -66,21 +71,26 @@ class SimRobot:
         self.drive.command(linear, angular)
 
     def state(self) -> RobotState:
-        """Command, odometry and truth now."""
-        pos, orn = self.link_pose()
+        """Command, odometry and truth now (called at log rate: few PyBullet calls)."""
+        cid, body = self.cid, self.body
+        com, orn = p.getBasePositionAndOrientation(body, physicsClientId=cid)
+        lin, ang = p.getBaseVelocity(body, physicsClientId=cid)
+        pos = com
+        if self.com_offset:
+            pos, orn = p.multiplyTransforms(com, orn, self.com_to_link[0], self.com_to_link[1])
+            # Velocity of the link origin, not of the centre of mass: v + w x (link - com).
+            r = (pos[0] - com[0], pos[1] - com[1], pos[2] - com[2])
+            lin = (lin[0] + ang[1] * r[2] - ang[2] * r[1],
+                   lin[1] + ang[2] * r[0] - ang[0] * r[2],
+                   lin[2] + ang[0] * r[1] - ang[1] * r[0])
         roll, pitch, yaw = p.getEulerFromQuaternion(orn)
-        lin, ang = p.getBaseVelocity(self.body, physicsClientId=self.cid)
         rot = p.getMatrixFromQuaternion(orn)
-        # Velocity of the link origin, not the centre of mass: v + w x (link - com).
-        com = p.getBasePositionAndOrientation(self.body, physicsClientId=self.cid)[0]
-        r = (pos[0] - com[0], pos[1] - com[1], pos[2] - com[2])
-        v = (lin[0] + ang[1] * r[2] - ang[2] * r[1],
-             lin[1] + ang[2] * r[0] - ang[0] * r[2],
-             lin[2] + ang[0] * r[1] - ang[1] * r[0])
-        true_vx = v[0] * rot[0] + v[1] * rot[3] + v[2] * rot[6]  # along the body x axis
+        true_vx = lin[0] * rot[0] + lin[1] * rot[3] + lin[2] * rot[6]  # along the body x axis
         true_wz = ang[0] * rot[2] + ang[1] * rot[5] + ang[2] * rot[8]  # about the body z axis
-        if self.drive is not None and self.plan.drive.odometry == "encoder":
-            odom = self.drive.odometry_now()
+        joints = p.getJointStates(body, self.joint_indices, physicsClientId=cid) \
+            if self.joint_indices else ()
+        if self.drive is not None and self.drive.spec.odometry == "encoder":
+            odom = self.drive.odometry_now(joints)
         else:
             x0, y0, yaw0 = self.spawn_xy_yaw
             dx, dy = pos[0] - x0, pos[1] - y0
@@ -88,13 +98,13 @@ class SimRobot:
             odom = (c * dx + s * dy, -s * dx + c * dy, wrap_angle(yaw - yaw0), true_vx, true_wz)
         return RobotState(
             self.cmd[0], self.cmd[1], *odom, pos[0], pos[1], pos[2], roll, pitch, yaw,
-            true_vx, true_wz, joint_positions=self.joint_positions())
+            true_vx, true_wz, joint_positions={n: j[0] for n, j in zip(self.joints, joints)})
 
     def joint_positions(self) -> dict[str, float]:
         """Position of every non-fixed joint, by name."""
         if not self.joints:
             return {}
-        states = p.getJointStates(self.body, list(self.joints.values()), physicsClientId=self.cid)
+        states = p.getJointStates(self.body, self.joint_indices, physicsClientId=self.cid)
         return {name: s[0] for name, s in zip(self.joints, states)}
 
 
@@ -106,16 +116,19 @@ class _Drive:
         self.spec = spec
         missing = [j for j in spec.left_joints + spec.right_joints if j not in robot.joints]
         if missing:
-            raise ValueError(f"robot '{robot.name}': drive joints not in the URDF or fixed: {missing}")
+            raise SpawnError(f"robot '{robot.name}': drive joints {missing} are not movable joints "
+                             "of its URDF", hint="Name its wheel joints in drive.left/right.")
         self.left = [robot.joints[j] for j in spec.left_joints]
         self.right = [robot.joints[j] for j in spec.right_joints]
         self.wheels = self.left + self.right
+        self.slots = [robot.joint_indices.index(j) for j in self.wheels]  # in the joint list
         given = dict(getattr(spec, "joint_signs", ()) or ())
         self.signs = [float(given.get(j, 0.0)) or _forward_sign(robot, robot.joints[j])
                       for j in spec.left_joints + spec.right_joints]
         self.radius = spec.wheel_radius * spec.wheel_radius_multiplier
         self.separation = spec.wheel_separation * spec.wheel_separation_multiplier
         self.odometry = Odometry(self.separation)
+        self.scale = [sign * self.radius for sign in self.signs]  # joint angle -> rim travel
         self.last = self._positions()
         self.rates = [0.0] * len(self.wheels)  # wheel targets in rad/s, as commanded now
         self.goal = list(self.rates)  # where ramping is heading (acceleration limit)
@@ -141,7 +154,7 @@ class _Drive:
         return self.max_step > 0.0 and self.rates != self.goal
 
     def ramp_step(self) -> None:
-        """Advance wheel targets one physics step toward the goal, at most the acceleration limit."""
+        """Move wheel targets one step toward the goal, no faster than the acceleration limit."""
         self.rates = [ramp(r, g, self.max_step) for r, g in zip(self.rates, self.goal)]
         self._apply()
 
@@ -150,21 +163,27 @@ class _Drive:
             self.robot.body, self.wheels, p.VELOCITY_CONTROL, targetVelocities=self.rates,
             forces=self.forces, physicsClientId=self.robot.cid)
 
-    def integrate(self) -> None:
+    def integrate(self, states=None) -> None:
         """Fold the wheel travel since the last call into the odometry."""
-        now = self._positions()
-        travel = [(a - b) * s * self.radius for a, b, s in zip(now, self.last, self.signs)]
-        self.last = now
-        n_left = len(self.left)
-        left = sum(travel[:n_left]) / n_left
-        right = sum(travel[n_left:]) / (len(travel) - n_left)
-        self.odometry.advance(left, right)
+        # Runs at 50 Hz for every robot: one PyBullet call and one plain loop, no temporaries.
+        if states is None:
+            states = p.getJointStates(self.robot.body, self.wheels, physicsClientId=self.robot.cid)
+        last, scale, n_left = self.last, self.scale, len(self.left)
+        left = right = 0.0
+        for k, state in enumerate(states):
+            travel = (state[0] - last[k]) * scale[k]
+            last[k] = state[0]
+            if k < n_left:
+                left += travel
+            else:
+                right += travel
+        self.odometry.advance(left / n_left, right / (len(states) - n_left))
 
-    def odometry_now(self) -> tuple[float, float, float, float, float]:
-        """Odometry pose (odom frame) and twist from the wheel encoders, brought up to date."""
-        self.integrate()
-        states = p.getJointStates(self.robot.body, self.wheels, physicsClientId=self.robot.cid)
-        rim = [st[1] * s * self.radius for st, s in zip(states, self.signs)]
+    def odometry_now(self, joints) -> tuple[float, float, float, float, float]:
+        """Odometry pose and twist, brought up to date from ``joints`` (every non-fixed joint)."""
+        wheels = [joints[k] for k in self.slots]
+        self.integrate(wheels)
+        rim = [state[1] * scale for state, scale in zip(wheels, self.scale)]
         n_left = len(self.left)
         vx, wz = body_twist(sum(rim[:n_left]) / n_left, sum(rim[n_left:]) / (len(rim) - n_left),
                             self.separation)
@@ -178,7 +197,8 @@ def _forward_sign(robot: SimRobot, joint: int) -> float:
     axis = p.getJointInfo(body, joint, physicsClientId=cid)[13]
     link_orn = p.getLinkState(body, joint, computeForwardKinematics=True, physicsClientId=cid)[5]
     base_orn = robot.link_pose()[1]
-    rel = p.multiplyTransforms((0, 0, 0), p.invertTransform((0, 0, 0), base_orn)[1], (0, 0, 0), link_orn)[1]
+    base_inv = p.invertTransform((0, 0, 0), base_orn)[1]
+    rel = p.multiplyTransforms((0, 0, 0), base_inv, (0, 0, 0), link_orn)[1]  # link in base frame
     m = p.getMatrixFromQuaternion(rel)
     axis_y = m[3] * axis[0] + m[4] * axis[1] + m[5] * axis[2]
     return 1.0 if axis_y >= 0.0 else -1.0
