@@ -12,8 +12,8 @@ from typing import Any, Callable, Optional
 
 from mobot_cli import __version__
 from mobot_cli.errors import MobotError
-from mobot_cli.run.sinks import OdomCsv, write_json_atomic, write_text_atomic
-from mobot_cli.run.timeline import Sample, simulate
+from mobot_cli.run.sinks import make_sinks, write_json_atomic, write_text_atomic
+from mobot_cli.run.timeline import simulate
 from mobot_cli.sim.plan import Plan
 from mobot_cli.sim.state import RobotState
 
@@ -64,13 +64,16 @@ def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | 
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / "summary.json").unlink(missing_ok=True)  # a rerun must not look complete early
     write_text_atomic(out_dir / "scenario.yaml", resolved_yaml)
-    tracks = {robot.name: Track() for robot in plan.robots}
-    sinks = {robot.name: OdomCsv(out_dir / "odom" / f"{robot.name}.csv") for robot in plan.robots}
+    tracks: dict[str, Track] = {}
+    sinks = make_sinks(plan, out_dir)
     status, error, last_step = "ok", None, 0
     started = time.perf_counter()
     try:
         for sample in simulate(plan):
-            _record(sample, plan, sinks, tracks)
+            for sink in sinks:
+                sink.write(sample)
+            for name, state in sample.states.items():
+                tracks.setdefault(name, Track()).add(state)
             last_step = sample.step
             if progress:
                 progress(sample.step, plan.total_steps)
@@ -81,19 +84,12 @@ def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | 
         status = "interrupted"
         raise
     finally:
-        for sink in sinks.values():
+        for sink in sinks:
             sink.close()
         wall = time.perf_counter() - started
         summary = _summary(plan, tracks, status, error, last_step, wall)
         write_json_atomic(out_dir / "summary.json", summary)
     return RunResult(out_dir=out_dir, summary=summary)
-
-
-def _record(sample: Sample, plan: Plan, sinks: dict[str, OdomCsv], tracks: dict[str, Track]) -> None:
-    t = sample.step / plan.physics.rate_hz
-    for name, state in sample.states.items():
-        sinks[name].write(t, state)
-        tracks[name].add(state)
 
 
 def _summary(plan: Plan, tracks: dict[str, Track], status: str, error: Exception | None,

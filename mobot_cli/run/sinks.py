@@ -1,4 +1,8 @@
-"""Writers for the run folder: odometry CSV per robot and an atomic summary.json."""
+"""Writers for the run folder. Each sink consumes the timeline's samples; none drives it.
+
+A sink has ``write(sample)`` and ``close()``. Robots may appear and disappear during a run
+(spawn and delete events), so per-robot outputs open on a robot's first sample.
+"""
 
 from __future__ import annotations
 
@@ -6,12 +10,22 @@ import json
 import math
 import os
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
+from mobot_cli.run.timeline import Sample
+from mobot_cli.sim.plan import Plan
 from mobot_cli.sim.state import RobotState
 
 CSV_COLUMNS = ("t",) + RobotState.CSV_FIELDS
 FLUSH_EVERY_ROWS = 50
+
+
+class Sink(Protocol):
+    """Something that records samples into the run folder."""
+
+    def write(self, sample: Sample) -> None: ...
+
+    def close(self) -> None: ...
 
 
 def number(value: float) -> str:
@@ -39,17 +53,46 @@ class OdomCsv:
         self._file.close()
 
 
+class CsvSink:
+    """``odom/<robot>.csv`` for every robot, opened on the robot's first sample."""
+
+    def __init__(self, plan: Plan, out_dir: Path):
+        self._rate = plan.physics.rate_hz
+        self._dir = out_dir / "odom"
+        self._files: dict[str, OdomCsv] = {}
+
+    def write(self, sample: Sample) -> None:
+        t = sample.step / self._rate
+        for name, state in sample.states.items():
+            if name not in self._files:
+                self._files[name] = OdomCsv(self._dir / f"{name}.csv")
+            self._files[name].write(t, state)
+
+    def close(self) -> None:
+        for csv in self._files.values():
+            csv.close()
+
+
+def make_sinks(plan: Plan, out_dir: Path) -> list[Sink]:
+    """The sinks a plan's ``formats`` ask for."""
+    sinks: list[Sink] = []
+    if "csv" in plan.formats:
+        sinks.append(CsvSink(plan, out_dir))
+    return sinks
+
+
 def write_json_atomic(path: Path, data: dict[str, Any]) -> None:
     """Write JSON to a temporary sibling and rename it into place."""
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data, indent=2, allow_nan=False, default=_plain) + "\n", encoding="utf-8")
-    os.replace(tmp, path)
+    write_text_atomic(path, json.dumps(data, indent=2, allow_nan=False, default=_plain) + "\n")
 
 
 def write_text_atomic(path: Path, text: str) -> None:
-    """Write text to a temporary sibling and rename it into place."""
+    """Write text to a temporary sibling, flush it to disk and rename it into place."""
     tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text, encoding="utf-8")
+    with tmp.open("w", encoding="utf-8") as f:
+        f.write(text)
+        f.flush()
+        os.fsync(f.fileno())
     os.replace(tmp, path)
 
 

@@ -41,6 +41,7 @@ def resolve(scenario: Scenario, source: Source) -> Plan:
     notices.extend(ctx.notices)
     return Plan(name=scenario.name, physics=physics, world=_world(scenario, source), robots=robots,
                 total_steps=total, settle_steps=ctx.settle, log_every=log_every, seed=scenario.seed,
+                formats=tuple(dict.fromkeys(scenario.log.formats)),
                 notices=tuple(dict.fromkeys(notices)))
 
 

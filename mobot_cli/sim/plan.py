@@ -108,4 +108,5 @@ class Plan:
     settle_steps: int
     log_every: int  # physics steps between two log rows
     seed: int = 0
+    formats: tuple[str, ...] = ("csv",)  # what the run folder records besides summary.json
     notices: tuple[str, ...] = field(default=())
