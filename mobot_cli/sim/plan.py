@@ -97,6 +97,15 @@ class WorldPlan:
 
 
 @dataclass(frozen=True)
+class Event:
+    """At physics step ``step``, spawn a robot or delete one by name (exactly one of the two)."""
+
+    step: int
+    spawn: RobotPlan | None = None
+    delete: str | None = None
+
+
+@dataclass(frozen=True)
 class Plan:
     """Everything a run needs, with all times already in whole physics steps."""
 
@@ -109,4 +118,5 @@ class Plan:
     log_every: int  # physics steps between two log rows
     seed: int = 0
     formats: tuple[str, ...] = ("csv",)  # what the run folder records besides summary.json
+    events: tuple[Event, ...] = ()
     notices: tuple[str, ...] = field(default=())
