@@ -132,3 +132,9 @@ def test_set_and_seed_override(tmp_path):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["seed"] == 11
     assert rows(out / "odom" / "mobot.csv")[0]["true_x"] == pytest.approx(2.0, abs=1e-3)
+
+
+def test_resolved_quickstart_matches_golden_file():
+    """The resolved format is a contract: a change here must be deliberate (regenerate and review)."""
+    golden = Path(__file__).parent / "golden" / "quickstart.resolved.yaml"
+    assert prepare(REPO / "scenarios" / "quickstart.yaml").resolved_yaml == golden.read_text()
