@@ -1,0 +1,219 @@
+"""Where SDF files and meshes are: model://, file://, relative URIs and Gazebo Fuel's cache.
+
+``model://NAME`` is looked up beside the world first (the world's folder, its package root
+and that package's ``models/``, and the folder holding every model read so far), then in
+mobot's resource roots (DESIGN.md, "Resources"), which include ``GZ_SIM_RESOURCE_PATH`` and
+``GAZEBO_MODEL_PATH``. ``https://`` URIs (Gazebo Fuel) are never downloaded: a model already
+in Fuel's local cache (``gz fuel download``) is used, anything else is an error or, with
+``--skip-missing``, a warning.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from urllib.parse import unquote, urlparse
+
+from lxml import etree
+
+from mobot_cli.assets.resources import ResourceResolver, model_sdf
+from mobot_cli.errors import Location, MobotError, WorldError
+
+FUEL_CACHES = ("~/.gz/fuel", "~/.ignition/fuel")
+SKIP_HINT = "Pass --skip-missing (or set skip_missing: true) to leave it out with a warning."
+
+
+class SdfPaths:
+    """Resolves and parses the files of one world (or model) and remembers every file read."""
+
+    def __init__(self, top: Path, resolver: ResourceResolver):
+        self.resolver = resolver
+        self.files: dict[Path, None] = {}  # every file read, in order (cache dependencies)
+        self._trees: dict[Path, object] = {}
+        self.local: list[Path] = []
+        folder = Path(top).resolve().parent
+        package = _package_root(folder)
+        for root in (folder, folder.parent, package, package / "models" if package else None):
+            self._add_local(root)
+
+    def _add_local(self, root: Path | None) -> None:
+        if root is not None and root not in self.local:
+            self.local.append(root)
+
+    @property
+    def roots(self) -> list[Path]:
+        """Every folder searched for model://NAME, in order."""
+        return [*self.local, *(r for r in self.resolver.roots if r not in self.local)]
+
+    def parse(self, path: Path):
+        """The root element of an SDF file, parsed once; WorldError with the line when broken."""
+        path = Path(path).resolve()
+        if path in self._trees:
+            return self._trees[path]
+        parser = etree.XMLParser(remove_comments=True, remove_pis=True, resolve_entities=False)
+        try:
+            root = etree.parse(str(path), parser).getroot()
+        except OSError as exc:
+            raise WorldError(f"cannot read {path}: {exc}", location=Location(file=path),
+                             hint="Check the path and the file's permissions.") from None
+        except etree.XMLSyntaxError as exc:
+            raise WorldError(f"malformed XML: {exc.msg}", location=Location(file=path, line=exc.lineno),
+                             hint="Fix the XML (an unclosed tag or a stray '<' is typical).") from None
+        if root.tag != "sdf":
+            raise WorldError(f"the root element is <{root.tag}>, not <sdf>",
+                             location=Location(file=path, line=root.sourceline),
+                             hint="A URDF file is a robot description, not a world."
+                             if root.tag == "robot" else "Gazebo files start with <sdf version=...>.")
+        self.files[path] = None
+        self._trees[path] = root
+        return root
+
+    def find_model(self, name: str, where: Location) -> Path:
+        """The folder of model NAME: ROOT/NAME or ROOT/models/NAME for the first root that has it."""
+        for root in self.roots:
+            for candidate in (root / name, root / "models" / name):
+                if candidate.is_dir():
+                    self._add_local(candidate.parent)
+                    return candidate
+        listing = "; ".join(str(r) for r in self.roots)
+        raise WorldError(f"model '{name}' not found. Folders searched: {listing}", location=where,
+                         hint="Add the folder holding it to GAZEBO_MODEL_PATH, GZ_SIM_RESOURCE_PATH "
+                              f"or MOBOT_RESOURCE_PATH (separated by '{os.pathsep}').")
+
+    def include_file(self, uri: str, file: Path, where: Location, reader) -> Path | None:
+        """The SDF file an include URI names; None when it is missing and skipping is on."""
+        try:
+            if uri.startswith(("http://", "https://")):
+                folder = _fuel_cache(uri)
+                if folder is None:
+                    raise WorldError(
+                        f"'{uri}' is on Gazebo Fuel and mobot never downloads: it needs a local copy",
+                        location=where, hint="Run `gz fuel download -u \"URI\"` (mobot reads Fuel's "
+                        "cache in ~/.gz/fuel), or copy the model into a folder on GAZEBO_MODEL_PATH "
+                        f"and include it as model://NAME. {SKIP_HINT}")
+            elif uri.startswith("model://"):
+                name, _, rest = uri[len("model://"):].partition("/")
+                folder = self.find_model(unquote(name), where) / unquote(rest)
+            else:
+                folder = self.local_file(uri, file, where)
+            target = model_sdf(folder) if folder.is_dir() else folder
+        except MobotError as exc:
+            if not reader.skip_missing:
+                if isinstance(exc, WorldError):
+                    raise
+                raise WorldError(exc.message, location=where, hint=exc.hint) from None
+            reader.warn(f"include left out: {exc.message}", where)
+            return None
+        if folder.is_dir() and (folder / "model.config").is_file():
+            self.files[(folder / "model.config").resolve()] = None
+        return target.resolve()
+
+    def local_file(self, uri: str, file: Path, where: Location) -> Path:
+        """A file:// URI, absolute path or path relative to ``file``, its package or the roots."""
+        text = unquote(uri[len("file://"):] if uri.startswith("file://") else uri)
+        text = os.path.expanduser(text)
+        if "://" in text:
+            raise WorldError(f"cannot resolve '{uri}': only model://, file://, package:// and "
+                             "paths are supported", location=where,
+                             hint="Nothing is fetched from the network; use a local copy.")
+        if os.path.isabs(text):
+            bases, rel = [Path("/")], text.lstrip("/")
+        else:
+            folder = Path(file).resolve().parent
+            bases = [folder, _package_root(folder), *self.roots]
+            bases = list(dict.fromkeys(b for b in bases if b is not None))
+            rel = text
+        for base in bases:
+            if (base / rel).exists():
+                return (base / rel).resolve()
+        for base in bases:
+            real = case_variant(base / rel)
+            if real is not None:
+                raise WorldError(
+                    f"'{uri}' not found: {real.parent} has '{real.name}', which differs only in "
+                    f"case from '{Path(rel).name}'", location=where,
+                    hint="File names are case-sensitive here: rename the file or fix the URI. "
+                         + SKIP_HINT)
+        raise WorldError(f"'{uri}' not found. Folders searched: "
+                         + "; ".join(str(b) for b in bases), location=where,
+                         hint="Check the file name; relative URIs are relative to the file that "
+                              "names them or to its package.")
+
+    def mesh_path(self, uri: str, file: Path, where: Location) -> Path:
+        """The file of a <mesh><uri>; a located WorldError when it cannot be found."""
+        if uri.startswith("model://"):
+            name, _, rest = uri[len("model://"):].partition("/")
+            path = self.find_model(unquote(name), where) / unquote(rest)
+            if path.is_file():
+                return path.resolve()
+            real = case_variant(path)
+            if real is not None:
+                raise WorldError(f"mesh '{uri}' not found: {real.parent} has '{real.name}', which "
+                                 f"differs only in case from '{path.name}'", location=where,
+                                 hint="File names are case-sensitive here: rename the file or fix "
+                                      "the URI. " + SKIP_HINT)
+            raise WorldError(f"mesh '{uri}' not found: {path} does not exist", location=where,
+                             hint="Check the file name and that the model folder is complete. "
+                                  + SKIP_HINT)
+        if uri.startswith("package://"):
+            try:
+                return self.resolver.resolve_uri(uri, file)
+            except MobotError as exc:
+                raise WorldError(exc.message, location=where, hint=exc.hint) from None
+        if uri.startswith(("http://", "https://")):
+            raise WorldError(f"mesh '{uri}' is on the network and mobot never downloads",
+                             location=where, hint="Use a local copy of the mesh. " + SKIP_HINT)
+        try:
+            return self.local_file(uri, file, where)
+        except WorldError as exc:
+            hint = exc.hint if SKIP_HINT in (exc.hint or "") else f"{exc.hint} {SKIP_HINT}"
+            raise WorldError(f"mesh {exc.message}", location=exc.location, hint=hint) from None
+
+
+def case_variant(path: Path) -> Path | None:
+    """The existing path that matches ``path`` when case is ignored, if there is one."""
+    path = Path(path)
+    current = Path(path.anchor or ".")
+    for part in path.parts[1:] if path.anchor else path.parts:
+        exact = current / part
+        if exact.exists():
+            current = exact
+            continue
+        try:
+            matches = [e for e in os.listdir(current) if e.lower() == part.lower()]
+        except OSError:
+            return None
+        if not matches:
+            return None
+        current = current / sorted(matches)[0]
+    return current if current != path else None
+
+
+def _package_root(folder: Path) -> Path | None:
+    for candidate in (folder, *folder.parents):
+        if (candidate / "package.xml").is_file():
+            return candidate
+    return None
+
+
+def _fuel_cache(uri: str) -> Path | None:
+    """The newest local copy of a Fuel model URL in Gazebo's cache, if one was downloaded."""
+    url = urlparse(uri)
+    parts = [unquote(p) for p in url.path.split("/") if p]
+    if len(parts) >= 2 and parts[0][:1].isdigit():  # ".../1.0/OWNER/models/NAME[/VERSION]"
+        parts = parts[1:]
+    if len(parts) < 3 or parts[1].lower() != "models":
+        return None
+    owner, name = parts[0].lower(), parts[2].lower()
+    version = parts[3] if len(parts) > 3 and parts[3].isdigit() else None
+    caches = [os.environ.get("GZ_FUEL_CACHE_PATH", ""), *FUEL_CACHES]
+    for cache in filter(None, caches):
+        folder = Path(cache).expanduser() / url.netloc / owner / "models" / name
+        if not folder.is_dir():
+            continue
+        versions = sorted((p for p in folder.iterdir() if p.name.isdigit()),
+                          key=lambda p: int(p.name))
+        chosen = folder / version if version else (versions[-1] if versions else None)
+        if chosen is not None and chosen.is_dir():
+            return chosen
+    return None

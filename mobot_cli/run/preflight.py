@@ -1,0 +1,19 @@
+"""Checks that need the physics but not a run: a world builds, the robots spawn where asked."""
+
+from __future__ import annotations
+
+from mobot_cli.sim.plan import Physics, Plan, WorldPlan
+from mobot_cli.sim.world import World
+
+
+def check_world(world: WorldPlan) -> None:
+    """Build the world in PyBullet once (every mesh loads), then drop it."""
+    with World(Physics(), world):
+        pass
+
+
+def check_spawns(plan: Plan) -> None:
+    """Build the plan's world and spawn its robots as a run would; SpawnError when one is refused."""
+    with World(plan.physics, plan.world, seed=plan.seed) as world:
+        for robot in plan.robots:
+            world.spawn(robot)
