@@ -1,0 +1,27 @@
+"""`mobot delete NAME`: remove a robot from the live world."""
+
+from __future__ import annotations
+
+from typing import Optional
+
+import typer
+
+from mobot_cli.cli import live_common
+from mobot_cli.errors import ExitCode
+
+
+def delete(
+    name: str = typer.Argument(..., help="The robot to remove."),
+    endpoint: Optional[str] = live_common.ENDPOINT,
+    timeout: float = typer.Option(5.0, "--timeout", help=live_common.TIMEOUT_HELP),
+    json_: bool = typer.Option(False, "--json", help="Print the reply as JSON."),
+) -> int:
+    """Remove a robot from the live world."""
+    with live_common.client(endpoint, timeout) as world:
+        reply = world.call("delete", name=name)
+    if json_:
+        live_common.json_out(reply)
+    live_common.checked(reply)
+    if not json_:
+        live_common.say(f"deleted '{name}' at t={reply['t']:.3f} s")
+    return ExitCode.OK

@@ -1,0 +1,25 @@
+"""`mobot list`: the robots in the live world, with their poses and commands."""
+
+from __future__ import annotations
+
+from typing import Optional
+
+import typer
+
+from mobot_cli.cli import live_common
+from mobot_cli.errors import ExitCode
+
+
+def list_(
+    endpoint: Optional[str] = live_common.ENDPOINT,
+    timeout: float = typer.Option(5.0, "--timeout", help=live_common.TIMEOUT_HELP),
+    json_: bool = typer.Option(False, "--json", help="Print the reply as JSON."),
+) -> int:
+    """List the robots in the live world: name, namespace, pose, command."""
+    with live_common.client(endpoint, timeout) as world:
+        reply = live_common.checked(world.call("list"))
+    if json_:
+        live_common.json_out(reply)
+    else:
+        live_common.robot_table(reply["robots"])
+    return ExitCode.OK

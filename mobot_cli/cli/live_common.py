@@ -1,0 +1,84 @@
+"""What the live-world commands share: the endpoint and timeout options, the client, the printing.
+
+Plain text only (no Rich), so `mobot list` and `mobot odom` answer fast.
+"""
+
+from __future__ import annotations
+
+import sys
+from typing import Any, Optional
+
+import typer
+
+from mobot_cli.errors import RequestRefused
+
+ENDPOINT = typer.Option(None, "--endpoint", "-e", metavar="ENDPOINT",
+                        help="Where the live world listens [default: $MOBOT_ENDPOINT, else "
+                             "ipc://$XDG_RUNTIME_DIR/mobot/mobot.sock].")
+TIMEOUT_HELP = "Seconds to wait for the reply (exit 4 when nothing answers)."
+
+
+def client(endpoint: Optional[str], timeout: float):
+    """A Client of the live world (ZeroMQ is imported only when a command runs)."""
+    from mobot_cli.live.client import Client
+
+    return Client(endpoint, timeout=timeout)
+
+
+def checked(reply: dict[str, Any]) -> dict[str, Any]:
+    """The reply, or RequestRefused (exit 2) printing its result code and message."""
+    if not reply.get("ok"):
+        raise RequestRefused(str(reply.get("result")), str(reply.get("message")))
+    return reply
+
+
+def json_out(reply: Any) -> None:
+    """A reply as JSON on stdout (printed for refused requests too, before the error)."""
+    from mobot_cli.cli.output import emit_json
+
+    emit_json(reply)
+
+
+def say(line: str) -> None:
+    """One line on stdout."""
+    sys.stdout.write(line + "\n")
+    sys.stdout.flush()
+
+
+def status(line: str) -> None:
+    """One line on stderr: what the server is doing (stdout stays for data)."""
+    sys.stderr.write(f"mobot: {line}\n")
+    sys.stderr.flush()
+
+
+def pose_text(pose: dict[str, Any]) -> str:
+    """x=.. y=.. z=.. yaw=.. of a reply's pose."""
+    return " ".join(f"{k}={_f(pose.get(k))}" for k in ("x", "y", "z", "yaw"))
+
+
+def robot_table(robots: list[dict[str, Any]]) -> None:
+    """The robots of `mobot list`, one line each under a header."""
+    if not robots:
+        say("no robots in the live world")
+        return
+    rows = [("NAME", "NAMESPACE", "X", "Y", "Z", "YAW", "LINEAR", "ANGULAR")]
+    for robot in robots:
+        pose, cmd = robot["pose"], robot["cmd"]
+        rows.append((robot["name"], robot["namespace"] or "", *(_f(pose.get(k)) for k in ("x", "y", "z", "yaw")),
+                     _f(cmd["linear"]), _f(cmd["angular"])))
+    widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
+    for row in rows:
+        say("  ".join(cell.ljust(w) if i < 2 else cell.rjust(w)
+                      for i, (cell, w) in enumerate(zip(row, widths))).rstrip())
+
+
+def odom_line(reply: dict[str, Any]) -> str:
+    """One odometry reading: time, odom (spawn-pose frame), ground truth and command."""
+    o, t, c = reply["odom"], reply["truth"], reply["cmd"]
+    return (f"t={reply['t']:.3f} {reply['name']}  odom x={_f(o['x'])} y={_f(o['y'])} yaw={_f(o['yaw'])} "
+            f"vx={_f(o['vx'])} wz={_f(o['wz'])}  true x={_f(t['x'])} y={_f(t['y'])} yaw={_f(t['yaw'])}  "
+            f"cmd {_f(c['linear'])} {_f(c['angular'])}")
+
+
+def _f(value: Any) -> str:
+    return "nan" if value is None else f"{value:.3f}".replace("-0.000", "0.000")

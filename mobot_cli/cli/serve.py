@@ -1,0 +1,67 @@
+"""`mobot serve [WORLD or SCENARIO]`: keep a headless world running and answer live requests."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from mobot_cli.cli import live_common, output
+from mobot_cli.errors import ExitCode, UsageError
+
+
+def serve(
+    target: Optional[str] = typer.Argument(None, metavar="[WORLD or SCENARIO]",
+                                           help="A world (bundled name or file) or a scenario .yaml [default: empty]."),
+    endpoint: Optional[str] = live_common.ENDPOINT,
+    bind_any: bool = typer.Option(False, "--bind-any", help="Allow a TCP endpoint that is not loopback."),
+    realtime: bool = typer.Option(False, "--realtime", help="Step in real time (the default)."),
+    fast: bool = typer.Option(False, "--fast", help="Step as fast as possible."),
+    rtf: Optional[float] = typer.Option(None, "--rtf", metavar="X", help="Step at X times real time."),
+    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Record odometry, history and a summary here."),
+    set_: list[str] = typer.Option([], "--set", help="Override a key, e.g. physics.rate_hz=480 (repeatable)."),
+    duration: Optional[float] = typer.Option(None, "--duration", help="Stop after this many simulated seconds."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),
+) -> int:
+    """Keep a headless world running; spawn, delete, drive and read robots with the other commands."""
+    from mobot_cli.live.endpoint import default_endpoint
+    from mobot_cli.live.server import LiveServer, pace_text
+    from mobot_cli.live.start import serve_plan
+    from mobot_cli.scenario.units import steps
+
+    pace = _pace(realtime, fast, rtf)
+    if duration is not None and not duration > 0:
+        raise UsageError(f"--duration {duration:g} must be above zero")
+    prepared = serve_plan(target, set_)
+    plan = prepared.plan
+    output.notices(plan.notices, quiet=quiet)
+    stop_after = steps(duration, plan.physics.rate_hz) if duration is not None else None
+    server = LiveServer(plan, endpoint or default_endpoint(), rtf=pace, bind_any=bind_any,
+                        out_dir=out, resolved_yaml=prepared.resolved_yaml, stop_after=stop_after)
+
+    def ready(where: str) -> None:
+        if not quiet:
+            live_common.status(f"serving '{plan.name}' (world {plan.world.name}, {len(plan.robots)} robot(s)) "
+                               f"at {where}, {pace_text(pace)}, {plan.physics.rate_hz} Hz. "
+                               "Stop with Ctrl-C or `mobot stop`.")
+
+    result = server.serve(ready)
+    if not quiet:
+        t = result["steps"] / plan.physics.rate_hz
+        where = f"; record in {out}" if out is not None else ""
+        live_common.status(f"stopped after {t:.3f} s simulated, {sum(result['requests'].values())} "
+                           f"request(s){where}")
+    if result["status"] == "fault":
+        live_common.status(f"error: {result['error']}")
+        return ExitCode.SIMULATION_FAULT
+    return ExitCode.OK
+
+
+def _pace(realtime: bool, fast: bool, rtf: Optional[float]) -> Optional[float]:
+    """Real-time factor: 1.0 by default, None for --fast."""
+    if sum((realtime, fast, rtf is not None)) > 1:
+        raise UsageError("give only one of --realtime, --fast and --rtf")
+    if rtf is not None and not 0 < rtf <= 1000:
+        raise UsageError(f"--rtf {rtf:g} must be above 0 and at most 1000", hint="Use --fast for no pacing.")
+    return None if fast else (rtf or 1.0)

@@ -1,0 +1,65 @@
+"""`mobot spawn NAME`: spawn a robot into the live world, with spawn_entity.py's flags."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from mobot_cli.cli import live_common, output
+from mobot_cli.cli.args import parse_mappings
+from mobot_cli.errors import ExitCode, UsageError
+
+
+def spawn(
+    name: str = typer.Argument(..., help="The robot's name (unique in the world)."),
+    mappings: list[str] = typer.Argument(None, metavar="[NAME:=VALUE]...", help="xacro arguments."),
+    file: Optional[str] = typer.Option(None, "--file", "-f", help="A .urdf/.xacro path or a bundled robot name."),
+    string: Optional[str] = typer.Option(None, "--string", help="The URDF or xacro text itself."),
+    stdin: bool = typer.Option(False, "--stdin", help="Read the URDF or xacro text from standard input."),
+    x: float = typer.Option(0.0, "-x", help="Position, m."),
+    y: float = typer.Option(0.0, "-y", help="Position, m."),
+    z: Optional[float] = typer.Option(None, "-z", help="Height, m [default: rest on the floor]."),
+    roll: float = typer.Option(0.0, "-R", help="Roll, rad."),
+    pitch: float = typer.Option(0.0, "-P", help="Pitch, rad."),
+    yaw: float = typer.Option(0.0, "-Y", help="Yaw, rad."),
+    quat: Optional[tuple[float, float, float, float]] = typer.Option(
+        None, "--quat", metavar="X Y Z W", help="Orientation as a quaternion instead of -R -P -Y."),
+    namespace: Optional[str] = typer.Option(None, "--namespace", help="ROS namespace [default: /NAME]."),
+    reference_frame: Optional[str] = typer.Option(None, "--reference-frame", metavar="ENTITY",
+                                                  help="Give the pose relative to this robot [default: world]."),
+    allow_renaming: bool = typer.Option(False, "--allow-renaming",
+                                        help="If NAME is taken, use NAME_0, NAME_1, ... instead of failing."),
+    endpoint: Optional[str] = live_common.ENDPOINT,
+    timeout: float = typer.Option(30.0, "--timeout", help=live_common.TIMEOUT_HELP),
+    json_: bool = typer.Option(False, "--json", help="Print the reply as JSON."),
+) -> int:
+    """Spawn a robot; the reply comes once it exists and passed the collision check."""
+    sources = [s for s in (file is not None, string is not None, stdin) if s]
+    if len(sources) != 1:
+        raise UsageError("give exactly one of --file, --string and --stdin",
+                         hint="For example: mobot spawn r1 --file mobot -x 1.0 -y 2.0")
+    if quat is not None and (roll or pitch or yaw):
+        raise UsageError("give the orientation either as --quat or as -R -P -Y, not both")
+    text = sys.stdin.read() if stdin else string
+    pose: dict = {"xyz": [x, y, "auto" if z is None else z]}
+    if quat is not None:
+        pose["quat"] = list(quat)
+    else:
+        pose["rpy"] = [roll, pitch, yaw]
+    fields = {"description": file, "urdf": text, "pose": pose, "args": parse_mappings(mappings or []),
+              "namespace": namespace, "reference_frame": reference_frame, "allow_renaming": allow_renaming,
+              "base_dir": str(Path.cwd())}
+    with live_common.client(endpoint, timeout) as world:
+        reply = world.call("spawn", name=name, **{k: v for k, v in fields.items() if v is not None})
+    if json_:
+        live_common.json_out(reply)
+    live_common.checked(reply)
+    output.notices(reply.get("notices", []), quiet=json_)
+    if not json_:
+        renamed = f" (renamed from '{name}')" if reply["renamed"] else ""
+        live_common.say(f"spawned '{reply['name']}'{renamed} in {reply['namespace']} at "
+                        f"{live_common.pose_text(reply['pose'])}, t={reply['t']:.3f} s")
+    return ExitCode.OK

@@ -1,0 +1,122 @@
+"""A small client of the live world; the CLI uses it, and so can any Python program.
+
+    from mobot_cli.live.client import Client
+    with Client() as world:                      # $MOBOT_ENDPOINT or the default IPC socket
+        world.spawn("r1", description="mobot", pose={"x": 1.0, "y": 2.0})
+        world.cmd("r1", linear=0.2, for_=2.0, wait=True)
+        print(world.odom("r1")["odom"]["x"])
+
+Every method returns the reply document and raises RequestRefused when the world refuses
+(``reply["result"]`` names why) or LiveWorldError when nothing answers within ``timeout``.
+"""
+
+from __future__ import annotations
+
+import itertools
+import os
+import time
+from typing import Any
+
+import zmq
+
+from mobot_cli.errors import LiveWorldError, RequestRefused
+from mobot_cli.live import endpoint as endpoints
+from mobot_cli.live.protocol import HARD_LIMIT_BYTES, decode_reply, encode
+
+START_HINT = "Start one with `mobot serve` (in another terminal), or point --endpoint / MOBOT_ENDPOINT at it."
+
+
+class Client:
+    """One connection to a live world; requests are answered in order, one at a time."""
+
+    def __init__(self, endpoint: str | None = None, timeout: float = 5.0):
+        self.endpoint = endpoints.check(endpoint or endpoints.default_endpoint(), bind_any=True)
+        self.timeout = timeout
+        self._ids = itertools.count(1)
+        self._context = zmq.Context.instance()
+        self._socket: zmq.Socket | None = None
+
+    def _connect(self) -> zmq.Socket:
+        if self._socket is None:
+            path = endpoints.ipc_path(self.endpoint)
+            if path is not None and not os.path.exists(path):
+                raise LiveWorldError(f"no live world at {self.endpoint} (no socket file)", hint=START_HINT)
+            # DEALER with an empty delimiter frame: the server sees what a REQ socket sends,
+            # but a late reply to a timed-out request cannot wedge the socket.
+            socket = self._context.socket(zmq.DEALER)
+            socket.setsockopt(zmq.LINGER, 0)
+            socket.setsockopt(zmq.MAXMSGSIZE, HARD_LIMIT_BYTES)
+            socket.connect(self.endpoint)
+            self._socket = socket
+        return self._socket
+
+    def request(self, op: str, timeout: float | None = None, **fields: Any) -> dict[str, Any]:
+        """Send one request and wait for its reply; RequestRefused unless it is OK."""
+        reply = self.call(op, timeout=timeout, **fields)
+        if not reply.get("ok"):
+            raise RequestRefused(str(reply.get("result")), str(reply.get("message")))
+        return reply
+
+    def call(self, op: str, timeout: float | None = None, **fields: Any) -> dict[str, Any]:
+        """Send one request and return its reply, refused or not; LiveWorldError on silence."""
+        socket = self._connect()
+        request_id = next(self._ids)
+        socket.send_multipart([b"", encode({"op": op, "id": request_id, **fields})])
+        limit = self.timeout if timeout is None else timeout
+        deadline = time.monotonic() + limit
+        while socket.poll(max(0, int(1000 * (deadline - time.monotonic())))):
+            reply = decode_reply(socket.recv_multipart()[-1])
+            if reply is not None and reply.get("id") == request_id:
+                return reply
+            # Otherwise a late reply to an earlier request that timed out: skip it.
+        self.close()  # drop the unanswered request so a later one does not read its reply
+        raise LiveWorldError(f"no live world answered at {self.endpoint} within {limit:g} s",
+                             hint=START_HINT)
+
+    def ping(self) -> dict[str, Any]:
+        """World name, step, sim time, robot count, pace."""
+        return self.request("ping")
+
+    def spawn(self, name: str, *, description: str | None = None, urdf: str | None = None,
+              timeout: float | None = None, **fields: Any) -> dict[str, Any]:
+        """Spawn a robot; the reply carries its final name, namespace and pose."""
+        body = {k: v for k, v in {"description": description, "urdf": urdf, **fields}.items()
+                if v is not None}
+        return self.request("spawn", timeout=timeout, name=name, **body)
+
+    def delete(self, name: str) -> dict[str, Any]:
+        """Remove a robot."""
+        return self.request("delete", name=name)
+
+    def list(self) -> list[dict[str, Any]]:
+        """The robots in the world, in spawn order."""
+        return self.request("list")["robots"]
+
+    def cmd(self, name: str, linear: float = 0.0, angular: float = 0.0, for_: float | None = None,
+            wait: bool = False, timeout: float | None = None) -> dict[str, Any]:
+        """Command a body twist; with ``for_`` it ends with a stop, with ``wait`` the reply waits for it."""
+        fields: dict[str, Any] = {"name": name, "linear": linear, "angular": angular}
+        if for_ is not None:
+            fields["for"] = for_
+            fields["wait"] = wait
+        return self.request("cmd", timeout=timeout, **fields)
+
+    def odom(self, name: str) -> dict[str, Any]:
+        """The robot's odometry, ground truth and command now."""
+        return self.request("odom", name=name)
+
+    def stop(self) -> dict[str, Any]:
+        """Shut the world down cleanly (it writes its record first)."""
+        return self.request("stop")
+
+    def close(self) -> None:
+        """Close the connection (the next request opens a new one)."""
+        if self._socket is not None:
+            self._socket.close(linger=0)
+            self._socket = None
+
+    def __enter__(self) -> Client:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

@@ -1,0 +1,100 @@
+"""The live world's wire format: one JSON object per message, result codes as in ROS.
+
+A request is ``{"op": OP, "id": ANY, ...fields}``; the reply echoes ``id`` and carries
+``ok``, ``result`` (a name below) and ``message``, plus the op's own fields. Result names
+and numbers follow ROS 2's simulation_interfaces (``msg/Result`` and ``srv/SpawnEntity``),
+with ``INVALID_REQUEST`` added for messages that are not a valid request at all.
+This module stays light (no pydantic, no zmq) so the CLI client imports it cheaply.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from enum import IntEnum
+from typing import Any
+
+PROTOCOL_VERSION = 1
+# A request larger than this is refused with INVALID_REQUEST (robot descriptions sent with
+# --string are the only big ones; 4 MiB holds any URDF in the corpus many times over).
+MAX_REQUEST_BYTES = 4 * 1024 * 1024
+# Larger frames are dropped by ZeroMQ itself before they reach Python (memory safety).
+HARD_LIMIT_BYTES = 64 * 1024 * 1024
+
+OPS = ("ping", "spawn", "delete", "list", "cmd", "odom", "stop")
+
+
+class Result(IntEnum):
+    """Outcome of a request; names and numbers as in simulation_interfaces."""
+
+    FEATURE_UNSUPPORTED = 0  # an op the server does not know
+    OK = 1
+    NOT_FOUND = 2  # no robot (or reference frame) of that name
+    INCORRECT_STATE = 3  # the world is shutting down
+    OPERATION_FAILED = 4  # anything else that went wrong
+    NAME_NOT_UNIQUE = 101
+    NAME_INVALID = 102
+    UNSUPPORTED_FORMAT = 103
+    NO_RESOURCE = 104
+    NAMESPACE_INVALID = 105
+    RESOURCE_PARSE_ERROR = 106
+    MISSING_ASSETS = 107
+    UNSUPPORTED_ASSETS = 108
+    INVALID_POSE = 109
+    INVALID_REQUEST = 900  # not in simulation_interfaces: malformed, oversized, bad fields
+
+
+class Refusal(Exception):
+    """A request the server refuses; becomes a reply with ``ok: false``."""
+
+    def __init__(self, result: Result, message: str):
+        super().__init__(message)
+        self.result = result
+        self.message = message
+
+
+def encode(document: dict[str, Any]) -> bytes:
+    """One message: compact UTF-8 JSON; NaN and infinity are not JSON and never sent."""
+    return json.dumps(document, separators=(",", ":"), allow_nan=False, default=_plain).encode()
+
+
+def decode(frame: bytes) -> dict[str, Any]:
+    """Parse one request; Refusal(INVALID_REQUEST) for anything but a JSON object with an op."""
+    if len(frame) > MAX_REQUEST_BYTES:
+        raise Refusal(Result.INVALID_REQUEST, f"request of {len(frame)} bytes is larger than the "
+                      f"limit of {MAX_REQUEST_BYTES} bytes")
+    try:
+        document = json.loads(frame.decode("utf-8"), parse_constant=_no_constant)
+    except (UnicodeDecodeError, ValueError) as exc:
+        raise Refusal(Result.INVALID_REQUEST, f"request is not UTF-8 JSON: {exc}") from None
+    if not isinstance(document, dict):
+        raise Refusal(Result.INVALID_REQUEST, "a request must be a JSON object with an 'op'")
+    op = document.get("op")
+    if not isinstance(op, str):
+        raise Refusal(Result.INVALID_REQUEST, "a request needs 'op', a string: one of " + ", ".join(OPS))
+    return document
+
+
+def decode_reply(frame: bytes) -> dict[str, Any] | None:
+    """A reply document, or None for a frame that is not one (the client skips it)."""
+    try:
+        document = json.loads(frame.decode("utf-8"))
+    except (UnicodeDecodeError, ValueError):
+        return None
+    return document if isinstance(document, dict) else None
+
+
+def reply(request_id: Any, result: Result = Result.OK, message: str = "", **fields: Any) -> dict[str, Any]:
+    """A reply document; ``ok`` is true only for Result.OK."""
+    return {"id": request_id, "ok": result == Result.OK, "result": result.name, "code": int(result),
+            "message": message, **fields}
+
+
+def _no_constant(name: str) -> Any:
+    raise ValueError(f"{name} is not a number JSON allows")
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return str(value)

@@ -1,0 +1,116 @@
+"""Typed live requests: every field checked before the world is touched.
+
+Pose and xacro arguments reuse the scenario's own models, so a pose a scenario accepts is a
+pose a spawn request accepts, with the same checks.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal, Optional, Union
+
+from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
+
+from mobot_cli.live.protocol import OPS, Refusal, Result
+from mobot_cli.scenario.model import NAME_RE, NAMESPACE_RE, PoseSpec
+
+MAX_NAME = 256
+Name = Annotated[str, Field(min_length=1, max_length=MAX_NAME)]
+# Spawn request fields whose problems have their own result code.
+FIELD_RESULTS = {"name": Result.NAME_INVALID, "namespace": Result.NAMESPACE_INVALID,
+                 "pose": Result.INVALID_POSE}
+
+
+class Request(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+
+    id: Any = None
+
+
+class Ping(Request):
+    op: Literal["ping"]
+
+
+class ListRobots(Request):
+    op: Literal["list"]
+
+
+class Stop(Request):
+    op: Literal["stop"]
+
+
+class Delete(Request):
+    op: Literal["delete"]
+    name: Name
+
+
+class Odom(Request):
+    op: Literal["odom"]
+    name: Name
+
+
+class Cmd(Request):
+    op: Literal["cmd"]
+    name: Name
+    linear: float = 0.0
+    angular: float = 0.0
+    for_: Optional[Annotated[float, Field(gt=0, le=1e6)]] = Field(default=None, alias="for")
+    wait: bool = False  # with 'for': reply when the command has ended
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True, populate_by_name=True)
+
+
+class Spawn(Request):
+    op: Literal["spawn"]
+    name: str
+    description: Optional[Name] = None  # a bundled name, a path, or a package:// URI
+    urdf: Optional[str] = None  # URDF or xacro text (mobot spawn --string / --stdin)
+    args: dict[str, Union[str, bool, int, float]] = Field(default_factory=dict)
+    pose: PoseSpec = Field(default_factory=PoseSpec)
+    namespace: Optional[str] = None  # default /<final name>
+    reference_frame: Optional[str] = None  # a robot's name; None, "" or "world": the world
+    allow_renaming: bool = False
+    base_dir: Optional[str] = None  # the client's folder: relative paths resolve against it
+
+
+AnyRequest = Annotated[Union[Ping, ListRobots, Stop, Delete, Odom, Cmd, Spawn], Field(discriminator="op")]
+_ADAPTER: TypeAdapter = TypeAdapter(AnyRequest)
+
+
+def parse(document: dict[str, Any]) -> Request:
+    """A decoded request to its typed form, or a Refusal saying which field is wrong."""
+    if document["op"] not in OPS:
+        raise Refusal(Result.FEATURE_UNSUPPORTED,
+                      f"unknown request op '{document['op']}': this server knows " + ", ".join(OPS))
+    try:
+        request = _ADAPTER.validate_python(document)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        loc = [str(part) for part in err["loc"][1:]]  # [0] is the union tag
+        field = ".".join("for" if part == "for_" else part for part in loc) or "request"
+        message = err["msg"].removeprefix("Value error, ")
+        result = Result.INVALID_REQUEST
+        if document["op"] == "spawn" and loc and loc[0] in FIELD_RESULTS and err["type"] != "missing":
+            result = FIELD_RESULTS[loc[0]]
+        raise Refusal(result, f"{document['op']} request, field '{field}': {message}") from None
+    if isinstance(request, Spawn):
+        check_spawn(request)
+    return request
+
+
+def check_spawn(request: Spawn) -> None:
+    """What a spawn request must hold beyond its field types."""
+    if not NAME_RE.match(request.name) or len(request.name) > MAX_NAME:
+        shown = request.name if len(request.name) <= 60 else request.name[:57] + "..."
+        raise Refusal(Result.NAME_INVALID, f"'{shown}' is not a valid robot name: use letters, "
+                      f"digits and '_', not starting with a digit, at most {MAX_NAME} characters")
+    if request.namespace is not None and not NAMESPACE_RE.match(normalize_namespace(request.namespace)):
+        raise Refusal(Result.NAMESPACE_INVALID, f"'{request.namespace}' is not a valid ROS namespace: "
+                      "names of letters, digits and '_' separated by '/', e.g. /robot1")
+    if (request.description is None) == (request.urdf is None):
+        raise Refusal(Result.INVALID_REQUEST, "a spawn request needs exactly one of 'description' "
+                      "(a bundled name or a file) and 'urdf' (the text)")
+
+
+def normalize_namespace(namespace: str) -> str:
+    """'r1' and '/r1/' mean '/r1', as spawn_entity.py's -robot_namespace takes them."""
+    return "/" + namespace.strip("/")

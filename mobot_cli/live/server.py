@@ -1,0 +1,348 @@
+"""The live world's server: one thread steps the World and answers requests between steps.
+
+Between two physics steps the server answers requests for a bounded time (until the next
+step is due in real time, a short slice in --fast), so neither a flood of requests nor a
+slow or vanished client stops the clock: a ROUTER socket never blocks on send, and a reply
+to a peer that is gone is dropped. Robot descriptions load in a worker thread; the robot
+is spawned (placed and collision-checked) between steps, and only then is the spawn answered.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import threading
+import time
+from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import zmq
+
+from mobot_cli import __version__
+from mobot_cli.errors import MobotError, SimulationFault, UsageError
+from mobot_cli.live import endpoint as endpoints
+from mobot_cli.live import protocol, schema, spawning
+from mobot_cli.live.protocol import Refusal, Result
+from mobot_cli.live.recorder import Recorder
+from mobot_cli.live.session import Session
+from mobot_cli.run.timeline import Script, sample
+from mobot_cli.sim.plan import Plan
+from mobot_cli.sim.world import World
+
+# In --fast mode requests get at most as much wall time between two steps as the last step
+# took (so a flood of requests at least halves, never stops, the world), within these bounds.
+FAST_SLICE = (0.0001, 0.002)  # s
+# A robot description loads in a worker thread, which needs the GIL. A --fast loop that
+# only ever polls with a zero timeout takes the GIL straight back and starves it (CPython
+# hands the GIL to a waiting thread only when nobody else took it meanwhile), so while a
+# load is pending the loop waits this long for requests, lending the GIL to the loader.
+LEND_GIL_MS = 1
+MAX_LAG = 0.25  # s: a real-time world further behind than this drops the lost time
+
+
+@dataclass
+class _Pending:
+    """A reply the server owes: a spawn whose robot is loading, or a `cmd --wait`."""
+
+    envelope: list[bytes]
+    request: Any
+    future: Future | None = None  # spawn: the loader's result
+    until: int | None = None  # cmd: the step at which the command ends
+
+
+@dataclass
+class Clock:
+    """Paces steps to the wall clock at ``rtf`` times real time; ``rtf`` None: as fast as possible."""
+
+    dt: float
+    rtf: float | None
+    start: float = field(default_factory=time.monotonic)
+    count: int = 0
+    lags: int = 0  # how often the world fell behind and dropped the lost time
+
+    def due(self) -> float | None:
+        """Wall time at which the next step is due; None in fast mode."""
+        return None if self.rtf is None else self.start + (self.count + 1) * self.dt / self.rtf
+
+    def stepped(self) -> None:
+        """Count a step; a world too far behind starts its clock afresh instead of racing."""
+        self.count += 1
+        due = self.due()
+        if due is not None and time.monotonic() - due > MAX_LAG:
+            self.start = time.monotonic() - self.count * self.dt / self.rtf
+            self.lags += 1
+
+
+class LiveServer:
+    """Serve ``plan``'s world; its robots, command scripts and events play as in `mobot run`."""
+
+    def __init__(self, plan: Plan, endpoint: str, *, rtf: float | None = 1.0, bind_any: bool = False,
+                 out_dir: Path | None = None, resolved_yaml: str = "", stop_after: int | None = None):
+        self.plan, self.rtf, self.stop_after = plan, rtf, stop_after
+        self.out_dir, self.resolved_yaml = out_dir, resolved_yaml
+        self.recorder: Recorder | None = None  # opened once the world is up and listening
+        self.endpoint = endpoints.check(endpoint, bind_any)
+        self.session: Session | None = None
+        self.stopping = False
+        self.status, self.error = "ok", None
+        self.counts: dict[str, int] = {}
+        self._socket: zmq.Socket | None = None
+        self._spawns: list[_Pending] = []
+        self._waits: list[_Pending] = []
+        self._loader = ThreadPoolExecutor(max_workers=1, thread_name_prefix="mobot-loader")
+        self._handlers: dict[str, Callable] = {
+            "ping": self._ping, "list": self._list, "spawn": self._spawn, "delete": self._delete,
+            "cmd": self._cmd, "odom": self._odom, "stop": self._stop}
+
+    def serve(self, ready: Callable[[str], None] | None = None) -> dict[str, Any]:
+        """Run until `stop`, SIGINT/SIGTERM or ``stop_after`` steps; returns status and counts."""
+        restore = _catch_signals(self)
+        try:
+            with World(self.plan.physics, self.plan.world, seed=self.plan.seed) as world:
+                self._bind()
+                if self.out_dir is not None:
+                    self.recorder = Recorder(self.out_dir, self.plan, self.resolved_yaml)
+                self.session = Session(self.plan, world, self.recorder)
+                self.session.start()
+                if ready:
+                    ready(self.endpoint)
+                self._loop(self.session, Script(self.plan), Clock(self.plan.physics.dt, self.rtf))
+        except BaseException as exc:  # the summary must not say "ok" for a world that broke
+            if self.status == "ok" and not isinstance(exc, KeyboardInterrupt):
+                self.status, self.error = "fault", str(exc) or repr(exc)
+            raise
+        finally:
+            self._shutdown()
+            restore()
+        return {"status": self.status, "error": self.error, "steps": self._step(), "requests": self.counts}
+
+    def _loop(self, session: Session, script: Script, clock: Clock) -> None:
+        plan, world = self.plan, session.world
+        step_time = 0.0
+        while not self.stopping:
+            step = world.step_count
+            if step <= plan.total_steps:
+                for event in script.events.get(step, ()):
+                    session.scripted(event)
+                script.command(world, step, present_only=True)
+            session.due_stops()
+            self._answer_waits(step)
+            self._finish_spawns()
+            if self.recorder and step % plan.log_every == 0:
+                self.recorder.write(sample(world, step))
+            self._serve_requests(clock.due(), step_time)
+            if self.stopping or (self.stop_after is not None and step >= self.stop_after):
+                break
+            started = time.perf_counter()
+            try:
+                world.step()
+            except SimulationFault as exc:
+                if not session.fault(exc):
+                    self.status, self.error, self.stopping = "fault", str(exc), True
+            step_time = time.perf_counter() - started
+            clock.stepped()
+
+    # -- the socket -------------------------------------------------------------------------
+
+    def _bind(self) -> None:
+        socket = zmq.Context.instance().socket(zmq.ROUTER)
+        socket.setsockopt(zmq.LINGER, 0)
+        socket.setsockopt(zmq.MAXMSGSIZE, protocol.HARD_LIMIT_BYTES)  # larger: the peer is dropped
+        path = endpoints.ipc_path(self.endpoint)
+        if path is not None:
+            _claim_socket_file(self.endpoint, path)
+        old = os.umask(0o177)  # the socket file is born 0600: no window with looser rights
+        try:
+            socket.bind(self.endpoint)
+        except zmq.ZMQError as exc:
+            socket.close()
+            raise UsageError(f"cannot listen at {self.endpoint}: {exc}",
+                             hint="Pick another --endpoint (is another server using it?).") from None
+        finally:
+            os.umask(old)
+        self._socket = socket
+        if path is not None:
+            os.chmod(path, 0o600)
+        else:  # tcp://127.0.0.1:* picks a free port: report the one it got
+            self.endpoint = socket.getsockopt_string(zmq.LAST_ENDPOINT)
+
+    def _serve_requests(self, due: float | None, step_time: float) -> None:
+        """Answer requests until the next step is due (real time) or for one slice (fast)."""
+        fast = due is None
+        end = time.monotonic() + min(max(step_time, FAST_SLICE[0]), FAST_SLICE[1]) if fast else due
+        while not self.stopping:
+            if fast:
+                wait_ms = LEND_GIL_MS if self._spawns else 0
+            else:
+                wait_ms = max(0, math.ceil((end - time.monotonic()) * 1000))
+            if not self._socket.poll(wait_ms):
+                return
+            try:
+                frames = self._socket.recv_multipart(zmq.NOBLOCK)
+            except zmq.Again:
+                return
+            self._receive(frames)
+            if time.monotonic() >= end:
+                return
+
+    def _receive(self, frames: list[bytes]) -> None:
+        # REQ peers (and our DEALER client) put an empty delimiter after the identity.
+        cut = 2 if len(frames) >= 3 and frames[1] == b"" else 1
+        envelope, body = frames[:cut], frames[cut:]
+        request_id, op = None, None
+        try:
+            if len(body) != 1:
+                raise Refusal(Result.INVALID_REQUEST, f"a request is one JSON frame, got {len(body)}")
+            document = protocol.decode(body[0])
+            request_id, op = document.get("id"), document.get("op")
+            request = schema.parse(document)
+            self.counts[request.op] = self.counts.get(request.op, 0) + 1
+            answer = self._handlers[request.op](envelope, request)
+        except Refusal as exc:
+            answer = protocol.reply(request_id, exc.result, exc.message)
+            if op in ("spawn", "delete", "cmd"):  # the history keeps what was refused, too
+                self.session.history(op=op, name=str(document.get("name")), result=exc.result.name,
+                                     message=exc.message)
+        except Exception as exc:  # a bug must cost one request, never the world
+            answer = protocol.reply(request_id, Result.OPERATION_FAILED, f"internal error: {exc!r}")
+        if answer is not None:
+            self._send(envelope, answer)
+
+    def _send(self, envelope: list[bytes], answer: dict[str, Any]) -> None:
+        try:
+            payload = protocol.encode(answer)
+        except ValueError as exc:  # a non-finite number in a robot's state
+            payload = protocol.encode(protocol.reply(answer.get("id"), Result.OPERATION_FAILED, str(exc)))
+        try:
+            self._socket.send_multipart([*envelope, payload], zmq.NOBLOCK)
+        except zmq.ZMQError:
+            pass  # the peer is gone or not reading: its reply is dropped, the world goes on
+
+    # -- requests ---------------------------------------------------------------------------
+
+    def _ping(self, envelope, request) -> dict[str, Any]:
+        step = self._step()
+        return protocol.reply(request.id, world=self.plan.world.name, scenario=self.plan.name, step=step,
+                              t=step / self.plan.physics.rate_hz, robots=len(self.session.robots),
+                              rate_hz=self.plan.physics.rate_hz, pace=pace_text(self.rtf), rtf=self.rtf,
+                              pid=os.getpid(),
+                              endpoint=self.endpoint, protocol=protocol.PROTOCOL_VERSION, version=__version__)
+
+    def _list(self, envelope, request) -> dict[str, Any]:
+        return self.session.listing(request.id)
+
+    def _odom(self, envelope, request) -> dict[str, Any]:
+        return self.session.odometry(request.id, request.name)
+
+    def _delete(self, envelope, request) -> dict[str, Any]:
+        self.session.known(request.name)
+        self.session.remove(request.name, "request")
+        return protocol.reply(request.id, name=request.name, step=self._step(), t=self._t())
+
+    def _cmd(self, envelope, request: schema.Cmd) -> dict[str, Any] | None:
+        until = self.session.command(request)
+        if until is not None and request.wait:
+            self._waits.append(_Pending(envelope, request, until=until))
+            return None
+        return protocol.reply(request.id, name=request.name, step=self._step(), t=self._t(), until_step=until)
+
+    def _stop(self, envelope, request) -> dict[str, Any]:
+        self.stopping = True
+        return protocol.reply(request.id, step=self._step(), t=self._t(), message="stopping")
+
+    def _spawn(self, envelope, request: schema.Spawn) -> None:
+        # Cheap refusals before loading; the same checks run again when the robot is placed.
+        if not request.allow_renaming:
+            spawning.final_name(request, self.session.taken())
+        self.session.reference(request)
+        future = self._loader.submit(spawning.load_plan, request, self.plan.physics.rate_hz)
+        self._spawns.append(_Pending(envelope, request, future=future))
+        return None
+
+    # -- replies owed -----------------------------------------------------------------------
+
+    def _finish_spawns(self) -> None:
+        while self._spawns and self._spawns[0].future.done():
+            job = self._spawns.pop(0)
+            request = job.request
+            try:
+                answer = self.session.place(request, *job.future.result())
+            except Refusal as exc:
+                answer = protocol.reply(request.id, exc.result, exc.message)
+            except MobotError as exc:
+                answer = protocol.reply(request.id, spawning.classify(exc), str(exc))
+            except Exception as exc:
+                answer = protocol.reply(request.id, Result.OPERATION_FAILED, f"internal error: {exc!r}")
+            if not answer["ok"]:
+                self.session.history(op="spawn", name=request.name, result=answer["result"],
+                                     message=answer["message"])
+            self._send(job.envelope, answer)
+
+    def _answer_waits(self, step: int) -> None:
+        for wait in [w for w in self._waits if step >= w.until]:
+            self._waits.remove(wait)
+            name = wait.request.name
+            try:
+                answer = self.session.odometry(wait.request.id, name)
+            except Refusal:
+                answer = protocol.reply(wait.request.id, Result.NOT_FOUND,
+                                        f"robot '{name}' was deleted before its command ended")
+            self._send(wait.envelope, answer)
+
+    def _step(self) -> int:
+        return self.session.step if self.session is not None else 0
+
+    def _t(self) -> float:
+        return self._step() / self.plan.physics.rate_hz
+
+    def _shutdown(self) -> None:
+        for job in self._spawns + self._waits:
+            self._send(job.envelope, protocol.reply(job.request.id, Result.INCORRECT_STATE,
+                                                    "the live world stopped before it could answer"))
+        self._loader.shutdown(wait=False, cancel_futures=True)
+        if self._socket is not None:
+            self._socket.close(linger=0)
+            path = endpoints.ipc_path(self.endpoint)
+            if path is not None:
+                path.unlink(missing_ok=True)
+        if self.recorder:
+            self.recorder.close(self.status, self.error, self._step(),
+                                {"endpoint": self.endpoint, "pace": pace_text(self.rtf), "requests": self.counts})
+
+
+def pace_text(rtf: float | None) -> str:
+    """'real time', '2x real time' or 'fast'."""
+    return "fast" if rtf is None else ("real time" if rtf == 1.0 else f"{rtf:g}x real time")
+
+
+def _claim_socket_file(endpoint: str, path: Path) -> None:
+    """Refuse to take over a live server's socket; remove a stale one left by a crash."""
+    if path.parent == endpoints.runtime_dir() or not path.parent.exists():
+        endpoints.private_dir(path.parent)  # made 0700, or checked to be the user's own
+    if not os.path.exists(path):
+        return
+    from mobot_cli.live.client import Client
+
+    try:
+        with Client(endpoint, timeout=1.0) as client:
+            pid = client.ping().get("pid")
+    except MobotError:
+        os.unlink(path)  # nobody answers: a server that died without cleaning up
+        return
+    raise UsageError(f"a live world (pid {pid}) already serves at {endpoint}",
+                     hint=f"Stop it with `mobot stop --endpoint {endpoint}`, or pick another --endpoint.")
+
+
+def _catch_signals(server: LiveServer) -> Callable[[], None]:
+    """SIGINT and SIGTERM stop the loop after the current step, so the record is flushed."""
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+
+    def stop(signum, frame) -> None:
+        server.stopping = True
+
+    old = {sig: signal.signal(sig, stop) for sig in (signal.SIGINT, signal.SIGTERM)}
+    return lambda: [signal.signal(sig, handler) for sig, handler in old.items()]

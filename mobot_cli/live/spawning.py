@@ -1,0 +1,144 @@
+"""A live spawn request to a RobotPlan, through the same RobotResolver scenario robots use.
+
+Loading (xacro, checks, meshes) runs in a worker thread; naming, the reference frame and
+the spawn itself happen on the world's thread, against the robots alive at that moment.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import math
+import os
+import re
+from pathlib import Path
+
+from mobot_cli.assets import cache
+from mobot_cli.assets.description import resolve_description
+from mobot_cli.assets.resources import ResourceResolver
+from mobot_cli.errors import DescriptionError, MobotError, ResourceError, SpawnError
+from mobot_cli.live.protocol import Refusal, Result
+from mobot_cli.live.schema import Spawn, normalize_namespace
+from mobot_cli.scenario.model import RobotSpec
+from mobot_cli.scenario.robots import RobotResolver
+from mobot_cli.scenario.units import quat_from_rpy
+from mobot_cli.sim.plan import RobotPlan, SpawnPose
+from mobot_cli.sim.state import RobotState
+
+DESCRIPTION_SUFFIXES = (".urdf", ".xacro")
+UNSUPPORTED_SUFFIXES = (".sdf", ".world", ".dae", ".stl", ".obj", ".mjcf", ".xml")
+# Far past any run: a live robot's spawn time is only known when it is spawned.
+NO_END = 2**62
+_MISSING_ASSET = re.compile(r"mesh '.*' of link '.*' (cannot be found|resolves to .* not a readable file)"
+                            r"|^included file '.*' cannot be read", re.DOTALL)
+
+
+def load_plan(request: Spawn, rate_hz: int) -> tuple[RobotPlan, list[str]]:
+    """The robot of a spawn request, loaded and checked (not yet named or placed); plus notices."""
+    base_dir = Path(request.base_dir) if request.base_dir else Path.cwd()
+    description, label = request.description, None
+    if request.urdf is not None:
+        description, label = str(_text_file(request.urdf)), "<urdf text>"
+    else:
+        _check_format(description, base_dir)
+    spec = RobotSpec(name=request.name, description=description, args=request.args, pose=request.pose)
+    resolver = RobotResolver(rate_hz, 0, NO_END, base_dir=base_dir)
+    try:
+        (plan,) = resolver.plans(spec, ())
+    except MobotError as exc:
+        message = str(exc) if label is None else str(exc).replace(description, label)
+        raise Refusal(classify(exc), message) from None
+    if label is not None:
+        return plan, [notice.replace(description, label) for notice in resolver.notices]
+    return plan, resolver.notices
+
+
+def _text_file(text: str) -> Path:
+    """URDF or xacro text as a file named by its content (xacro and the checks read files)."""
+    if text.lstrip().startswith("<sdf"):
+        raise Refusal(Result.UNSUPPORTED_FORMAT, "the text is an SDF model: mobot spawns URDF and xacro")
+    digest = hashlib.sha256(text.encode("utf-8")).hexdigest()[:32]
+    path = cache.cache_dir() / "spawned" / f"{digest}.urdf"  # xacro is detected from the text
+    if not path.is_file():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, path)
+    return path
+
+
+def _check_format(description: str, base_dir: Path) -> None:
+    """NO_RESOURCE when nothing is there, UNSUPPORTED_FORMAT for a file that is not URDF/xacro."""
+    try:
+        path = resolve_description(description, base_dir, ResourceResolver(base_dir))
+    except ResourceError as exc:
+        raise Refusal(Result.NO_RESOURCE, str(exc)) from None
+    if path.name.lower().endswith(UNSUPPORTED_SUFFIXES) or not path.name.endswith(DESCRIPTION_SUFFIXES):
+        raise Refusal(Result.UNSUPPORTED_FORMAT, f"{path} is not a URDF or xacro file: mobot spawns "
+                      ".urdf, .urdf.xacro and .xacro descriptions")
+
+
+def classify(exc: MobotError) -> Result:
+    """The simulation_interfaces result for an error raised while loading or placing a robot."""
+    if isinstance(exc, ResourceError):  # the description was found, so this is an include or mesh
+        return Result.MISSING_ASSETS
+    if isinstance(exc, DescriptionError):
+        return Result.MISSING_ASSETS if _MISSING_ASSET.search(exc.message) else Result.RESOURCE_PARSE_ERROR
+    if isinstance(exc, SpawnError):
+        return Result.INVALID_POSE
+    return Result.OPERATION_FAILED
+
+
+def final_name(request: Spawn, taken: set[str]) -> str:
+    """The requested name, or with --allow-renaming the first free of name_0, name_1, ...
+
+    ``taken`` holds the robots and the world's static models: entity names are unique, as in Gazebo.
+    """
+    if request.name not in taken:
+        return request.name
+    if not request.allow_renaming:
+        raise Refusal(Result.NAME_NOT_UNIQUE, f"'{request.name}' is already the name of a robot or model "
+                      "in the world; pick another name, or allow renaming (--allow-renaming)")
+    n = 0
+    while f"{request.name}_{n}" in taken:
+        n += 1
+    return f"{request.name}_{n}"
+
+
+def named(plan: RobotPlan, name: str, namespace: str | None, namespaces: dict[str, str]) -> RobotPlan:
+    """The plan under its final name and namespace (default /<name>), refused if the namespace is taken."""
+    ns = normalize_namespace(namespace) if namespace is not None else f"/{name}"
+    if ns in namespaces:
+        raise Refusal(Result.NAMESPACE_INVALID, f"namespace '{ns}' is already used by robot "
+                      f"'{namespaces[ns]}': two robots in one namespace would share topics and TF frames")
+    return dataclasses.replace(plan, name=name, namespace=ns, frame_prefix=ns.lstrip("/") + "/")
+
+
+def in_frame(pose: SpawnPose, ref: RobotState) -> SpawnPose:
+    """A pose given relative to a robot's base link (its pose now) to the world frame."""
+    q_ref = quat_from_rpy(ref.true_roll, ref.true_pitch, ref.true_yaw)
+    x, y, z = _rotate(q_ref, (pose.xyz[0], pose.xyz[1], 0.0 if pose.z_auto else pose.xyz[2]))
+    xyz = (ref.true_x + x, ref.true_y + y, ref.true_z + z)
+    return SpawnPose(xyz=xyz, quat=_multiply(q_ref, pose.quat), z_auto=pose.z_auto)
+
+
+def _multiply(a, b) -> tuple[float, float, float, float]:
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return (aw * bx + ax * bw + ay * bz - az * by, aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw, aw * bw - ax * bx - ay * by - az * bz)
+
+
+def _rotate(q, v) -> tuple[float, float, float]:
+    x, y, z, _ = _multiply(_multiply(q, (*v, 0.0)), (-q[0], -q[1], -q[2], q[3]))
+    return x, y, z
+
+
+def pose_fields(state: RobotState) -> dict[str, float]:
+    """A robot's world pose as reply fields (ground truth of its base link)."""
+    return {"x": _num(state.true_x), "y": _num(state.true_y), "z": _num(state.true_z),
+            "roll": _num(state.true_roll), "pitch": _num(state.true_pitch), "yaw": _num(state.true_yaw)}
+
+
+def _num(value: float) -> float | None:
+    return round(value, 6) + 0.0 if math.isfinite(value) else None

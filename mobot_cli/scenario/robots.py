@@ -1,0 +1,181 @@
+"""Robot specs to RobotPlans: the one path that scenario robots, spawn events and live spawns take.
+
+A ``RobotSpec`` (the scenario's robot entry; a live spawn request is validated into one too)
+becomes a ``RobotPlan``: description loaded with its xacro args, drive overrides merged, pose
+converted, command times rounded to whole steps, name and namespace claimed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+from typing import Any
+
+from mobot_cli.assets.description import RobotDescription, load_robot
+from mobot_cli.assets.world_load import LoadedWorld, WorldRobot
+from mobot_cli.errors import Location, MobotError, ScenarioError
+from mobot_cli.scenario.model import RobotSpec
+from mobot_cli.scenario.units import quat_from_rpy, spawn_pose, steps
+from mobot_cli.scenario.yamlsource import Source
+from mobot_cli.sim.plan import CommandStep, DriveSpec, RobotPlan, SpawnPose
+
+
+class RobotResolver:
+    """State shared while resolving robots: names seen, descriptions loaded once per args.
+
+    ``source`` locates errors in a scenario file; without one (a live spawn) errors carry no
+    location. ``settle`` and ``total`` are in physics steps.
+    """
+
+    def __init__(self, rate_hz: int, settle: int, total: int, *, base_dir: Path,
+                 source: Source | None = None, world: LoadedWorld | None = None):
+        self.rate_hz, self.settle, self.total = rate_hz, settle, total
+        self.base_dir = base_dir
+        self.source = source
+        self.world = world  # its robot models are robots when listed by name
+        self.names: dict[str, tuple] = {}
+        self.namespaces: dict[str, str] = {}
+        self.loaded: dict[tuple, RobotDescription] = {}
+        self.notices: list[str] = []
+
+    def locate_key(self, path: tuple) -> Location | None:
+        """Where ``path`` is in the scenario file, or None for a live request."""
+        return self.source.locate_key(path) if self.source is not None else None
+
+    def plans(self, spec: RobotSpec, path: tuple, spawn_step: int = 0) -> list[RobotPlan]:
+        """One RobotPlan per robot (a fleet gives ``count`` of them), spawned at ``spawn_step``."""
+        desc = self.describe(spec, path)
+        drive = self.drive(spec, desc, path)
+        commands = self.commands(spec, path, spawn_step)
+        if commands and drive is None:
+            raise ScenarioError(f"robot '{spec.name}' has commands but no drive wheels were detected in "
+                                f"'{spec.description}'", location=self.locate_key(path + ("commands",)),
+                                hint="Add drive: {left_joints, right_joints, wheel_radius, wheel_separation}.")
+        in_world = self.world_robot(spec)
+        if in_world is not None and "pose" not in spec.model_fields_set:
+            members = [(spec.name, spec.namespace, SpawnPose(xyz=in_world.xyz, quat=in_world.quat))]
+        elif spec.count is None:
+            members = [(spec.name, spec.namespace, spawn_pose(spec.pose))]
+        else:
+            members = [(spec.name.replace("{i}", str(i)), None, SpawnPose(
+                xyz=(x, y, 0.0), quat=quat_from_rpy(0.0, 0.0, yaw), z_auto=True))
+                for i, (x, y, yaw) in enumerate(spec.poses)]
+        out = []
+        for name, namespace, pose in members:
+            namespace = namespace or f"/{name}"
+            self.claim(name, namespace, path)
+            out.append(RobotPlan(name=name, namespace=namespace, frame_prefix=namespace.lstrip("/") + "/",
+                                 urdf=desc.urdf, root_link=desc.root_link, pose=pose, drive=drive,
+                                 commands=commands, spawn_step=spawn_step, source=str(desc.source)))
+        return out
+
+    def claim(self, name: str, namespace: str, path: tuple) -> None:
+        """Reserve a robot name and namespace; a second use is an error."""
+        if name in self.names:
+            raise ScenarioError(f"robot name '{name}' is used twice", location=self.locate_key(path + ("name",)),
+                                hint="Every robot needs a unique name, as Gazebo entities do.")
+        if self.world is not None and name in self.world.static_models:
+            raise ScenarioError(f"robot name '{name}' is already the name of a static model of the world",
+                                location=self.locate_key(path + ("name",)),
+                                hint="Every entity needs a unique name, as in Gazebo; pick another name.")
+        if namespace in self.namespaces:
+            raise ScenarioError(f"namespace '{namespace}' of '{name}' is already used by "
+                                f"'{self.namespaces[namespace]}'", location=self.locate_key(path + ("namespace",)),
+                                hint="Two robots in one namespace would share topics and TF frames.")
+        self.names[name] = path
+        self.namespaces[namespace] = name
+
+    def describe(self, spec: RobotSpec, path: tuple) -> RobotDescription:
+        """The checked description of ``spec`` with its args (loaded once per description and args)."""
+        in_world = self.world_robot(spec)
+        if in_world is not None:
+            key = ("world model", in_world.name)
+            if key not in self.loaded:
+                from mobot_cli.assets.sdf_description import describe_world_robot
+
+                self.loaded[key] = describe_world_robot(in_world, self.base_dir)
+                self.notices.extend(str(n) for n in self.loaded[key].notices)
+            return self.loaded[key]
+        args = {k: arg_text(v) for k, v in spec.args.items()}
+        key = (spec.description, tuple(sorted(args.items())))
+        if key not in self.loaded:
+            try:
+                self.loaded[key] = load_robot(spec.description, args, self.base_dir)
+            except MobotError as exc:
+                raise type(exc)(f"robot '{spec.name}': {exc}",
+                                location=self.locate_key(path + ("description",))) from None
+            self.notices.extend(str(n) for n in self.loaded[key].notices)
+        return self.loaded[key]
+
+    def world_robot(self, spec: RobotSpec) -> WorldRobot | None:
+        """The world's robot model this spec names (no description given), if any."""
+        if self.world is None or "description" in spec.model_fields_set or spec.count is not None:
+            return None
+        return self.world.robot(spec.name)
+
+    def drive(self, spec: RobotSpec, desc: RobotDescription, path: tuple) -> DriveSpec | None:
+        """The detected drive with the spec's overrides merged in."""
+        over = spec.drive
+        if over is None:
+            return desc.drive
+        fields = {k: v for k, v in over.model_dump(exclude={"type"}).items() if v is not None}
+        for key in ("left_joints", "right_joints"):
+            if key in fields:
+                fields[key] = tuple(fields[key])
+        if desc.drive is not None:
+            return dataclasses.replace(desc.drive, source=_source(desc.drive, fields), **fields)
+        needed = ["left_joints", "right_joints", "wheel_radius", "wheel_separation"]
+        missing = [k for k in needed if k not in fields]
+        if missing:
+            raise ScenarioError(f"no drive wheels were detected in '{spec.description}' and drive: lacks "
+                                + ", ".join(missing), location=self.locate_key(path + ("drive",)),
+                                hint="Name the wheel joints and give their radius and separation.")
+        return DriveSpec(source="scenario", **fields)
+
+    def commands(self, spec: RobotSpec, path: tuple, spawn_step: int = 0) -> tuple[CommandStep, ...]:
+        """The command script in whole steps; each robot holds still for ``settle`` after its spawn."""
+        rate, out = self.rate_hz, []
+        settled = spawn_step + self.settle
+        free_from = settled
+        for i, cmd in enumerate(spec.commands):
+            where = self.locate_key(path + ("commands", i, "at"))
+            at = steps(cmd.at, rate)
+            if at < settled:
+                window = (f"the first {self.settle / rate:g} s" if spawn_step == 0 else
+                          f"{self.settle / rate:g} s from its spawn at {spawn_step / rate:g} s")
+                raise ScenarioError(f"command at {cmd.at:g} s falls inside the settle window ({window})",
+                                    location=where, hint="Robots hold still while they settle; start commands at or after 'settle'.")
+            if at >= self.total:  # e.g. a run shortened with --duration: say so, don't refuse
+                self.notices.append(f"{where}: command at {cmd.at:g} s is at or after the end of the run "
+                                    f"({self.total / rate:g} s) and is never sent")
+                break
+            if at < free_from or (out and at <= out[-1].step):
+                raise ScenarioError(f"command at {cmd.at:g} s starts before the previous one ends",
+                                    location=where, hint="List commands in time order, each after the last 'for' ends.")
+            out.append(CommandStep(step=at, linear=cmd.linear, angular=cmd.angular))
+            free_from = at
+            if cmd.for_ is not None:
+                free_from = at + max(1, steps(cmd.for_, rate))
+                if free_from < self.total:
+                    out.append(CommandStep(step=free_from, linear=0.0, angular=0.0))
+        return tuple(out)
+
+
+def unlisted_robots(world: LoadedWorld, robots) -> list[str]:
+    """Warnings for the world's robot models that the scenario does not list (not simulated)."""
+    names = {robot.name for robot in robots}
+    return [f"world model '{r.name}' is a robot (not static, with joints) and is not simulated: "
+            f"list it under robots: (- name: {r.name}) to drive it" for r in world.robots
+            if r.name not in names]
+
+
+def _source(detected: DriveSpec, fields: dict[str, Any]) -> str:
+    layout = {"left_joints", "right_joints", "wheel_radius", "wheel_separation"}
+    return "scenario" if layout <= fields.keys() else detected.source
+
+
+def arg_text(value: Any) -> str:
+    """A xacro argument value as the text xacro sees ('true', not 'True')."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return str(value)
