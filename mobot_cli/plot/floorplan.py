@@ -1,0 +1,172 @@
+"""A world's floor plan: its static collision geometry projected from above, as polygons.
+
+Only what a wheeled robot can meet is kept: geometry reaching into ``BAND`` (above the floor,
+below a ceiling). Boxes, cylinders, capsules and spheres become the outline of their shadow;
+meshes become their triangles' shadows, and upright faces (seen edge-on) become segments, so a
+wall taller than the band still shows as its outline. Bodies come
+as StaticShape lists (SDF worlds) or, failing that, as URDF text with <collision> elements.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+
+from mobot_cli.assets.frames import LinkTree, floats, origin_frame
+from mobot_cli.run.tf import quat_from_matrix, quat_mul
+from mobot_cli.sim.plan import StaticShape, WorldPlan
+
+Point = tuple[float, float]
+Polygon = list[Point]
+Vec3 = tuple[float, float, float]
+Quat = tuple[float, float, float, float]
+
+BAND = (0.02, 2.0)  # metres above z = 0: lower is floor, higher is ceiling
+ROUND = 24  # points on a projected circle
+
+
+def floor_plan(world: WorldPlan) -> list[Polygon]:
+    """Every static body's shadow in the band, in world x, y."""
+    polygons: list[Polygon] = []
+    for body in world.bodies:
+        for shape in body.shapes or _urdf_shapes(body.urdf):
+            xyz, quat = _compose((body.xyz, body.quat), (shape.xyz, shape.quat))
+            polygons.extend(shape_shadow(shape, xyz, quat))
+    return polygons
+
+
+def shape_shadow(shape: StaticShape, xyz: Vec3, quat: Quat) -> list[Polygon]:
+    """The shadow of one shape posed in the world (none when it lies outside the band)."""
+    if shape.kind == "mesh":
+        return _mesh_shadow(shape.mesh, shape.size, xyz, quat)
+    points = [_apply(xyz, quat, p) for p in _outline_points(shape.kind, shape.size)]
+    if not points or not _in_band(min(p[2] for p in points), max(p[2] for p in points)):
+        return []
+    hull = convex_hull([(p[0], p[1]) for p in points])
+    return [hull] if len(hull) >= 3 else []
+
+
+def _outline_points(kind: str, size: tuple[float, ...]) -> list[Vec3]:
+    """Points whose convex hull is the shape (exact for boxes, 24-gons for round parts)."""
+    if kind == "box":
+        hx, hy, hz = (s / 2.0 for s in size[:3])
+        return [(sx * hx, sy * hy, sz * hz) for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]
+    ring = [(math.cos(a), math.sin(a)) for a in (2 * math.pi * i / ROUND for i in range(ROUND))]
+    if kind == "cylinder":
+        r, half = size[0], size[1] / 2.0
+        return [(r * c, r * s, z) for z in (-half, half) for c, s in ring]
+    if kind in ("sphere", "capsule"):  # a capsule is two spheres and the hull between them
+        r = size[0]
+        centres = (0.0,) if kind == "sphere" else (-size[1] / 2.0, size[1] / 2.0)
+        return [p for z in centres for c, s in ring
+                for p in ((r * c, r * s, z), (r * c, 0.0, z + r * s), (0.0, r * c, z + r * s))]
+    return []  # a plane is a floor or a wall of infinite extent: not drawn
+
+
+def _mesh_shadow(path: str, scale: tuple[float, ...], xyz: Vec3, quat: Quat) -> list[Polygon]:
+    import numpy as np
+
+    from mobot_cli.plot.meshread import read_mesh
+
+    vertices, faces = read_mesh(path)
+    if len(faces) == 0:
+        return []
+    rot = np.array(_matrix(quat))
+    world = (vertices * np.array(scale[:3])) @ rot.T + np.array(xyz)
+    tri = world[faces]  # (n, 3 corners, xyz)
+    z = tri[:, :, 2]
+    keep = (z.max(axis=1) >= BAND[0]) & (z.min(axis=1) <= BAND[1])
+    tri = tri[keep][:, :, :2]
+    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+    area = np.abs((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
+    flat = area > 1e-6  # the rest are upright faces seen edge-on: a wall's sides, drawn as lines
+    out = [[(x0, y0), (x1, y1), (x2, y2)] for (x0, y0), (x1, y1), (x2, y2) in tri[flat].tolist()]
+    edge_on = tri[~flat]
+    ends = np.stack([edge_on, np.roll(edge_on, -1, axis=1)], axis=2)  # (n, 3 edges, 2 ends, xy)
+    length = np.hypot(*(ends[:, :, 1] - ends[:, :, 0]).transpose(2, 0, 1))
+    longest = ends[np.arange(len(ends)), length.argmax(axis=1)] if len(ends) else ends[:, 0]
+    longest = longest[length.max(axis=1) > 1e-3] if len(ends) else longest
+    out += [[(x0, y0), (x1, y1)] for (x0, y0), (x1, y1) in longest.tolist()]
+    return out
+
+
+def _urdf_shapes(urdf: str) -> list[StaticShape]:
+    """The collision shapes of a URDF's links, posed in the root link's frame (joints at zero)."""
+    if not urdf.strip():
+        return []
+    try:
+        tree = LinkTree(ET.fromstring(urdf))
+    except ET.ParseError:
+        return []
+    shapes = []
+    for name, link in tree.links.items():
+        link_frame = tree.frame(name)
+        for collision in link.findall("collision"):
+            frame = link_frame.compose(origin_frame(collision))
+            shape = _urdf_geometry(collision.find("geometry"))
+            if shape is not None:
+                kind, size, mesh = shape
+                shapes.append(StaticShape(kind=kind, size=size, mesh=mesh, xyz=frame.pos,
+                                          quat=quat_from_matrix(frame.rot)))
+    return shapes
+
+
+def _urdf_geometry(geometry: ET.Element | None):
+    if geometry is None or len(geometry) == 0:
+        return None
+    g = geometry[0]
+    if g.tag == "box":
+        return "box", floats(g.get("size"), 3, (0.0, 0.0, 0.0)), ""
+    if g.tag == "cylinder":
+        return "cylinder", (floats(g.get("radius"), 1, (0.0,))[0], floats(g.get("length"), 1, (0.0,))[0]), ""
+    if g.tag == "sphere":
+        return "sphere", floats(g.get("radius"), 1, (0.0,)), ""
+    if g.tag == "mesh" and g.get("filename"):
+        filename = g.get("filename", "").removeprefix("file://")
+        return "mesh", floats(g.get("scale"), 3, (1.0, 1.0, 1.0)), filename
+    return None
+
+
+def convex_hull(points: list[Point]) -> Polygon:
+    """Andrew's monotone chain: the hull counter-clockwise, without repeated points."""
+    pts = sorted(set(points))
+    if len(pts) <= 2:
+        return pts
+
+    def half(seq):
+        out: list[Point] = []
+        for p in seq:
+            while len(out) >= 2 and _cross(out[-2], out[-1], p) <= 1e-12:
+                out.pop()
+            out.append(p)
+        return out[:-1]
+
+    return half(pts) + half(reversed(pts))
+
+
+def _cross(o: Point, a: Point, b: Point) -> float:
+    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+
+def _in_band(zmin: float, zmax: float) -> bool:
+    return zmax >= BAND[0] and zmin <= BAND[1]
+
+
+def _matrix(q: Quat):
+    x, y, z, w = q
+    n = math.sqrt(x * x + y * y + z * z + w * w) or 1.0
+    x, y, z, w = x / n, y / n, z / n, w / n
+    return ((1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)),
+            (2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)),
+            (2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)))
+
+
+def _apply(xyz: Vec3, quat: Quat, p: Vec3) -> Vec3:
+    m = _matrix(quat)
+    return tuple(m[i][0] * p[0] + m[i][1] * p[1] + m[i][2] * p[2] + xyz[i] for i in range(3))  # type: ignore
+
+
+def _compose(a: tuple[Vec3, Quat], b: tuple[Vec3, Quat]) -> tuple[Vec3, Quat]:
+    """Pose a * pose b."""
+    return _apply(a[0], a[1], b[0]), quat_mul(a[1], b[1])
+

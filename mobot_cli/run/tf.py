@@ -1,0 +1,156 @@
+"""A robot's TF frames as robot_state_publisher publishes them, in plain Python.
+
+Every joint gives one parent -> child transform: fixed joints once on /tf_static, moving
+joints (revolute, continuous, prismatic) on /tf from the joint positions. Floating and
+planar joints are published as fixed at their origin, as robot_state_publisher does. Mimic
+joints follow their leader (``multiplier * leader + offset``). Frame names carry the robot's
+frame prefix (``mobot/base_link``), so two robots never share a frame.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+
+from mobot_cli.assets.frames import Frame, LinkTree, floats
+
+Vec3 = tuple[float, float, float]
+Quat = tuple[float, float, float, float]  # x, y, z, w as in ROS
+
+MOVING = ("revolute", "continuous", "prismatic")
+# What gazebo_ros_diff_drive puts on the diagonal of both covariances unless the plugin's
+# covariance_x / covariance_y / covariance_yaw say otherwise; z, roll and pitch are "unknown".
+DEFAULT_COVARIANCE = {"covariance_x": 0.00001, "covariance_y": 0.00001, "covariance_yaw": 0.001}
+UNKNOWN_VARIANCE = 1e12
+
+
+@dataclass(frozen=True)
+class Transform:
+    """One parent -> child transform with prefixed frame names."""
+
+    parent: str
+    child: str
+    xyz: Vec3
+    quat: Quat
+
+
+@dataclass(frozen=True)
+class MovingJoint:
+    """A joint whose transform depends on its position."""
+
+    name: str
+    parent: str
+    child: str
+    prismatic: bool
+    xyz: Vec3  # origin translation
+    quat: Quat  # origin rotation
+    axis: Vec3  # unit axis in the joint frame
+    moved_axis: Vec3  # origin rotation * axis: a prismatic joint's direction in the parent frame
+    leader: str  # the joint whose position drives this one (itself unless mimic)
+    multiplier: float = 1.0
+    offset: float = 0.0
+
+    def transform(self, positions: dict[str, float]) -> tuple[float, ...]:
+        """(x, y, z, qx, qy, qz, qw) of the child in the parent frame at these positions."""
+        q = positions.get(self.leader, 0.0) * self.multiplier + self.offset
+        x, y, z = self.xyz
+        if self.prismatic:
+            mx, my, mz = self.moved_axis
+            return (x + mx * q, y + my * q, z + mz * q, *self.quat)
+        s, c = math.sin(q / 2.0), math.cos(q / 2.0)
+        ax, ay, az = self.axis
+        if self.quat == (0.0, 0.0, 0.0, 1.0):  # most wheel joints: no origin rotation
+            return (x, y, z, ax * s, ay * s, az * s, c)
+        return (x, y, z, *quat_mul(self.quat, (ax * s, ay * s, az * s, c)))
+
+
+def quat_mul(a: Quat, b: Quat) -> Quat:
+    """The Hamilton product a * b (rotate by b first, then a)."""
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return (aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+            aw * bw - ax * bx - ay * by - az * bz)
+
+
+def quat_from_matrix(m) -> Quat:
+    """A unit quaternion (x, y, z, w) from a 3x3 rotation matrix, w >= 0."""
+    trace = m[0][0] + m[1][1] + m[2][2]
+    if trace > 0.0:
+        s = 2.0 * math.sqrt(trace + 1.0)
+        q = ((m[2][1] - m[1][2]) / s, (m[0][2] - m[2][0]) / s, (m[1][0] - m[0][1]) / s, s / 4.0)
+    elif m[0][0] > m[1][1] and m[0][0] > m[2][2]:
+        s = 2.0 * math.sqrt(1.0 + m[0][0] - m[1][1] - m[2][2])
+        q = (s / 4.0, (m[0][1] + m[1][0]) / s, (m[0][2] + m[2][0]) / s, (m[2][1] - m[1][2]) / s)
+    elif m[1][1] > m[2][2]:
+        s = 2.0 * math.sqrt(1.0 + m[1][1] - m[0][0] - m[2][2])
+        q = ((m[0][1] + m[1][0]) / s, s / 4.0, (m[1][2] + m[2][1]) / s, (m[0][2] - m[2][0]) / s)
+    else:
+        s = 2.0 * math.sqrt(1.0 + m[2][2] - m[0][0] - m[1][1])
+        q = ((m[0][2] + m[2][0]) / s, (m[1][2] + m[2][1]) / s, s / 4.0, (m[1][0] - m[0][1]) / s)
+    norm = math.sqrt(sum(v * v for v in q))
+    sign = -1.0 if q[3] < 0.0 else 1.0
+    return tuple(sign * v / norm + 0.0 for v in q)  # type: ignore[return-value]
+
+
+def yaw_quat(yaw: float) -> Quat:
+    """The rotation about +z by ``yaw``."""
+    return (0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0))
+
+
+class RobotFrames:
+    """The TF tree of one robot's URDF under a frame prefix, and its odometry settings."""
+
+    def __init__(self, urdf: str, prefix: str, root_link: str | None = None):
+        robot = ET.fromstring(urdf)
+        tree = LinkTree(robot)
+        self.prefix = prefix
+        self.root = root_link or tree.root or "base_link"
+        self.links = list(tree.links)
+        self.odom_frame = prefix + "odom"
+        self.base_frame = prefix + self.root
+        self.static: list[Transform] = []
+        self.moving: list[MovingJoint] = []
+        mimics = {j.get("name", ""): j.find("mimic") for j in robot.findall("joint")}
+        for joint in tree.joints:
+            quat = quat_from_matrix(joint.origin.rot)
+            parent, child = prefix + joint.parent, prefix + joint.child
+            if joint.type not in MOVING:
+                self.static.append(Transform(parent, child, joint.origin.pos, quat))
+                continue
+            mimic = mimics.get(joint.name)
+            leader, multiplier, offset = joint.name, 1.0, 0.0
+            if mimic is not None and mimic.get("joint"):
+                leader = mimic.get("joint", "")
+                multiplier = floats(mimic.get("multiplier"), 1, (1.0,))[0]
+                offset = floats(mimic.get("offset"), 1, (0.0,))[0]
+            self.moving.append(MovingJoint(
+                joint.name, parent, child, joint.type == "prismatic", joint.origin.pos, quat,
+                joint.axis, Frame(joint.origin.rot).point(joint.axis), leader, multiplier, offset))
+        self.covariance = odometry_covariance(robot)
+
+    def moving_transforms(self, positions: dict[str, float]) -> list[float]:
+        """The flattened (x, y, z, qx, qy, qz, qw) of every moving joint, in ``self.moving`` order."""
+        out: list[float] = []
+        for joint in self.moving:
+            out.extend(joint.transform(positions))
+        return out
+
+
+def odometry_covariance(robot: ET.Element) -> tuple[float, ...]:
+    """The 36 covariance values gazebo_ros_diff_drive sets, with the URDF plugin's overrides."""
+    values = dict(DEFAULT_COVARIANCE)
+    for gazebo in robot.findall("gazebo"):
+        for plugin in gazebo.findall("plugin"):
+            label = (plugin.get("filename", "") + " " + plugin.get("name", "")).lower()
+            if "diff" not in label and "skid" not in label:
+                continue
+            for key in values:
+                text = plugin.findtext(key)
+                if text is not None:
+                    values[key] = floats(text, 1, (values[key],))[0]
+    diagonal = (values["covariance_x"], values["covariance_y"], UNKNOWN_VARIANCE,
+                UNKNOWN_VARIANCE, UNKNOWN_VARIANCE, values["covariance_yaw"])
+    return tuple(diagonal[i // 6] if i % 7 == 0 else 0.0 for i in range(36))

@@ -1,0 +1,84 @@
+"""``DIR/trajectory.png``: every robot's true path and odometry over the floor plan, after every run.
+
+The sink only collects points while the run goes; the plotting code (Pillow, and trimesh for
+mesh worlds) is imported when the picture is drawn, at close.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from mobot_cli.run.timeline import Sample
+from mobot_cli.sim.plan import Plan, WorldPlan
+from mobot_cli.sim.state import RobotState
+
+
+class OdomToWorld:
+    """Maps a robot's odometry into the world: its odom frame is where odometry started."""
+
+    def __init__(self, state: RobotState):
+        # The truth now, less the odometry so far: exact at the first sample, whenever that is.
+        self.yaw = state.true_yaw - state.odom_yaw
+        self.c, self.s = math.cos(self.yaw), math.sin(self.yaw)
+        self.x = state.true_x - (self.c * state.odom_x - self.s * state.odom_y)
+        self.y = state.true_y - (self.s * state.odom_x + self.c * state.odom_y)
+
+    def __call__(self, x: float, y: float) -> tuple[float, float]:
+        return self.x + self.c * x - self.s * y, self.y + self.s * x + self.c * y
+
+
+class TrajectorySink:
+    """Collects each robot's path; close() draws ``trajectory.png``."""
+
+    def __init__(self, plan: Plan, out_dir: Path):
+        self.path = out_dir / "trajectory.png"
+        self.world = plan.world
+        self.title = plan.name
+        self.rate = plan.physics.rate_hz
+        self.tracks: list = []  # plot.render.Track, created lazily to keep Pillow out of the run
+        self.open: dict[str, tuple[object, OdomToWorld]] = {}
+        self.last_step = 0
+
+    def write(self, sample: Sample) -> None:
+        for name in [n for n in self.open if n not in sample.states]:
+            del self.open[name]  # deleted: a respawn under the same name starts a new track
+        for name, state in sample.states.items():
+            entry = self.open.get(name)
+            if entry is None:
+                entry = self.open[name] = (_Points(name), OdomToWorld(state))
+                self.tracks.append(entry[0])
+            points, to_world = entry
+            points.true.append((state.true_x, state.true_y))
+            points.odom.append(to_world(state.odom_x, state.odom_y))
+        self.last_step = sample.step
+
+    def close(self) -> None:
+        draw(self.tracks, self.world, self.path, self.title,
+             f"{self.last_step / self.rate:g} s simulated; {_robots(len(self.tracks))}")
+
+
+class _Points:
+    """A track's points as they come (the plot's Track is made at drawing time)."""
+
+    def __init__(self, label: str):
+        self.label, self.true, self.odom = label, [], []
+
+
+def draw(tracks: list, world: WorldPlan | None, out: Path, title: str, subtitle: str) -> None:
+    """Render ``tracks`` (objects with label, true, odom) over ``world``'s floor plan to ``out``."""
+    from mobot_cli.plot.floorplan import floor_plan
+    from mobot_cli.plot.render import Track, render
+
+    labels = [t.label for t in tracks]
+    plot_tracks = [Track(_unique(t.label, labels[:i]), t.true, t.odom) for i, t in enumerate(tracks)]
+    render(plot_tracks, floor_plan(world) if world is not None else [], out, title, subtitle)
+
+
+def _unique(label: str, before: list[str]) -> str:
+    count = before.count(label)
+    return f"{label} ({count + 1})" if count else label
+
+
+def _robots(n: int) -> str:
+    return f"{n} robot{'s' if n != 1 else ''}"
