@@ -90,6 +90,20 @@ class SimulationFault(MobotError):
     exit_code = ExitCode.SIMULATION_FAULT
 
 
+class LiveWorldError(MobotError):
+    """No live world answers at the endpoint (or it stopped answering)."""
+
+    exit_code = ExitCode.NO_LIVE_WORLD
+
+
+class RequestRefused(MobotError):
+    """The live world refused a request; ``result`` is its simulation_interfaces-style code."""
+
+    def __init__(self, result: str, message: str, *, hint: str | None = None):
+        super().__init__(f"{result}: {message}", hint=hint)
+        self.result = result
+
+
 @dataclass(frozen=True)
 class Notice:
     """A problem worth telling the user that does not stop the run."""

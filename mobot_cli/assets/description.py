@@ -17,7 +17,7 @@ from typing import Any, Mapping
 from mobot_cli.assets import cache
 from mobot_cli.assets.drive_detect import detect_drive
 from mobot_cli.assets.frames import LinkTree, floats
-from mobot_cli.assets.resources import ResourceResolver, bundled_dir
+from mobot_cli.assets.resources import ResourceResolver, bundled_dir, model_sdf
 from mobot_cli.assets.urdf_check import check_geometry, check_tree, check_with_yourdfpy, \
     parse_urdf
 from mobot_cli.assets.urdf_process import apply_friction, collision_bounds, fix_inertials, \
@@ -26,7 +26,7 @@ from mobot_cli.assets.xacro_expand import Expansion, expand_file
 from mobot_cli.errors import Location, Notice, ResourceError, did_you_mean
 from mobot_cli.sim.plan import DriveSpec
 
-_SUFFIXES = (".urdf", ".xacro")
+_SUFFIXES = (".urdf", ".xacro", ".sdf")
 _MESH_ATTR = re.compile(r"(<mesh\b[^>]*?\bfilename\s*=\s*)([\"'])(.*?)\2", re.DOTALL)
 
 
@@ -105,11 +105,12 @@ def resolve_description(description: str, base_dir: Path | None,
     """The file a `description:` value names: a bundled name, a path or a package:// URI."""
     text = str(description).strip()
     if "://" in text:
-        return resolver.resolve_uri(text, None)
+        return _model_file(resolver.resolve_uri(text, None))
     if text.endswith(_SUFFIXES) or "/" in text or os.sep in text:
         path = Path(text).expanduser()
         if not path.is_absolute():
             path = Path(base_dir or Path.cwd()) / path
+        path = _model_file(path)
         if not path.is_file():
             raise ResourceError(f"robot description file {path} does not exist",
                                 location=Location(file=path),
@@ -129,7 +130,18 @@ def load_robot(description: str, args: Mapping[str, str] | None = None,
     """Load, check and cache a robot description for the simulation."""
     resolver = ResourceResolver(base_dir)
     source = resolve_description(description, base_dir, resolver)
-    expansion = expand_file(source, args or {}, resolver)
+    if source.suffix == ".sdf":  # a Gazebo model: converted to URDF, then the same path
+        from mobot_cli.assets.sdf_description import expand_sdf
+
+        expansion = expand_sdf(source, resolver)
+    else:
+        expansion = expand_file(source, args or {}, resolver)
+    return describe_expansion(source, expansion, resolver)
+
+
+def describe_expansion(source: Path, expansion: Expansion,
+                       resolver: ResourceResolver) -> RobotDescription:
+    """Check, cache and describe an expanded URDF text (from xacro or converted from SDF)."""
     key = cache.digest("robot", expansion.text, resolver.fingerprint(), str(source))
     loaded = _from_document(cache.load("robot", key))
     if loaded is None:
@@ -137,6 +149,13 @@ def load_robot(description: str, args: Mapping[str, str] | None = None,
         cache.store("robot", key, _to_document(loaded, meshes))
     return RobotDescription(**{**_fields(loaded), "notices": expansion.notices + loaded.notices,
                                "files": expansion.files})
+
+
+def _model_file(path: Path) -> Path:
+    """A Gazebo model folder stands for the SDF file its model.config names."""
+    if Path(path).is_dir() and (Path(path) / "model.config").is_file():
+        return model_sdf(Path(path))
+    return Path(path)
 
 
 def _build(source: Path, expansion: Expansion,

@@ -14,6 +14,9 @@ import typer
 
 from mobot_cli import __version__
 from mobot_cli.cli import check, inspect, run, xacro
+from mobot_cli.cli import plot as plot_command
+from mobot_cli.cli import sweep as sweep_command
+from mobot_cli.cli import cmd, delete, list, odom, serve, spawn, stop
 from mobot_cli.cli.output import STATE, report_error
 from mobot_cli.errors import ExitCode, MobotError
 
@@ -47,6 +50,15 @@ app.command("run")(run.run)
 app.command("check")(check.check)
 app.command("inspect")(inspect.inspect)
 app.command("xacro")(xacro.xacro)
+app.command("plot")(plot_command.plot)
+app.command("sweep")(sweep_command.sweep)
+app.command("serve")(serve.serve)
+app.command("spawn")(spawn.spawn)
+app.command("delete")(delete.delete)
+app.command("list")(list.list_)
+app.command("cmd")(cmd.cmd)
+app.command("odom")(odom.odom)
+app.command("stop")(stop.stop)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import typer
@@ -12,21 +13,35 @@ from mobot_cli.errors import ExitCode, UsageError
 
 SCENARIO_SUFFIXES = (".yaml", ".yml")
 ROBOT_SUFFIXES = (".urdf", ".xacro")
+WORLD_SUFFIXES = (".world", ".sdf")  # an .sdf holding a <model> is a robot
+SKIP_HELP = "Leave out world models whose files are missing (Fuel includes, meshes), with a warning."
 
 
 def check(
-    path: Path = typer.Argument(..., help="A scenario (.yaml) or robot description (.urdf, .xacro)."),
+    path: Path = typer.Argument(..., help="A scenario (.yaml), robot (.urdf, .xacro, .sdf model or model folder), world "
+                                         "(.world, .sdf, bundled name), or run folder."),
     mappings: list[str] = typer.Argument(None, metavar="[NAME:=VALUE]...", help="xacro arguments for a robot."),
     json_: bool = typer.Option(False, "--json", help="Print the result as JSON."),
+    skip_missing: bool = typer.Option(False, "--skip-missing", help=SKIP_HELP),
 ) -> int:
-    """Validate a scenario or a robot description; exit 0 when it is usable, 2 when not."""
+    """Validate a scenario, robot description or world; exit 0 when it is usable, 2 when not.
+
+    Given a run folder, say how the run ended: exit 0 ok, 1 expectations failed, 2 incomplete
+    (killed, interrupted or files missing), 3 simulation fault.
+    """
+    model_folder = (path / "model.config").is_file()  # a Gazebo model: a robot description
+    if path.is_dir() and not model_folder:
+        return _check_run_folder(path, json_)
     if path.suffix in SCENARIO_SUFFIXES:
-        result = _check_scenario(path)
-    elif path.suffix in ROBOT_SUFFIXES:
+        result = _check_scenario(path, skip_missing)
+    elif path.suffix in ROBOT_SUFFIXES or model_folder or (path.suffix == ".sdf" and not _is_world(path)):
         result = _check_robot(path, parse_mappings(mappings or []))
+    elif path.suffix in WORLD_SUFFIXES or _bundled_world(path):
+        result = _check_world(path, skip_missing)
     else:
         raise UsageError(f"cannot tell what '{path}' is from its suffix",
-                         hint="mobot check takes a scenario (.yaml) or a robot (.urdf, .urdf.xacro, .xacro).")
+                         hint="mobot check takes a scenario (.yaml), a robot (.urdf, .urdf.xacro, .xacro, "
+                              ".sdf) or a world (.world, .sdf, or a bundled world's name).")
     if json_:
         output.emit_json(result)
     else:
@@ -35,10 +50,12 @@ def check(
     return ExitCode.OK
 
 
-def _check_scenario(path: Path) -> dict:
+def _check_scenario(path: Path, skip_missing: bool) -> dict:
+    from mobot_cli.run.preflight import check_spawns
     from mobot_cli.run.prepare import prepare
 
-    plan = prepare(path).plan
+    plan = prepare(path, ["skip_missing=true"] if skip_missing else []).plan
+    check_spawns(plan)  # robots inside furniture or below the floor are bad input too
     return {"ok": True, "kind": "scenario", "path": str(path), "name": plan.name,
             "robots": [robot.name for robot in plan.robots], "steps": plan.total_steps,
             "duration": plan.total_steps / plan.physics.rate_hz, "notices": list(plan.notices)}
@@ -50,3 +67,38 @@ def _check_robot(path: Path, args: dict[str, str]) -> dict:
     desc = load_robot(str(path), args, Path.cwd())
     return {"ok": True, "kind": "robot", "path": str(path), **inspect_summary(desc),
             "notices": [str(n) for n in desc.notices]}
+
+
+def _is_world(path: Path) -> bool:
+    """True when an .sdf file holds a <world> (a cheap look; the loader parses it properly)."""
+    try:
+        head = path.read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return True  # let the world loader report the unreadable file
+    return re.search(r"<world[\s>]", head) is not None
+
+
+def _bundled_world(path: Path) -> bool:
+    from mobot_cli.assets.world_load import bundled_world_names
+
+    return not path.exists() and str(path) in bundled_world_names()
+
+
+def _check_world(path: Path, skip_missing: bool) -> dict:
+    from mobot_cli.assets.world_load import load_world
+    from mobot_cli.run.preflight import check_world
+
+    loaded = load_world(str(path), Path.cwd(), skip_missing=skip_missing)
+    check_world(loaded.plan)  # every mesh loads into PyBullet
+    return {"ok": True, **loaded.summary, "notices": list(loaded.notices)}
+
+
+def _check_run_folder(path: Path, json_: bool) -> int:
+    from mobot_cli.run.folder import run_status
+
+    result = run_status(path)
+    if json_:
+        output.emit_json(result)
+    else:
+        output.run_folder_status(result)
+    return result["exit_code"]

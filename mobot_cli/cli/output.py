@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import sys
+from pathlib import Path
 from dataclasses import dataclass
 from typing import Any, Iterable
 
@@ -40,7 +41,7 @@ def stdout_console():
     """A Rich console on stdout (imported lazily: Rich is not needed for --help or --json)."""
     from rich.console import Console
 
-    return Console(highlight=False)
+    return Console(highlight=False, soft_wrap=True)  # never hard-wrap lines that scripts may grep
 
 
 def progress_bar(total: int, label: str):
@@ -61,20 +62,26 @@ def run_table(summary: dict[str, Any], out_dir) -> None:
     from rich.table import Table
 
     table = Table(title=f"{summary['scenario']}: {summary['sim_time']:g} s simulated in "
-                        f"{summary['wall_time']:g} s ({summary['real_time_factor']}x real time)")
-    for column in ("robot", "distance m", "final x", "final y", "final yaw", "odom error m"):
+                        f"{summary['wall_time']:g} s ({summary['real_time_factor']}x real time)",
+                  caption="final pose x, y (m), yaw (rad); distance and odometry error in m")
+    # Short headers: the table must fit 80 columns (pipes and CI logs) without wrapping.
+    for column in ("robot", "distance", "x", "y", "yaw", "odom error", "collisions"):
         table.add_column(column, justify="left" if column == "robot" else "right")
     for name, robot in summary["robots"].items():
         pose = robot["final_pose"]
         table.add_row(name, f"{robot['distance']:.3f}", f"{pose['x']:.3f}", f"{pose['y']:.3f}",
-                      f"{pose['yaw']:.3f}", f"{robot['odom_error']['position']:.3f}")
+                      f"{pose['yaw']:.3f}", f"{robot['odom_error']['position']:.3f}", str(robot.get("collisions", 0)))
     console = stdout_console()
     console.print(table)
-    console.print(f"run folder: {out_dir}")
+    written = [name for name in ("trajectory.png", "bag/") if (Path(out_dir) / name.rstrip("/")).exists()]
+    console.print(f"run folder: {out_dir}" + (f" ({', '.join(written)})" if written else ""))
 
 
 def check_result(result: dict[str, Any]) -> None:
     """One line saying what was checked and that it is fine."""
+    if result["kind"] == "world":
+        world_summary(result)
+        return
     if result["kind"] == "scenario":
         line = (f"ok: scenario '{result['name']}': {len(result['robots'])} robot(s), "
                 f"{result['duration']:g} s ({result['steps']} steps)")
@@ -109,3 +116,140 @@ def inspect_tree(summary: dict[str, Any]) -> None:
                   f"{', '.join(drive['right_joints'])}; wheel radius {drive['wheel_radius']:.4f} m, separation "
                   f"{drive['wheel_separation']:.4f} m x {drive['wheel_separation_multiplier']:g}; "
                   f"max torque {drive['max_wheel_torque']:g} N*m")
+
+
+def expectations(results, verbose: bool = True) -> None:
+    """Each expectation and how it went; when quiet, the failures alone on stderr, for scripts."""
+    failed = [r for r in results if not r.passed]
+    if verbose and results:
+        console = stdout_console()
+        for r in results:
+            mark = "[green]pass[/]" if r.passed else "[bold red]FAIL[/]"
+            console.print(f"{mark}  {r.robot}: expected to {r.expected}; it {r.happened}", markup=True,
+                          highlight=False)
+        if failed:
+            sys.stderr.write(f"mobot: {len(failed)} of {len(results)} expectations failed\n")
+        return
+    for r in failed:
+        sys.stderr.write(f"mobot: expectation failed: robot '{r.robot}' was expected to {r.expected}; "
+                         f"it {r.happened}\n")
+
+
+def sweep_progress(total: int, label: str):
+    """A Rich bar for a sweep (runs done, failed, ETA) on stderr when it is a terminal; else None."""
+    if not sys.stderr.isatty():
+        return None
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, \
+        TimeRemainingColumn
+
+    bar = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                   TextColumn("runs, [red]{task.fields[failed]} failed[/]"), TimeElapsedColumn(),
+                   TextColumn("ETA"), TimeRemainingColumn(), console=Console(stderr=True), transient=True)
+    bar.add_task(label, total=total, failed=0)
+    return bar
+
+
+def sweep_summary(out_dir, rows: list[dict[str, str]], keys: list[str], total: int, skipped: int,
+                  wall: float) -> None:
+    """The failed runs (if any) as a table, then one line of counts and where the results are."""
+    from rich.markup import escape
+    from rich.table import Table
+
+    console = stdout_console()
+    failed = [r for r in rows if r["status"] == "failed"]
+    if failed:
+        table = Table(title=f"{len(failed)} failed run{'s' if len(failed) != 1 else ''}")
+        for column in ("run", "values", "failure", "reason"):
+            table.add_column(column, overflow="fold")
+        short = _short_keys(keys)
+        for r in failed[:50]:
+            values = ", ".join(f"{short[k]}={r[k]}" for k in keys)
+            table.add_row(r["run"], escape(values), r["failure"], escape(r["reason"]))
+        console.print(table)
+        if len(failed) > 50:
+            console.print(f"... and {len(failed) - 50} more in results.csv")
+    resumed = f" ({skipped} from before --resume)" if skipped else ""
+    console.print(f"{len(rows)} of {total} runs done{resumed}: {len(rows) - len(failed)} passed, "
+                  f"{len(failed)} failed, in {wall:.1f} s", highlight=False)
+    console.print(f"results: {out_dir}/results.csv", highlight=False)
+
+
+def sweep_failures(out_dir, failed: int, total: int) -> None:
+    """When quiet: one line on stderr if any run failed."""
+    if failed:
+        sys.stderr.write(f"mobot: {failed} of {total} runs failed; see {out_dir}/results.csv\n")
+
+
+def sweep_interrupted(out_dir) -> None:
+    """Where the finished rows are and how to go on."""
+    sys.stderr.write(f"mobot: sweep stopped; finished runs are in {out_dir}/results.csv. "
+                     f"Go on with: --resume --out {out_dir}\n")
+
+
+def world_summary(result: dict[str, Any]) -> None:
+    """What `mobot check WORLD` found: models, shapes, meshes, robots, what it ignored, extent."""
+    def plural(n: int, word: str) -> str:
+        return f"{n} {word}{'' if n == 1 else 's'}"
+
+    shapes = result["shapes"]
+    meshes = result["meshes"]
+    lines = [f"ok: world '{result['name']}' ({result['path']})",
+             f"  models   {result['models']} ({result['static_models']} static"
+             + (f", {result['held_fixed']} of them held fixed" if result["held_fixed"] else "")
+             + (f", {len(result['skipped_models'])} left out" if result["skipped_models"] else "") + ")",
+             f"  shapes   {plural(sum(shapes.values()), 'collision shape')} in {plural(result['links'], 'link')}"
+             + (": " + ", ".join(f"{k} {v}" for k, v in shapes.items()) if shapes else ""),
+             "  meshes   " + (f"{plural(meshes['files'], 'file')}, {plural(meshes['triangles'], 'triangle')}; "
+                              f"{meshes['converted']} COLLADA converted to OBJ (cached)"
+                              if meshes["files"] else "none"),
+             "  ground   " + ("a ground plane at z = 0" if result["ground_plane"]
+                              else "no ground plane: floors are world geometry")]
+    robots = result["robots"]
+    lines.append("  robots   " + (", ".join(robots) + " (list a name under robots: to drive it)"
+                                  if robots else "none"))
+    ignored = {k: v for k, v in result["ignored"].items() if v}
+    if ignored:
+        lines.append("  ignored  " + ", ".join(f"{k} x{v}" if v > 1 else k for k, v in ignored.items()))
+    bounds = result["bounds"]
+    if bounds:
+        (x0, y0, z0), (x1, y1, z1), size = bounds["min"], bounds["max"], bounds["size"]
+        lines.append(f"  extent   x {x0:.2f}..{x1:.2f}, y {y0:.2f}..{y1:.2f}, z {z0:.2f}..{z1:.2f} m "
+                     f"({size[0]:.2f} x {size[1]:.2f} x {size[2]:.2f} m)")
+    sys.stdout.write("\n".join(lines) + "\n")
+
+
+def _short_keys(keys: list[str]) -> dict[str, str]:
+    """'robots.mobot.commands.0.linear' -> 'linear', or more of the key where that is ambiguous."""
+    for n in range(1, max((k.count(".") + 1 for k in keys), default=1) + 1):
+        short = {k: ".".join(k.split(".")[-n:]) for k in keys}
+        if len(set(short.values())) == len(keys):
+            return short
+    return {k: k for k in keys}
+
+
+def run_folder_status(result: dict[str, Any]) -> None:
+    """How a run ended (mobot check RUN_DIR): a verdict line, then what the files hold."""
+    what = f"run '{result['scenario']}'" if result.get("scenario") else "run"
+    line = f"{result['status']}: {what} in {result['path']}"
+    if result["status"] == "ok":
+        line += f": {result['sim_time']:g} s simulated, {len(result['robots'])} robot(s), every file in place"
+    elif result["problems"]:
+        line += ": " + "; ".join(result["problems"])
+    lines = [line]
+    if not result["ok"]:
+        for robot, extent in result["csv"].items():
+            upto = f", up to t = {extent['last_t']:g} s" if extent["last_t"] is not None else ""
+            lines.append(f"  odom/{robot}.csv: {extent['rows']} whole rows{upto}")
+        bag = result["bag"]
+        if bag is not None and bag.get("file"):
+            upto = f", messages up to t = {bag['last_t']:g} s" if bag.get("last_t") is not None else ""
+            closed = "closed" if bag["complete"] else "not closed (no metadata.yaml)"
+            lines.append(f"  bag/{bag['file']}: {closed}; {bag['chunks']} complete chunks{upto}")
+    sys.stdout.write("\n".join(lines) + "\n")
+
+
+def plot_written(result) -> None:
+    """Where mobot plot wrote its picture."""
+    runs = f" from {result.runs} runs" if result.runs > 1 else ""
+    sys.stdout.write(f"wrote {result.out} ({result.tracks} path{'s' if result.tracks != 1 else ''}{runs})\n")

@@ -21,6 +21,8 @@ def run(
     realtime: bool = typer.Option(False, "--realtime", help="Pace the run to the wall clock."),
     json_: bool = typer.Option(False, "--json", help="Print summary.json on stdout."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),
+    skip_missing: bool = typer.Option(False, "--skip-missing",
+                                      help="Leave out world models whose files are missing, with a warning."),
 ) -> int:
     """Run a scenario to its end and write odometry, a summary and the resolved scenario."""
     from mobot_cli.run.execute import execute
@@ -31,6 +33,8 @@ def run(
         overrides.append(f"seed={seed}")
     if duration is not None:
         overrides.append(f"duration={duration}")
+    if skip_missing:
+        overrides.append("skip_missing=true")
     prepared = prepare(scenario, overrides)
     output.notices(prepared.plan.notices, quiet=quiet or json_)
     out_dir = out or _default_out(prepared.plan.name)
@@ -47,6 +51,9 @@ def run(
         output.emit_json(result.summary)
     elif not quiet:
         output.run_table(result.summary, result.out_dir)
+    output.expectations(result.expectations, verbose=not (quiet or json_))
+    if any(not r.passed for r in result.expectations):
+        return ExitCode.EXPECTATION_FAILED
     return ExitCode.OK
 
 

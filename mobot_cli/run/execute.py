@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 import platform
 import time
@@ -12,6 +13,7 @@ from typing import Any, Callable, Optional
 
 from mobot_cli import __version__
 from mobot_cli.errors import MobotError
+from mobot_cli.run.expect import Checker, Result, summary_block
 from mobot_cli.run.sinks import make_sinks, write_json_atomic, write_text_atomic
 from mobot_cli.run.timeline import simulate
 from mobot_cli.sim.plan import Plan
@@ -47,6 +49,7 @@ class Track:
                            "pitch": _r(s.true_pitch), "yaw": _r(s.true_yaw)},
             "final_odom": {"x": _r(s.odom_x), "y": _r(s.odom_y), "yaw": _r(s.odom_yaw)},
             "distance": _r(self.distance),
+            "collisions": s.collisions,
             "odom_error": {"position": _r(math.hypot(ox - s.true_x, oy - s.true_y)), "yaw": _r(yaw_error)},
         }
 
@@ -57,19 +60,27 @@ class RunResult:
 
     out_dir: Path
     summary: dict[str, Any] = field(default_factory=dict)
+    expectations: list[Result] = field(default_factory=list)  # empty when the run did not finish
 
 
 def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | None = None) -> RunResult:
     """Run a plan and write its run folder; summary.json is written last and says how it ended."""
+    # The first sample comes after the world is built and the robots are spawned and checked:
+    # a spawn refused (inside furniture, below the floor) leaves no run folder behind.
+    samples = simulate(plan)
+    first = next(samples)
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / "summary.json").unlink(missing_ok=True)  # a rerun must not look complete early
     write_text_atomic(out_dir / "scenario.yaml", resolved_yaml)
     tracks: dict[str, Track] = {}
     sinks = make_sinks(plan, out_dir)
+    checker = Checker(plan)
+    sinks.append(checker)
+    results: list[Result] = []
     status, error, last_step = "ok", None, 0
     started = time.perf_counter()
     try:
-        for sample in simulate(plan):
+        for sample in itertools.chain([first], samples):
             for sink in sinks:
                 sink.write(sample)
             for name, state in sample.states.items():
@@ -83,13 +94,20 @@ def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | 
     except KeyboardInterrupt:
         status = "interrupted"
         raise
+    except Exception as exc:  # a bug, not bad input: summary.json must still not say "ok"
+        status, error = "error", exc
+        raise
     finally:
+        samples.close()
         for sink in sinks:
             sink.close()
         wall = time.perf_counter() - started
         summary = _summary(plan, tracks, status, error, last_step, wall)
+        if plan.expectations and status == "ok":
+            results = checker.results()
+            summary["expectations"] = summary_block(results)
         write_json_atomic(out_dir / "summary.json", summary)
-    return RunResult(out_dir=out_dir, summary=summary)
+    return RunResult(out_dir=out_dir, summary=summary, expectations=results)
 
 
 def _summary(plan: Plan, tracks: dict[str, Track], status: str, error: Exception | None,

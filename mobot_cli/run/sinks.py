@@ -39,7 +39,9 @@ class OdomCsv:
 
     def __init__(self, path: Path):
         path.parent.mkdir(parents=True, exist_ok=True)
-        self._file = path.open("w", encoding="utf-8", newline="\n")
+        # A buffer far larger than FLUSH_EVERY_ROWS rows: the file only grows at our flushes,
+        # so a killed run leaves whole rows, never half a line.
+        self._file = path.open("w", encoding="utf-8", newline="\n", buffering=1 << 20)
         self._file.write(",".join(CSV_COLUMNS) + "\n")
         self._rows = 0
 
@@ -78,6 +80,13 @@ def make_sinks(plan: Plan, out_dir: Path) -> list[Sink]:
     sinks: list[Sink] = []
     if "csv" in plan.formats:
         sinks.append(CsvSink(plan, out_dir))
+    if "mcap" in plan.formats:
+        from mobot_cli.run.bag import BagSink  # imports rosbags: only when a bag is asked for
+
+        sinks.append(BagSink(plan, out_dir))
+    from mobot_cli.run.trajectory import TrajectorySink
+
+    sinks.append(TrajectorySink(plan, out_dir))  # every run; last, as it draws when closed
     return sinks
 
 

@@ -11,6 +11,7 @@ from typing import Any
 
 import yaml
 
+from mobot_cli.scenario.expect_resolve import expect_document
 from mobot_cli.scenario.model import RobotSpec, Scenario
 from mobot_cli.sim.plan import DriveSpec, Plan, RobotPlan
 
@@ -27,10 +28,16 @@ def resolved_document(scenario: Scenario, plan: Plan, base_dir: Path) -> dict[st
     for spec in scenario.robots:
         names = [spec.name] if spec.count is None else [spec.name.replace("{i}", str(i)) for i in range(spec.count)]
         robots.extend(_robot(spec, by_name[name], base_dir, rate) for name in names)
+    implicit = {spec.name for spec in scenario.robots if "description" not in spec.model_fields_set}
+    for entry in robots:  # the world's own robot model, named without a description: keep it so
+        if entry["name"] in implicit and entry["name"] in plan.world.robot_models:
+            del entry["description"], entry["args"]
+    local_world = base_dir / scenario.world
     return {
         "version": 1,
         "name": scenario.name,
-        "world": scenario.world,
+        "world": str(local_world.resolve()) if local_world.is_file() else scenario.world,
+        **({"skip_missing": True} if scenario.skip_missing else {}),
         "physics": {"rate_hz": rate, "gravity": list(plan.physics.gravity),
                     "solver_iterations": plan.physics.solver_iterations},
         "duration": plan.total_steps / rate,
@@ -38,7 +45,26 @@ def resolved_document(scenario: Scenario, plan: Plan, base_dir: Path) -> dict[st
         "settle": plan.settle_steps / rate,
         "log": {"rate_hz": scenario.log.rate_hz or rate / plan.log_every, "formats": list(scenario.log.formats)},
         "robots": robots,
+        **_events(scenario, plan, base_dir),
+        **expect_document(plan.expectations, rate),
     }
+
+
+def _events(scenario: Scenario, plan: Plan, base_dir: Path) -> dict[str, Any]:
+    """``events:`` in step order, spawned robots written like the scenario's own robots."""
+    if not plan.events:
+        return {}
+    rate = plan.physics.rate_hz
+    specs = {event.spawn.name: event.spawn for event in scenario.events if event.spawn is not None}
+    out: list[dict[str, Any]] = []
+    for event in plan.events:
+        entry: dict[str, Any] = {"at": event.step / rate}
+        if event.spawn is not None:
+            entry["spawn"] = _robot(specs[event.spawn.name], event.spawn, base_dir, rate)
+        else:
+            entry["delete"] = event.delete
+        out.append(entry)
+    return {"events": out}
 
 
 def _robot(spec: RobotSpec, robot: RobotPlan, base_dir: Path, rate: int) -> dict[str, Any]:

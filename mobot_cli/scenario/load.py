@@ -12,10 +12,7 @@ from mobot_cli.errors import Location, ScenarioError, did_you_mean
 from mobot_cli.scenario.model import Scenario
 from mobot_cli.scenario.yamlsource import PathKey, Source, parse_value, parse_yaml
 
-NOT_YET = {
-    "events": "spawn/delete events are not implemented in this version of mobot",
-    "expect": "expectations are not implemented in this version of mobot",
-}
+NOT_YET: dict[str, str] = {}
 
 
 def load_scenario(path: Path | str, overrides: Iterable[str] = ()) -> tuple[Scenario, Source]:

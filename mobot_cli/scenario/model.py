@@ -13,6 +13,8 @@ from typing import Annotated, Literal, Optional, Union
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from mobot_cli.scenario.expect_model import ExpectSpec
+
 NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 FLEET_NAME_RE = re.compile(r"^[A-Za-z_]([A-Za-z0-9_]|\{i\})*$")
 NAMESPACE_RE = re.compile(r"^(/[A-Za-z_][A-Za-z0-9_]*)+$")
@@ -37,7 +39,7 @@ class PhysicsSpec(Strict):
 class LogSpec(Strict):
     # None: about 50 Hz, rounded down to a whole number of physics steps (48 Hz at 240 Hz).
     rate_hz: Optional[Annotated[float, Field(gt=0)]] = None
-    formats: list[Literal["csv"]] = Field(default_factory=lambda: ["csv"])
+    formats: list[Literal["csv", "mcap"]] = Field(default_factory=lambda: ["csv"])  # mcap: DIR/bag/
 
 
 class PoseSpec(Strict):
@@ -139,18 +141,38 @@ class RobotSpec(Strict):
         return self
 
 
+class EventSpec(Strict):
+    """At ``at`` seconds, spawn one robot or delete one by name."""
+
+    at: NonNegativeFloat
+    spawn: Optional[RobotSpec] = None
+    delete: Optional[str] = None
+
+    @model_validator(mode="after")
+    def _one_action(self) -> "EventSpec":
+        if (self.spawn is None) == (self.delete is None):
+            raise ValueError("an event needs exactly one of 'spawn' or 'delete'")
+        if self.spawn is not None and self.spawn.count is not None:
+            raise ValueError("a spawn event spawns one robot: use one event per robot, not 'count'")
+        return self
+
+
 class Scenario(Strict):
     """A whole scenario file, version 1."""
 
     version: Literal[1]
     name: str = "scenario"
     world: str = "empty"
+    # World models whose files are missing (Fuel includes, meshes) are left out with a warning.
+    skip_missing: bool = False
     physics: PhysicsSpec = Field(default_factory=PhysicsSpec)
     duration: Annotated[float, Field(gt=0, le=1e6)]
     seed: Annotated[int, Field(ge=0, lt=2**32)] = 0
     settle: Annotated[float, Field(ge=0)] = 0.5
     log: LogSpec = Field(default_factory=LogSpec)
     robots: list[RobotSpec] = Field(default_factory=list)
+    events: list[EventSpec] = Field(default_factory=list)
+    expect: list[ExpectSpec] = Field(default_factory=list)
 
     @field_validator("name")
     @classmethod

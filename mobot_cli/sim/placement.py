@@ -12,17 +12,29 @@ MAX_SPAWN_PENETRATION = 0.01  # m
 # Rays looking for the floor start this far above the top of the robot resting at z = 0.
 FLOOR_PROBE_CLEARANCE = 0.05  # m
 FLOOR_PROBE_DEPTH = 100.0  # m below z = 0
+# Where there is no floor within a robot's height of z = 0, rays look again from this high
+# (below the parked robot) and the robot rests on the highest surface under it.
+HIGH_PROBE = 100.0  # m
 # Where a robot waits while its floor is probed, so rays do not hit the robot itself.
 PARKING_HEIGHT = 200.0  # m
+# Without a ground plane, lowest points are measured against a temporary plane this far
+# down: at z = 0 it would tie with (and hide) a mesh floor at z = 0 from the floor rays.
+PROBE_Z = -1000.0  # m
+# Rays that look for the surfaces around a robot reach this far and cross at most this many.
+RAY_REACH = 1000.0  # m
+MAX_CROSSINGS = 64
+RAY_STEP = 1e-4  # m a ray moves past each surface it crosses before looking on
 
 
-def lowest_points(cid: int, body: int, probe: int) -> dict[int, float]:
-    """Height above ``probe`` (a plane at z = 0) of each link's lowest collision point."""
+def lowest_points(cid: int, body: int, probe: int, probe_z: float = 0.0) -> dict[int, float]:
+    """World z of each link's lowest collision point, measured against ``probe``, a horizontal
+    plane at ``probe_z``."""
     lowest: dict[int, float] = {}
-    for pt in p.getClosestPoints(body, probe, 2.0 * PARKING_HEIGHT, physicsClientId=cid):
-        link, dist = pt[3], pt[8]
-        if dist < lowest.get(link, float("inf")):
-            lowest[link] = dist
+    reach = 2.0 * PARKING_HEIGHT + abs(probe_z)
+    for pt in p.getClosestPoints(body, probe, reach, physicsClientId=cid):
+        link, height = pt[3], pt[8] + probe_z
+        if height < lowest.get(link, float("inf")):
+            lowest[link] = height
     return lowest
 
 
@@ -37,6 +49,8 @@ def floor_height(cid: int, body: int, floors: set[int], top: float, name: str) -
     ends = [(x, y, -FLOOR_PROBE_DEPTH) for x, y, _ in starts]
     rays = p.rayTestBatch(starts, ends, physicsClientId=cid)
     hits = [r[3][2] for r in rays if r[0] in floors]  # another robot is not a floor
+    if not hits and top < HIGH_PROBE:  # no floor near z = 0 (a raised stage): the highest surface
+        return floor_height(cid, body, floors, HIGH_PROBE, name)
     if not hits:
         x, y = (x0 + x1) / 2, (y0 + y1) / 2
         raise SpawnError(
@@ -46,12 +60,12 @@ def floor_height(cid: int, body: int, floors: set[int], top: float, name: str) -
 
 
 def rest_on_floor(cid: int, body: int, probe: int, floors: set[int], xyz, quat,
-                  name: str) -> tuple[float, float, float]:
+                  name: str, probe_z: float = 0.0) -> tuple[float, float, float]:
     """Move the robot so its lowest collision point touches the floor below (x, y); return xyz."""
     p.resetBasePositionAndOrientation(body, (xyz[0], xyz[1], PARKING_HEIGHT), quat,
                                       physicsClientId=cid)
     base_z = link_frame_z(cid, body)
-    lowest = min(lowest_points(cid, body, probe).values())  # lowest point's height above z = 0
+    lowest = min(lowest_points(cid, body, probe, probe_z).values())  # its world z, parked
     height = _top(cid, body) - lowest
     floor = floor_height(cid, body, floors, height + FLOOR_PROBE_CLEARANCE, name)
     z = floor + (base_z - lowest)
@@ -68,10 +82,15 @@ def _top(cid: int, body: int) -> float:
 
 def link_frame_z(cid: int, body: int) -> float:
     """z of the base's URDF link frame (PyBullet tracks the inertial frame)."""
+    return link_frame_xyz(cid, body)[2]
+
+
+def link_frame_xyz(cid: int, body: int) -> tuple[float, float, float]:
+    """Position of the base's URDF link frame."""
     pos, orn = p.getBasePositionAndOrientation(body, physicsClientId=cid)
     dyn = p.getDynamicsInfo(body, -1, physicsClientId=cid)
     inv = p.invertTransform(dyn[3], dyn[4])
-    return p.multiplyTransforms(pos, orn, inv[0], inv[1])[0][2]
+    return tuple(p.multiplyTransforms(pos, orn, inv[0], inv[1])[0])  # type: ignore[return-value]
 
 
 def _place(cid: int, body: int, link_xyz, quat) -> None:
@@ -81,12 +100,16 @@ def _place(cid: int, body: int, link_xyz, quat) -> None:
     p.resetBasePositionAndOrientation(body, pos, orn, physicsClientId=cid)
 
 
-def check_clear(cid: int, body: int, others: dict[int, str], name: str, z: float) -> None:
+def _at(xyz) -> str:
+    return f"x={xyz[0]:.3f}, y={xyz[1]:.3f}, z={xyz[2]:.3f}"
+
+
+def check_clear(cid: int, body: int, others: dict[int, str], name: str, xyz) -> None:
     """Refuse a robot that reaches into the floor or another body by more than a centimetre."""
     for other, label in others.items():
         points = p.getClosestPoints(body, other, 0.0, physicsClientId=cid)
         depth = -min((pt[8] for pt in points), default=0.0)
         if depth > MAX_SPAWN_PENETRATION:
             raise SpawnError(
-                f"robot '{name}' spawned at z={z:.3f} reaches {depth * 100:.1f} cm into {label}",
+                f"robot '{name}' spawned at {_at(xyz)} reaches {depth * 100:.1f} cm into {label}",
                 hint="Raise z, move the robot, or use z: auto to rest it on the floor.")

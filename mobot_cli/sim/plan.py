@@ -78,13 +78,29 @@ class RobotPlan:
 
 
 @dataclass(frozen=True)
-class StaticBody:
-    """A piece of static world geometry (issue 3 fills these from SDF worlds)."""
+class StaticShape:
+    """One collision shape of a static body, posed in the body's frame."""
 
-    name: str
-    urdf: str  # a single-link URDF with absolute mesh paths
+    kind: str  # "box" | "cylinder" | "capsule" | "sphere" | "plane" | "mesh"
+    # box: x, y, z sizes; cylinder and capsule: radius, length; sphere: radius;
+    # plane: its normal; mesh: the x, y, z scale
+    size: tuple[float, ...]
+    mesh: str = ""  # absolute path of an OBJ or STL file; it collides as a concave triangle mesh
     xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
     quat: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
+
+
+@dataclass(frozen=True)
+class StaticBody:
+    """A piece of static world geometry: collision shapes (SDF worlds) or URDF text."""
+
+    name: str
+    urdf: str = ""  # a single-link URDF with absolute mesh paths; used when shapes is empty
+    xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    quat: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
+    shapes: tuple[StaticShape, ...] = ()  # a plane is always the only shape of its body
+    friction: float | None = None  # None: the world's default (1.0, as Gazebo's mu)
+    label: str = ""  # how messages name it, e.g. "world model 'Bed_01_001' at (-6.17, 2.03, 0.00)"
 
 
 @dataclass(frozen=True)
@@ -94,6 +110,8 @@ class WorldPlan:
     name: str = "empty"
     ground_plane: bool = True
     bodies: tuple[StaticBody, ...] = ()
+    source: str = ""  # the world file, for messages
+    robot_models: tuple[str, ...] = ()  # its models with joints: robots when a scenario lists them
 
 
 @dataclass(frozen=True)
@@ -103,6 +121,20 @@ class Event:
     step: int
     spawn: RobotPlan | None = None
     delete: str | None = None
+
+
+@dataclass(frozen=True)
+class Expectation:
+    """A check on a run's samples (see run/expect.py), from a scenario's ``expect:`` list."""
+
+    robot: str  # a robot's name, or "all": every robot, each checked on its own
+    kind: str  # "within" | "collisions" | "distance" | "upright" | "odom_error"
+    limits: tuple[tuple[str, float], ...]  # e.g. (("x", 5.0), ("y", 1.0), ("radius", 0.3))
+    step: int | None = None  # a log row's step; None is the end of the run
+
+    def limit(self, name: str) -> float | None:
+        """One limit by name, or None when the scenario did not give it."""
+        return dict(self.limits).get(name)
 
 
 @dataclass(frozen=True)
@@ -120,3 +152,4 @@ class Plan:
     formats: tuple[str, ...] = ("csv",)  # what the run folder records besides summary.json
     events: tuple[Event, ...] = ()
     notices: tuple[str, ...] = field(default=())
+    expectations: tuple[Expectation, ...] = ()

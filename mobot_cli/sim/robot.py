@@ -21,6 +21,7 @@ class SimRobot:
         self.name = plan.name
         self.dt = dt
         self.cmd = (0.0, 0.0)
+        self.collisions = 0  # collision events so far, counted by the World's ContactCounter
         self.joints: dict[str, int] = {}  # every non-fixed joint
         self.links: dict[str, int] = {p.getBodyInfo(body, physicsClientId=cid)[0].decode(): -1}
         for index in range(p.getNumJoints(body, physicsClientId=cid)):
@@ -98,7 +99,9 @@ class SimRobot:
             odom = (c * dx + s * dy, -s * dx + c * dy, wrap_angle(yaw - yaw0), true_vx, true_wz)
         return RobotState(
             self.cmd[0], self.cmd[1], *odom, pos[0], pos[1], pos[2], roll, pitch, yaw,
-            true_vx, true_wz, joint_positions={n: j[0] for n, j in zip(self.joints, joints)})
+            true_vx, true_wz, joint_positions={n: j[0] for n, j in zip(self.joints, joints)},
+            collisions=self.collisions,
+            joint_velocities={n: j[1] for n, j in zip(self.joints, joints)})
 
     def joint_positions(self) -> dict[str, float]:
         """Position of every non-fixed joint, by name."""

@@ -29,6 +29,8 @@ class RobotState:
     true_vx: float
     true_wz: float
     joint_positions: dict[str, float] = field(default_factory=dict, compare=True)
+    collisions: int = 0  # collision events so far (sim/contacts.py); not a CSV column
+    joint_velocities: dict[str, float] = field(default_factory=dict)  # rad/s or m/s; for joint_states
 
     # Column order of the odom CSV (DESIGN.md), without the leading time column.
     CSV_FIELDS = (

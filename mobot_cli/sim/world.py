@@ -10,8 +10,9 @@ import math
 from dataclasses import replace
 
 from mobot_cli.errors import SimulationFault, SpawnError, WorldError, did_you_mean
-from mobot_cli.sim import placement
+from mobot_cli.sim import placement, static_shapes, surroundings
 from mobot_cli.sim.bullet import p
+from mobot_cli.sim.contacts import CONTACT_RATE_HZ, ContactCounter
 from mobot_cli.sim.plan import Physics, RobotPlan, WorldPlan
 from mobot_cli.sim.robot import SimRobot
 from mobot_cli.sim.state import RobotState
@@ -71,6 +72,8 @@ class World:
         self._ramping: list[SimRobot] = []
         self._odom_every = max(1, round(physics.rate_hz / ODOMETRY_RATE_HZ))
         self._check_every = max(1, round(physics.rate_hz / HEALTH_RATE_HZ))
+        self._contacts = ContactCounter()
+        self._contact_every = max(1, round(physics.rate_hz / CONTACT_RATE_HZ))
         try:
             self._build(world)
         except BaseException:
@@ -85,17 +88,27 @@ class World:
             physicsClientId=cid)
         p.setGravity(*physics.gravity, physicsClientId=cid)
         self._statics: dict[int, str] = {}
+        self._solids: set[int] = set()  # static bodies with an inside (not planes)
         self._ground: int | None = None
         if world.ground_plane:
             self._ground = self._plane(0.0)
             self._statics[self._ground] = "the ground plane"
         for body in world.bodies:
-            uid = self._load(body.urdf, body.xyz, body.quat, fixed=True)
-            if uid < 0:
-                raise WorldError(f"PyBullet could not load static body '{body.name}'",
-                                 hint="Check its geometry: meshes must exist and be readable.")
-            _set_friction(cid, uid, links_with_friction(body.urdf), {}, DEFAULT_FRICTION)
-            self._statics[uid] = f"static body '{body.name}'"
+            if body.shapes:
+                uids = static_shapes.create(cid, body)
+                for uid in uids:
+                    p.changeDynamics(uid, -1, lateralFriction=DEFAULT_FRICTION if body.friction is None
+                                     else body.friction, physicsClientId=cid)
+            else:
+                uids = [self._load(body.urdf, body.xyz, body.quat, fixed=True)]
+                if uids[0] < 0:
+                    raise WorldError(f"PyBullet could not load static body '{body.name}'",
+                                     hint="Check its geometry: meshes must exist and be readable.")
+                _set_friction(cid, uids[0], links_with_friction(body.urdf), {}, DEFAULT_FRICTION)
+            for uid in uids:
+                self._statics[uid] = body.label or f"static body '{body.name}'"
+                if not any(shape.kind == "plane" for shape in body.shapes):
+                    self._solids.add(uid)
 
     def _load(self, urdf: str, xyz, quat, fixed: bool = False) -> int:
         """Load URDF text; -1 when PyBullet refuses it."""
@@ -163,19 +176,25 @@ class World:
     def _settle_in(self, uid: int, robot: RobotPlan) -> None:
         """Place the robot (z: auto), refuse overlaps, set contact and damping defaults."""
         cid, pose = self._cid, robot.pose
-        probe = self._ground if self._ground is not None else self._plane(0.0)
+        probe_z = 0.0 if self._ground is not None else placement.PROBE_Z
+        probe = self._ground if self._ground is not None else self._plane(probe_z)
         try:
-            lowest = placement.lowest_points(cid, uid, probe)
+            lowest = placement.lowest_points(cid, uid, probe, probe_z)
             if pose.z_auto:
                 floors = set(self._statics)  # the ground plane is among them, a probe is not
-                placement.rest_on_floor(cid, uid, probe, floors, pose.xyz, pose.quat, robot.name)
+                placement.rest_on_floor(cid, uid, probe, floors, pose.xyz, pose.quat, robot.name,
+                                        probe_z)
         finally:
             if probe != self._ground:
                 p.removeBody(probe, physicsClientId=cid)
-        z = placement.link_frame_z(cid, uid)
+        xyz = placement.link_frame_xyz(cid, uid)
         others = dict(self._statics)
         others.update({r.body: f"robot '{n}'" for n, r in self._robots.items()})
-        placement.check_clear(cid, uid, others, robot.name, z)
+        placement.check_clear(cid, uid, others, robot.name, xyz)
+        surroundings.check_not_inside(cid, uid, {b: self._statics[b] for b in self._solids},
+                                      robot.name, xyz)
+        if not pose.z_auto:
+            surroundings.check_above_floor(cid, uid, self._statics, robot.name, xyz)
         bottom = min(lowest.values(), default=0.0)
         wheels = _wheel_links(cid, uid, robot)
         casters = {link for link, h in lowest.items()
@@ -197,6 +216,7 @@ class World:
         robot = self._robot(name)
         p.removeBody(robot.body, physicsClientId=self._cid)
         del self._robots[name]
+        self._contacts.forget(name)
         if robot in self._ramping:
             self._ramping.remove(robot)
 
@@ -222,6 +242,8 @@ class World:
         if self._steps % self._check_every == 0:
             for robot in self._robots.values():
                 self._check(robot)
+        if self._steps % self._contact_every == 0:
+            self._contacts.sample(self._cid, self._robots.values())
 
     def _check(self, robot: SimRobot) -> None:
         pos = p.getBasePositionAndOrientation(robot.body, physicsClientId=self._cid)[0]

@@ -1,0 +1,123 @@
+"""The typed ``expect:`` list: checks that make a run a test (``mobot run`` exits 1 on a failure).
+
+Each item names a robot (or ``all``) and exactly one check. ``at`` is when: for ``within``
+the moment the robot must be inside the area, for the other checks the end of the span
+they cover (default: the end of the run).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal, Optional, Union
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+NonNegativeFloat = Annotated[float, Field(ge=0)]
+PositiveFloat = Annotated[float, Field(gt=0)]
+
+KINDS = ("within", "collisions", "distance", "upright", "odom_error")
+# Tilt (angle between the robot's z axis and the world's) beyond which a robot has tipped over.
+DEFAULT_MAX_TILT = math.radians(45.0)
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+
+
+class WithinSpec(_Strict):
+    """A circle {x, y, radius} or a box {xmin, xmax, ymin, ymax}, in the world frame (metres)."""
+
+    x: Optional[float] = None
+    y: Optional[float] = None
+    radius: Optional[PositiveFloat] = None
+    xmin: Optional[float] = None
+    xmax: Optional[float] = None
+    ymin: Optional[float] = None
+    ymax: Optional[float] = None
+
+    @model_validator(mode="after")
+    def _one_shape(self) -> "WithinSpec":
+        circle = [k for k in ("x", "y", "radius") if getattr(self, k) is not None]
+        box = [k for k in ("xmin", "xmax", "ymin", "ymax") if getattr(self, k) is not None]
+        if circle and box:
+            raise ValueError("mixes a circle (x, y, radius) with a box (xmin, xmax, ymin, ymax): use one")
+        if box and len(box) < 4:
+            raise ValueError("a box needs xmin, xmax, ymin and ymax")
+        if box and (self.xmin >= self.xmax or self.ymin >= self.ymax):
+            raise ValueError("a box needs xmin < xmax and ymin < ymax")
+        if not box and len(circle) < 3:
+            raise ValueError("give a circle {x, y, radius} or a box {xmin, xmax, ymin, ymax}")
+        return self
+
+
+class RangeSpec(_Strict):
+    """Travelled distance bounds in metres; at least one of min and max."""
+
+    min: Optional[NonNegativeFloat] = None
+    max: Optional[NonNegativeFloat] = None
+
+    @model_validator(mode="after")
+    def _bounds(self) -> "RangeSpec":
+        if self.min is None and self.max is None:
+            raise ValueError("give 'min', 'max' or both (metres travelled)")
+        if self.min is not None and self.max is not None and self.min > self.max:
+            raise ValueError(f"min {self.min:g} is above max {self.max:g}")
+        return self
+
+
+class UprightSpec(_Strict):
+    """The largest tilt (radians from vertical) that still counts as upright."""
+
+    max_tilt: Annotated[float, Field(gt=0, le=math.pi)] = DEFAULT_MAX_TILT
+
+
+class OdomErrorSpec(_Strict):
+    """Largest allowed drift of the robot's odometry from the truth."""
+
+    position: Optional[NonNegativeFloat] = None  # metres
+    yaw: Optional[NonNegativeFloat] = None  # radians
+
+    @model_validator(mode="after")
+    def _some(self) -> "OdomErrorSpec":
+        if self.position is None and self.yaw is None:
+            raise ValueError("give 'position' (m), 'yaw' (rad) or both")
+        return self
+
+
+class ExpectSpec(_Strict):
+    """One expectation: a robot (or ``all``), one check and when it applies."""
+
+    robot: str
+    at: Union[Literal["end"], NonNegativeFloat] = "end"
+    within: Optional[WithinSpec] = None
+    collisions: Optional[Annotated[int, Field(ge=0)]] = None
+    distance: Optional[RangeSpec] = None
+    upright: Optional[Union[Literal[True], UprightSpec]] = None
+    odom_error: Optional[Union[NonNegativeFloat, OdomErrorSpec]] = None
+
+    @field_validator("at", mode="before")
+    @classmethod
+    def _at(cls, v: object) -> object:
+        if isinstance(v, str) and v != "end" or isinstance(v, bool):
+            raise ValueError(f"'at' is 'end' or a time in seconds, e.g. 5.0; got {v!r}")
+        return v
+
+    @field_validator("upright", mode="before")
+    @classmethod
+    def _upright(cls, v: object) -> object:
+        if v is False:
+            raise ValueError("'upright: false' checks nothing: write 'upright: true' or {max_tilt: RADIANS}")
+        return v
+
+    @model_validator(mode="after")
+    def _one_check(self) -> "ExpectSpec":
+        given = [k for k in KINDS if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError(("gives " + " and ".join(f"'{k}'" for k in given) + ": one check per item")
+                             if given else "needs one check: " + ", ".join(KINDS))
+        return self
+
+    @property
+    def kind(self) -> str:
+        """The name of the one check this item makes."""
+        return next(k for k in KINDS if getattr(self, k) is not None)

@@ -1,0 +1,89 @@
+"""``expect:`` items to plan Expectations: robot names checked, fleets expanded, times to log rows."""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+from mobot_cli.errors import ScenarioError, did_you_mean
+from mobot_cli.scenario.expect_model import ExpectSpec, OdomErrorSpec, UprightSpec
+from mobot_cli.scenario.model import Scenario
+from mobot_cli.scenario.units import steps
+from mobot_cli.scenario.yamlsource import Source
+from mobot_cli.sim.plan import Event, Expectation, RobotPlan
+
+ALL = "all"
+
+
+def resolve_expectations(scenario: Scenario, source: Source, robots: Sequence[RobotPlan],
+                         events: Sequence[Event], log_every: int,
+                         total: int) -> tuple[tuple[Expectation, ...], list[str]]:
+    """Expectations in file order (a fleet's name gives one per member) and notices."""
+    rate = scenario.physics.rate_hz
+    names = [r.name for r in robots] + [e.spawn.name for e in events if e.spawn is not None]
+    fleets = {spec.name: [spec.name.replace("{i}", str(i)) for i in range(spec.count)]
+              for spec in scenario.robots if spec.count is not None}
+    out: list[Expectation] = []
+    notices: list[str] = []
+    for index, spec in enumerate(scenario.expect):
+        path = ("expect", index)
+        step = None
+        if spec.at != "end":
+            step, note = _log_row(spec.at, rate, log_every, total)
+            if note:
+                notices.append(f"{source.locate_key(path + ('at',))}: {note}")
+        if spec.robot == ALL or spec.robot in names:
+            members = [spec.robot]
+        elif spec.robot in fleets:
+            members = fleets[spec.robot]
+        else:
+            raise ScenarioError(f"expectation names robot '{spec.robot}', which is not in the scenario",
+                                location=source.locate_key(path + ("robot",)),
+                                hint=did_you_mean(spec.robot, [*names, *fleets, ALL]))
+        limits = _limits(spec)
+        out.extend(Expectation(robot=name, kind=spec.kind, limits=limits, step=step) for name in members)
+    return tuple(out), notices
+
+
+def _log_row(at: float, rate: int, log_every: int, total: int) -> tuple[int, str | None]:
+    """The step of the log row nearest ``at`` (so a check uses a row of odom/<robot>.csv)."""
+    exact = steps(at, rate)
+    if exact >= total:
+        return exact, None  # the end of the run, or after it: the check says the run ended first
+    row = min(total, (exact + log_every // 2) // log_every * log_every)
+    if row == exact:
+        return row, None
+    return row, f"expectation at {at:g} s is checked on the nearest log row, {row / rate:g} s"
+
+
+def _limits(spec: ExpectSpec) -> tuple[tuple[str, float], ...]:
+    """The check's numbers, defaults filled, in a fixed order."""
+    kind = spec.kind
+    if kind == "within":
+        shape = spec.within.model_dump(exclude_none=True)
+        order = ("x", "y", "radius") if "radius" in shape else ("xmin", "xmax", "ymin", "ymax")
+        return tuple((k, float(shape[k])) for k in order)
+    if kind == "collisions":
+        return (("max", float(spec.collisions)),)
+    if kind == "distance":
+        return tuple((k, float(v)) for k, v in spec.distance.model_dump(exclude_none=True).items())
+    if kind == "upright":
+        upright = spec.upright if isinstance(spec.upright, UprightSpec) else UprightSpec()
+        return (("max_tilt", float(upright.max_tilt)),)
+    odom = spec.odom_error if isinstance(spec.odom_error, OdomErrorSpec) \
+        else OdomErrorSpec(position=spec.odom_error)
+    return tuple((k, float(v)) for k, v in odom.model_dump(exclude_none=True).items())
+
+
+def expect_document(expectations: Sequence[Expectation], rate: int) -> dict[str, list]:
+    """``expect:`` as the resolved scenario writes it: one item per robot, defaults filled."""
+    if not expectations:
+        return {}
+    items = []
+    for e in expectations:
+        limits = dict(e.limits)
+        if e.kind == "collisions":
+            check = int(limits["max"])
+        else:
+            check = limits
+        items.append({"robot": e.robot, e.kind: check, "at": "end" if e.step is None else e.step / rate})
+    return {"expect": items}

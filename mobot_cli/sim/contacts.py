@@ -1,0 +1,77 @@
+"""Collision events: a robot touching anything but what it stands on.
+
+A collision is counted once when a robot starts touching another body, not once per step
+it stays in touch. Floors need no list: a contact whose normal points up into the robot
+(steeper than SUPPORT_NORMAL_Z) is the robot resting on something - the ground plane, a
+mesh floor, a ramp - and is support, not a collision. Contacts between two robots always
+count, for both robots.
+"""
+
+from __future__ import annotations
+
+from typing import Hashable, Iterable, Protocol
+
+from mobot_cli.sim.bullet import p
+
+# Contacts are sampled at this rate, not every step: one getContactPoints call for the whole
+# world per sample keeps the step loop within a few percent of raw PyBullet.
+CONTACT_RATE_HZ = 50
+# |normal z| above this (about 45 degrees from vertical) and pointing up into the robot:
+# the robot is standing on the other body.
+SUPPORT_NORMAL_Z = 0.7
+# Manifold points can be reported a little before bodies touch; closer than this is touching.
+CONTACT_SLOP = 1e-3  # m
+# A pair must be apart for this many samples (0.1 s at 50 Hz) before touching again counts as
+# a new collision, so solver jitter in one long scrape along a wall is not many collisions.
+RELEASE_SAMPLES = 5
+
+
+class Counted(Protocol):
+    """What the counter needs of a robot: its name, body and a running count."""
+
+    name: str
+    body: int
+    collisions: int
+
+
+class ContactCounter:
+    """Counts collision events per robot; call ``sample`` at a fixed rate."""
+
+    def __init__(self) -> None:
+        self._samples = 0
+        self._last_touch: dict[tuple[str, Hashable], int] = {}
+
+    def sample(self, cid: int, robots: Iterable[Counted]) -> None:
+        """Look at the world's contacts now and add new collision events to the robots."""
+        self._samples += 1
+        by_body = {robot.body: robot for robot in robots}
+        if not by_body:
+            return
+        touching: set[tuple[Counted, Hashable]] = set()
+        for contact in p.getContactPoints(physicsClientId=cid):
+            ra, rb = by_body.get(contact[1]), by_body.get(contact[2])
+            if (ra is None and rb is None) or contact[8] > CONTACT_SLOP:
+                continue
+            if ra is not None and rb is not None:
+                if ra is not rb:
+                    touching.add((ra, ("robot", rb.name)))
+                    touching.add((rb, ("robot", ra.name)))
+                continue
+            # contactNormalOnB points from B towards A: turn it to point from the other body
+            # into the robot.
+            robot, other, up = (ra, contact[2], contact[7][2]) if ra is not None \
+                else (rb, contact[1], -contact[7][2])
+            if up > SUPPORT_NORMAL_Z:
+                continue
+            touching.add((robot, ("body", other)))
+        for robot, other in touching:
+            key = (robot.name, other)
+            last = self._last_touch.get(key)
+            if last is None or self._samples - last > RELEASE_SAMPLES:
+                robot.collisions += 1
+            self._last_touch[key] = self._samples
+
+    def forget(self, name: str) -> None:
+        """Drop a removed robot's pairs (PyBullet may reuse its body id)."""
+        self._last_touch = {k: v for k, v in self._last_touch.items()
+                            if k[0] != name and k[1] != ("robot", name)}
