@@ -1,0 +1,187 @@
+"""A small pool of warm worker processes that survives its workers dying.
+
+concurrent.futures' ProcessPoolExecutor marks every pending future broken when one worker
+dies (a segfault in PyBullet, an out-of-memory kill), so a sweep could not go on past one
+bad run. Here each worker is a process with a pipe: the parent waits on the pipes and on the
+processes themselves, and a worker that dies or overruns its timeout is killed, its run is
+marked failed, and a fresh worker takes its place. Workers stay alive for the whole sweep,
+so imports and in-process caches are paid once per worker, not once per run. They come from
+multiprocessing's fork server with mobot and PyBullet imported once (never forked from the
+parent, which may run threads such as the progress bar), so a replacement is ready in
+milliseconds instead of the 0.5 s a spawned one needs; spawn where there is no fork server.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import signal
+import time
+from collections import deque
+from multiprocessing.connection import Connection, wait
+from typing import Callable, Iterable
+
+from mobot_cli.sweep.task import Outcome, Task, failed, run_task
+
+Runner = Callable[[Task], Outcome]
+OnDone = Callable[[Outcome], None]
+POLL_S = 0.5  # how often a wait wakes up to look at deadlines when none is closer
+READY = "ready"  # a worker's first message: imports done, the timeout clock may start
+
+
+def _worker_main(conn: Connection, runner: Runner) -> None:
+    """A worker's life: take tasks from the pipe until told to stop (None)."""
+    # Ctrl-C reaches the whole process group; the parent decides what stops, not each worker.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    import mobot_cli.run.execute  # noqa: F401  (warm up before the first task)
+
+    conn.send(READY)
+    while True:
+        try:
+            task = conn.recv()
+        except EOFError:
+            return
+        if task is None:
+            return
+        try:
+            outcome = runner(task)
+        except Exception as exc:  # run_task never raises; a runner that does must not kill the worker
+            outcome = failed(task.index, "error", f"{type(exc).__name__}: {exc}")
+        conn.send(outcome)
+
+
+class _Worker:
+    """One worker process, its pipe end and the task it is running."""
+
+    def __init__(self, ctx, runner: Runner):
+        self.conn, child = ctx.Pipe()
+        self.process = ctx.Process(target=_worker_main, args=(child, runner), daemon=True)
+        self.process.start()
+        child.close()
+        self.task: Task | None = None
+        self.ready = False
+        self.started: float | None = None  # when the task started; None until the worker is ready
+
+    def give(self, task: Task) -> None:
+        self.task, self.started = task, time.perf_counter() if self.ready else None
+        self.conn.send(task)
+
+    def elapsed(self) -> float:
+        return 0.0 if self.started is None else time.perf_counter() - self.started
+
+    def kill(self) -> None:
+        if self.process.is_alive():
+            self.process.kill()
+        self.process.join(timeout=5)
+        self.conn.close()
+
+
+class LocalExecutor:
+    """Run tasks on ``jobs`` warm worker processes; a run's failure never stops the others."""
+
+    name = "local"
+
+    def __init__(self, jobs: int, timeout: float | None = None, runner: Runner = run_task):
+        self.jobs = max(1, jobs)
+        self.timeout = timeout
+        self.runner = runner
+
+    def start(self) -> None:
+        """Nothing to set up: workers start with the first tasks."""
+
+    def run(self, tasks: Iterable[Task], on_done: OnDone) -> None:
+        """Run every task, calling ``on_done`` in the parent as each one ends."""
+        pending = deque(tasks)
+        if not pending:
+            return
+        ctx = _context()
+        # A slot holds None after its worker was killed, until a task needs a new one.
+        workers: list[_Worker | None] = [_Worker(ctx, self.runner) for _ in range(min(self.jobs, len(pending)))]
+        try:
+            while True:
+                for i, worker in enumerate(workers):
+                    if (worker is None or worker.task is None) and pending:
+                        workers[i] = self._give(ctx, worker, pending.popleft())
+                busy = [w for w in workers if w is not None and w.task is not None]
+                if not busy:
+                    return
+                wait([w.conn for w in busy] + [w.process.sentinel for w in busy], timeout=self._wait_s(busy))
+                for i, worker in enumerate(workers):
+                    if worker is not None and worker.task is not None:
+                        workers[i] = self._collect(worker, on_done)
+        finally:
+            for worker in workers:
+                if worker is not None:
+                    self._stop(worker)
+
+    def _give(self, ctx, worker: _Worker | None, task: Task) -> _Worker:
+        """Hand a task over; a missing worker, or one that died while idle, is replaced first."""
+        if worker is not None:
+            try:
+                worker.give(task)
+                return worker
+            except (BrokenPipeError, OSError):
+                worker.kill()
+        worker = _Worker(ctx, self.runner)
+        worker.give(task)
+        return worker
+
+    def _wait_s(self, busy: list[_Worker]) -> float:
+        if self.timeout is None:
+            return POLL_S
+        return max(0.0, min([POLL_S] + [self.timeout - w.elapsed() for w in busy if w.started is not None]))
+
+    def _collect(self, worker: _Worker, on_done: OnDone) -> _Worker | None:
+        """Take a finished run's outcome, or fail the run of a dead or overdue worker."""
+        task = worker.task
+        try:
+            while worker.conn.poll():
+                message = worker.conn.recv()
+                if message == READY:
+                    worker.ready, worker.started = True, time.perf_counter()
+                    continue
+                worker.task = None
+                on_done(message)
+                return worker
+        except (EOFError, OSError):
+            pass  # the worker died mid-reply: treat as a crash below
+        elapsed = worker.elapsed()
+        if worker.process.is_alive() and (self.timeout is None or elapsed < self.timeout):
+            return worker
+        if worker.process.is_alive():
+            outcome = failed(task.index, "timeout", f"no result after {self.timeout:g} s: the run was stopped",
+                             elapsed)
+        else:
+            outcome = failed(task.index, "crash", _death(worker.process.exitcode), elapsed)
+        worker.kill()
+        on_done(outcome)
+        return None
+
+    @staticmethod
+    def _stop(worker: _Worker) -> None:
+        try:
+            if worker.task is None:
+                worker.conn.send(None)
+                worker.process.join(timeout=2)
+        except (BrokenPipeError, OSError):
+            pass
+        worker.kill()
+
+
+def _context():
+    """The fork server with mobot imported where the platform has one, else plain spawn."""
+    if "forkserver" in multiprocessing.get_all_start_methods():
+        ctx = multiprocessing.get_context("forkserver")
+        ctx.set_forkserver_preload(["mobot_cli.run.execute"])
+        return ctx
+    return multiprocessing.get_context("spawn")
+
+
+def _death(exitcode: int | None) -> str:
+    """Words for how a worker process ended."""
+    if exitcode is not None and exitcode < 0:
+        try:
+            name = signal.Signals(-exitcode).name
+        except ValueError:
+            name = f"signal {-exitcode}"
+        return f"the worker process was killed by {name} (a crash in the physics engine?)"
+    return f"the worker process exited with code {exitcode}"

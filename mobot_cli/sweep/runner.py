@@ -1,0 +1,120 @@
+"""A prepared sweep, run: the sweep folder, resuming, and rows written as runs finish."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Protocol
+
+from mobot_cli.errors import UsageError
+from mobot_cli.sweep.expand import Sweep
+from mobot_cli.sweep.results import (ResultsCsv, columns, folder, read_rows, rewrite_sorted, row,
+                                     sweep_document, write_document)
+from mobot_cli.sweep.task import FAILED, Outcome, Task
+
+Progress = Callable[[int, int, int], None]  # (runs done, runs failed, runs in the sweep)
+
+
+class Executor(Protocol):
+    """Something that runs tasks and reports each outcome as it comes."""
+
+    name: str
+    jobs: int
+    timeout: float | None
+
+    def start(self) -> None: ...
+
+    def run(self, tasks: list[Task], on_done: Callable[[Outcome], None]) -> None: ...
+
+
+@dataclass
+class SweepReport:
+    """How the sweep went; ``rows`` are results.csv's rows by run index."""
+
+    out_dir: Path
+    document: dict[str, Any]
+    rows: dict[int, dict[str, str]] = field(default_factory=dict)
+    skipped: int = 0  # runs finished by an earlier, resumed sweep
+
+    @property
+    def failed(self) -> list[dict[str, str]]:
+        return [r for _, r in sorted(self.rows.items()) if r["status"] == FAILED]
+
+
+def check_out_dir(sweep: Sweep, out_dir: Path, resume: bool) -> dict[int, dict[str, str]]:
+    """Refuse to mix sweeps in one folder; with resume, the rows already finished."""
+    header = columns(sweep.keys, sweep.robots())
+    stored = out_dir / "sweep.json"
+    if not resume:
+        if stored.exists():
+            raise UsageError(f"{out_dir} already holds a sweep",
+                             hint="Add --resume to finish it, or choose another --out.")
+        if out_dir.exists() and any(out_dir.iterdir()):
+            raise UsageError(f"{out_dir} is not empty", hint="Choose a new or empty folder for --out.")
+        return {}
+    if not stored.exists():
+        raise UsageError(f"nothing to resume: {stored} does not exist",
+                         hint="Give --out the folder of the sweep to finish.")
+    try:
+        before = json.loads(stored.read_text(encoding="utf-8"))
+        same = [(r["run"], r["seed"], r["params"]) for r in before["runs"]] == \
+            [(v.index, v.seed, dict(v.params)) for v in sweep.variants] and before["scenario"] == str(sweep.spec.scenario)
+        rows = read_rows(out_dir / "results.csv", header) if same else None
+    except (OSError, ValueError, KeyError, TypeError):
+        same, rows = False, None
+    if not same or rows is None:
+        raise UsageError(f"the sweep in {out_dir} was made with other runs or columns than these",
+                         hint="Resume with the same scenario, values and seed, or choose another --out.")
+    return rows
+
+
+def run_sweep(sweep: Sweep, out_dir: Path, executor: Executor, done_rows: dict[int, dict[str, str]],
+              progress: Progress | None = None) -> SweepReport:
+    """Run every run not in ``done_rows``; Ctrl-C stops it, keeping the finished rows."""
+    total = len(sweep.variants)
+    header = columns(sweep.keys, sweep.robots())
+    (out_dir / "runs").mkdir(parents=True, exist_ok=True)
+    document = sweep_document(sweep, executor.name, executor.jobs, executor.timeout)
+    write_document(out_dir / "sweep.json", document)
+    report = SweepReport(out_dir, document, dict(done_rows), skipped=len(done_rows))
+    todo = [v for v in sweep.variants if v.index not in done_rows]
+    tasks = [Task(v.index, sweep.prepared[v.index].plan, sweep.prepared[v.index].resolved_yaml,
+                  str((out_dir / folder(v.index, total)).resolve())) for v in todo]
+    results = ResultsCsv(out_dir / "results.csv", header)
+
+    def on_done(outcome: Outcome) -> None:
+        run_dir = folder(outcome.index, total)
+        if outcome.files is not None:
+            _unpack(out_dir / run_dir, outcome.files)
+        values = row(sweep.variants[outcome.index], outcome, run_dir)
+        results.append(values)
+        report.rows[outcome.index] = values
+        if progress:
+            progress(len(report.rows), len(report.failed), total)
+
+    if progress:
+        progress(len(report.rows), len(report.failed), total)
+    status = "interrupted"
+    try:
+        executor.run(tasks, on_done)
+        status = "complete"
+    finally:
+        results.close()
+        rewrite_sorted(out_dir / "results.csv", header, report.rows)
+        failed = len(report.failed)
+        document.update(status=status, counts={"total": total, "passed": len(report.rows) - failed,
+                                               "failed": failed, "not_run": total - len(report.rows)})
+        write_document(out_dir / "sweep.json", document)
+    return report
+
+
+def _unpack(run_dir: Path, files: dict[str, bytes]) -> None:
+    """Write a run folder that was made on another machine."""
+    if run_dir.exists():
+        shutil.rmtree(run_dir)
+    for rel, data in files.items():
+        path = run_dir / rel
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(data)
