@@ -87,6 +87,7 @@ class LiveServer:
         self.endpoint = endpoints.check(endpoint, bind_any)
         self.session: Session | None = None
         self.stopping = False
+        self._logged = -1  # the last step recorded, so shutdown can record the final state once
         self.status, self.error = "ok", None
         self.counts: dict[str, int] = {}
         self._socket: zmq.Socket | None = None
@@ -110,6 +111,9 @@ class LiveServer:
                 if ready:
                     ready(self.endpoint)
                 self._loop(self.session, Script(self.plan), Clock(self.plan.physics.dt, self.rtf))
+                # Like `mobot run`, the record ends with the state at the last step.
+                if self.recorder and self.status != "fault" and self._logged != world.step_count:
+                    self.recorder.write(sample(world, world.step_count))
         except BaseException as exc:  # the summary must not say "ok" for a world that broke
             if self.status == "ok" and not isinstance(exc, KeyboardInterrupt):
                 self.status, self.error = "fault", str(exc) or repr(exc)
@@ -133,6 +137,7 @@ class LiveServer:
             self._finish_spawns()
             if self.recorder and step % plan.log_every == 0:
                 self.recorder.write(sample(world, step))
+                self._logged = step
             self._serve_requests(clock.due(), step_time)
             if self.stopping or (self.stop_after is not None and step >= self.stop_after):
                 break
