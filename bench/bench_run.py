@@ -27,6 +27,7 @@ sys.path.insert(0, str(REPO))
 
 from mobot_cli.run.execute import execute  # noqa: E402
 from mobot_cli.run.prepare import prepare  # noqa: E402
+from mobot_cli.run.timeline import simulate  # noqa: E402
 from mobot_cli.sim.bullet import p  # noqa: E402
 
 
@@ -39,9 +40,8 @@ def scenario_text(robots: int, seconds: float) -> str:
             f"    commands: [{{at: 0.5, linear: 0.3, angular: 0.3}}]\n")
 
 
-def raw_loop(plan, out_dir: Path) -> float:
-    """The same physics with nothing but PyBullet calls; returns wall seconds."""
-    started = time.perf_counter()
+def raw_loop(plan, out_dir: Path) -> None:
+    """The same physics with nothing but PyBullet calls."""
     cid = p.connect(p.DIRECT)
     # The same engine settings mobot uses (see mobot_cli/sim/world.py), so only mobot's own
     # work (timeline, controllers, odometry, sinks) differs between the two loops.
@@ -86,13 +86,24 @@ def raw_loop(plan, out_dir: Path) -> float:
     for _, _, f in bodies:
         f.close()
     p.disconnect(cid)
-    return time.perf_counter() - started
 
 
 def mobot_loop(prepared, out_dir: Path) -> float:
-    started = time.perf_counter()
+    """A whole `mobot run` minus start-up: simulation, CSV, summary, trajectory.png."""
     execute(prepared.plan, prepared.resolved_yaml, out_dir)
-    return time.perf_counter() - started
+
+
+def mobot_sim_only(prepared, out_dir: Path) -> None:
+    """mobot's timeline alone (spawn checks, drive, odometry, contacts, reads), no files."""
+    for _ in simulate(prepared.plan):
+        pass
+
+
+def timed(fn, *args) -> tuple[float, float]:
+    """(wall, CPU) seconds of one call."""
+    wall, cpu = time.perf_counter(), time.process_time()
+    fn(*args)
+    return time.perf_counter() - wall, time.process_time() - cpu
 
 
 def process_seconds(args: list[str], repeat: int) -> float:
@@ -111,19 +122,26 @@ def main() -> None:
     args = parser.parse_args()
     work = Path(tempfile.mkdtemp(prefix="mobot-bench-"))
     try:
-        print(f"mobot vs raw PyBullet, {args.seconds:g} simulated s at 240 Hz, 50 solver iterations, log 48 Hz")
-        print(f"{'robots':>6} {'raw s':>8} {'mobot s':>8} {'ratio':>6} {'steps/s (mobot)':>16}")
+        print(f"mobot vs raw PyBullet, {args.seconds:g} simulated s at 240 Hz, 50 solver iterations, "
+              f"log 48 Hz; medians of {args.repeat}, interleaved")
+        print(f"{'robots':>6} {'what':<22} {'raw s':>7} {'mobot s':>8} {'wall ratio':>10} {'CPU ratio':>10}")
         for robots in (1, 10):
             path = work / f"bench{robots}.yaml"
             path.write_text(scenario_text(robots, args.seconds))
             prepared = prepare(path)
-            raw, ours = [], []
+            results: dict[str, list[tuple[float, float]]] = {"raw": [], "run": [], "sim": []}
             for i in range(args.repeat):
                 (work / f"raw{robots}-{i}").mkdir()
-                raw.append(raw_loop(prepared.plan, work / f"raw{robots}-{i}"))
-                ours.append(mobot_loop(prepared, work / f"mobot{robots}-{i}"))
-            r, m = statistics.median(raw), statistics.median(ours)
-            print(f"{robots:>6} {r:>8.3f} {m:>8.3f} {m / r:>6.3f} {prepared.plan.total_steps / m:>16.0f}")
+                results["raw"].append(timed(raw_loop, prepared.plan, work / f"raw{robots}-{i}"))
+                results["run"].append(timed(mobot_loop, prepared, work / f"mobot{robots}-{i}"))
+                results["sim"].append(timed(mobot_sim_only, prepared, work))
+            raw_wall = statistics.median(w for w, _ in results["raw"])
+            raw_cpu = statistics.median(c for _, c in results["raw"])
+            for key, label in (("run", "whole run (files, png)"), ("sim", "simulation loop only")):
+                wall = statistics.median(w for w, _ in results[key])
+                cpu = statistics.median(c for _, c in results[key])
+                print(f"{robots:>6} {label:<22} {raw_wall:>7.3f} {wall:>8.3f} {wall / raw_wall:>10.3f} "
+                      f"{cpu / raw_cpu:>10.3f}")
         mobot = shutil.which("mobot") or "mobot"
         real = Path(sys.executable).parent / "mobot"
         mobot = str(real) if real.exists() else mobot

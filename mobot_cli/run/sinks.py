@@ -34,6 +34,16 @@ def number(value: float) -> str:
     return "0.000000" if text == "-0.000000" else text
 
 
+_ROW = ",".join(["%.6f"] * len(CSV_COLUMNS)) + "\n"
+
+
+def csv_row(values: tuple[float, ...]) -> str:
+    """One CSV line: six decimals per value, never '-0.000000', formatted in one go (it is hot)."""
+    # Every '-' in the line is a value's sign and every value has six decimals, so
+    # '-0.000000' can only be a whole value that rounded to zero.
+    return (_ROW % values).replace("-0.000000", "0.000000")
+
+
 class OdomCsv:
     """One robot's odometry log, flushed every few rows so a killed run keeps what it had."""
 
@@ -46,7 +56,7 @@ class OdomCsv:
         self._rows = 0
 
     def write(self, t: float, state: RobotState) -> None:
-        self._file.write(",".join(number(v) for v in (t, *state.row())) + "\n")
+        self._file.write(csv_row((t, *state.row())))
         self._rows += 1
         if self._rows % FLUSH_EVERY_ROWS == 0:
             self._file.flush()

@@ -71,8 +71,8 @@ class SimRobot:
         self.cmd = (float(linear), float(angular))
         self.drive.command(linear, angular)
 
-    def state(self) -> RobotState:
-        """Command, odometry and truth now (called at log rate: few PyBullet calls)."""
+    def state(self, step: int = -1) -> RobotState:
+        """Command, odometry and truth after ``step`` steps (called at log rate: few PyBullet calls)."""
         cid, body = self.cid, self.body
         com, orn = p.getBasePositionAndOrientation(body, physicsClientId=cid)
         lin, ang = p.getBaseVelocity(body, physicsClientId=cid)
@@ -91,7 +91,7 @@ class SimRobot:
         joints = p.getJointStates(body, self.joint_indices, physicsClientId=cid) \
             if self.joint_indices else ()
         if self.drive is not None and self.drive.spec.odometry == "encoder":
-            odom = self.drive.odometry_now(joints)
+            odom = self.drive.odometry_now(joints, step)
         else:
             x0, y0, yaw0 = self.spawn_xy_yaw
             dx, dy = pos[0] - x0, pos[1] - y0
@@ -133,6 +133,7 @@ class _Drive:
         self.odometry = Odometry(self.separation)
         self.scale = [sign * self.radius for sign in self.signs]  # joint angle -> rim travel
         self.last = self._positions()
+        self.integrated_at = -1  # the world step of the last integration
         self.rates = [0.0] * len(self.wheels)  # wheel targets in rad/s, as commanded now
         self.goal = list(self.rates)  # where ramping is heading (acceleration limit)
         self.max_step = (spec.max_wheel_acceleration or 0.0) * robot.dt
@@ -182,10 +183,12 @@ class _Drive:
                 right += travel
         self.odometry.advance(left / n_left, right / (len(states) - n_left))
 
-    def odometry_now(self, joints) -> tuple[float, float, float, float, float]:
+    def odometry_now(self, joints, step: int = -1) -> tuple[float, float, float, float, float]:
         """Odometry pose and twist, brought up to date from ``joints`` (every non-fixed joint)."""
         wheels = [joints[k] for k in self.slots]
-        self.integrate(wheels)
+        if step < 0 or step != self.integrated_at:  # already folded in at this step: nothing moved
+            self.integrate(wheels)
+            self.integrated_at = step
         rim = [state[1] * scale for state, scale in zip(wheels, self.scale)]
         n_left = len(self.left)
         vx, wz = body_twist(sum(rim[:n_left]) / n_left, sum(rim[n_left:]) / (len(rim) - n_left),

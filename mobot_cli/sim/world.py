@@ -239,6 +239,7 @@ class World:
             for robot in self._robots.values():
                 if robot.drive is not None:
                     robot.drive.integrate()
+                    robot.drive.integrated_at = self._steps
         if self._steps % self._check_every == 0:
             for robot in self._robots.values():
                 self._check(robot)
@@ -262,7 +263,7 @@ class World:
 
     def read(self, name: str) -> RobotState:
         """The robot's command, odometry and ground truth now."""
-        return self._robot(name).state()
+        return self._robot(name).state(self._steps)
 
     def _robot(self, name: str) -> SimRobot:
         try:
