@@ -86,3 +86,18 @@ def test_bad_set_override(override, message, capsys, tmp_path):
     assert code == 2
     assert message in err
     assert not (tmp_path / "r").exists()
+
+
+@pytest.mark.parametrize("args, message", [
+    (["run"], "Missing argument 'scenario'"),
+    (["bogus"], "No such command 'bogus'"),
+    (["run", "scenarios/quickstart.yaml", "--bogus"], "No such option: --bogus"),
+    (["run", "scenarios/quickstart.yaml", "--seed", "abc"], "Invalid value for '--seed'"),
+])
+def test_command_line_mistakes_exit_2_without_traceback(args, message):
+    """Real processes: Typer's own usage errors must not escape as tracebacks."""
+    result = subprocess.run([sys.executable, "-m", "mobot_cli", *args], capture_output=True, text=True,
+                            timeout=60, cwd=HERE.parent)
+    assert result.returncode == 2
+    assert "Traceback" not in result.stderr
+    assert message in result.stderr and result.stdout == ""

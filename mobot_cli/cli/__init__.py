@@ -9,7 +9,6 @@ from __future__ import annotations
 import sys
 from typing import Optional
 
-import click
 import typer
 
 from mobot_cli import __version__
@@ -67,6 +66,18 @@ def main(argv: list[str] | None = None) -> int:
     sys.exit(int(code))
 
 
+def _usage_error_class() -> type[Exception]:
+    """Click's base exception for bad command lines, wherever this Typer keeps Click."""
+    try:
+        from typer._click.exceptions import ClickException  # Typer >= 0.20 vendors Click
+    except ImportError:
+        from click.exceptions import ClickException  # older Typer depends on Click itself
+    return ClickException
+
+
+UsageProblem = _usage_error_class()
+
+
 def _dispatch(argv: list[str] | None) -> int:
     STATE.traceback = "--traceback" in (argv if argv is not None else sys.argv[1:])
     try:
@@ -77,11 +88,11 @@ def _dispatch(argv: list[str] | None) -> int:
             raise
         report_error(exc)
         return exc.exit_code
-    except click.exceptions.Exit as exc:
+    except typer.Exit as exc:
         return exc.exit_code
-    except click.exceptions.Abort:
+    except typer.Abort:
         return ExitCode.INTERRUPTED
-    except click.ClickException as exc:
+    except UsageProblem as exc:
         exc.show()
         return ExitCode.BAD_INPUT
     except KeyboardInterrupt:
