@@ -29,6 +29,8 @@ sys.path.insert(0, str(REPO))
 from mobot_cli.run.execute import execute  # noqa: E402
 from mobot_cli.run.prepare import prepare  # noqa: E402
 
+from common import process_seconds, timed  # noqa: E402  (bench/common.py)
+
 
 def scenario_text(robots: int, seconds: float, formats: str) -> str:
     """N bundled robots 1 m apart, each driving a circle after settling, logged at 50 Hz."""
@@ -59,20 +61,8 @@ class SinkClock:
             setattr(bag.BagSink, name, wrapped)
 
 
-def timed(prepared, out: Path) -> tuple[float, float]:
-    """Wall and CPU seconds of one execute(); CPU time is steadier on a shared machine."""
-    wall, cpu = time.perf_counter(), time.process_time()
+def run_once(prepared, out: Path) -> None:
     execute(prepared.plan, prepared.resolved_yaml, out)
-    return time.perf_counter() - wall, time.process_time() - cpu
-
-
-def process_seconds(args: list[str], repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        started = time.perf_counter()
-        subprocess.run(args, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        times.append(time.perf_counter() - started)
-    return statistics.median(times)
 
 
 def main() -> None:
@@ -97,7 +87,7 @@ def main() -> None:
             for i in range(args.repeat):
                 for label in ("csv", "mcap") if i % 2 == 0 else ("mcap", "csv"):
                     clock.seconds = 0.0
-                    times[label].append(timed(plans[label], work / f"{label}{robots}-{i}"))
+                    times[label].append(timed(run_once, plans[label], work / f"{label}{robots}-{i}"))
                     if label == "mcap":
                         in_sink.append(clock.seconds)
             sink = statistics.median(in_sink)

@@ -13,13 +13,11 @@ Then it times whole processes: ``mobot --help`` and a 10-simulated-second ``mobo
 from __future__ import annotations
 
 import argparse
-import math
 import shutil
 import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
@@ -29,6 +27,8 @@ from mobot_cli.run.execute import execute  # noqa: E402
 from mobot_cli.run.prepare import prepare  # noqa: E402
 from mobot_cli.run.timeline import simulate  # noqa: E402
 from mobot_cli.sim.bullet import p  # noqa: E402
+
+from common import process_seconds, timed  # noqa: E402  (bench/common.py)
 
 
 def scenario_text(robots: int, seconds: float) -> str:
@@ -97,22 +97,6 @@ def mobot_sim_only(prepared, out_dir: Path) -> None:
     """mobot's timeline alone (spawn checks, drive, odometry, contacts, reads), no files."""
     for _ in simulate(prepared.plan):
         pass
-
-
-def timed(fn, *args) -> tuple[float, float]:
-    """(wall, CPU) seconds of one call."""
-    wall, cpu = time.perf_counter(), time.process_time()
-    fn(*args)
-    return time.perf_counter() - wall, time.process_time() - cpu
-
-
-def process_seconds(args: list[str], repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        started = time.perf_counter()
-        subprocess.run(args, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        times.append(time.perf_counter() - started)
-    return statistics.median(times)
 
 
 def main() -> None:

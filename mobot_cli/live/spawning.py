@@ -7,13 +7,10 @@ the spawn itself happen on the world's thread, against the robots alive at that 
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import math
-import os
 import re
 from pathlib import Path
 
-from mobot_cli.assets import cache
 from mobot_cli.assets.description import resolve_description
 from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.errors import DescriptionError, MobotError, ResourceError, SpawnError
@@ -24,6 +21,7 @@ from mobot_cli.scenario.robots import RobotResolver
 from mobot_cli.scenario.units import quat_from_rpy
 from mobot_cli.sim.plan import RobotPlan, SpawnPose
 from mobot_cli.sim.state import RobotState
+from mobot_cli.sim.urdf_file import urdf_path
 
 DESCRIPTION_SUFFIXES = (".urdf", ".xacro")
 UNSUPPORTED_SUFFIXES = (".sdf", ".world", ".dae", ".stl", ".obj", ".mjcf", ".xml")
@@ -57,14 +55,7 @@ def _text_file(text: str) -> Path:
     """URDF or xacro text as a file named by its content (xacro and the checks read files)."""
     if text.lstrip().startswith("<sdf"):
         raise Refusal(Result.UNSUPPORTED_FORMAT, "the text is an SDF model: mobot spawns URDF and xacro")
-    digest = hashlib.sha256(text.encode("utf-8")).hexdigest()[:32]
-    path = cache.cache_dir() / "spawned" / f"{digest}.urdf"  # xacro is detected from the text
-    if not path.is_file():
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
-    return path
+    return urdf_path(text, folder="spawned")  # xacro is detected from the text
 
 
 def _check_format(description: str, base_dir: Path) -> None:

@@ -19,10 +19,10 @@ def cache_dir() -> Path:
     return (Path(xdg) if xdg else Path.home() / ".cache") / "mobot"
 
 
-def urdf_path(text: str) -> Path:
+def urdf_path(text: str, folder: str = "urdf") -> Path:
     """A file holding ``text``, named by its content hash, written once and atomically."""
     digest = hashlib.sha256(text.encode("utf-8")).hexdigest()[:32]
-    path = cache_dir() / "urdf" / f"{digest}.urdf"
+    path = cache_dir() / folder / f"{digest}.urdf"
     if not path.is_file():
         path.parent.mkdir(parents=True, exist_ok=True)
         # Parallel sweep workers may write the same file: write aside, then rename.
