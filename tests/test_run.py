@@ -138,3 +138,21 @@ def test_resolved_quickstart_matches_golden_file():
     """The resolved format is a contract: a change here must be deliberate (regenerate and review)."""
     golden = Path(__file__).parent / "golden" / "quickstart.resolved.yaml"
     assert prepare(REPO / "scenarios" / "quickstart.yaml").resolved_yaml == golden.read_text()
+
+
+def test_a_warm_headless_run_imports_no_plotting_viewer_or_mesh_code(tmp_path):
+    """DESIGN: headless runs must not import plotting or viewer code (nor heavy mesh tooling)."""
+    code = ("import sys, pathlib; from mobot_cli.run.prepare import prepare; "
+            "from mobot_cli.run.execute import execute; "
+            f"p = prepare({str(REPO / 'scenarios' / 'quickstart.yaml')!r}); "
+            f"execute(p.plan, p.resolved_yaml, pathlib.Path({str(tmp_path / 'r')!r})); "
+            "print(sorted(m for m in ('matplotlib', 'yourdfpy', 'trimesh', 'rich', 'xacro', 'pyglet') "
+            "if m in sys.modules))")
+    import subprocess
+    import sys
+    first = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert first.returncode == 0, first.stderr  # the first run may fill the cache
+    second = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert second.returncode == 0, second.stderr
+    assert second.stdout.strip() == "[]"
+    assert (tmp_path / "r" / "trajectory.png").stat().st_size > 10_000
