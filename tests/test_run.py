@@ -156,3 +156,21 @@ def test_a_warm_headless_run_imports_no_plotting_viewer_or_mesh_code(tmp_path):
     assert second.returncode == 0, second.stderr
     assert second.stdout.strip() == "[]"
     assert (tmp_path / "r" / "trajectory.png").stat().st_size > 10_000
+
+
+def test_a_robot_falling_out_of_the_world_is_a_simulation_fault(tmp_path, capsys):
+    """Exit 3, a located one-line error, and a summary that says fault (not ok)."""
+    (tmp_path / "void.sdf").write_text(
+        '<?xml version="1.0"?><sdf version="1.6"><world name="void"><model name="pillar">'
+        "<static>true</static><pose>5 5 0.5 0 0 0</pose><link name='l'><collision name='c'><geometry>"
+        "<box><size>1 1 1</size></box></geometry></collision></link></model></world></sdf>")
+    scenario = tmp_path / "s.yaml"
+    scenario.write_text("version: 1\nduration: 5\nworld: void.sdf\nrobots:\n"
+                        "  - {name: faller, pose: {x: 0, y: 0, z: 1.0}}\n")
+    code = _dispatch(["run", str(scenario), "--out", str(tmp_path / "r"), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 3
+    assert err.endswith("robot 'faller' fell out of the world (z = -10.1 m) at step 360. "
+                        "Is there a floor under its spawn pose?\n")
+    summary = json.loads((tmp_path / "r" / "summary.json").read_text())
+    assert summary["status"] == "fault" and summary["steps"] < 5 * 240
