@@ -1,0 +1,38 @@
+"""The README's examples are tests: its first commands, its scenario, its error message."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+from mobot_cli.cli import _dispatch
+
+REPO = Path(__file__).resolve().parent.parent
+README = (REPO / "README.md").read_text()
+
+
+def test_first_lines_are_the_install_and_run_and_the_test_commands():
+    first_block = re.search(r"```bash\n(.*?)```", README, re.S).group(1).splitlines()
+    assert first_block[0] == "python3 -m pip install -e . && mobot run scenarios/quickstart.yaml"
+    assert first_block[1] == 'python3 -m pip install -e ".[test]" && python3 -m pytest -q'
+    ci = (REPO / ".ci" / "run").read_text()
+    assert first_block[1] in ci, ".ci/run must run exactly the README's test command"
+
+
+def test_the_scenario_example_runs(tmp_path):
+    example = next(b for b in re.findall(r"```yaml\n(.*?)```", README, re.S) if b.startswith("version: 1"))
+    path = tmp_path / "example.yaml"
+    path.write_text(example)
+    assert _dispatch(["run", str(path), "--out", str(tmp_path / "r"), "--quiet"]) == 0
+    assert sorted(p.name for p in (tmp_path / "r" / "odom").iterdir()) == \
+        ["mobot.csv", "mobot_0.csv", "mobot_1.csv", "mobot_2.csv"]
+
+
+def test_the_error_example_is_what_mobot_prints():
+    shown = re.search(r"\$ mobot run tests/bad/unknown_key.yaml\n(mobot: error: .*)\n", README).group(1)
+    result = subprocess.run([sys.executable, "-m", "mobot_cli", "run", "tests/bad/unknown_key.yaml"],
+                            capture_output=True, text=True, cwd=REPO, timeout=60)
+    assert result.returncode == 2
+    assert result.stderr == shown + "\n"
