@@ -15,7 +15,8 @@ from mobot_cli import __version__
 from mobot_cli.cli import check, inspect, run, xacro
 from mobot_cli.cli import plot as plot_command
 from mobot_cli.cli import sweep as sweep_command
-from mobot_cli.cli import cmd, delete, list, odom, serve, spawn, stop
+from mobot_cli.cli import cmd, delete, odom, serve, spawn, stop
+from mobot_cli.cli import list as list_command  # not `list`: that would shadow the builtin here
 from mobot_cli.cli.output import STATE, report_error
 from mobot_cli.errors import ExitCode, MobotError
 
@@ -54,7 +55,7 @@ app.command("sweep")(sweep_command.sweep)
 app.command("serve")(serve.serve)
 app.command("spawn")(spawn.spawn)
 app.command("delete")(delete.delete)
-app.command("list")(list.list_)
+app.command("list")(list_command.list_)
 app.command("cmd")(cmd.cmd)
 app.command("odom")(odom.odom)
 app.command("stop")(stop.stop)

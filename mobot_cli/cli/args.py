@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import time
+from pathlib import Path
+
 from mobot_cli.errors import UsageError
 
 
@@ -14,3 +17,12 @@ def parse_mappings(items: list[str]) -> dict[str, str]:
             raise UsageError(f"argument '{item}' is not NAME:=VALUE", hint="e.g. lidar:=true")
         out[name] = value
     return out
+
+
+def default_out(folder: str, name: str) -> Path:
+    """``folder/<name>-<YYYYmmdd-HHMMSS>``, with a suffix if that exists already."""
+    base = Path(folder) / f"{name}-{time.strftime('%Y%m%d-%H%M%S')}"
+    candidate, n = base, 1
+    while candidate.exists():
+        candidate, n = base.with_name(f"{base.name}-{n}"), n + 1
+    return candidate

@@ -9,6 +9,7 @@ from typing import Optional
 import typer
 
 from mobot_cli.cli import output
+from mobot_cli.cli.args import default_out
 from mobot_cli.errors import ExitCode
 
 
@@ -37,7 +38,7 @@ def run(
         overrides.append("skip_missing=true")
     prepared = prepare(scenario, overrides)
     output.notices(prepared.plan.notices, quiet=quiet or json_)
-    out_dir = out or _default_out(prepared.plan.name)
+    out_dir = out or default_out("runs", prepared.plan.name)
     bar = None if (quiet or json_) else output.progress_bar(prepared.plan.total_steps, prepared.plan.name)
     progress = _progress(bar, realtime, prepared.plan.physics.rate_hz)
     if bar:
@@ -55,14 +56,6 @@ def run(
     if any(not r.passed for r in result.expectations):
         return ExitCode.EXPECTATION_FAILED
     return ExitCode.OK
-
-
-def _default_out(name: str) -> Path:
-    base = Path("runs") / f"{name}-{time.strftime('%Y%m%d-%H%M%S')}"
-    candidate, n = base, 1
-    while candidate.exists():
-        candidate, n = base.with_name(f"{base.name}-{n}"), n + 1
-    return candidate
 
 
 def _progress(bar, realtime: bool, rate_hz: int):

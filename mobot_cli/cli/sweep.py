@@ -10,6 +10,7 @@ from typing import Optional
 import typer
 
 from mobot_cli.cli import output
+from mobot_cli.cli.args import default_out
 from mobot_cli.errors import ExitCode, Location, UsageError
 
 EXECUTORS = ("local", "ray")
@@ -44,7 +45,7 @@ def sweep(
     runner = _executor(executor, jobs, timeout, address)
     spec = build_spec(path, grid, zip_, random, samples, seed, set_)
     prepared = expand(spec)  # every run prepared (and so checked) before any starts
-    out_dir = out or _default_out(prepared.name)
+    out_dir = out or default_out("sweeps", prepared.name)
     done = check_out_dir(prepared, out_dir, resume)
     runner.start()  # e.g. join the Ray cluster: a failure here leaves no sweep folder behind
     total = len(prepared.variants)
@@ -98,14 +99,6 @@ def _executor(name: str, jobs: int, timeout: float | None, address: str | None):
     from mobot_cli.sweep.executor_local import LocalExecutor
 
     return LocalExecutor(jobs, timeout)
-
-
-def _default_out(name: str) -> Path:
-    base = Path("sweeps") / f"{name}-{time.strftime('%Y%m%d-%H%M%S')}"
-    candidate, n = base, 1
-    while candidate.exists():
-        candidate, n = base.with_name(f"{base.name}-{n}"), n + 1
-    return candidate
 
 
 def _progress(bar):
