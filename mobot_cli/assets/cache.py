@@ -11,20 +11,10 @@ from pathlib import Path
 from typing import Any
 
 import mobot_cli
+from mobot_cli.sim.urdf_file import cache_dir  # noqa: F401  (one rule for the whole cache folder)
 
 # Bump when the layout of a cached document changes, so old entries are simply missed.
 CACHE_FORMAT = 1
-
-
-def cache_dir() -> Path:
-    """MOBOT_CACHE_DIR, else $XDG_CACHE_HOME/mobot, else ~/.cache/mobot."""
-    explicit = os.environ.get("MOBOT_CACHE_DIR")
-    if explicit:
-        return Path(explicit).expanduser()
-    xdg = os.environ.get("XDG_CACHE_HOME")
-    if xdg:
-        return Path(xdg).expanduser() / "mobot"
-    return Path.home() / ".cache" / "mobot"
 
 
 @functools.lru_cache(maxsize=1)

@@ -14,9 +14,9 @@ def cache_dir() -> Path:
     """mobot's cache folder: $MOBOT_CACHE_DIR, else $XDG_CACHE_HOME/mobot, else ~/.cache/mobot."""
     explicit = os.environ.get("MOBOT_CACHE_DIR")
     if explicit:
-        return Path(explicit)
+        return Path(explicit).expanduser()
     xdg = os.environ.get("XDG_CACHE_HOME")
-    return (Path(xdg) if xdg else Path.home() / ".cache") / "mobot"
+    return (Path(xdg).expanduser() if xdg else Path.home() / ".cache") / "mobot"
 
 
 def urdf_path(text: str, folder: str = "urdf") -> Path:
