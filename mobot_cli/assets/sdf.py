@@ -193,23 +193,22 @@ class SdfReader:
               static: bool) -> None:
         name = link.get("name", "")
         pose = scope.frame(name, link)
-        collisions = []
-        for element in link.findall("collision"):
-            shape = parse_shape(self, element, file, collision=True)
-            if shape is not None:
-                shape.pose = self._local(element, file, scope, pose)
-                collisions.append(shape)
-        visuals = []
-        for element in link.findall("visual"):
-            shape = parse_shape(self, element, file, collision=False)
-            if shape is not None:
-                shape.pose = self._local(element, file, scope, pose)
-                visuals.append(shape)
-        top.links.append(Link(name=prefix + name, pose=base @ pose, collisions=collisions,
-                              visuals=visuals, inertial=self._inertial(link, file),
-                              location=key_of(link, file)))
+        top.links.append(Link(name=prefix + name, pose=base @ pose,
+                              collisions=self._shapes(link, "collision", file, scope, pose),
+                              visuals=self._shapes(link, "visual", file, scope, pose),
+                              inertial=self._inertial(link, file), location=key_of(link, file)))
         if not static:
             top.dynamic_links += 1
+
+    def _shapes(self, link, tag: str, file: Path, scope: "Scope", pose: Matrix) -> list:
+        """The link's <collision> or <visual> shapes, posed in the link frame."""
+        shapes = []
+        for element in link.findall(tag):
+            shape = parse_shape(self, element, file, collision=tag == "collision")
+            if shape is not None:
+                shape.pose = self._local(element, file, scope, pose)
+                shapes.append(shape)
+        return shapes
 
     def _local(self, element, file: Path, scope: "Scope", link_pose: Matrix) -> Matrix:
         """A collision's or visual's pose relative to its link (relative_to honoured)."""
