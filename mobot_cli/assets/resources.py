@@ -98,12 +98,6 @@ def _package_index(root: Path, depth: int) -> dict[str, Path]:
         return _index_cache[key]
 
 
-def clear_index() -> None:
-    """Forget every crawled package index (tests create packages on the fly)."""
-    with _index_lock:
-        _index_cache.clear()
-
-
 def _split_env(name: str) -> list[Path]:
     value = os.environ.get(name, "")
     return [Path(part).expanduser() for part in value.split(os.pathsep) if part.strip()]

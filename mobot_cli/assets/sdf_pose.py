@@ -102,11 +102,6 @@ def rpy(m: Matrix) -> tuple[float, float, float]:
     return _clean(roll), _clean(pitch), _clean(yaw)
 
 
-def is_identity(m: Matrix, tol: float = 1e-9) -> bool:
-    """True when the transform does nothing (within ``tol``)."""
-    return bool(np.allclose(m, IDENTITY, atol=tol))
-
-
 def _clean(v: float) -> float:
     # Round to 1e-12 so composing poses does not leave 1e-17 noise in texts and caches.
     return round(float(v), 12) + 0.0

@@ -13,7 +13,6 @@ def _import_quietly():
     try:
         os.dup2(devnull, 2)
         import pybullet
-        import pybullet_data  # noqa: F401  (same package; imported here so it is quiet too)
     finally:
         os.dup2(saved, 2)
         os.close(saved)
