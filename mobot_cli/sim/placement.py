@@ -104,12 +104,14 @@ def _at(xyz) -> str:
     return f"x={xyz[0]:.3f}, y={xyz[1]:.3f}, z={xyz[2]:.3f}"
 
 
-def check_clear(cid: int, body: int, others: dict[int, str], name: str, xyz) -> None:
+def check_clear(cid: int, body: int, others: dict[int, str], name: str, xyz, z_auto: bool = False) -> None:
     """Refuse a robot that reaches into the floor or another body by more than a centimetre."""
+    hint = ("Move the robot clear of it: z: auto already rested it on the surface below."
+            if z_auto else "Raise z, move the robot, or use z: auto to rest it on the floor.")
     for other, label in others.items():
         points = p.getClosestPoints(body, other, 0.0, physicsClientId=cid)
         depth = -min((pt[8] for pt in points), default=0.0)
         if depth > MAX_SPAWN_PENETRATION:
             raise SpawnError(
                 f"robot '{name}' spawned at {_at(xyz)} reaches {depth * 100:.1f} cm into {label}",
-                hint="Raise z, move the robot, or use z: auto to rest it on the floor.")
+                hint=hint)

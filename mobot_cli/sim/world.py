@@ -190,7 +190,7 @@ class World:
         xyz = placement.link_frame_xyz(cid, uid)
         others = dict(self._statics)
         others.update({r.body: f"robot '{n}'" for n, r in self._robots.items()})
-        placement.check_clear(cid, uid, others, robot.name, xyz)
+        placement.check_clear(cid, uid, others, robot.name, xyz, z_auto=pose.z_auto)
         surroundings.check_not_inside(cid, uid, {b: self._statics[b] for b in self._solids},
                                       robot.name, xyz)
         if not pose.z_auto:
