@@ -95,7 +95,7 @@ def mobot_loop(prepared, out_dir: Path) -> float:
 
 def mobot_sim_only(prepared, out_dir: Path) -> None:
     """mobot's timeline alone (spawn checks, drive, odometry, contacts, reads), no files."""
-    for _ in simulate(prepared.plan):
+    for _ in simulate(prepared.plan):  # every record, nothing written
         pass
 
 

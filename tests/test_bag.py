@@ -239,7 +239,7 @@ def test_robots_that_come_and_go_get_their_topics_from_their_first_sample(tmp_pa
     counts = {topic: len(by_topic(msgs, topic)) for topic in first}
     assert first["/late/odom"] == first["/late/robot_description"] == pytest.approx(3.5)
     assert counts["/late/odom"] == len(rows(out / "odom" / "late.csv")) == 121  # 3.5 .. 6.0 s at 48 Hz
-    assert counts["/mobot_1/odom"] == len(rows(out / "odom" / "mobot_1.csv")) == 144  # until 3.0 s
+    assert counts["/mobot_1/odom"] == len(rows(out / "odom" / "mobot_1.csv")) == 145  # 0 .. 3.0 s, its delete
     statics = [(m[2] / 1e9, m[3].transforms[0].child_frame_id) for m in by_topic(msgs, "/tf_static")]
     assert statics == [(0.0, "mobot_0/odom"), (0.0, "mobot_1/odom"), (3.5, "late/odom")]
     children = [{t.child_frame_id for t in m[3].transforms} for m in by_topic(msgs, "/tf")]
@@ -247,8 +247,8 @@ def test_robots_that_come_and_go_get_their_topics_from_their_first_sample(tmp_pa
     assert "mobot_1/base_footprint" not in children[-1] and "late/base_footprint" in children[-1]
 
 
-def test_robots_the_plan_does_not_list_announced_or_not(tmp_path):
-    """A live world's spawns: announced ones get their URDF's frames; others a bare base_link."""
+def test_a_robot_is_recorded_under_the_plan_it_was_spawned_with(tmp_path):
+    """A live world's spawns reach the bag with their own plan: their URDF's frames, their namespace."""
     import dataclasses
 
     from mobot_cli.run.bag import BagSink
@@ -259,15 +259,17 @@ def test_robots_the_plan_does_not_list_announced_or_not(tmp_path):
     plan = prepare(tmp_path / "s.yaml").plan
     sink = BagSink(dataclasses.replace(plan, robots=()), tmp_path)
     alpha = plan.robots[0]
-    sink.add_robot(dataclasses.replace(alpha, name="ghost", namespace="/ghost", frame_prefix="ghost/"))
-    for sample in simulate(plan):
-        sink.write(Sample(sample.step, {"ghost": sample.states["alpha"], "stray": sample.states["beta"]}))
+    sink.spawned(0, "ghost", dataclasses.replace(alpha, name="ghost", namespace="/ghost", frame_prefix="ghost/"))
+    for record in simulate(plan):
+        if isinstance(record, Sample):
+            sink.write(Sample(record.step, {"ghost": record.states["alpha"]}))
     sink.close()
     msgs = messages(tmp_path / "bag")
     assert by_topic(msgs, "/ghost/odom")[0][3].child_frame_id == "ghost/base_footprint"
-    assert by_topic(msgs, "/stray/odom")[0][3].child_frame_id == "stray/base_link"
     children = {t.child_frame_id for m in by_topic(msgs, "/tf") for t in m[3].transforms}
-    assert children == {"ghost/base_footprint", "ghost/left_wheel", "ghost/right_wheel", "stray/base_link"}
+    assert children == {"ghost/base_footprint", "ghost/left_wheel", "ghost/right_wheel"}
+    statics = {t.child_frame_id for m in by_topic(msgs, "/tf_static") for t in m[3].transforms}
+    assert statics >= {"ghost/odom", "ghost/base_link"}
 
 
 def test_robot_description_has_file_uris_for_meshes():

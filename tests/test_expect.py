@@ -119,7 +119,14 @@ def check(expectations, samples, rate=10):
     plan = Plan(name="t", physics=Physics(rate_hz=rate), world=WorldPlan(), robots=(), total_steps=100,
                 settle_steps=0, log_every=1, expectations=tuple(expectations))
     checker = Checker(plan)
+    seen: set[str] = set()
     for step, states in samples:
+        for name in sorted(seen - states.keys()):  # a robot missing from a row was deleted
+            checker.deleted(step, name)
+            seen.discard(name)
+        for name in sorted(states.keys() - seen):
+            checker.spawned(step, name, None)
+            seen.add(name)
         checker.write(Sample(step, states))
     return [(r.robot, r.passed, r.happened) for r in checker.results()]
 

@@ -57,20 +57,20 @@ def progress_bar(total: int, label: str):
     return bar
 
 
-def run_table(summary: dict[str, Any], out_dir) -> None:
-    """The per-robot table printed after a run."""
+def run_table(record, out_dir) -> None:
+    """The per-robot table printed after a run (``record`` is a RunRecord)."""
     from rich.table import Table
 
-    table = Table(title=f"{summary['scenario']}: {summary['sim_time']:g} s simulated in "
-                        f"{summary['wall_time']:g} s ({summary['real_time_factor']}x real time)",
+    table = Table(title=f"{record.scenario}: {record.sim_time:g} s simulated in "
+                        f"{record.wall_time:g} s ({record.real_time_factor}x real time)",
                   caption="final pose x, y (m), yaw (rad); distance and odometry error in m")
     # Short headers: the table must fit 80 columns (pipes and CI logs) without wrapping.
     for column in ("robot", "distance", "x", "y", "yaw", "odom error", "collisions"):
         table.add_column(column, justify="left" if column == "robot" else "right")
-    for name, robot in summary["robots"].items():
-        pose = robot["final_pose"]
-        table.add_row(name, f"{robot['distance']:.3f}", f"{pose['x']:.3f}", f"{pose['y']:.3f}",
-                      f"{pose['yaw']:.3f}", f"{robot['odom_error']['position']:.3f}", str(robot.get("collisions", 0)))
+    for name, robot in record.robots.items():
+        pose = robot.final_pose
+        table.add_row(name, f"{robot.distance:.3f}", f"{pose.x:.3f}", f"{pose.y:.3f}",
+                      f"{pose.yaw:.3f}", f"{robot.odom_error.position:.3f}", str(robot.collisions))
     console = stdout_console()
     console.print(table)
     written = [name for name in ("trajectory.png", "bag/") if (Path(out_dir) / name.rstrip("/")).exists()]

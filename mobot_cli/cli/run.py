@@ -49,9 +49,9 @@ def run(
         if bar:
             bar.stop()
     if json_:
-        output.emit_json(result.summary)
+        output.emit_json(result.record.model_dump(mode="json"))
     elif not quiet:
-        output.run_table(result.summary, result.out_dir)
+        output.run_table(result.record, result.out_dir)
     output.expectations(result.expectations, verbose=not (quiet or json_))
     if any(not r.passed for r in result.expectations):
         return ExitCode.EXPECTATION_FAILED

@@ -27,6 +27,7 @@ def serve(
     """Keep a headless world running; spawn, delete, drive and read robots with the other commands."""
     from mobot_cli.live.endpoint import default_endpoint
     from mobot_cli.live.server import LiveServer, pace_text
+    from mobot_cli.run.record import Status
     from mobot_cli.live.start import serve_plan
     from mobot_cli.scenario.units import steps
 
@@ -48,12 +49,12 @@ def serve(
 
     result = server.serve(ready)
     if not quiet:
-        t = result["steps"] / plan.physics.rate_hz
+        t = result.steps / plan.physics.rate_hz
         where = f"; record in {out}" if out is not None else ""
-        live_common.status(f"stopped after {t:.3f} s simulated, {sum(result['requests'].values())} "
+        live_common.status(f"stopped after {t:.3f} s simulated, {sum(result.requests.values())} "
                            f"request(s){where}")
-    if result["status"] == "fault":
-        live_common.status(f"error: {result['error']}")
+    if result.status == Status.FAULT:
+        live_common.status(f"error: {result.error}")
         return ExitCode.SIMULATION_FAULT
     return ExitCode.OK
 

@@ -26,9 +26,8 @@ from mobot_cli.errors import MobotError, SimulationFault, UsageError
 from mobot_cli.live import endpoint as endpoints
 from mobot_cli.live import protocol, schema, spawning
 from mobot_cli.live.protocol import Refusal, Result
-from mobot_cli.live.recorder import Recorder
 from mobot_cli.live.session import Session
-from mobot_cli.run.timeline import Script, sample
+from mobot_cli.run.record import LiveInfo, Status
 from mobot_cli.sim.plan import Plan
 from mobot_cli.sim.world import World
 
@@ -51,6 +50,16 @@ class _Pending:
     request: Any
     future: Future | None = None  # spawn: the loader's result
     until: int | None = None  # cmd: the step at which the command ends
+
+
+@dataclass(frozen=True)
+class Served:
+    """How a live world ended: its status, the steps it took and the requests it answered."""
+
+    status: Status
+    error: str | None
+    steps: int
+    requests: dict[str, int]
 
 
 @dataclass
@@ -83,12 +92,10 @@ class LiveServer:
                  out_dir: Path | None = None, resolved_yaml: str = "", stop_after: int | None = None):
         self.plan, self.rtf, self.stop_after = plan, rtf, stop_after
         self.out_dir, self.resolved_yaml = out_dir, resolved_yaml
-        self.recorder: Recorder | None = None  # opened once the world is up and listening
         self.endpoint = endpoints.check(endpoint, bind_any)
-        self.session: Session | None = None
+        self.session: Session | None = None  # made once the world is up and listening
         self.stopping = False
-        self._logged = -1  # the last step recorded, so shutdown can record the final state once
-        self.status, self.error = "ok", None
+        self.status, self.error = Status.OK, None
         self.counts: dict[str, int] = {}
         self._socket: zmq.Socket | None = None
         self._spawns: list[_Pending] = []
@@ -98,55 +105,50 @@ class LiveServer:
             "ping": self._ping, "list": self._list, "spawn": self._spawn, "delete": self._delete,
             "cmd": self._cmd, "odom": self._odom, "stop": self._stop}
 
-    def serve(self, ready: Callable[[str], None] | None = None) -> dict[str, Any]:
+    def serve(self, ready: Callable[[str], None] | None = None) -> Served:
         """Run until `stop`, SIGINT/SIGTERM or ``stop_after`` steps; returns status and counts."""
         restore = _catch_signals(self)
         try:
             with World(self.plan.physics, self.plan.world, seed=self.plan.seed) as world:
                 self._bind()
-                if self.out_dir is not None:
-                    self.recorder = Recorder(self.out_dir, self.plan, self.resolved_yaml)
-                self.session = Session(self.plan, world, self.recorder)
-                self.session.start()
-                if ready:
-                    ready(self.endpoint)
-                self._loop(self.session, Script(self.plan), Clock(self.plan.physics.dt, self.rtf))
-                # Like `mobot run`, the record ends with the state at the last step.
-                if self.recorder and self.status != "fault" and self._logged != world.step_count:
-                    self.recorder.write(sample(world, world.step_count))
-        except BaseException as exc:  # the summary must not say "ok" for a world that broke
-            if self.status == "ok" and not isinstance(exc, KeyboardInterrupt):
-                self.status, self.error = "fault", str(exc) or repr(exc)
-            raise
+                self.session = Session(self.plan, world, self.out_dir, self.resolved_yaml)
+                try:
+                    self.session.start()
+                    if ready:
+                        ready(self.endpoint)
+                    self._loop(self.session, Clock(self.plan.physics.dt, self.rtf))
+                except BaseException as exc:  # the record must not say "ok" for a world that broke
+                    if self.status == Status.OK:
+                        interrupted = isinstance(exc, KeyboardInterrupt)
+                        self.status = Status.INTERRUPTED if interrupted else Status.FAULT
+                        self.error = None if interrupted else str(exc) or repr(exc)
+                    raise
+                finally:
+                    self._answer_owed()
+                    self.session.close(self.status, self.error, LiveInfo(
+                        endpoint=self.endpoint, pace=pace_text(self.rtf), requests=self.counts))
         finally:
             self._shutdown()
             restore()
-        return {"status": self.status, "error": self.error, "steps": self._step(), "requests": self.counts}
+        return Served(self.status, self.error, self._step(), dict(self.counts))
 
-    def _loop(self, session: Session, script: Script, clock: Clock) -> None:
-        plan, world = self.plan, session.world
+    def _loop(self, session: Session, clock: Clock) -> None:
+        timeline = session.timeline
         step_time = 0.0
         while not self.stopping:
-            step = world.step_count
-            if step <= plan.total_steps:
-                for event in script.events.get(step, ()):
-                    session.scripted(event)
-                script.command(world, step, present_only=True)
-            session.due_stops()
+            step = timeline.step
+            timeline.tick()
             self._answer_waits(step)
             self._finish_spawns()
-            if self.recorder and step % plan.log_every == 0:
-                self.recorder.write(sample(world, step))
-                self._logged = step
             self._serve_requests(clock.due(), step_time)
             if self.stopping or (self.stop_after is not None and step >= self.stop_after):
                 break
             started = time.perf_counter()
             try:
-                world.step()
+                timeline.advance()
             except SimulationFault as exc:
                 if not session.fault(exc):
-                    self.status, self.error, self.stopping = "fault", str(exc), True
+                    self.status, self.error, self.stopping = Status.FAULT, str(exc), True
             step_time = time.perf_counter() - started
             clock.stepped()
 
@@ -243,8 +245,7 @@ class LiveServer:
         return self.session.odometry(request.id, request.name)
 
     def _delete(self, envelope, request) -> dict[str, Any]:
-        self.session.known(request.name)
-        self.session.remove(request.name, "request")
+        self.session.remove(request.name)
         return protocol.reply(request.id, name=request.name, step=self._step(), t=self._t())
 
     def _cmd(self, envelope, request: schema.Cmd) -> dict[str, Any] | None:
@@ -303,19 +304,20 @@ class LiveServer:
     def _t(self) -> float:
         return self._step() / self.plan.physics.rate_hz
 
-    def _shutdown(self) -> None:
+    def _answer_owed(self) -> None:
+        """Every reply still owed says the world stopped."""
         for job in self._spawns + self._waits:
             self._send(job.envelope, protocol.reply(job.request.id, Result.INCORRECT_STATE,
                                                     "the live world stopped before it could answer"))
+        self._spawns, self._waits = [], []
+
+    def _shutdown(self) -> None:
         self._loader.shutdown(wait=False, cancel_futures=True)
         if self._socket is not None:
             self._socket.close(linger=0)
             path = endpoints.ipc_path(self.endpoint)
             if path is not None:
                 path.unlink(missing_ok=True)
-        if self.recorder:
-            self.recorder.close(self.status, self.error, self._step(),
-                                {"endpoint": self.endpoint, "pace": pace_text(self.rtf), "requests": self.counts})
 
 
 def pace_text(rtf: float | None) -> str:

@@ -1,50 +1,75 @@
-"""What the live world knows between steps: its World, the plans of its robots and the record.
+"""What the live world knows between steps: its timeline, the record and the history.
 
 The server owns the socket and the clock; everything a request does to the world goes
-through here, on the world's own thread. Nothing here talks to ZeroMQ.
+through here, on the world's own thread, and into the same Timeline `mobot run` plays.
+Nothing here talks to ZeroMQ.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+from pathlib import Path
 from typing import Any
 
 from mobot_cli.errors import MobotError, SimulationFault, did_you_mean
 from mobot_cli.live import protocol, schema, spawning
+from mobot_cli.live.history import History
 from mobot_cli.live.protocol import Refusal, Result
-from mobot_cli.live.recorder import Recorder
-from mobot_cli.run.timeline import apply_event
+from mobot_cli.run.record import LiveInfo, RunRecord, Status
+from mobot_cli.run.recording import Recording
+from mobot_cli.run.timeline import Deleted, Record, Spawned, Timeline
 from mobot_cli.scenario.units import steps
 from mobot_cli.sim.plan import Event, Plan, RobotPlan
 from mobot_cli.sim.world import FLOOR_OF_THE_WORLD, World
 
 
 class Session:
-    """One live World with its robots' plans, pending `cmd --for` stops and the recorder."""
+    """One live World on its Timeline, with the optional record (``out_dir``) and history."""
 
-    def __init__(self, plan: Plan, world: World, recorder: Recorder | None = None):
-        self.plan, self.world, self.recorder = plan, world, recorder
+    def __init__(self, plan: Plan, world: World, out_dir: Path | None = None, resolved_yaml: str = ""):
+        self.plan, self.world = plan, world
         self.rate_hz = plan.physics.rate_hz
-        self.robots: dict[str, RobotPlan] = {}  # the plans of the robots in the world
-        self.stops: dict[str, int] = {}  # robot -> step at which its `cmd --for` ends
         self.static_names = frozenset(body.name for body in plan.world.bodies)
+        self.timeline = Timeline(plan, world, on_refused=self._refused)
+        self.recording = Recording(plan, out_dir, resolved_yaml) if out_dir is not None else None
+        self.history_file = History(out_dir, self.rate_hz) if out_dir is not None else None
+        self.timeline.attach(self._record)
 
-    def taken(self) -> set[str]:
-        """Entity names in use: robots and the world's static models."""
-        return set(self.robots) | self.static_names
+    @property
+    def robots(self) -> dict[str, RobotPlan]:
+        """The plans of the robots in the world."""
+        return self.timeline.robots
 
     @property
     def step(self) -> int:
         return self.world.step_count
 
-    # -- spawning and deleting --------------------------------------------------------------
-
     def start(self) -> None:
         """Spawn the scenario's own robots."""
-        for robot in self.plan.robots:
-            self.world.spawn(robot)
-            self._added(robot, "scenario")
+        self.timeline.start()
+
+    def taken(self) -> set[str]:
+        """Entity names in use: robots and the world's static models."""
+        return set(self.robots) | self.static_names
+
+    def _record(self, record: Record) -> None:
+        if self.recording is not None:
+            self.recording(record)
+        if isinstance(record, Spawned):
+            self.history(op="spawn", name=record.robot.name, by=record.by, result="OK",
+                         namespace=record.robot.namespace, source=record.robot.source,
+                         pose=spawning.pose_fields(record.state))
+        elif isinstance(record, Deleted):
+            self.history(op="delete", name=record.name, by=record.by, result="OK",
+                         **({"message": record.message} if record.message else {}))
+
+    def _refused(self, event: Event, exc: MobotError) -> None:
+        """A scenario event that a live request made impossible is skipped and recorded."""
+        when = f"event at {event.step / self.rate_hz:g} s"
+        self.history(op="event", result=spawning.classify(exc).name, message=f"{when} skipped: {exc}")
+
+    # -- spawning and deleting --------------------------------------------------------------
 
     def place(self, request: schema.Spawn, plan: RobotPlan, notices: list[str]) -> dict[str, Any]:
         """Name, frame and spawn a loaded robot now; the reply says where it is."""
@@ -56,47 +81,16 @@ class Session:
         if reference is not None:
             plan = dataclasses.replace(plan, pose=spawning.in_frame(plan.pose, self.world.read(reference)))
         plan = dataclasses.replace(plan, spawn_step=step)
-        apply_event(self.world, Event(step=step, spawn=plan))  # the scenario events' path
-        self._added(plan, "request", requested=request.name)
+        self.timeline.apply(Event(step=step, spawn=plan), "request")  # the scenario events' path
         return protocol.reply(request.id, name=name, namespace=plan.namespace, frame_prefix=plan.frame_prefix,
                               renamed=name != request.name, step=step, t=step / self.rate_hz,
                               pose=spawning.pose_fields(self.world.read(name)), source=plan.source,
                               notices=list(dict.fromkeys(notices)))
 
-    def scripted(self, event: Event) -> None:
-        """A scenario event; one that a live request made impossible is skipped and recorded."""
-        when = f"event at {event.step / self.rate_hz:g} s"
-        try:
-            if event.spawn is not None:
-                taken = {robot.namespace: n for n, robot in self.robots.items()}
-                if event.spawn.name in self.robots or event.spawn.namespace in taken:
-                    raise Refusal(Result.NAME_NOT_UNIQUE, f"robot '{event.spawn.name}' or namespace "
-                                  f"'{event.spawn.namespace}' is already in the world")
-                apply_event(self.world, event)
-                self._added(event.spawn, "scenario")
-            else:
-                self.known(event.delete)
-                self.remove(event.delete, "scenario")
-        except (Refusal, MobotError) as exc:
-            result = exc.result if isinstance(exc, Refusal) else spawning.classify(exc)
-            self.history(op="event", result=result.name, message=f"{when} skipped: {exc}")
-
-    def _added(self, plan: RobotPlan, how: str, requested: str | None = None) -> None:
-        self.robots[plan.name] = plan
-        if self.recorder:
-            self.recorder.spawned(plan.name, self.step, plan.namespace, plan.source)
-        pose = spawning.pose_fields(self.world.read(plan.name))
-        self.history(op="spawn", name=plan.name, by=how, result="OK", namespace=plan.namespace,
-                     source=plan.source, pose=pose, **({"requested": requested} if requested else {}))
-
-    def remove(self, name: str, how: str, message: str | None = None) -> None:
-        """Delete a robot (a request, or a fault took it out of the world)."""
-        apply_event(self.world, Event(step=self.step, delete=name))
-        self.robots.pop(name, None)
-        self.stops.pop(name, None)
-        if self.recorder:
-            self.recorder.deleted(name, self.step)
-        self.history(op="delete", name=name, by=how, result="OK", **({"message": message} if message else {}))
+    def remove(self, name: str) -> None:
+        """Delete a robot on request."""
+        self.known(name)
+        self.timeline.apply(Event(step=self.step, delete=name), "request")
 
     # -- commands ---------------------------------------------------------------------------
 
@@ -106,28 +100,17 @@ class Session:
         if not self.world.has_drive(request.name):
             raise Refusal(Result.OPERATION_FAILED, f"robot '{request.name}' has no drive wheels: it does "
                           "not take velocity commands")
-        self.world.set_command(request.name, request.linear, request.angular)
-        self.stops.pop(request.name, None)
-        until = None
-        if request.for_ is not None:
-            until = self.step + max(1, steps(request.for_, self.rate_hz))
-            self.stops[request.name] = until
+        span = None if request.for_ is None else steps(request.for_, self.rate_hz)
+        until = self.timeline.command(request.name, request.linear, request.angular, span)
         self.history(op="cmd", name=request.name, result="OK", linear=request.linear, angular=request.angular,
                      **{"for": request.for_})
         return until
-
-    def due_stops(self) -> None:
-        """Stop the robots whose `cmd --for` ends at this step."""
-        for name, until in list(self.stops.items()):
-            if self.step >= until:
-                del self.stops[name]
-                self.world.set_command(name, 0.0, 0.0)
 
     def fault(self, exc: SimulationFault) -> bool:
         """Remove robots whose state went bad; False when none can be blamed."""
         bad = [name for name in self.world.names() if not _healthy(self.world, name)]
         for name in bad:
-            self.remove(name, "fault", message=str(exc))
+            self.timeline.delete(name, "fault", message=str(exc), last_row=False)
         return bool(bad)
 
     # -- replies ----------------------------------------------------------------------------
@@ -174,8 +157,17 @@ class Session:
 
     def history(self, **record: Any) -> None:
         """One line in history.jsonl when recording."""
-        if self.recorder:
-            self.recorder.history(self.step, record)
+        if self.history_file is not None:
+            self.history_file.write(self.step, record)
+
+    def close(self, status: Status, error: str | None, live: LiveInfo) -> RunRecord | None:
+        """End the record: the state at the last step (unless the world broke), then summary.json."""
+        if self.recording is None:
+            return None
+        self.history_file.close()
+        if status != Status.FAULT:
+            self.timeline.log()
+        return self.recording.close(status, error, self.step, live)
 
 
 def _healthy(world: World, name: str) -> bool:

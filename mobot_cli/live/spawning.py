@@ -16,6 +16,7 @@ from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.errors import DescriptionError, MobotError, ResourceError, SpawnError
 from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.live.schema import Spawn, normalize_namespace
+from mobot_cli.run.timeline import NameTaken, NotInWorld
 from mobot_cli.scenario.model import RobotSpec
 from mobot_cli.scenario.robots import RobotResolver
 from mobot_cli.scenario.units import quat_from_rpy
@@ -71,6 +72,10 @@ def _check_format(description: str, base_dir: Path) -> None:
 
 def classify(exc: MobotError) -> Result:
     """The simulation_interfaces result for an error raised while loading or placing a robot."""
+    if isinstance(exc, NameTaken):
+        return Result.NAME_NOT_UNIQUE
+    if isinstance(exc, NotInWorld):
+        return Result.NOT_FOUND
     if isinstance(exc, ResourceError):  # the description was found, so this is an include or mesh
         return Result.MISSING_ASSETS
     if isinstance(exc, DescriptionError):

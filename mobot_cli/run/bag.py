@@ -29,8 +29,9 @@ from pathlib import Path
 from mobot_cli.run.cdr import Layout, Packer
 from mobot_cli.run.ros_msgs import MESSAGES
 from mobot_cli.run.tf import RobotFrames, yaw_quat
+from mobot_cli.run.sinks import Sink
 from mobot_cli.run.timeline import Sample
-from mobot_cli.sim.plan import Plan, RobotPlan, SpawnPose
+from mobot_cli.sim.plan import Plan, RobotPlan
 from mobot_cli.sim.state import RobotState
 
 WORLD_FRAME = "world"  # Gazebo's name for the frame all robots' odom frames hang from
@@ -60,8 +61,8 @@ def file_uris(urdf: str) -> str:
     return _MESH_PATH.sub(r"\1file://\2", urdf)
 
 
-class BagSink:
-    """Records samples into ``DIR/bag``; per-robot topics open on a robot's first sample."""
+class BagSink(Sink):
+    """Records samples into ``DIR/bag``; a robot's topics open with its first sample."""
 
     def __init__(self, plan: Plan, out_dir: Path):
         from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
@@ -70,8 +71,6 @@ class BagSink:
         self.path = out_dir / "bag"
         if self.path.exists():  # a rerun into the same folder; rosbags never overwrites
             shutil.rmtree(self.path)
-        self.plans: list[tuple[int, RobotPlan]] = [(0, robot) for robot in plan.robots]
-        self.plans += [(e.step, e.spawn) for e in plan.events if e.spawn is not None]
         self.writer = Writer(self.path, version=8, storage_plugin=StoragePlugin.MCAP)
         # zstd inside each MCAP chunk (as ros2 bag record's zstd storage presets do): ~12x
         # smaller for ~10 % of the bag's time; metadata.yaml names no compression, as readers
@@ -82,11 +81,12 @@ class BagSink:
         self.tf = self.topic("/tf", TF)
         self.tf_static = self.topic("/tf_static", TF, latched=True)
         self.clock_packer = Layout().var("i").var("I").build()
-        self.robots: dict[str, _RobotTopics] = {}
-        self.present: tuple[str, ...] = ()
-        self.tf_packer: Packer | None = None
-        self.pending: list[Sample] = []
-        self.announced: dict[str, RobotPlan] = {}
+        self.robots: dict[str, _RobotTopics] = {}  # by record name; kept after a delete for its topics
+        self.arriving: dict[str, RobotPlan] = {}  # spawned, waiting for their first sample
+        self.tf_packers: dict[tuple[str, ...], Packer] = {}  # the /tf shape for a set of robots
+        self.pending: list[Sample | tuple[str, RobotPlan]] = []  # samples, and arrivals between them
+        self.waiting = 0  # samples in ``pending``
+        self.clock_step = -1  # the step of the last /clock message
 
     def topic(self, name: str, msgtype: str, latched: bool = False):
         """Add a connection, with its message definition and type hash embedded."""
@@ -94,49 +94,54 @@ class BagSink:
         return self.writer.add_connection(name, msgtype, msgdef=msgdef, rihs01=rihs01,
                                           offered_qos_profiles=_latched_qos() if latched else ())
 
-    def add_robot(self, robot: RobotPlan) -> None:
-        """Announce a robot the plan does not list (a live spawn); call it before its first sample."""
-        self.announced[robot.name] = robot
+    def spawned(self, step: int, key: str, robot: RobotPlan) -> None:
+        self.pending.append((key, robot))
 
     def write(self, sample: Sample) -> None:
         # Samples wait and are recorded a chunk at a time: the same work runs ~2x faster in a
         # batch than spread between physics steps, which leave the CPU caches cold.
         self.pending.append(sample)
-        if len(self.pending) >= CHUNK_EVERY_SAMPLES:
+        self.waiting += 1
+        if self.waiting >= CHUNK_EVERY_SAMPLES:
             self._record()
 
     def _record(self) -> None:
         """Record the waiting samples and close their chunk."""
-        for sample in self.pending:
-            self._record_one(sample)
+        for item in self.pending:
+            if isinstance(item, Sample):
+                self._record_one(item)
+            else:
+                key, robot = item
+                self.arriving[key] = robot
         self.pending.clear()
+        self.waiting = 0
         self._flush()
 
     def _record_one(self, sample: Sample) -> None:
         ns = sample.step * 1_000_000_000 // self.rate
         stamp = divmod(ns, 1_000_000_000)
         write = self.writer.write
-        write(self.clock, ns, self.clock_packer.pack(stamp))
+        if sample.step != self.clock_step:  # a robot's own row may share its step with a log row
+            self.clock_step = sample.step
+            write(self.clock, ns, self.clock_packer.pack(stamp))
         names = tuple(sample.states)
-        if names != self.present:
-            for name in names:
-                if name not in self.present:
-                    self._arrive(name, sample, ns, stamp)
-            self.present, self.tf_packer = names, None
+        for name in names:
+            if name in self.arriving:
+                self._arrive(name, self.arriving.pop(name), sample.states[name], ns, stamp)
         tf_values: list[float] = []
         robots = self.robots
         for name, state in sample.states.items():
             robots[name].write(write, ns, stamp, state, tf_values)
-        if self.tf_packer is None:
-            self.tf_packer = _tf_layout([self.robots[name].frames for name in names])
-        write(self.tf, ns, self.tf_packer.pack(tf_values))
+        packer = self.tf_packers.get(names)
+        if packer is None:
+            packer = self.tf_packers[names] = _tf_layout([robots[name].frames for name in names])
+        write(self.tf, ns, packer.pack(tf_values))
 
-    def _arrive(self, name: str, sample: Sample, ns: int, stamp: tuple[int, int]) -> None:
-        """A robot's first sample (or first after a respawn): static frames and its description."""
-        state = sample.states[name]
-        plan, robot = self._plan(name, sample.step), self.robots.get(name)
-        if robot is None or robot.plan is not plan:  # a new name, or respawned from another plan
-            robot = self.robots[name] = _RobotTopics(self, plan, state, reuse=robot)
+    def _arrive(self, name: str, plan: RobotPlan, state: RobotState, ns: int, stamp: tuple[int, int]) -> None:
+        """A robot's first sample: its topics (reused for a name seen before), static frames and
+        description."""
+        same_ns = [r for r in self.robots.values() if r.plan.namespace == plan.namespace]
+        robot = self.robots[name] = _RobotTopics(self, plan, state, reuse=same_ns[0] if same_ns else None)
         self.writer.write(robot.description, ns, robot.description_packer.pack(()))
         # The odom frame sits where odometry (0, 0, 0) is: the truth now, less the odometry so far.
         yaw = state.true_yaw - state.odom_yaw
@@ -153,18 +158,6 @@ class BagSink:
             values.extend((*stamp, *xyz, *quat))
         self.writer.write(self.tf_static, ns, layout.build().pack(values))
 
-    def _plan(self, name: str, step: int) -> RobotPlan:
-        """The plan of the robot of this name spawned last at or before ``step``."""
-        if name in self.announced:
-            return self.announced.pop(name)
-        found = [(at, i, plan) for i, (at, plan) in enumerate(self.plans) if plan.name == name and at <= step]
-        if found:
-            return max(found, key=lambda item: item[:2])[2]
-        # Unknown to the plan and never announced: record it as a bare base_link.
-        return RobotPlan(name=name, namespace=f"/{name}", frame_prefix=f"{name}/",
-                         urdf=f'<robot name="{name}"><link name="base_link"/></robot>',
-                         root_link="base_link", pose=SpawnPose(), drive=None)
-
     def _flush(self) -> None:
         """Close the open MCAP chunk and push it to the OS, so a killed run keeps it."""
         # rosbags closes chunks only at 1 MiB; its McapWriter has no public flush, so use its
@@ -179,9 +172,7 @@ class BagSink:
 
     def close(self) -> None:
         if self.writer.storage is not None:
-            for sample in self.pending:
-                self._record_one(sample)
-            self.pending.clear()
+            self._record()
             self.writer.close()
 
 
@@ -192,7 +183,7 @@ class _RobotTopics:
         ns = plan.namespace.rstrip("/")
         self.plan = plan
         self.frames = RobotFrames(plan.urdf, plan.frame_prefix, plan.root_link)
-        if reuse is not None and reuse.plan.namespace == plan.namespace:  # a topic is added once
+        if reuse is not None:  # a topic is added once
             self.odom, self.cmd_vel = reuse.odom, reuse.cmd_vel
             self.joint_states, self.description = reuse.joint_states, reuse.description
         else:

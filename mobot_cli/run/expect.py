@@ -12,8 +12,9 @@ import math
 from dataclasses import dataclass, replace
 from typing import Any, Optional
 
+from mobot_cli.run.sinks import Sink
 from mobot_cli.run.timeline import Sample
-from mobot_cli.sim.plan import Expectation, Plan
+from mobot_cli.sim.plan import Expectation, Plan, RobotPlan
 from mobot_cli.sim.state import RobotState
 
 
@@ -75,8 +76,8 @@ def odom_error(first: RobotState, state: RobotState) -> tuple[float, float]:
     return math.hypot(x - state.true_x, y - state.true_y), yaw
 
 
-class Checker:
-    """Feed it every sample; ``results()`` then evaluates the plan's expectations."""
+class Checker(Sink):
+    """Feed it the timeline's records; ``results()`` then evaluates the plan's expectations."""
 
     def __init__(self, plan: Plan):
         self.plan = plan
@@ -86,6 +87,12 @@ class Checker:
         self.last_step = 0
         self._wanted = {e.step for e in plan.expectations if e.step is not None}
         self._snapshots: dict[int, tuple[dict[str, Figures], frozenset[str]]] = {}
+
+    def spawned(self, step: int, key: str, robot: RobotPlan) -> None:
+        self.present.add(key)
+
+    def deleted(self, step: int, key: str) -> None:
+        self.present.discard(key)
 
     def write(self, sample: Sample) -> None:
         """Take one sample (the sink interface, so it can sit beside the writers)."""
@@ -97,14 +104,10 @@ class Checker:
                 self.figures[name] = Figures(sample.step, state, state, tilt=(tilt(state), sample.step))
             else:
                 known.advance(sample.step, state)
-        self.present = set(sample.states)
         self.last_step = sample.step
-        if sample.step in self._wanted:
+        if sample.complete and sample.step in self._wanted:
             self._snapshots[sample.step] = ({n: replace(f) for n, f in self.figures.items()},
                                             frozenset(self.present))
-
-    def close(self) -> None:
-        """Nothing to release; here to match the sink interface."""
 
     def results(self) -> list[Result]:
         """Every expectation, for every robot it names, in the scenario's order."""
@@ -210,9 +213,3 @@ def _angle(rad: float) -> str:
 def _when(value: float, step: int, rate: int) -> str:
     """' (at 8.5 s)': when a worst value happened, unless it rounds to nothing."""
     return f" (at {round(step / rate, 3):g} s)" if value >= 5e-4 else ""
-
-
-def summary_block(results: list[Result]) -> dict[str, Any]:
-    """What summary.json says about the expectations."""
-    failed = sum(not r.passed for r in results)
-    return {"passed": len(results) - failed, "failed": failed, "results": [r.as_dict() for r in results]}

@@ -8,12 +8,12 @@ end at their last flush and its bag at its last MCAP chunk, which this module me
 from __future__ import annotations
 
 import csv
-import json
 import struct
 from pathlib import Path
 from typing import Any
 
 from mobot_cli.errors import ExitCode, UsageError
+from mobot_cli.run.record import SUMMARY, RunRecord, Status
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 _CHUNK, _RECORD = 0x06, struct.Struct("<BQ")
@@ -36,21 +36,21 @@ def run_status(folder: Path) -> dict[str, Any]:
                          hint="Give the folder that mobot run --out wrote.")
     result: dict[str, Any] = {"kind": "run", "path": str(folder), "problems": [],
                               "csv": csv_extents(folder), "bag": bag_status(folder / "bag")}
-    summary = _json(folder / "summary.json")
-    if summary is None:
-        result["problems"].append("no summary.json: the run was killed, or is still running")
+    record = RunRecord.load(folder)
+    if record is None:
+        result["problems"].append("summary.json is not a record mobot wrote" if (folder / SUMMARY).exists()
+                                  else "no summary.json: the run was killed, or is still running")
         return _verdict(result, "incomplete")
-    result.update(scenario=summary.get("scenario"), sim_time=summary.get("sim_time"),
-                  robots=sorted(summary.get("robots", {})), run_status=summary.get("status"))
-    status = summary.get("status")
-    if status != "ok":
-        error = f": {summary['error']}" if summary.get("error") else ""
-        result["problems"].append(f"summary.json says '{status}'{error}")
-        return _verdict(result, "fault" if status == "fault" else "incomplete")
-    result["problems"] += _missing(folder, summary, result)
+    result.update(scenario=record.scenario, sim_time=record.sim_time, robots=sorted(record.robots),
+                  run_status=record.status.value)
+    if record.status != Status.OK:
+        error = f": {record.error}" if record.error else ""
+        result["problems"].append(f"summary.json says '{record.status.value}'{error}")
+        return _verdict(result, "fault" if record.status == Status.FAULT else "incomplete")
+    result["problems"] += _missing(folder, record, result)
     if result["problems"]:
         return _verdict(result, "incomplete")
-    failed = (summary.get("expectations") or {}).get("failed", 0)
+    failed = record.failed_expectations
     if failed:
         result["problems"].append(f"{failed} expectation(s) failed")
         return _verdict(result, "failed")
@@ -64,12 +64,12 @@ def _verdict(result: dict[str, Any], status: str) -> dict[str, Any]:
     return result
 
 
-def _missing(folder: Path, summary: dict[str, Any], result: dict[str, Any]) -> list[str]:
+def _missing(folder: Path, record: RunRecord, result: dict[str, Any]) -> list[str]:
     """What a complete run folder must hold but this one lacks."""
     problems = [f"{name} is missing" for name in ("scenario.yaml", "trajectory.png")
                 if not (folder / name).is_file()]
     if (folder / "odom").is_dir():
-        problems += [f"odom/{robot}.csv is missing" for robot in summary.get("robots", {})
+        problems += [f"odom/{robot}.csv is missing" for robot in record.robots
                      if not (folder / "odom" / f"{robot}.csv").is_file()]
     bag = result["bag"]
     if bag is not None and not bag["complete"]:
@@ -121,10 +121,3 @@ def mcap_chunks(path: Path) -> dict[str, Any]:
             footer = footer or opcode == 0x02
             f.seek(start + length)
     return {"chunks": chunks, "last_t": end_ns / 1e9 if end_ns is not None else None, "footer": footer}
-
-
-def _json(path: Path) -> dict[str, Any] | None:
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from mobot_cli.errors import MobotError, UsageError
 from mobot_cli.run.folder import is_run_folder, is_sweep_folder
+from mobot_cli.run.record import RunRecord
 from mobot_cli.run.trajectory import draw
 
 MAX_ODOMETRY_TRACKS = 10  # more dashed lines than this (a sweep) hide the true paths
@@ -57,13 +58,12 @@ def replot(folder: Path, out: Path | None = None) -> PlotResult:
             track.odom = []
         result.notices.append(f"{len(tracks)} paths: odometry (dashed) is left out above {MAX_ODOMETRY_TRACKS}")
     world = _world(runs[0] / "scenario.yaml", result.notices)
-    summary = _read_json(runs[0] / "summary.json") or {}
-    title = summary.get("scenario") or folder.name
+    record = RunRecord.load(runs[0])
+    title = record.scenario if record else folder.name
     if prefix:
         subtitle = f"sweep: {len(runs)} runs, {len(tracks)} paths"
     else:
-        sim = summary.get("sim_time")
-        subtitle = (f"{sim:g} s simulated; " if isinstance(sim, (int, float)) else "") + \
+        subtitle = (f"{record.sim_time:g} s simulated; " if record else "") + \
             f"{len(tracks)} robot{'s' if len(tracks) != 1 else ''}"
     result.out.parent.mkdir(parents=True, exist_ok=True)
     draw(tracks, world, result.out, title, subtitle)

@@ -1,7 +1,8 @@
-"""Writers for the run folder. Each sink consumes the timeline's samples; none drives it.
+"""Writers for the run folder. Each sink consumes the timeline's records; none drives it.
 
-A sink has ``write(sample)`` and ``close()``. Robots may appear and disappear during a run
-(spawn and delete events), so per-robot outputs open on a robot's first sample.
+A sink is told when a robot arrives (``spawned``, with its plan) and leaves (``deleted``),
+takes ``write(sample)`` for every sample, and finishes its files in ``close()``. Robots are
+named by their name in the record (``<name>__2`` for a name used again in a live world).
 """
 
 from __future__ import annotations
@@ -10,22 +11,30 @@ import json
 import math
 import os
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any
 
 from mobot_cli.run.timeline import Sample
-from mobot_cli.sim.plan import Plan
+from mobot_cli.sim.plan import Plan, RobotPlan
 from mobot_cli.sim.state import RobotState
 
 CSV_COLUMNS = ("t",) + RobotState.CSV_FIELDS
 FLUSH_EVERY_ROWS = 50
 
 
-class Sink(Protocol):
-    """Something that records samples into the run folder."""
+class Sink:
+    """Something that records the timeline into the run folder."""
 
-    def write(self, sample: Sample) -> None: ...
+    def spawned(self, step: int, key: str, robot: RobotPlan) -> None:
+        """Robot ``key`` entered the world at ``step``; its first sample follows."""
 
-    def close(self) -> None: ...
+    def deleted(self, step: int, key: str) -> None:
+        """Robot ``key`` left the world at ``step``, after its last sample."""
+
+    def write(self, sample: Sample) -> None:
+        """Record one sample."""
+
+    def close(self) -> None:
+        """Finish every file."""
 
 
 def number(value: float) -> str:
@@ -65,7 +74,7 @@ class OdomCsv:
         self._file.close()
 
 
-class CsvSink:
+class CsvSink(Sink):
     """``odom/<robot>.csv`` for every robot, opened on the robot's first sample."""
 
     def __init__(self, plan: Plan, out_dir: Path):

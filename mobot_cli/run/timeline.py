@@ -1,81 +1,203 @@
-"""The fixed-step timeline: spawn, apply command scripts, step, and yield log samples.
+"""The one timeline every door drives: `mobot run`, `mobot serve` and whatever steps a world.
 
-It never writes files; sinks consume what it yields.
+A Timeline owns the order of things within a physics step: scripted events, then the command
+scripts and the ends of timed commands, then the log row; requests of a live world enter
+between steps through the same ``spawn``, ``delete`` and ``command`` a scripted event uses.
+It never writes files: it hands records (``Spawned``, ``Deleted``, ``Sample``) to a consumer,
+and the run folder's writers take them from there.
 """
 
 from __future__ import annotations
 
 from collections import defaultdict
 from dataclasses import dataclass
-from typing import Iterator
+from typing import Callable, Iterator, Protocol, Union
 
-from mobot_cli.errors import MobotError
-from mobot_cli.sim.plan import Event, Plan
+from mobot_cli.errors import MobotError, SpawnError
+from mobot_cli.sim.plan import Event, Plan, RobotPlan
 from mobot_cli.sim.state import RobotState
 from mobot_cli.sim.world import World
 
 
 @dataclass(frozen=True)
 class Sample:
-    """The state of every robot after ``step`` physics steps."""
+    """Robot states after ``step`` physics steps: every robot on a log row (``complete``), or only
+    the robot that arrived or left between two rows (so that even a short life leaves rows)."""
 
     step: int
     states: dict[str, RobotState]
+    complete: bool = True
 
 
-def simulate(plan: Plan) -> Iterator[Sample]:
-    """Run ``plan`` to its end, yielding a Sample every ``log_every`` steps and at the last step."""
-    with World(plan.physics, plan.world, seed=plan.seed) as world:
-        script = Script(plan)
-        for robot in plan.robots:
-            world.spawn(robot)
-        for step in range(plan.total_steps + 1):
-            script.apply(world, step)
-            if step % plan.log_every == 0 or step == plan.total_steps:
-                yield sample(world, step)
-            if step < plan.total_steps:
-                world.step()
+@dataclass(frozen=True)
+class Spawned:
+    """A robot entered the world at ``step``; ``by`` says how (scenario, request)."""
+
+    step: int
+    robot: RobotPlan
+    by: str
+    state: RobotState  # where it was placed
 
 
-def sample(world: World, step: int) -> Sample:
-    """The state of every robot in the world, in spawn order."""
-    return Sample(step, {name: world.read(name) for name in world.names()})
+@dataclass(frozen=True)
+class Deleted:
+    """A robot left the world at ``step`` (its last row was recorded just before)."""
+
+    step: int
+    name: str
+    by: str
+    message: str | None = None
 
 
-def apply_event(world: World, event: Event) -> None:
-    """Spawn or delete one robot: the path scenario events and live requests share."""
-    if event.spawn is not None:
-        world.spawn(event.spawn)
-    else:
-        world.remove(event.delete)
+Record = Union[Sample, Spawned, Deleted]
 
 
-class Script:
-    """A plan's events and command scripts, indexed by the step they happen at."""
+class Consumer(Protocol):
+    """Whatever takes the timeline's records, in order."""
 
-    def __init__(self, plan: Plan):
+    def __call__(self, record: Record) -> None: ...
+
+
+class NameTaken(SpawnError):
+    """A robot's name or namespace is already in the world."""
+
+
+class NotInWorld(MobotError):
+    """No robot of that name is in the world."""
+
+
+class Timeline:
+    """``plan``'s world on one clock: spawns, deletes, command scripts and the log cadence."""
+
+    def __init__(self, plan: Plan, world: World, on_refused: Callable[[Event, MobotError], None] | None = None):
+        self.plan, self.world = plan, world
         self.rate_hz = plan.physics.rate_hz
-        self.events: dict[int, list[Event]] = defaultdict(list)
-        self.commands: dict[int, list[tuple[str, float, float]]] = defaultdict(list)
+        self.robots: dict[str, RobotPlan] = {}  # the plans of the robots in the world, in spawn order
+        self._held: list[Record] | None = []  # records made before a consumer is attached
+        self._consume: Consumer = self._held.append
+        self._on_refused = on_refused  # None: a refused scripted event ends the run
+        self._events: dict[int, list[Event]] = defaultdict(list)
+        self._commands: dict[int, list[tuple[str, float, float]]] = defaultdict(list)
+        self._stops: dict[str, int] = {}  # robot -> step at which its timed command ends
+        self._logged = -1  # the step of the last complete sample
         for event in plan.events:
-            self.events[event.step].append(event)
+            self._events[event.step].append(event)
         spawned = [event.spawn for event in plan.events if event.spawn is not None]
         for robot in (*plan.robots, *spawned):
             for cmd in robot.commands:
-                self.commands[cmd.step].append((robot.name, cmd.linear, cmd.angular))
+                self._commands[cmd.step].append((robot.name, cmd.linear, cmd.angular))
 
-    def apply(self, world: World, step: int) -> None:
-        """Events due at ``step``, then commands: one "at" t is in force in the row logged at t."""
-        for event in self.events.get(step, ()):
-            try:
-                apply_event(world, event)
-            except MobotError as exc:
-                raise type(exc)(f"event at {step / self.rate_hz:g} s: {exc.message}",
+    @property
+    def step(self) -> int:
+        """Physics steps taken since t = 0."""
+        return self.world.step_count
+
+    @property
+    def finished(self) -> bool:
+        """The plan's duration is over (a live world may go on past it)."""
+        return self.step >= self.plan.total_steps
+
+    def attach(self, consumer: Consumer) -> None:
+        """Send every record to ``consumer`` from now on, beginning with those made before."""
+        held, self._held = self._held or [], None
+        self._consume = consumer
+        for record in held:
+            consumer(record)
+
+    def start(self) -> None:
+        """Spawn the plan's own robots at t = 0."""
+        for robot in self.plan.robots:
+            self.spawn(robot, "scenario")
+
+    def tick(self) -> None:
+        """Everything due at the current step, in order: events, commands, ends of timed
+        commands, the log row."""
+        step = self.step
+        for event in self._events.get(step, ()):
+            self._scripted(event)
+        for name, linear, angular in self._commands.get(step, ()):
+            if name in self.robots:  # a live world may have deleted it meanwhile
+                self.world.set_command(name, linear, angular)
+        for name, until in list(self._stops.items()):
+            if step >= until:
+                del self._stops[name]
+                self.world.set_command(name, 0.0, 0.0)
+        if step % self.plan.log_every == 0 or step == self.plan.total_steps:
+            self.log()
+
+    def advance(self) -> None:
+        """One physics step."""
+        self.world.step()
+
+    def log(self) -> None:
+        """A complete sample now, once per step."""
+        if self._logged != self.step:
+            self._logged = self.step
+            self._consume(Sample(self.step, {name: self.world.read(name) for name in self.robots}))
+
+    # -- what events and requests do --------------------------------------------------------
+
+    def spawn(self, robot: RobotPlan, by: str) -> None:
+        """Place a robot now (SpawnError when refused); it gets a row at once unless the log
+        row of this step is still to come."""
+        taken = {plan.namespace: name for name, plan in self.robots.items()}
+        if robot.name in self.robots or robot.namespace in taken:
+            raise NameTaken(f"robot '{robot.name}' or namespace '{robot.namespace}' is already in the world")
+        self.world.spawn(robot)
+        self.robots[robot.name] = robot
+        state = self.world.read(robot.name)
+        self._consume(Spawned(self.step, robot, by, state))
+        if self._logged == self.step or self.step % self.plan.log_every:
+            self._consume(Sample(self.step, {robot.name: state}, complete=False))
+
+    def delete(self, name: str, by: str, message: str | None = None, last_row: bool = True) -> None:
+        """Take a robot out now; its state at this step is its last row (unless its state broke)."""
+        if last_row and self._logged != self.step:
+            self._consume(Sample(self.step, {name: self.world.read(name)}, complete=False))
+        self.world.remove(name)
+        del self.robots[name]
+        self._stops.pop(name, None)
+        self._consume(Deleted(self.step, name, by, message))
+
+    def command(self, name: str, linear: float, angular: float, steps: int | None = None) -> int | None:
+        """Hold a twist; with ``steps``, stop after that many steps. Returns the stop step."""
+        self.world.set_command(name, linear, angular)
+        self._stops.pop(name, None)
+        if steps is None:
+            return None
+        until = self._stops[name] = self.step + max(1, steps)
+        return until
+
+    def apply(self, event: Event, by: str) -> None:
+        """One spawn or delete event: the path scenario events and live requests share."""
+        if event.spawn is not None:
+            self.spawn(event.spawn, by)
+        else:
+            if event.delete not in self.robots:
+                raise NotInWorld(f"no robot named '{event.delete}' is in the world")
+            self.delete(event.delete, by)
+
+    def _scripted(self, event: Event) -> None:
+        try:
+            self.apply(event, "scenario")
+        except MobotError as exc:
+            if self._on_refused is None:
+                raise type(exc)(f"event at {event.step / self.rate_hz:g} s: {exc.message}",
                                 location=exc.location, hint=exc.hint) from None
-        self.command(world, step)
+            self._on_refused(event, exc)
 
-    def command(self, world: World, step: int, present_only: bool = False) -> None:
-        """Send the commands due at ``step`` (a live world skips robots deleted meanwhile)."""
-        for name, linear, angular in self.commands.get(step, ()):
-            if not present_only or name in world.names():
-                world.set_command(name, linear, angular)
+
+def simulate(plan: Plan) -> Iterator[Record]:
+    """Play ``plan`` in a world of its own from start to end, yielding its records as they come."""
+    with World(plan.physics, plan.world, seed=plan.seed) as world:
+        records: list[Record] = []
+        timeline = Timeline(plan, world)
+        timeline.attach(records.append)
+        timeline.start()
+        while True:
+            timeline.tick()
+            yield from records
+            records.clear()
+            if timeline.finished:
+                break
+            timeline.advance()

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from mobot_cli.run.sinks import Sink
 from mobot_cli.run.timeline import Sample
 from mobot_cli.sim.plan import Plan, WorldPlan
 from mobot_cli.sim.state import RobotState
@@ -28,7 +29,7 @@ class OdomToWorld:
         return self.x + self.c * x - self.s * y, self.y + self.s * x + self.c * y
 
 
-class TrajectorySink:
+class TrajectorySink(Sink):
     """Collects each robot's path; close() draws ``trajectory.png``."""
 
     def __init__(self, plan: Plan, out_dir: Path):
@@ -40,9 +41,10 @@ class TrajectorySink:
         self.open: dict[str, tuple[object, OdomToWorld]] = {}
         self.last_step = 0
 
+    def deleted(self, step: int, key: str) -> None:
+        self.open.pop(key, None)
+
     def write(self, sample: Sample) -> None:
-        for name in [n for n in self.open if n not in sample.states]:
-            del self.open[name]  # deleted: a respawn under the same name starts a new track
         for name, state in sample.states.items():
             entry = self.open.get(name)
             if entry is None:

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from mobot_cli.errors import MobotError, SimulationFault
+from mobot_cli.run.record import RobotRecord
 from mobot_cli.sim.plan import Plan
 
 PASSED, FAILED = "passed", "failed"
@@ -62,7 +63,7 @@ def run_task(task: Task) -> Outcome:
     except Exception as exc:  # a bug or a broken robot: this run fails, the sweep goes on
         return failed(task.index, "error", f"{type(exc).__name__}: {exc}", time.perf_counter() - started)
     wall = time.perf_counter() - started
-    robots = {name: _figures(robot) for name, robot in result.summary["robots"].items()}
+    robots = {name: _figures(robot) for name, robot in result.record.robots.items()}
     bad = [r for r in result.expectations if not r.passed]
     reason = ""
     if bad:
@@ -83,7 +84,6 @@ def run_task_elsewhere(task: Task) -> Outcome:
         shutil.rmtree(scratch, ignore_errors=True)
 
 
-def _figures(robot: dict[str, Any]) -> dict[str, Any]:
-    pose = robot["final_pose"]
-    return {"distance": robot["distance"], "x": pose["x"], "y": pose["y"], "yaw": pose["yaw"],
-            "collisions": robot.get("collisions", 0)}
+def _figures(robot: RobotRecord) -> dict[str, Any]:
+    pose = robot.final_pose
+    return {"distance": robot.distance, "x": pose.x, "y": pose.y, "yaw": pose.yaw, "collisions": robot.collisions}

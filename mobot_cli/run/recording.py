@@ -1,0 +1,157 @@
+"""The run folder as a timeline's consumer: one place for `mobot run` and `mobot serve --out`.
+
+    DIR/scenario.yaml      the resolved scenario (or world) the run started from
+    DIR/odom/, DIR/bag/    per robot, however it entered the world (the sinks)
+    DIR/trajectory.png     drawn when the recording closes
+    DIR/summary.json       the RunRecord, written last
+
+A name used again after its robot was deleted (a live world) is recorded as ``<name>__2``.
+"""
+
+from __future__ import annotations
+
+import math
+import platform
+import time
+from dataclasses import dataclass
+from importlib import metadata
+from pathlib import Path
+from typing import Optional
+
+from mobot_cli import __version__
+from mobot_cli.common.files import write_text_atomic
+from mobot_cli.run.expect import Checker, Result, odom_error
+from mobot_cli.run.record import (SUMMARY, ExpectationResult, Expectations, LiveInfo, OdomError, OdomPose, Pose,
+                                  RobotRecord, RunRecord, Status, Versions)
+from mobot_cli.run.sinks import make_sinks
+from mobot_cli.run.timeline import Deleted, Record, Sample, Spawned
+from mobot_cli.sim.plan import Plan, RobotPlan
+from mobot_cli.sim.state import RobotState
+
+
+@dataclass
+class _Life:
+    """One robot's life in the record, accumulated sample by sample."""
+
+    name: str
+    plan: RobotPlan
+    spawned_at: float
+    deleted_at: Optional[float] = None
+    first: Optional[RobotState] = None
+    last: Optional[RobotState] = None
+    distance: float = 0.0
+
+    def add(self, state: RobotState) -> None:
+        if self.first is None:
+            self.first = state
+        elif self.last is not None:
+            self.distance += math.hypot(state.true_x - self.last.true_x, state.true_y - self.last.true_y)
+        self.last = state
+
+    def record(self) -> RobotRecord:
+        s = self.last
+        position, yaw = odom_error(self.first, s)
+        return RobotRecord(
+            name=self.name, namespace=self.plan.namespace, source=self.plan.source,
+            spawned_at=self.spawned_at, deleted_at=self.deleted_at,
+            final_pose=Pose(x=_r(s.true_x), y=_r(s.true_y), z=_r(s.true_z), roll=_r(s.true_roll),
+                            pitch=_r(s.true_pitch), yaw=_r(s.true_yaw)),
+            final_odom=OdomPose(x=_r(s.odom_x), y=_r(s.odom_y), yaw=_r(s.odom_yaw)),
+            distance=_r(self.distance), collisions=s.collisions,
+            odom_error=OdomError(position=_r(position), yaw=_r(yaw)))
+
+
+class Recording:
+    """Takes a timeline's records into ``out_dir``; ``close`` writes the RunRecord last."""
+
+    def __init__(self, plan: Plan, out_dir: Path, resolved_yaml: str):
+        self.plan, self.out_dir = plan, out_dir
+        out_dir.mkdir(parents=True, exist_ok=True)
+        (out_dir / SUMMARY).unlink(missing_ok=True)  # a reused folder must not look finished early
+        write_text_atomic(out_dir / "scenario.yaml", resolved_yaml)
+        self.sinks = make_sinks(plan, out_dir)
+        self.checker = Checker(plan)
+        self.sinks.append(self.checker)
+        self.results: list[Result] = []
+        self.last_step = 0
+        self._keys: dict[str, str] = {}  # robot name -> its name in the record
+        self._lives: dict[str, _Life] = {}  # record name -> life, in order of arrival
+        self._renamed = False
+        self._started = time.perf_counter()
+
+    def __call__(self, record: Record) -> None:
+        """Take one record of the timeline (the Consumer interface)."""
+        if isinstance(record, Sample):
+            self._sample(record)
+        elif isinstance(record, Spawned):
+            self._spawned(record)
+        elif isinstance(record, Deleted):
+            key = self._keys.pop(record.name)
+            self._lives[key].deleted_at = record.step / self.plan.physics.rate_hz
+            for sink in self.sinks:
+                sink.deleted(record.step, key)
+
+    def _spawned(self, record: Spawned) -> None:
+        name, lives = record.robot.name, 1
+        key = name
+        while key in self._lives:
+            lives += 1
+            key = f"{name}__{lives}"
+        self._renamed = self._renamed or key != name
+        self._keys[name] = key
+        self._lives[key] = _Life(key, record.robot, record.step / self.plan.physics.rate_hz)
+        for sink in self.sinks:
+            sink.spawned(record.step, key, record.robot)
+
+    def _sample(self, sample: Sample) -> None:
+        if self._renamed:
+            sample = Sample(sample.step, {self._keys[n]: s for n, s in sample.states.items()}, sample.complete)
+        for sink in self.sinks:
+            sink.write(sample)
+        lives = self._lives
+        for key, state in sample.states.items():
+            lives[key].add(state)
+        self.last_step = sample.step
+
+    def close(self, status: Status, error: str | None = None, steps: int | None = None,
+              live: LiveInfo | None = None) -> RunRecord:
+        """Close every writer and write summary.json last; returns the record."""
+        try:
+            for sink in self.sinks:
+                sink.close()
+        finally:
+            if self.plan.expectations and status == Status.OK:
+                self.results = self.checker.results()
+            record = self._record(status, error, self.last_step if steps is None else steps, live)
+            record.save(self.out_dir)
+        return record
+
+    def _record(self, status: Status, error: str | None, steps: int, live: LiveInfo | None) -> RunRecord:
+        wall = time.perf_counter() - self._started
+        plan, sim_time = self.plan, steps / self.plan.physics.rate_hz
+        expectations = None
+        if self.results:
+            failed = sum(not r.passed for r in self.results)
+            expectations = Expectations(passed=len(self.results) - failed, failed=failed,
+                                        results=[ExpectationResult(**r.as_dict()) for r in self.results])
+        return RunRecord(
+            status=status, error=error, scenario=plan.name, world=plan.world.name, seed=plan.seed,
+            versions=Versions(mobot=__version__, pybullet=_version("pybullet"), python=platform.python_version()),
+            steps=steps, sim_time=_r(sim_time), wall_time=round(wall, 3),
+            real_time_factor=round(sim_time / wall, 2) if wall > 0 else None,
+            physics_rate_hz=plan.physics.rate_hz, log_rate_hz=_r(plan.physics.rate_hz / plan.log_every),
+            notices=list(plan.notices),
+            robots={key: life.record() for key, life in self._lives.items() if life.last is not None},
+            expectations=expectations, live=live)
+
+
+def _version(package: str) -> str | None:
+    try:
+        return metadata.version(package)
+    except metadata.PackageNotFoundError:
+        return None
+
+
+def _r(value: float) -> float:
+    """Six decimals and never -0.0, so that records compare as text."""
+    return round(value, 6) + 0.0
