@@ -36,3 +36,13 @@ def test_the_error_example_is_what_mobot_prints():
                             capture_output=True, text=True, cwd=REPO, timeout=60)
     assert result.returncode == 2
     assert result.stderr == shown + "\n"
+
+
+def test_the_in_process_example_runs(tmp_path, monkeypatch):
+    """The Development section's invoke() example, run as written from a checkout-like folder."""
+    block = re.search(r"```python\n(.*?)```", README[README.index("## Development"):], re.S).group(1)
+    assert "invoke(" in block
+    (tmp_path / "scenarios").symlink_to(REPO / "scenarios")
+    monkeypatch.chdir(tmp_path)
+    exec(compile(block, "README.md", "exec"), {})
+    assert (tmp_path / "runs" / "api" / "summary.json").is_file() and (tmp_path / "runs" / "tty").is_dir()
