@@ -9,26 +9,21 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+from dataclasses import astuple
 from pathlib import Path
 
 import pytest
 
-from mobot_cli.cli import _dispatch
+from mobot_cli.cli import invoke
 
 HERE = Path(__file__).parent
 BAD = sorted((HERE / "bad").glob("*.yaml"))
 
 
-def run_cli(args: list[str], capsys) -> tuple[int, str, str]:
-    code = _dispatch(args)
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
-
-
 @pytest.mark.parametrize("path", BAD, ids=[p.stem for p in BAD])
-def test_bad_scenario_error_text(path: Path, capsys, monkeypatch):
+def test_bad_scenario_error_text(path: Path, monkeypatch):
     monkeypatch.chdir(HERE)
-    code, out, err = run_cli(["check", f"bad/{path.name}"], capsys)
+    code, out, err = astuple(invoke(["check", f"bad/{path.name}"]))
     assert code == 2
     assert out == ""
     assert "Traceback" not in err
@@ -42,11 +37,12 @@ def test_bad_scenario_error_text(path: Path, capsys, monkeypatch):
 
 
 @pytest.mark.parametrize("path", BAD, ids=[p.stem for p in BAD])
-def test_bad_scenario_leaves_no_run_folder(path: Path, capsys, monkeypatch, tmp_path):
+def test_bad_scenario_leaves_no_run_folder(path: Path, monkeypatch, tmp_path):
     monkeypatch.chdir(HERE)
     out_dir = tmp_path / "run"
-    code, _, err = run_cli(["run", f"bad/{path.name}", "--out", str(out_dir), "--quiet"], capsys)
+    code, out, err = astuple(invoke(["run", f"bad/{path.name}", "--out", str(out_dir), "--quiet"]))
     assert code == 2, err
+    assert out == "" and err.startswith("mobot: error: ")
     assert not out_dir.exists()
 
 
@@ -67,10 +63,11 @@ def test_traceback_flag_shows_one(tmp_path):
     assert "Traceback" in result.stderr
 
 
-def test_missing_scenario_file(capsys, tmp_path):
-    code, _, err = run_cli(["run", str(tmp_path / "nope.yaml"), "--out", str(tmp_path / "r")], capsys)
-    assert code == 2
-    assert "scenario file not found" in err
+def test_missing_scenario_file(tmp_path):
+    code, out, err = astuple(invoke(["run", tmp_path / "nope.yaml", "--out", tmp_path / "r"]))
+    assert code == 2 and out == ""
+    assert err == (f"mobot: error: scenario file not found: {tmp_path / 'nope.yaml'}. "
+                   "Check the path; bundled examples are in scenarios/.\n")
     assert not (tmp_path / "r").exists()
 
 
@@ -81,11 +78,11 @@ def test_missing_scenario_file(capsys, tmp_path):
     ("robots.mobot.pose.z=.nan", "Input should be a finite number, got nan"),
     ("nonsense", "--set 'nonsense' is not KEY=VALUE"),
 ])
-def test_bad_set_override(override, message, capsys, tmp_path):
+def test_bad_set_override(override, message, tmp_path):
     scenario = HERE.parent / "scenarios" / "quickstart.yaml"
-    code, _, err = run_cli(["run", str(scenario), "--set", override, "--out", str(tmp_path / "r")], capsys)
-    assert code == 2
-    assert message in err
+    code, out, err = astuple(invoke(["run", scenario, "--set", override, "--out", tmp_path / "r"]))
+    assert code == 2 and out == ""
+    assert err.startswith("mobot: error: ") and message in err
     assert not (tmp_path / "r").exists()
 
 

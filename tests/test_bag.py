@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from mobot_cli.cli import _dispatch
+from mobot_cli.cli import Outcome, invoke
 
 import mcap.reader as mcap_reader  # the independent reader: the `test` extra's mcap packages
 import mcap_ros2.decoder as mcap_ros2
@@ -49,7 +49,7 @@ NAMESPACE = {"alpha": "/alpha", "beta": "/team/beta"}
 
 
 def run(scenario: Path, out: Path) -> Path:
-    assert _dispatch(["run", str(scenario), "--out", str(out), "--quiet"]) == 0
+    assert invoke(["run", str(scenario), "--out", str(out), "--quiet"]) == Outcome(0, "", "")
     return out
 
 
@@ -231,7 +231,7 @@ def test_robots_that_come_and_go_get_their_topics_from_their_first_sample(tmp_pa
     """scenarios/events.yaml: mobot_1 is deleted at 3 s, 'late' spawns at 3.5 s."""
     scenario = Path(__file__).resolve().parent.parent / "scenarios" / "events.yaml"
     out = tmp_path / "events"
-    assert _dispatch(["run", str(scenario), "--out", str(out), "--quiet", "--set", "log.formats=[csv, mcap]"]) == 0
+    assert invoke(["run", scenario, "--out", out, "--quiet", "--set", "log.formats=[csv, mcap]"]) == Outcome(0, "", "")
     msgs = messages(out / "bag")
     first = {}
     for topic, _, log_time, _, _ in msgs:

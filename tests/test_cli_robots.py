@@ -7,11 +7,12 @@ import json
 import math
 import subprocess
 import sys
+from dataclasses import astuple
 from pathlib import Path
 
 import pytest
 
-from mobot_cli.cli import _dispatch
+from mobot_cli.cli import invoke
 
 REPO = Path(__file__).resolve().parent.parent
 BURGER = "turtlebot3/turtlebot3_description/urdf/turtlebot3_burger.urdf.xacro"
@@ -21,15 +22,9 @@ def tree_links(node: dict) -> set[str]:
     return {node["link"]}.union(*(tree_links(child) for child in node["children"]))
 
 
-def mobot(capsys, *args) -> tuple[int, str, str]:
-    code = _dispatch([str(a) for a in args])
-    out = capsys.readouterr()
-    return code, out.out, out.err
-
-
-def test_inspect_bundled_robot_json(capsys):
-    code, out, _ = mobot(capsys, "inspect", "mobot", "lidar:=true", "--json")
-    assert code == 0
+def test_inspect_bundled_robot_json():
+    code, out, err = astuple(invoke(["inspect", "mobot", "lidar:=true", "--json"]))
+    assert code == 0 and err == ""
     info = json.loads(out)
     assert info["root_link"] == "base_footprint"
     assert info["links"] == 6 and info["joints"] == 5
@@ -40,46 +35,46 @@ def test_inspect_bundled_robot_json(capsys):
     assert info["total_mass"] == pytest.approx(4.821, abs=1e-3)
 
 
-def test_inspect_without_lidar_has_no_lidar_link(capsys):
-    code, out, _ = mobot(capsys, "inspect", "mobot", "--json")
-    assert code == 0
+def test_inspect_without_lidar_has_no_lidar_link():
+    code, out, err = astuple(invoke(["inspect", "mobot", "--json"]))
+    assert code == 0 and err == ""
     info = json.loads(out)
     assert "lidar_link" not in tree_links(info["tree"])
     assert info["total_mass"] == pytest.approx(4.651, abs=1e-3)
 
 
-def test_inspect_text_shows_tree_and_drive(capsys):
-    code, out, _ = mobot(capsys, "inspect", "mobot")
-    assert code == 0
+def test_inspect_text_shows_tree_and_drive():
+    code, out, err = astuple(invoke(["inspect", "mobot"]))
+    assert code == 0 and err == ""
     assert "left_wheel  (continuous joint left_wheel_joint, 0.3 kg)" in out
     assert "wheel radius 0.0500 m" in out
 
 
-def test_xacro_prints_expanded_urdf_with_args(capsys):
-    code, out, _ = mobot(capsys, "xacro", "mobot", "lidar:=true")
-    assert code == 0
+def test_xacro_prints_expanded_urdf_with_args():
+    code, out, err = astuple(invoke(["xacro", "mobot", "lidar:=true"]))
+    assert code == 0 and err == ""
     assert out.lstrip().startswith("<?xml") and "xacro:" not in out
     assert '<link name="lidar_link">' in out
 
 
-def test_xacro_bad_argument_syntax(capsys):
-    code, out, err = mobot(capsys, "xacro", "mobot", "lidar=true")
+def test_xacro_bad_argument_syntax():
+    code, out, err = astuple(invoke(["xacro", "mobot", "lidar=true"]))
     assert code == 2 and out == ""
     assert err == "mobot: error: argument 'lidar=true' is not NAME:=VALUE. e.g. lidar:=true\n"
 
 
-def test_check_corpus_robot_and_its_notices(corpus, capsys, monkeypatch):
+def test_check_corpus_robot_and_its_notices(corpus, monkeypatch):
     monkeypatch.setenv("MOBOT_RESOURCE_PATH", str(corpus / "turtlebot3"))
-    code, out, err = mobot(capsys, "check", corpus / BURGER)
+    code, out, err = astuple(invoke(["check", corpus / BURGER]))
     assert code == 0
     assert out == f"ok: robot 'turtlebot3_burger' ({corpus / BURGER})\n"
     assert "link 'base_footprint' has no <inertial>" in err
 
 
-def test_check_robot_with_missing_meshes_fails(corpus, capsys, monkeypatch):
+def test_check_robot_with_missing_meshes_fails(corpus, monkeypatch):
     path = corpus / "turtlebot3__main/turtlebot3_description/urdf/turtlebot3_burger.urdf"
     monkeypatch.setenv("MOBOT_RESOURCE_PATH", str(corpus / "turtlebot3__main"))
-    code, out, err = mobot(capsys, "check", path)
+    code, out, err = astuple(invoke(["check", path]))
     assert code == 2 and out == ""
     assert "burger_base.stl" in err and "cannot be found" in err
 

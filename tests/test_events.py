@@ -5,11 +5,12 @@ from __future__ import annotations
 import csv
 import json
 import textwrap
+from dataclasses import astuple
 from pathlib import Path
 
 import pytest
 
-from mobot_cli.cli import _dispatch
+from mobot_cli.cli import Outcome, invoke
 from mobot_cli.errors import ScenarioError
 from mobot_cli.run.prepare import prepare
 
@@ -31,7 +32,7 @@ def scenario(tmp_path: Path, body: str) -> Path:
 @pytest.fixture(scope="module")
 def events_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("events") / "run"
-    assert _dispatch(["run", str(EVENTS), "--out", str(out), "--quiet"]) == 0
+    assert invoke(["run", str(EVENTS), "--out", str(out), "--quiet"]) == Outcome(0, "", "")
     return out
 
 
@@ -101,13 +102,13 @@ def test_bad_events(tmp_path, body, message):
     assert message in str(err.value)
 
 
-def test_a_spawn_event_into_another_robot_stops_the_run_with_the_event_time(tmp_path, capsys):
+def test_a_spawn_event_into_another_robot_stops_the_run_with_the_event_time(tmp_path):
     path = scenario(tmp_path, """
         robots: [{name: a}]
         events: [{at: 1.0, spawn: {name: b, pose: {x: 0.05}}}]
     """)
-    code = _dispatch(["run", str(path), "--out", str(tmp_path / "out"), "--quiet"])
-    err = capsys.readouterr().err
+    code, out, err = astuple(invoke(["run", path, "--out", tmp_path / "out", "--quiet"]))
+    assert out == ""
     assert code == 2
     assert err.startswith("mobot: error: event at 1 s: robot 'b' spawned at ")
     assert "into robot 'a'" in err

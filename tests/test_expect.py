@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import astuple
 from pathlib import Path
 
 import pytest
 
-from mobot_cli.cli import _dispatch
+from mobot_cli.cli import invoke
 from mobot_cli.run.expect import Checker
 from mobot_cli.run.prepare import prepare
 from mobot_cli.run.timeline import Sample
@@ -19,14 +20,8 @@ REPO = Path(__file__).resolve().parent.parent
 CHECKED = REPO / "scenarios" / "expectations.yaml"
 
 
-def run(capsys, *args) -> tuple[int, str, str]:
-    code = _dispatch([str(a) for a in args])
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
-
-
-def test_bundled_expectations_pass_and_are_in_the_summary(capsys, tmp_path):
-    code, out, err = run(capsys, "run", CHECKED, "--out", tmp_path / "r")
+def test_bundled_expectations_pass_and_are_in_the_summary(tmp_path):
+    code, out, err = astuple(invoke(["run", CHECKED, "--out", tmp_path / "r"]))
     assert code == 0, err
     block = json.loads((tmp_path / "r" / "summary.json").read_text())["expectations"]
     assert (block["passed"], block["failed"]) == (6, 0)
@@ -37,8 +32,9 @@ def test_bundled_expectations_pass_and_are_in_the_summary(capsys, tmp_path):
     assert err == ""
 
 
-def test_a_failed_expectation_exits_1_and_says_robot_expected_and_happened(capsys, tmp_path):
-    code, out, err = run(capsys, "run", CHECKED, "--out", tmp_path / "r", "--quiet", "--set", "expect.1.within.x=2.0")
+def test_a_failed_expectation_exits_1_and_says_robot_expected_and_happened(tmp_path):
+    code, out, err = astuple(invoke(["run", CHECKED, "--out", tmp_path / "r", "--quiet",
+                                     "--set", "expect.1.within.x=2.0"]))
     assert code == 1
     assert out == ""
     assert err.startswith("mobot: expectation failed: robot 'mobot' was expected to be within 0.05 m of (2, 0.75) "
@@ -52,14 +48,14 @@ def test_a_failed_expectation_exits_1_and_says_robot_expected_and_happened(capsy
     assert 0.95 < float(failed["happened"].split(", ")[-1].split(" m")[0]) < 1.05  # 1 m short of x = 2
 
 
-def test_checks_after_a_shortened_run_fail_saying_so(capsys, tmp_path):
-    code, _, err = run(capsys, "run", CHECKED, "--out", tmp_path / "r", "--quiet", "--duration", "3")
-    assert code == 1
+def test_checks_after_a_shortened_run_fail_saying_so(tmp_path):
+    code, out, err = astuple(invoke(["run", CHECKED, "--out", tmp_path / "r", "--quiet", "--duration", "3"]))
+    assert code == 1 and out == ""
     assert ("robot 'mobot' was expected to be inside x 0.95..1.05, y -0.05..0.05 at 4.5 s; "
             "it was not checked: the run ended at 3 s") in err
 
 
-def test_collisions_between_robots_are_counted_and_expected(capsys, tmp_path):
+def test_collisions_between_robots_are_counted_and_expected(tmp_path):
     scenario = tmp_path / "meet.yaml"
     scenario.write_text("""version: 1
 name: meet
@@ -73,8 +69,8 @@ robots:
 expect:
   - {robot: all, collisions: 0}
 """)
-    code, _, err = run(capsys, "run", scenario, "--out", tmp_path / "r", "--quiet")
-    assert code == 1
+    code, out, err = astuple(invoke(["run", scenario, "--out", tmp_path / "r", "--quiet"]))
+    assert code == 1 and out == ""
     assert err.splitlines() == [
         "mobot: expectation failed: robot 'a' was expected to have at most 0 collisions by the end; it had 1 collision",
         "mobot: expectation failed: robot 'b' was expected to have at most 0 collisions by the end; it had 1 collision"]
@@ -174,10 +170,10 @@ def test_all_checks_each_robot_and_a_deleted_robot_is_not_within():
     ("{robot: mobot, colisions: 0}", "unknown key 'colisions'. Did you mean 'collisions'?"),
     ("{robot: mobot, odom_error: -1}", "key 'expect[0].odom_error'"),
 ])
-def test_bad_expectations_are_located_errors(text, message, capsys, tmp_path):
+def test_bad_expectations_are_located_errors(text, message, tmp_path):
     scenario = tmp_path / "bad.yaml"
     scenario.write_text(f"version: 1\nduration: 2\nrobots:\n  - name: mobot\nexpect:\n  - {text}\n")
-    code, out, err = run(capsys, "check", scenario)
+    code, out, err = astuple(invoke(["check", scenario]))
     assert code == 2 and out == ""
     assert err.startswith(f"mobot: error: {scenario}:6, key 'expect[0]")
     assert message in err

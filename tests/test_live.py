@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from live_server import REPO, LiveProcess
-from mobot_cli.cli import _dispatch
+from mobot_cli.cli import invoke
 
 BAD_ROBOTS = REPO / "tests" / "bad" / "robots"
 TUTORIAL = [(0.0, 0.0), (1.0, 1.0), (2.0, 0.0), (1.0, 2.0), (0.0, 2.0)]
@@ -33,14 +33,13 @@ def blocker(live):
 
 
 @pytest.fixture
-def mobot(live, capsys):
+def mobot(live):
     """Run one CLI command against the live server: (exit code, stdout, stderr)."""
 
     def run(*args: str) -> tuple[int, str, str]:
-        code = _dispatch([str(a) for a in args] + ["--endpoint", live.endpoint])
-        captured = capsys.readouterr()
-        assert "Traceback" not in captured.err
-        return code, captured.out, captured.err
+        done = invoke([*args, "--endpoint", live.endpoint])
+        assert "Traceback" not in done.stderr
+        return done.exit_code, done.stdout, done.stderr
 
     return run
 
@@ -166,9 +165,10 @@ def test_bad_names_and_formats(mobot, tmp_path):
     assert code == 2 and err.startswith("mobot: error: UNSUPPORTED_FORMAT: ")
 
 
-def test_spawn_from_text_with_args_quaternion_and_reference_frame(mobot, capsys):
-    assert _dispatch(["xacro", "mobot", "lidar:=true"]) == 0
-    urdf = capsys.readouterr().out
+def test_spawn_from_text_with_args_quaternion_and_reference_frame(mobot):
+    expanded = invoke(["xacro", "mobot", "lidar:=true"])
+    assert expanded.exit_code == 0 and expanded.stderr == ""
+    urdf = expanded.stdout
     reply = spawn_json(mobot, "texty", "--string", urdf, "-x", "12", "-y", "0")
     assert reply["pose"]["x"] == pytest.approx(12.0, abs=2e-3)
     xacro = spawn_json(mobot, "lidar_bot", "--file", "mobot", "lidar:=true", "-x", "14", "-y", "0",
@@ -188,6 +188,13 @@ def test_spawn_from_stdin(live, tmp_path):
                            "--endpoint", live.endpoint], input=urdf, capture_output=True, text=True, cwd=REPO)
     assert done.returncode == 0, done.stderr
     assert done.stdout.startswith("spawned 'piped' in /piped at x=16.000 y=0.000")
+
+
+def test_spawn_reads_the_environments_stdin(live):
+    urdf = invoke(["xacro", "mobot"]).stdout
+    done = invoke(["spawn", "from_stdin", "--stdin", "-x", "18", "--endpoint", live.endpoint], stdin=urdf)
+    assert (done.exit_code, done.stderr) == (0, "")
+    assert done.stdout.startswith("spawned 'from_stdin' in /from_stdin at x=18.000 y=0.000")
 
 
 def test_no_server_exits_4_and_says_how_to_start_one(tmp_path):

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from live_server import REPO, LiveProcess, wait_for_step
-from mobot_cli.cli import _dispatch
+from mobot_cli.cli import Outcome, invoke
 from mobot_cli.errors import RequestRefused
 
 EVENTS = REPO / "scenarios" / "events.yaml"
@@ -30,7 +30,7 @@ def cache(tmp_path_factory) -> Path:
     return tmp_path_factory.getbasetemp() / "mobot-cache"
 
 
-def test_scenario_events_play_live_as_in_a_run(tmp_path, cache, capsys):
+def test_scenario_events_play_live_as_in_a_run(tmp_path, cache):
     """Serving events.yaml logs, step for step, the rows `mobot run` writes for it."""
     server = LiveProcess(str(EVENTS), "--fast", cache_dir=cache, out=tmp_path / "live")
     try:
@@ -38,12 +38,13 @@ def test_scenario_events_play_live_as_in_a_run(tmp_path, cache, capsys):
             wait_for_step(client, 6 * 240 + 10)
             names = [robot["name"] for robot in client.list()]
         assert names == ["mobot_0", "late"]  # mobot_1 deleted at 3 s, late spawned at 3.5 s
-        assert _dispatch(["stop", "--endpoint", server.endpoint]) == 0
-        assert capsys.readouterr().out.startswith(f"stopped the live world at {server.endpoint} at t=")
+        stopped = invoke(["stop", "--endpoint", server.endpoint])
+        assert (stopped.exit_code, stopped.stderr) == (0, "")
+        assert stopped.stdout.startswith(f"stopped the live world at {server.endpoint} at t=")
         assert server.wait() == 0, server.output()
     finally:
         server.kill()
-    assert _dispatch(["run", str(EVENTS), "--out", str(tmp_path / "run"), "--quiet"]) == 0
+    assert invoke(["run", str(EVENTS), "--out", str(tmp_path / "run"), "--quiet"]) == Outcome(0, "", "")
     live, run = tmp_path / "live", tmp_path / "run"
     for name in ("mobot_0", "mobot_1", "late"):
         ran = (run / "odom" / f"{name}.csv").read_text().splitlines()

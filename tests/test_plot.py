@@ -7,11 +7,12 @@ import math
 import shutil
 import subprocess
 import sys
+from dataclasses import astuple
 
 import pytest
 from PIL import Image
 
-from mobot_cli.cli import _dispatch
+from mobot_cli.cli import Outcome, invoke
 from mobot_cli.plot.floorplan import BAND, convex_hull, floor_plan
 from mobot_cli.plot.render import FLOOR, PALETTE, Track, dash_runs, nice_step, render
 from mobot_cli.sim.plan import StaticBody, StaticShape, WorldPlan
@@ -41,7 +42,7 @@ def plot_run(tmp_path_factory):
     base = tmp_path_factory.mktemp("plot")
     (base / "s.yaml").write_text(SCENARIO)
     out = base / "run"
-    assert _dispatch(["run", str(base / "s.yaml"), "--out", str(out), "--quiet"]) == 0
+    assert invoke(["run", base / "s.yaml", "--out", out, "--quiet"]) == Outcome(0, "", "")
     return out
 
 
@@ -105,10 +106,9 @@ def test_plot_helpers():
     assert convex_hull([(0, 0), (1, 0), (1, 1), (0, 1), (0.5, 0.5)]) == [(0, 0), (1, 0), (1, 1), (0, 1)]
 
 
-def test_mobot_plot_redraws_a_run_and_overlays_a_sweep(plot_run, tmp_path, capsys):
+def test_mobot_plot_redraws_a_run_and_overlays_a_sweep(plot_run, tmp_path):
     out = tmp_path / "again.png"
-    assert _dispatch(["plot", str(plot_run), "--out", str(out)]) == 0
-    assert capsys.readouterr().out == f"wrote {out} (2 paths)\n"
+    assert invoke(["plot", plot_run, "--out", out]) == Outcome(0, f"wrote {out} (2 paths)\n", "")
     redrawn, original = Image.open(out).convert("RGB"), Image.open(plot_run / "trajectory.png").convert("RGB")
     assert redrawn.size == original.size
     assert color_pixels(redrawn, PALETTE[0]) == pytest.approx(color_pixels(original, PALETTE[0]), rel=0.05)
@@ -117,58 +117,63 @@ def test_mobot_plot_redraws_a_run_and_overlays_a_sweep(plot_run, tmp_path, capsy
         shutil.copytree(plot_run, sweep / "runs" / f"000{i}")
     runs = [{"run": i, "folder": f"runs/000{i}", "params": {"robots.r_0.pose.x": str(i)}} for i in range(3)]
     (sweep / "sweep.json").write_text(json.dumps({"runs": runs}))
-    assert _dispatch(["plot", str(sweep)]) == 0
-    assert capsys.readouterr().out == f"wrote {sweep / 'trajectory.png'} (6 paths from 3 runs)\n"
+    assert invoke(["plot", sweep]) == Outcome(0, f"wrote {sweep / 'trajectory.png'} (6 paths from 3 runs)\n", "")
     assert color_pixels(Image.open(sweep / "trajectory.png").convert("RGB"), PALETTE[5]) > 400
     from mobot_cli.run.replot import _swept_values
 
     assert _swept_values(sweep) == {"0000": "x=0", "0001": "x=1", "0002": "x=2"}
 
 
-def test_mobot_plot_refuses_other_folders(tmp_path, capsys):
-    assert _dispatch(["plot", str(tmp_path)]) == 2
-    assert capsys.readouterr().err == (f"mobot: error: '{tmp_path}' is neither a run folder nor a sweep folder. "
-                                       "Give the folder that mobot run --out or mobot sweep --out wrote.\n")
+def test_mobot_plot_refuses_other_folders(tmp_path):
+    assert invoke(["plot", tmp_path]) == Outcome(2, "", f"mobot: error: '{tmp_path}' is neither a run folder nor "
+                                                 "a sweep folder. Give the folder that mobot run --out or mobot "
+                                                 "sweep --out wrote.\n")
 
 
-def test_mobot_check_says_how_a_run_folder_ended(plot_run, tmp_path, capsys):
-    assert _dispatch(["check", str(plot_run)]) == 0
-    assert capsys.readouterr().out == (f"ok: run 'plottest' in {plot_run}: 4 s simulated, 2 robot(s), "
-                                       "every file in place\n")
+def test_mobot_check_says_how_a_run_folder_ended(plot_run, tmp_path):
+    assert invoke(["check", plot_run]) == Outcome(0, f"ok: run 'plottest' in {plot_run}: 4 s simulated, 2 robot(s), "
+                                                     "every file in place\n", "")
     broken = shutil.copytree(plot_run, tmp_path / "broken")
     (broken / "trajectory.png").unlink()
-    assert _dispatch(["check", str(broken)]) == 2
-    assert capsys.readouterr().out.startswith(f"incomplete: run 'plottest' in {broken}: trajectory.png is missing\n")
+    code, out, err = astuple(invoke(["check", broken]))
+    assert (code, err) == (2, "")  # a verdict, not an error
+    assert out.startswith(f"incomplete: run 'plottest' in {broken}: trajectory.png is missing\n")
     summary = json.loads((broken / "summary.json").read_text())
     summary.update(status="fault", error="robot 'r_0' left the world")
     (broken / "summary.json").write_text(json.dumps(summary))
-    assert _dispatch(["check", str(broken), "--json"]) == 3
-    result = json.loads(capsys.readouterr().out)
+    code, out, err = astuple(invoke(["check", broken, "--json"]))
+    assert (code, err) == (3, "")
+    result = json.loads(out)
     assert result["status"] == "fault"
     assert result["problems"] == ["summary.json says 'fault': robot 'r_0' left the world"]
     summary.update(status="ok", error=None, expectations={"passed": 1, "failed": 2, "results": []})
     (broken / "summary.json").write_text(json.dumps(summary))
     shutil.copy(plot_run / "trajectory.png", broken)
-    assert _dispatch(["check", str(broken)]) == 1
-    assert "failed: run 'plottest'" in capsys.readouterr().out
+    code, out, err = astuple(invoke(["check", broken]))
+    assert (code, err) == (1, "")
+    assert out.startswith(f"failed: run 'plottest' in {broken}")
 
 
-def test_run_prints_a_table_per_robot_and_json(plot_run, tmp_path, capsys):
+def test_run_prints_a_table_per_robot_and_json(plot_run, tmp_path):
     scenario = plot_run.parent / "s.yaml"
-    assert _dispatch(["run", str(scenario), "--out", str(tmp_path / "t")]) == 0
-    text = capsys.readouterr().out
+    code, text, err = astuple(invoke(["run", scenario, "--out", tmp_path / "t"]))
+    assert (code, err) == (0, "")
+    table = [line for line in text.splitlines() if line[:1] in "┏┃┡│└"]
+    assert len(table) == 6 and max(len(line) for line in table) <= 80  # fits pipes and CI logs
     for word in ("plottest: 4 s simulated", "real time", "distance", "yaw", "odom error", "collisions",
                  "r_0", "r_1"):
         assert word in text
-    assert _dispatch(["run", str(scenario), "--out", str(tmp_path / "j"), "--json"]) == 0
-    summary = json.loads(capsys.readouterr().out)
+    code, out, err = astuple(invoke(["run", scenario, "--out", tmp_path / "j", "--json"]))
+    assert (code, err) == (0, "")
+    summary = json.loads(out)
     assert sorted(summary["robots"]) == ["r_0", "r_1"] and summary["status"] == "ok"
 
 
-def test_csv_only_run_imports_neither_rosbags_nor_matplotlib(plot_run, tmp_path):
-    args = ["run", str(plot_run.parent / "s.yaml"), "--out", str(tmp_path / "o"), "-q"]
-    code = ("import sys; from mobot_cli.cli import _dispatch; "
-            f"assert _dispatch({args!r}) == 0; "
-            "print(sorted(m for m in ('rosbags', 'matplotlib', 'PIL') if m in sys.modules))")
+def test_csv_only_run_imports_neither_rosbags_nor_matplotlib_nor_rich(plot_run, tmp_path):
+    quiet = ["run", str(plot_run.parent / "s.yaml"), "--out", str(tmp_path / "o"), "-q"]
+    json_ = ["run", str(plot_run.parent / "s.yaml"), "--out", str(tmp_path / "j"), "--json"]
+    code = ("import sys; from mobot_cli.cli import invoke; "
+            f"assert invoke({quiet!r}).exit_code == 0; assert invoke({json_!r}).exit_code == 0; "
+            "print(sorted(m for m in ('rosbags', 'matplotlib', 'PIL', 'rich') if m in sys.modules))")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert done.stdout.strip() == "['PIL']"  # Pillow draws trajectory.png; nothing else is loaded

@@ -7,7 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from mobot_cli.cli import _dispatch
+from mobot_cli.cli import Outcome, invoke
 
 REPO = Path(__file__).resolve().parent.parent
 README = (REPO / "README.md").read_text()
@@ -25,7 +25,7 @@ def test_the_scenario_example_runs(tmp_path):
     example = next(b for b in re.findall(r"```yaml\n(.*?)```", README, re.S) if b.startswith("version: 1"))
     path = tmp_path / "example.yaml"
     path.write_text(example)
-    assert _dispatch(["run", str(path), "--out", str(tmp_path / "r"), "--quiet"]) == 0
+    assert invoke(["run", str(path), "--out", str(tmp_path / "r"), "--quiet"]) == Outcome(0, "", "")
     assert sorted(p.name for p in (tmp_path / "r" / "odom").iterdir()) == \
         ["mobot.csv", "mobot_0.csv", "mobot_1.csv", "mobot_2.csv"]
 
@@ -36,3 +36,13 @@ def test_the_error_example_is_what_mobot_prints():
                             capture_output=True, text=True, cwd=REPO, timeout=60)
     assert result.returncode == 2
     assert result.stderr == shown + "\n"
+
+
+def test_the_in_process_example_runs(tmp_path, monkeypatch):
+    """The Development section's invoke() example, run as written from a checkout-like folder."""
+    block = re.search(r"```python\n(.*?)```", README[README.index("## Development"):], re.S).group(1)
+    assert "invoke(" in block
+    (tmp_path / "scenarios").symlink_to(REPO / "scenarios")
+    monkeypatch.chdir(tmp_path)
+    exec(compile(block, "README.md", "exec"), {})
+    assert (tmp_path / "runs" / "api" / "summary.json").is_file() and (tmp_path / "runs" / "tty").is_dir()

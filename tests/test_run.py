@@ -5,11 +5,12 @@ from __future__ import annotations
 import csv
 import json
 import math
+from dataclasses import astuple
 from pathlib import Path
 
 import pytest
 
-from mobot_cli.cli import _dispatch
+from mobot_cli.cli import invoke
 from mobot_cli.run.prepare import prepare
 
 REPO = Path(__file__).resolve().parent.parent
@@ -18,9 +19,11 @@ HEADER = ("t,cmd_linear,cmd_angular,odom_x,odom_y,odom_yaw,odom_vx,odom_wz,"
           "true_x,true_y,true_z,true_roll,true_pitch,true_yaw,true_vx,true_wz\n")
 
 
-def mobot(*args: str, capsys=None) -> int:
-    code = _dispatch([str(a) for a in args])
-    return code
+def mobot(*args) -> int:
+    """Run a quiet command: it prints nothing, whatever its exit code."""
+    done = invoke(args)
+    assert (done.stdout, done.stderr) == ("", ""), done
+    return done.exit_code
 
 
 def rows(path: Path) -> list[dict[str, float]]:
@@ -115,11 +118,10 @@ def test_fleet_names_namespaces_and_poses(tmp_path):
     assert [r.pose.xyz[:2] for r in plan.robots] == [(0, 0), (1, 1), (2, 0), (1, 2), (0, 2)]
 
 
-def test_json_prints_the_summary(capsys, tmp_path):
-    code = _dispatch(["run", str(REPO / "scenarios" / "quickstart.yaml"), "--out", str(tmp_path / "r"),
-                      "--json", "--duration", "2"])
-    out = capsys.readouterr().out
-    assert code == 0
+def test_json_prints_the_summary(tmp_path):
+    code, out, err = astuple(invoke(["run", REPO / "scenarios" / "quickstart.yaml", "--out", tmp_path / "r",
+                                     "--json", "--duration", "2"]))
+    assert (code, err) == (0, "")
     summary = json.loads(out)
     assert summary["status"] == "ok" and summary["sim_time"] == 2.0
     assert summary == json.loads((tmp_path / "r" / "summary.json").read_text())
@@ -158,7 +160,7 @@ def test_a_warm_headless_run_imports_no_plotting_viewer_or_mesh_code(tmp_path):
     assert (tmp_path / "r" / "trajectory.png").stat().st_size > 10_000
 
 
-def test_a_robot_falling_out_of_the_world_is_a_simulation_fault(tmp_path, capsys):
+def test_a_robot_falling_out_of_the_world_is_a_simulation_fault(tmp_path):
     """Exit 3, a located one-line error, and a summary that says fault (not ok)."""
     (tmp_path / "void.sdf").write_text(
         '<?xml version="1.0"?><sdf version="1.6"><world name="void"><model name="pillar">'
@@ -167,9 +169,8 @@ def test_a_robot_falling_out_of_the_world_is_a_simulation_fault(tmp_path, capsys
     scenario = tmp_path / "s.yaml"
     scenario.write_text("version: 1\nduration: 5\nworld: void.sdf\nrobots:\n"
                         "  - {name: faller, pose: {x: 0, y: 0, z: 1.0}}\n")
-    code = _dispatch(["run", str(scenario), "--out", str(tmp_path / "r"), "--quiet"])
-    err = capsys.readouterr().err
-    assert code == 3
+    code, out, err = astuple(invoke(["run", scenario, "--out", tmp_path / "r", "--quiet"]))
+    assert (code, out) == (3, "")
     assert err.endswith("robot 'faller' fell out of the world (z = -10.1 m) at step 360. "
                         "Is there a floor under its spawn pose?\n")
     summary = json.loads((tmp_path / "r" / "summary.json").read_text())

@@ -10,11 +10,12 @@ import signal
 import subprocess
 import sys
 import time
+from dataclasses import astuple
 from pathlib import Path
 
 import pytest
 
-from mobot_cli.cli import _dispatch
+from mobot_cli.cli import Outcome, invoke
 from mobot_cli.sweep.executor_local import LocalExecutor
 from mobot_cli.sweep.expand import derive_seed, expand
 from mobot_cli.sweep.runner import run_sweep
@@ -57,8 +58,13 @@ def scenario(tmp_path_factory) -> Path:
 @pytest.fixture(scope="module")
 def two_jobs(scenario) -> Path:
     out = scenario.parent / "jobs2"
-    assert _dispatch(["sweep", str(scenario), *GRID, "--jobs", "2", "--out", str(out), "--quiet"]) == 1
+    assert invoke(["sweep", scenario, *GRID, "--jobs", "2", "--out", out, "--quiet"]) == Outcome(1, "", failed(1, out))
     return out
+
+
+def failed(runs: int, out: Path) -> str:
+    """What a quiet sweep prints when runs failed."""
+    return f"mobot: {runs} of 6 runs failed; see {out}/results.csv\n"
 
 
 def test_grid_rows_match_speed_times_time(two_jobs):
@@ -85,7 +91,7 @@ def test_grid_rows_match_speed_times_time(two_jobs):
 
 def test_one_job_gives_the_same_results_as_two(scenario, two_jobs, tmp_path):
     out = tmp_path / "jobs1"
-    assert _dispatch(["sweep", str(scenario), *GRID, "--jobs", "1", "--out", str(out), "--quiet"]) == 1
+    assert invoke(["sweep", scenario, *GRID, "--jobs", "1", "--out", out, "--quiet"]) == Outcome(1, "", failed(1, out))
     assert without_wall_time(rows(out)) == without_wall_time(rows(two_jobs))
     for run in ("0000", "0005"):
         for name in ("odom/mobot.csv", "scenario.yaml"):
@@ -99,14 +105,14 @@ def test_resume_runs_only_what_is_missing(scenario, two_jobs, tmp_path):
     (out / "results.csv").write_text("".join(lines[:3]) + lines[3][:20])  # runs 0, 1 and a torn line
     kept = (out / "runs" / "0000" / "odom" / "mobot.csv").stat().st_mtime_ns
     shutil.rmtree(out / "runs" / "0004")
-    assert _dispatch(["sweep", str(scenario), *GRID, "--out", str(out), "--resume", "--quiet"]) == 1
+    assert invoke(["sweep", scenario, *GRID, "--out", out, "--resume", "--quiet"]) == Outcome(1, "", failed(1, out))
     assert without_wall_time(rows(out)) == without_wall_time(rows(two_jobs))
     assert (out / "runs" / "0000" / "odom" / "mobot.csv").stat().st_mtime_ns == kept  # not run again
     assert (out / "runs" / "0004" / "odom" / "mobot.csv").is_file()  # run again
     # Resuming with other values is refused before anything runs.
-    code = _dispatch(["sweep", str(scenario), "--grid", "robots.mobot.commands.0.linear=0.3", "--out", str(out),
-                      "--resume", "--quiet"])
-    assert code == 2
+    code, stdout, err = astuple(invoke(["sweep", scenario, "--grid", "robots.mobot.commands.0.linear=0.3",
+                                        "--out", out, "--resume", "--quiet"]))
+    assert (code, stdout) == (2, "") and err.startswith("mobot: error: ")
 
 
 def faulty_runner(task):
@@ -134,13 +140,13 @@ def test_crashing_hanging_and_raising_runs_fail_alone(scenario, tmp_path):
     assert len(report.failed) == 3
 
 
-def test_a_run_that_raises_is_a_failed_row(tmp_path, capsys):
+def test_a_run_that_raises_is_a_failed_row(tmp_path):
     path = tmp_path / "two.yaml"
     path.write_text("version: 1\nname: two\nduration: 1\nrobots:\n  - name: a\n  - name: b\n    pose: {x: 2}\n")
     out = tmp_path / "out"
     # b on top of a cannot be spawned: found in the worker, not while preparing.
-    assert _dispatch(["sweep", str(path), "--grid", "robots.b.pose.x=2,0", "--out", str(out), "--quiet"]) == 1
-    assert "mobot: 1 of 2 runs failed; see" in capsys.readouterr().err
+    assert invoke(["sweep", path, "--grid", "robots.b.pose.x=2,0", "--out", out, "--quiet"]) == \
+        Outcome(1, "", f"mobot: 1 of 2 runs failed; see {out}/results.csv\n")
     table = rows(out)
     assert [(r["status"], r["failure"]) for r in table] == [("passed", ""), ("failed", "error")]
     assert table[1]["reason"].startswith("robot 'b' spawned at x=0.000, y=0.000") and "into robot 'a'" in table[1]["reason"]
@@ -213,7 +219,7 @@ def test_seeds_and_value_splitting_are_stable():
     assert split_values("0, 0.5,[1, 2],{a: 1},'x,y'") == ["0", "0.5", "[1, 2]", "{a: 1}", "'x,y'"]
 
 
-def test_a_sweep_file_with_zip_set_and_grid(tmp_path, capsys):
+def test_a_sweep_file_with_zip_set_and_grid(tmp_path):
     (tmp_path / "speed.yaml").write_text(SPEED)
     sweep_file = tmp_path / "poses.yaml"
     sweep_file.write_text("""scenario: speed.yaml
@@ -226,8 +232,9 @@ zip:
   robots.mobot.pose.y: [0, 1]
 """)
     out = tmp_path / "out"
-    assert _dispatch(["sweep", str(sweep_file), "--out", str(out), "--json"]) == 0
-    printed = json.loads(capsys.readouterr().out)
+    code, stdout, err = astuple(invoke(["sweep", sweep_file, "--out", out, "--json"]))
+    assert (code, err) == (0, "")
+    printed = json.loads(stdout)
     assert printed["name"] == "poses" and printed["seed"] == 9
     table = rows(out)
     assert printed["results"] == table
@@ -255,28 +262,28 @@ zip:
     (["--grid", "duration=1,2", "--executor", "dask"], "mobot: error: --executor: unknown executor 'dask'."),
     (["--grid", "settle=0.5,1"], "(in run 1: settle=1)"),
 ])
-def test_bad_sweep_input_is_exit_2_before_anything_runs(args, message, scenario, tmp_path, capsys):
-    code = _dispatch(["sweep", str(scenario), *args, "--out", str(tmp_path / "out")])
-    err = capsys.readouterr().err
-    assert code == 2
+def test_bad_sweep_input_is_exit_2_before_anything_runs(args, message, scenario, tmp_path):
+    code, out, err = astuple(invoke(["sweep", scenario, *args, "--out", tmp_path / "out"]))
+    assert (code, out) == (2, "")
     assert message in err
     assert err.count("\n") == 1 and "Traceback" not in err
     assert not (tmp_path / "out").exists()
 
 
-def test_a_sweep_file_naming_a_missing_scenario(tmp_path, capsys):
+def test_a_sweep_file_naming_a_missing_scenario(tmp_path):
     sweep_file = tmp_path / "s.yaml"
     sweep_file.write_text("# a sweep\nscenario: nowhere.yaml\ngrid: {duration: [1, 2]}\n")
-    assert _dispatch(["sweep", str(sweep_file), "--out", str(tmp_path / "out")]) == 2
-    assert capsys.readouterr().err == (f"mobot: error: {sweep_file}:2, key 'scenario': scenario file not found: "
-                                       f"{tmp_path}/nowhere.yaml. Paths in a sweep file are relative to the sweep file.\n")
+    assert invoke(["sweep", sweep_file, "--out", tmp_path / "out"]) == Outcome(2, "", (
+        f"mobot: error: {sweep_file}:2, key 'scenario': scenario file not found: {tmp_path}/nowhere.yaml. "
+        "Paths in a sweep file are relative to the sweep file.\n"))
     assert not (tmp_path / "out").exists()
 
 
-def test_an_existing_sweep_folder_is_not_overwritten(two_jobs, scenario, capsys):
+def test_an_existing_sweep_folder_is_not_overwritten(two_jobs, scenario):
     before = (two_jobs / "results.csv").read_bytes()
-    assert _dispatch(["sweep", str(scenario), *GRID, "--out", str(two_jobs)]) == 2
-    assert "already holds a sweep. Add --resume to finish it" in capsys.readouterr().err
+    code, out, err = astuple(invoke(["sweep", scenario, *GRID, "--out", two_jobs]))
+    assert (code, out) == (2, "") and err.startswith("mobot: error: ")
+    assert "already holds a sweep. Add --resume to finish it" in err
     assert (two_jobs / "results.csv").read_bytes() == before
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from mobot_cli.cli import _dispatch
+from mobot_cli.cli import Outcome, invoke
 
 pytest.importorskip("ray", reason="Ray is an optional extra: pip install 'mobot-cli[ray]'")
 
@@ -33,9 +33,11 @@ def test_ray_and_local_sweeps_agree(tmp_path):
     scenario.write_text(SCENARIO)
     grid = ["--grid", "robots.mobot.commands.0.linear=0.1,0.4", "--grid", "robots.mobot.pose.y=0,1"]
     local, ray = tmp_path / "local", tmp_path / "ray"
-    assert _dispatch(["sweep", str(scenario), *grid, "--jobs", "2", "--out", str(local), "--quiet"]) == 1
-    assert _dispatch(["sweep", str(scenario), *grid, "--executor", "ray", "--jobs", "2", "--out", str(ray),
-                      "--quiet"]) == 1
+    failed = "mobot: 2 of 4 runs failed; see {}/results.csv\n"
+    assert invoke(["sweep", scenario, *grid, "--jobs", "2", "--out", local, "--quiet"]) == \
+        Outcome(1, "", failed.format(local))
+    assert invoke(["sweep", scenario, *grid, "--executor", "ray", "--jobs", "2", "--out", ray, "--quiet"]) == \
+        Outcome(1, "", failed.format(ray))
     table = rows(ray)
     assert table == rows(local)
     assert [r["status"] for r in table] == ["passed", "passed", "failed", "failed"]  # 0.4 m/s goes 0.4 m
@@ -45,11 +47,11 @@ def test_ray_and_local_sweeps_agree(tmp_path):
         assert (ray / "runs" / run / "summary.json").is_file()
 
 
-def test_an_unreachable_ray_address_is_bad_input(tmp_path, capsys):
+def test_an_unreachable_ray_address_is_bad_input(tmp_path):
     scenario = tmp_path / "speed.yaml"
     scenario.write_text(SCENARIO)
-    code = _dispatch(["sweep", str(scenario), "--grid", "duration=1,2", "--executor", "ray", "--address",
-                      "127.0.0.1:1", "--out", str(tmp_path / "out")])
-    assert code == 2
-    assert capsys.readouterr().err.startswith("mobot: error: --address: cannot reach a Ray cluster at 127.0.0.1:1: ")
+    done = invoke(["sweep", scenario, "--grid", "duration=1,2", "--executor", "ray", "--address", "127.0.0.1:1",
+                   "--out", tmp_path / "out"])
+    assert (done.exit_code, done.stdout) == (2, "")
+    assert done.stderr.startswith("mobot: error: --address: cannot reach a Ray cluster at 127.0.0.1:1: ")
     assert not (tmp_path / "out").exists()

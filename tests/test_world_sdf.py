@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import math
+from dataclasses import astuple
 from pathlib import Path
 
 import pytest
 
 from mobot_cli.assets import world_build
 from mobot_cli.assets.world_load import load_world
-from mobot_cli.cli import _dispatch
+from mobot_cli.cli import invoke
 from mobot_cli.errors import WorldError
 
 CONFIG = '<?xml version="1.0"?><model><name>{name}</name><sdf version="1.5">old.sdf</sdf>' \
@@ -276,10 +277,10 @@ def test_warm_load_reads_the_cache_and_an_edit_invalidates_it(tmp_path, monkeypa
     assert len(calls) == 1
 
 
-def test_mobot_check_prints_the_world_summary(tmp_path, capsys):
+def test_mobot_check_prints_the_world_summary(tmp_path):
     path = world_file(tmp_path, box_model("crate", "1 2 1.5 0 0 0") + "<light name='a' type='point'/>")
-    assert _dispatch(["check", str(path)]) == 0
-    out, err = capsys.readouterr()
+    code, out, err = astuple(invoke(["check", path]))
+    assert code == 0
     assert out.splitlines() == [
         f"ok: world 'w' ({path})",
         "  models   1 (1 static)",
@@ -290,7 +291,8 @@ def test_mobot_check_prints_the_world_summary(tmp_path, capsys):
         "  ignored  light",
         "  extent   x 0.50..1.50, y 1.00..3.00, z 0.00..3.00 m (1.00 x 2.00 x 3.00 m)"]
     assert "ignored 1 light" in err
-    assert _dispatch(["check", str(tmp_path / "nope.world")]) == 2
+    missing = invoke(["check", tmp_path / "nope.world"])
+    assert (missing.exit_code, missing.stdout) == (2, "") and missing.stderr.startswith("mobot: error: ")
 
 
 def _collada_box(meter: float, size, lift: float) -> str:

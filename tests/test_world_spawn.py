@@ -12,7 +12,7 @@ import trimesh
 
 from mobot_cli.assets.description import load_robot
 from mobot_cli.assets.world_load import load_world
-from mobot_cli.cli import _dispatch
+from mobot_cli.cli import Outcome, invoke
 from mobot_cli.errors import ScenarioError, SpawnError
 from mobot_cli.run.prepare import prepare
 from mobot_cli.sim.plan import Physics, RobotPlan, SpawnPose
@@ -103,7 +103,7 @@ def test_dolly_in_its_world_is_driven_by_name(corpus, tmp_path):
                                "duration: 6.0\nsettle: 1.0\nrobots:\n  - name: Dolly\n"
                                "    commands: [{at: 1.0, linear: 0.5, for: 4.0}]\n")
     out = tmp_path / "run"
-    assert _dispatch(["run", str(path), "--out", str(out), "--quiet"]) == 0
+    assert invoke(["run", str(path), "--out", str(out), "--quiet"]) == Outcome(0, "", "")
     with (out / "odom" / "Dolly.csv").open() as f:
         rows = list(csv.DictReader(f))
     assert float(rows[0]["true_z"]) == pytest.approx(0.33)  # the world's pose: it drops onto its wheels
@@ -112,7 +112,7 @@ def test_dolly_in_its_world_is_driven_by_name(corpus, tmp_path):
     resolved = (out / "scenario.yaml").read_text()
     assert "description" not in resolved.split("robots:")[1]  # still the world's own Dolly
     again = tmp_path / "again"
-    assert _dispatch(["run", str(out / "scenario.yaml"), "--out", str(again), "--quiet"]) == 0
+    assert invoke(["run", str(out / "scenario.yaml"), "--out", str(again), "--quiet"]) == Outcome(0, "", "")
     assert (again / "odom" / "Dolly.csv").read_bytes() == (out / "odom" / "Dolly.csv").read_bytes()
 
 
@@ -139,7 +139,7 @@ def test_sdf_model_files_are_robot_descriptions(corpus):
 
 def _summary_and_rows(tmp_path, name):
     out = tmp_path / name
-    assert _dispatch(["run", str(REPO / "scenarios" / f"{name}.yaml"), "--out", str(out), "--quiet"]) == 0
+    assert invoke(["run", str(REPO / "scenarios" / f"{name}.yaml"), "--out", str(out), "--quiet"]) == Outcome(0, "", "")
     with (out / "odom" / "mobot.csv").open() as f:
         rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
     return json.loads((out / "summary.json").read_text()), rows
@@ -161,15 +161,18 @@ def test_bookstore_scenario_stays_in_its_aisle(tmp_path):
     assert rows[-1]["true_x"] == pytest.approx(-1.5, abs=0.1)
 
 
-def test_skip_missing_flag_for_run_and_check(corpus, tmp_path, capsys):
+def test_skip_missing_flag_for_run_and_check(corpus, tmp_path):
     world = corpus / "aws-robomaker-bookstore-world/worlds/bookstore.world"
-    assert _dispatch(["check", str(world)]) == 2
-    assert _dispatch(["check", str(world), "--skip-missing"]) == 0
+    refused = invoke(["check", world])
+    assert (refused.exit_code, refused.stdout) == (2, "") and refused.stderr.startswith("mobot: error: ")
+    skipped = invoke(["check", world, "--skip-missing"])
+    assert skipped.exit_code == 0 and skipped.stdout.startswith("ok: world ")
+    assert "differs only in case" in skipped.stderr  # the left-out model, as a warning
     path = _scenario(tmp_path, f"world: {world}\nduration: 0.5\n")
-    assert _dispatch(["run", str(path), "--out", str(tmp_path / "no"), "--quiet"]) == 2
+    assert invoke(["run", path, "--out", tmp_path / "no", "--quiet"]) == Outcome(2, "", refused.stderr)
     assert not (tmp_path / "no").exists()
     out = tmp_path / "run"
-    assert _dispatch(["run", str(path), "--out", str(out), "--skip-missing"]) == 0
+    done = invoke(["run", path, "--out", out, "--skip-missing"])
+    assert done.exit_code == 0 and done.stdout.endswith(f"run folder: {out} (trajectory.png)\n")
     assert "skip_missing: true" in (out / "scenario.yaml").read_text()  # the rerun skips too
-    err = capsys.readouterr().err
-    assert "differs only in case" in err and "BookE_01_009" in err
+    assert "differs only in case" in done.stderr and "BookE_01_009" in done.stderr

@@ -1,13 +1,19 @@
 """The `mobot` command: one Typer app, one place that turns errors into exit codes.
 
+`main()` runs it on the process's streams; `invoke()` runs it on captured ones and returns
+the exit code and what it printed, for tests and scripts. Commands print only to the
+Environment they find in Typer's context object (`ctx.obj`).
+
 Command modules import heavy libraries (pybullet, pydantic, xacro) inside their functions
 so that `mobot --help` stays fast.
 """
 
 from __future__ import annotations
 
+import contextlib
 import sys
-from typing import Optional
+from dataclasses import dataclass, replace
+from typing import Iterable, Optional
 
 import typer
 
@@ -17,7 +23,8 @@ from mobot_cli.cli import plot as plot_command
 from mobot_cli.cli import sweep as sweep_command
 from mobot_cli.cli import cmd, delete, odom, serve, spawn, stop
 from mobot_cli.cli import list as list_command  # not `list`: that would shadow the builtin here
-from mobot_cli.cli.output import STATE, report_error
+from mobot_cli.cli.environment import Environment
+from mobot_cli.cli.output import interrupted, report_error
 from mobot_cli.errors import ExitCode, MobotError
 
 app = typer.Typer(
@@ -31,9 +38,9 @@ app = typer.Typer(
 )
 
 
-def _version(value: bool) -> None:
+def _version(ctx: typer.Context, value: bool) -> None:
     if value:
-        typer.echo(f"mobot {__version__}")
+        ctx.obj.stdout.write(f"mobot {__version__}\n")
         raise typer.Exit()
 
 
@@ -43,7 +50,8 @@ def _root(
     version: Optional[bool] = typer.Option(None, "--version", callback=_version, is_eager=True,
                                            help="Print the version and exit."),
 ) -> None:
-    STATE.traceback = traceback
+    # Declared here for parsing and --help; _execute has read --traceback already (_traceback_asked).
+    del traceback, version
 
 
 app.command("run")(run.run)
@@ -61,10 +69,34 @@ app.command("odom")(odom.odom)
 app.command("stop")(stop.stop)
 
 
+@dataclass(frozen=True)
+class Outcome:
+    """What one command did: its exit code and everything it printed."""
+
+    exit_code: int
+    stdout: str
+    stderr: str
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the console script; returns (and exits with) an ExitCode."""
-    code = _dispatch(argv)
-    sys.exit(int(code))
+    """Entry point of the console script: run the command line on the real streams, exit with its code."""
+    args = sys.argv[1:] if argv is None else list(argv)
+    sys.exit(int(_execute(args, Environment.from_process())))
+
+
+def invoke(args: Iterable[object], *, stdin: str | None = None, env: Environment | None = None) -> Outcome:
+    """Run one mobot command in-process on captured streams; errors become exit codes as in main().
+
+    Each argument is passed as str(arg), so paths and numbers may be given as they are. `stdin` is
+    the text the command reads; `env` replaces the default Environment.captured(), e.g.
+    Environment.captured(stderr_isatty=True) to draw progress bars (its streams must be StringIO).
+    """
+    if env is None:
+        env = Environment.captured(stdin or "")
+    elif stdin is not None:
+        raise TypeError("give stdin through env: Environment.captured(stdin=...)")
+    code = _execute([str(a) for a in args], env)
+    return Outcome(int(code), env.stdout.getvalue(), env.stderr.getvalue())
 
 
 def _usage_error_class() -> type[Exception]:
@@ -79,25 +111,43 @@ def _usage_error_class() -> type[Exception]:
 UsageProblem = _usage_error_class()
 
 
-def _dispatch(argv: list[str] | None) -> int:
-    STATE.traceback = "--traceback" in (argv if argv is not None else sys.argv[1:])
+def _execute(args: list[str], env: Environment) -> int:
+    """Run one command line on env; the one place where exceptions become exit codes."""
+    if _traceback_asked(args):
+        env = replace(env, traceback=True)
     try:
-        result = app(args=argv, prog_name="mobot", standalone_mode=False)
+        # Click prints --help itself, to sys.stdout: point the sys streams at env's for the call.
+        with contextlib.redirect_stdout(env.stdout), contextlib.redirect_stderr(env.stderr):
+            result = app(args=args, prog_name="mobot", standalone_mode=False, obj=env)
         return int(result) if isinstance(result, int) else ExitCode.OK
     except MobotError as exc:
-        if STATE.traceback:
+        if env.traceback:
             raise
-        report_error(exc)
+        report_error(env, exc)
         return exc.exit_code
     except typer.Exit as exc:
         return exc.exit_code
     except typer.Abort:
         return ExitCode.INTERRUPTED
     except UsageProblem as exc:
-        exc.show()
+        exc.show(file=env.stderr)
         return ExitCode.BAD_INPUT
     except KeyboardInterrupt:
-        if STATE.traceback:
+        if env.traceback:
             raise
-        sys.stderr.write("mobot: interrupted\n")
+        interrupted(env)
         return ExitCode.INTERRUPTED
+
+
+def _traceback_asked(args: list[str]) -> bool:
+    """--traceback among the root options, which Click reads up to the command's name.
+
+    Read here, before Click runs, because the handler in _execute needs it and the
+    Environment it hands to the commands is immutable.
+    """
+    for arg in args:
+        if arg == "--traceback":
+            return True
+        if arg == "--" or not arg.startswith("-"):
+            return False
+    return False

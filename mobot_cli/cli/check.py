@@ -18,6 +18,7 @@ SKIP_HELP = "Leave out world models whose files are missing (Fuel includes, mesh
 
 
 def check(
+    ctx: typer.Context,
     path: Path = typer.Argument(..., help="A scenario (.yaml), robot (.urdf, .xacro, .sdf model or model folder), world "
                                          "(.world, .sdf, bundled name), or run folder."),
     mappings: list[str] = typer.Argument(None, metavar="[NAME:=VALUE]...", help="xacro arguments for a robot."),
@@ -29,9 +30,10 @@ def check(
     Given a run folder, say how the run ended: exit 0 ok, 1 expectations failed, 2 incomplete
     (killed, interrupted or files missing), 3 simulation fault.
     """
+    env = ctx.obj
     model_folder = (path / "model.config").is_file()  # a Gazebo model: a robot description
     if path.is_dir() and not model_folder:
-        return _check_run_folder(path, json_)
+        return _check_run_folder(env, path, json_)
     if path.suffix in SCENARIO_SUFFIXES:
         result = _check_scenario(path, skip_missing)
     elif path.suffix in ROBOT_SUFFIXES or model_folder or (path.suffix == ".sdf" and not _is_world(path)):
@@ -43,10 +45,10 @@ def check(
                          hint="mobot check takes a scenario (.yaml), a robot (.urdf, .urdf.xacro, .xacro, "
                               ".sdf) or a world (.world, .sdf, or a bundled world's name).")
     if json_:
-        output.emit_json(result)
+        output.emit_json(env, result)
     else:
-        output.notices(result["notices"])
-        output.check_result(result)
+        output.notices(env, result["notices"])
+        output.check_result(env, result)
     return ExitCode.OK
 
 
@@ -93,12 +95,12 @@ def _check_world(path: Path, skip_missing: bool) -> dict:
     return {"ok": True, **loaded.summary, "notices": list(loaded.notices)}
 
 
-def _check_run_folder(path: Path, json_: bool) -> int:
+def _check_run_folder(env, path: Path, json_: bool) -> int:
     from mobot_cli.run.folder import run_status
 
     result = run_status(path)
     if json_:
-        output.emit_json(result)
+        output.emit_json(env, result)
     else:
-        output.run_folder_status(result)
+        output.run_folder_status(env, result)
     return result["exit_code"]

@@ -11,6 +11,7 @@ from mobot_cli.errors import ExitCode, UsageError
 
 
 def cmd(
+    ctx: typer.Context,
     name: str = typer.Argument(..., help="The robot to drive."),
     linear: float = typer.Option(0.0, "--linear", "-l", help="Forward speed, m/s (negative: backwards)."),
     angular: float = typer.Option(0.0, "--angular", "-a", help="Turn rate, rad/s (positive: left)."),
@@ -23,6 +24,7 @@ def cmd(
     json_: bool = typer.Option(False, "--json", help="Print the reply as JSON."),
 ) -> int:
     """Command a body twist; it holds until the next cmd, or for S seconds with --for."""
+    env = ctx.obj
     if for_ is not None and not for_ > 0:
         raise UsageError(f"--for {for_:g} must be above zero")
     if wait and for_ is None:
@@ -34,14 +36,14 @@ def cmd(
             fields.update({"for": for_, "wait": wait})
         reply = world.call("cmd", timeout=budget, **fields)
     if json_:
-        live_common.json_out(reply)
+        live_common.json_out(env, reply)
     live_common.checked(reply)
     if not json_:
         if wait:
-            live_common.say(live_common.odom_line(reply))
+            live_common.say(env, live_common.odom_line(reply))
         else:
             ends = f" until step {reply['until_step']}" if reply.get("until_step") is not None else ""
-            live_common.say(f"'{name}': linear {linear:g} m/s, angular {angular:g} rad/s from step "
+            live_common.say(env, f"'{name}': linear {linear:g} m/s, angular {angular:g} rad/s from step "
                             f"{reply['step']}{ends}")
     return ExitCode.OK
 

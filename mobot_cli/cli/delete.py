@@ -11,6 +11,7 @@ from mobot_cli.errors import ExitCode
 
 
 def delete(
+    ctx: typer.Context,
     name: str = typer.Argument(..., help="The robot to remove."),
     endpoint: Optional[str] = live_common.ENDPOINT,
     timeout: float = typer.Option(5.0, "--timeout", help=live_common.TIMEOUT_HELP),
@@ -20,8 +21,8 @@ def delete(
     with live_common.client(endpoint, timeout) as world:
         reply = world.call("delete", name=name)
     if json_:
-        live_common.json_out(reply)
+        live_common.json_out(ctx.obj, reply)
     live_common.checked(reply)
     if not json_:
-        live_common.say(f"deleted '{name}' at t={reply['t']:.3f} s")
+        live_common.say(ctx.obj, f"deleted '{name}' at t={reply['t']:.3f} s")
     return ExitCode.OK

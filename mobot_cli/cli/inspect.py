@@ -12,6 +12,7 @@ from mobot_cli.errors import ExitCode
 
 
 def inspect(
+    ctx: typer.Context,
     robot: str = typer.Argument(..., help="A bundled robot name or a .urdf/.xacro path."),
     mappings: list[str] = typer.Argument(None, metavar="[NAME:=VALUE]...", help="xacro arguments."),
     json_: bool = typer.Option(False, "--json", help="Print the result as JSON."),
@@ -22,8 +23,8 @@ def inspect(
     desc = load_robot(robot, parse_mappings(mappings or []), Path.cwd())
     summary = inspect_summary(desc)
     if json_:
-        output.emit_json(summary)
+        output.emit_json(ctx.obj, summary)
     else:
-        output.notices(str(n) for n in desc.notices)
-        output.inspect_tree(summary)
+        output.notices(ctx.obj, (str(n) for n in desc.notices))
+        output.inspect_tree(ctx.obj, summary)
     return ExitCode.OK

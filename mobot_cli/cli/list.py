@@ -11,6 +11,7 @@ from mobot_cli.errors import ExitCode
 
 
 def list_(
+    ctx: typer.Context,
     endpoint: Optional[str] = live_common.ENDPOINT,
     timeout: float = typer.Option(5.0, "--timeout", help=live_common.TIMEOUT_HELP),
     json_: bool = typer.Option(False, "--json", help="Print the reply as JSON."),
@@ -19,7 +20,7 @@ def list_(
     with live_common.client(endpoint, timeout) as world:
         reply = live_common.checked(world.call("list"))
     if json_:
-        live_common.json_out(reply)
+        live_common.json_out(ctx.obj, reply)
     else:
-        live_common.robot_table(reply["robots"])
+        live_common.robot_table(ctx.obj, reply["robots"])
     return ExitCode.OK

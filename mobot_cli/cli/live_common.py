@@ -5,11 +5,11 @@ Plain text only (no Rich), so `mobot list` and `mobot odom` answer fast.
 
 from __future__ import annotations
 
-import sys
 from typing import Any, Optional
 
 import typer
 
+from mobot_cli.cli.environment import Environment
 from mobot_cli.errors import RequestRefused
 
 ENDPOINT = typer.Option(None, "--endpoint", "-e", metavar="ENDPOINT",
@@ -32,23 +32,23 @@ def checked(reply: dict[str, Any]) -> dict[str, Any]:
     return reply
 
 
-def json_out(reply: Any) -> None:
+def json_out(env: Environment, reply: Any) -> None:
     """A reply as JSON on stdout (printed for refused requests too, before the error)."""
     from mobot_cli.cli.output import emit_json
 
-    emit_json(reply)
+    emit_json(env, reply)
 
 
-def say(line: str) -> None:
-    """One line on stdout."""
-    sys.stdout.write(line + "\n")
-    sys.stdout.flush()
+def say(env: Environment, line: str) -> None:
+    """One line on stdout, flushed (odom --follow and scripts read it as it comes)."""
+    env.stdout.write(line + "\n")
+    env.stdout.flush()
 
 
-def status(line: str) -> None:
+def status(env: Environment, line: str) -> None:
     """One line on stderr: what the server is doing (stdout stays for data)."""
-    sys.stderr.write(f"mobot: {line}\n")
-    sys.stderr.flush()
+    env.stderr.write(f"mobot: {line}\n")
+    env.stderr.flush()
 
 
 def pose_text(pose: dict[str, Any]) -> str:
@@ -56,10 +56,10 @@ def pose_text(pose: dict[str, Any]) -> str:
     return " ".join(f"{k}={_f(pose.get(k))}" for k in ("x", "y", "z", "yaw"))
 
 
-def robot_table(robots: list[dict[str, Any]]) -> None:
+def robot_table(env: Environment, robots: list[dict[str, Any]]) -> None:
     """The robots of `mobot list`, one line each under a header."""
     if not robots:
-        say("no robots in the live world")
+        say(env, "no robots in the live world")
         return
     rows = [("NAME", "NAMESPACE", "X", "Y", "Z", "YAW", "LINEAR", "ANGULAR")]
     for robot in robots:
@@ -68,7 +68,7 @@ def robot_table(robots: list[dict[str, Any]]) -> None:
                      _f(cmd["linear"]), _f(cmd["angular"])))
     widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
     for row in rows:
-        say("  ".join(cell.ljust(w) if i < 2 else cell.rjust(w)
+        say(env, "  ".join(cell.ljust(w) if i < 2 else cell.rjust(w)
                       for i, (cell, w) in enumerate(zip(row, widths))).rstrip())
 
 

@@ -12,6 +12,7 @@ from mobot_cli.errors import ExitCode
 
 
 def odom(
+    ctx: typer.Context,
     name: str = typer.Argument(..., help="The robot to read."),
     follow: bool = typer.Option(False, "--follow", "-f", help="Keep printing readings until Ctrl-C."),
     rate: float = typer.Option(10.0, "--rate", help="Readings per second (wall clock) with --follow."),
@@ -20,30 +21,31 @@ def odom(
     json_: bool = typer.Option(False, "--json", help="Print replies as JSON (one line each with --follow)."),
 ) -> int:
     """Print a robot's odometry (odom frame = its spawn pose), ground truth and command."""
+    env = ctx.obj
     with live_common.client(endpoint, timeout) as world:
         reply = world.call("odom", name=name)
         if not follow or not reply.get("ok"):
             if json_:
-                live_common.json_out(reply)
+                live_common.json_out(env, reply)
             live_common.checked(reply)
             if not json_:
-                live_common.say(live_common.odom_line(reply))
+                live_common.say(env, live_common.odom_line(reply))
             return ExitCode.OK
-        return _follow(world, name, reply, max(0.1, min(rate, 1000.0)), json_)
+        return _follow(env, world, name, reply, max(0.1, min(rate, 1000.0)), json_)
 
 
-def _follow(world, name: str, reply: dict, rate: float, json_: bool) -> int:
+def _follow(env, world, name: str, reply: dict, rate: float, json_: bool) -> int:
     import json
 
     last = None
     try:
         while True:
             if not reply.get("ok"):
-                live_common.status(f"'{name}' is gone: {reply.get('result')}: {reply.get('message')}")
+                live_common.status(env, f"'{name}' is gone: {reply.get('result')}: {reply.get('message')}")
                 return ExitCode.OK
             if reply["step"] != last:
                 last = reply["step"]
-                live_common.say(json.dumps(reply) if json_ else live_common.odom_line(reply))
+                live_common.say(env, json.dumps(reply) if json_ else live_common.odom_line(reply))
             time.sleep(1.0 / rate)
             reply = world.call("odom", name=name)
     except KeyboardInterrupt:

@@ -1,63 +1,71 @@
-"""All terminal output of mobot: errors, notices, tables and progress. Rich lives only here."""
+"""All terminal output of mobot: errors, notices, tables and progress. Rich lives only here.
+
+Every function writes to the streams of the Environment it is given, never to sys.stdout.
+"""
 
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
-from dataclasses import dataclass
 from typing import Any, Iterable
 
+from mobot_cli.cli.environment import Environment
 from mobot_cli.errors import MobotError
 
 
-@dataclass
-class _State:
-    traceback: bool = False
-
-
-STATE = _State()
-
-
-def report_error(exc: MobotError) -> None:
+def report_error(env: Environment, exc: MobotError) -> None:
     """One short paragraph on stderr, no traceback."""
-    sys.stderr.write(f"mobot: error: {exc}\n")
+    env.stderr.write(f"mobot: error: {exc}\n")
 
 
-def notices(lines: Iterable[str], quiet: bool = False) -> None:
+def interrupted(env: Environment) -> None:
+    """The one line after Ctrl-C."""
+    env.stderr.write("mobot: interrupted\n")
+
+
+def notices(env: Environment, lines: Iterable[str], quiet: bool = False) -> None:
     """Print warnings that did not stop the command."""
     if quiet:
         return
     for line in lines:
-        sys.stderr.write(f"mobot: warning: {line}\n")
+        env.stderr.write(f"mobot: warning: {line}\n")
 
 
-def emit_json(data: Any) -> None:
+def emit_json(env: Environment, data: Any) -> None:
     """Print a JSON document on stdout, for scripts."""
-    sys.stdout.write(json.dumps(data, indent=2) + "\n")
+    env.stdout.write(json.dumps(data, indent=2) + "\n")
 
 
-def stdout_console():
+def stdout_console(env: Environment):
     """A Rich console on stdout (imported lazily: Rich is not needed for --help or --json)."""
+    return _console(env, stderr=False, highlight=False, soft_wrap=True)  # never hard-wrap lines scripts grep
+
+
+def _console(env: Environment, stderr: bool, **options: Any):
+    """A Rich console on env's stdout or stderr, styled and sized as env decided."""
     from rich.console import Console
 
-    return Console(highlight=False, soft_wrap=True)  # never hard-wrap lines that scripts may grep
+    stream, tty = (env.stderr, env.stderr_isatty) if stderr else (env.stdout, env.stdout_isatty)
+    if env.color is None:
+        # A terminal we know of, or else Rich's own look (FORCE_COLOR, the stream's isatty()).
+        return Console(file=stream, force_terminal=True if tty else None, width=env.width, **options)
+    return Console(file=stream, force_terminal=tty or env.color, no_color=not env.color, width=env.width,
+                   **options)
 
 
-def progress_bar(total: int, label: str):
+def progress_bar(env: Environment, total: int, label: str):
     """A Rich progress bar on stderr when it is a terminal; otherwise None."""
-    if not sys.stderr.isatty():
+    if not env.stderr_isatty:
         return None
-    from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
     bar = Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.percentage:>3.0f}%"),
-                   TimeRemainingColumn(), console=Console(stderr=True), transient=True)
+                   TimeRemainingColumn(), console=_console(env, stderr=True), transient=True)
     bar.add_task(label, total=total)
     return bar
 
 
-def run_table(record, out_dir) -> None:
+def run_table(env: Environment, record, out_dir) -> None:
     """The per-robot table printed after a run (``record`` is a RunRecord)."""
     from rich.table import Table
 
@@ -71,26 +79,26 @@ def run_table(record, out_dir) -> None:
         pose = robot.final_pose
         table.add_row(name, f"{robot.distance:.3f}", f"{pose.x:.3f}", f"{pose.y:.3f}",
                       f"{pose.yaw:.3f}", f"{robot.odom_error.position:.3f}", str(robot.collisions))
-    console = stdout_console()
+    console = stdout_console(env)
     console.print(table)
     written = [name for name in ("trajectory.png", "bag/") if (Path(out_dir) / name.rstrip("/")).exists()]
     console.print(f"run folder: {out_dir}" + (f" ({', '.join(written)})" if written else ""))
 
 
-def check_result(result: dict[str, Any]) -> None:
+def check_result(env: Environment, result: dict[str, Any]) -> None:
     """One line saying what was checked and that it is fine."""
     if result["kind"] == "world":
-        world_summary(result)
+        world_summary(env, result)
         return
     if result["kind"] == "scenario":
         line = (f"ok: scenario '{result['name']}': {len(result['robots'])} robot(s), "
                 f"{result['duration']:g} s ({result['steps']} steps)")
     else:
         line = f"ok: robot '{result.get('name', result['path'])}' ({result['path']})"
-    sys.stdout.write(line + "\n")
+    env.stdout.write(line + "\n")
 
 
-def inspect_tree(summary: dict[str, Any]) -> None:
+def inspect_tree(env: Environment, summary: dict[str, Any]) -> None:
     """The link/joint tree, mass, footprint and drive of a robot, as a Rich tree."""
     from rich.tree import Tree
 
@@ -102,7 +110,7 @@ def inspect_tree(summary: dict[str, Any]) -> None:
     root = summary["tree"]
     tree = Tree(f"[bold]{root['link']}[/]  [dim]({root['mass']:g} kg)[/]")
     add(tree, root)
-    console = stdout_console()
+    console = stdout_console(env)
     console.print(f"[bold]{summary['name']}[/]  {summary['source']}")
     console.print(tree)
     fp = summary["footprint"]
@@ -118,45 +126,44 @@ def inspect_tree(summary: dict[str, Any]) -> None:
                   f"max torque {drive['max_wheel_torque']:g} N*m")
 
 
-def expectations(results, verbose: bool = True) -> None:
+def expectations(env: Environment, results, verbose: bool = True) -> None:
     """Each expectation and how it went; when quiet, the failures alone on stderr, for scripts."""
     failed = [r for r in results if not r.passed]
     if verbose and results:
-        console = stdout_console()
+        console = stdout_console(env)
         for r in results:
             mark = "[green]pass[/]" if r.passed else "[bold red]FAIL[/]"
             console.print(f"{mark}  {r.robot}: expected to {r.expected}; it {r.happened}", markup=True,
                           highlight=False)
         if failed:
-            sys.stderr.write(f"mobot: {len(failed)} of {len(results)} expectations failed\n")
+            env.stderr.write(f"mobot: {len(failed)} of {len(results)} expectations failed\n")
         return
     for r in failed:
-        sys.stderr.write(f"mobot: expectation failed: robot '{r.robot}' was expected to {r.expected}; "
+        env.stderr.write(f"mobot: expectation failed: robot '{r.robot}' was expected to {r.expected}; "
                          f"it {r.happened}\n")
 
 
-def sweep_progress(total: int, label: str):
+def sweep_progress(env: Environment, total: int, label: str):
     """A Rich bar for a sweep (runs done, failed, ETA) on stderr when it is a terminal; else None."""
-    if not sys.stderr.isatty():
+    if not env.stderr_isatty:
         return None
-    from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, \
         TimeRemainingColumn
 
     bar = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                    TextColumn("runs, [red]{task.fields[failed]} failed[/]"), TimeElapsedColumn(),
-                   TextColumn("ETA"), TimeRemainingColumn(), console=Console(stderr=True), transient=True)
+                   TextColumn("ETA"), TimeRemainingColumn(), console=_console(env, stderr=True), transient=True)
     bar.add_task(label, total=total, failed=0)
     return bar
 
 
-def sweep_summary(out_dir, rows: list[dict[str, str]], keys: list[str], total: int, skipped: int,
+def sweep_summary(env: Environment, out_dir, rows: list[dict[str, str]], keys: list[str], total: int, skipped: int,
                   wall: float) -> None:
     """The failed runs (if any) as a table, then one line of counts and where the results are."""
     from rich.markup import escape
     from rich.table import Table
 
-    console = stdout_console()
+    console = stdout_console(env)
     failed = [r for r in rows if r["status"] == "failed"]
     if failed:
         table = Table(title=f"{len(failed)} failed run{'s' if len(failed) != 1 else ''}")
@@ -175,19 +182,19 @@ def sweep_summary(out_dir, rows: list[dict[str, str]], keys: list[str], total: i
     console.print(f"results: {out_dir}/results.csv", highlight=False)
 
 
-def sweep_failures(out_dir, failed: int, total: int) -> None:
+def sweep_failures(env: Environment, out_dir, failed: int, total: int) -> None:
     """When quiet: one line on stderr if any run failed."""
     if failed:
-        sys.stderr.write(f"mobot: {failed} of {total} runs failed; see {out_dir}/results.csv\n")
+        env.stderr.write(f"mobot: {failed} of {total} runs failed; see {out_dir}/results.csv\n")
 
 
-def sweep_interrupted(out_dir) -> None:
+def sweep_interrupted(env: Environment, out_dir) -> None:
     """Where the finished rows are and how to go on."""
-    sys.stderr.write(f"mobot: sweep stopped; finished runs are in {out_dir}/results.csv. "
+    env.stderr.write(f"mobot: sweep stopped; finished runs are in {out_dir}/results.csv. "
                      f"Go on with: --resume --out {out_dir}\n")
 
 
-def world_summary(result: dict[str, Any]) -> None:
+def world_summary(env: Environment, result: dict[str, Any]) -> None:
     """What `mobot check WORLD` found: models, shapes, meshes, robots, what it ignored, extent."""
     def plural(n: int, word: str) -> str:
         return f"{n} {word}{'' if n == 1 else 's'}"
@@ -216,7 +223,7 @@ def world_summary(result: dict[str, Any]) -> None:
         (x0, y0, z0), (x1, y1, z1), size = bounds["min"], bounds["max"], bounds["size"]
         lines.append(f"  extent   x {x0:.2f}..{x1:.2f}, y {y0:.2f}..{y1:.2f}, z {z0:.2f}..{z1:.2f} m "
                      f"({size[0]:.2f} x {size[1]:.2f} x {size[2]:.2f} m)")
-    sys.stdout.write("\n".join(lines) + "\n")
+    env.stdout.write("\n".join(lines) + "\n")
 
 
 def _short_keys(keys: list[str]) -> dict[str, str]:
@@ -228,7 +235,7 @@ def _short_keys(keys: list[str]) -> dict[str, str]:
     return {k: k for k in keys}
 
 
-def run_folder_status(result: dict[str, Any]) -> None:
+def run_folder_status(env: Environment, result: dict[str, Any]) -> None:
     """How a run ended (mobot check RUN_DIR): a verdict line, then what the files hold."""
     what = f"run '{result['scenario']}'" if result.get("scenario") else "run"
     line = f"{result['status']}: {what} in {result['path']}"
@@ -246,10 +253,10 @@ def run_folder_status(result: dict[str, Any]) -> None:
             upto = f", messages up to t = {bag['last_t']:g} s" if bag.get("last_t") is not None else ""
             closed = "closed" if bag["complete"] else "not closed (no metadata.yaml)"
             lines.append(f"  bag/{bag['file']}: {closed}; {bag['chunks']} complete chunks{upto}")
-    sys.stdout.write("\n".join(lines) + "\n")
+    env.stdout.write("\n".join(lines) + "\n")
 
 
-def plot_written(result) -> None:
+def plot_written(env: Environment, result) -> None:
     """Where mobot plot wrote its picture."""
     runs = f" from {result.runs} runs" if result.runs > 1 else ""
-    sys.stdout.write(f"wrote {result.out} ({result.tracks} path{'s' if result.tracks != 1 else ''}{runs})\n")
+    env.stdout.write(f"wrote {result.out} ({result.tracks} path{'s' if result.tracks != 1 else ''}{runs})\n")

@@ -12,6 +12,7 @@ from mobot_cli.errors import ExitCode
 
 
 def plot(
+    ctx: typer.Context,
     folder: Path = typer.Argument(..., help="A run folder, or a sweep folder (every run overlaid)."),
     out: Optional[Path] = typer.Option(None, "--out", "-o", help="The PNG to write [default: FOLDER/trajectory.png]."),
 ) -> int:
@@ -19,6 +20,6 @@ def plot(
     from mobot_cli.run.replot import replot
 
     result = replot(folder, out)
-    output.notices(result.notices)
-    output.plot_written(result)
+    output.notices(ctx.obj, result.notices)
+    output.plot_written(ctx.obj, result)
     return ExitCode.OK

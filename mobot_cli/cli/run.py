@@ -14,6 +14,7 @@ from mobot_cli.errors import ExitCode
 
 
 def run(
+    ctx: typer.Context,
     scenario: Path = typer.Argument(..., help="The scenario YAML file."),
     out: Optional[Path] = typer.Option(None, "--out", "-o", help="Run folder [default: runs/<name>-<time>]."),
     set_: list[str] = typer.Option([], "--set", help="Override a key, e.g. robots.mobot.pose.x=2.0 (repeatable)."),
@@ -29,6 +30,7 @@ def run(
     from mobot_cli.run.execute import execute
     from mobot_cli.run.prepare import prepare
 
+    env = ctx.obj
     overrides = list(set_)
     if seed is not None:
         overrides.append(f"seed={seed}")
@@ -37,9 +39,9 @@ def run(
     if skip_missing:
         overrides.append("skip_missing=true")
     prepared = prepare(scenario, overrides)
-    output.notices(prepared.plan.notices, quiet=quiet or json_)
+    output.notices(env, prepared.plan.notices, quiet=quiet or json_)
     out_dir = out or default_out("runs", prepared.plan.name)
-    bar = None if (quiet or json_) else output.progress_bar(prepared.plan.total_steps, prepared.plan.name)
+    bar = None if (quiet or json_) else output.progress_bar(env, prepared.plan.total_steps, prepared.plan.name)
     progress = _progress(bar, realtime, prepared.plan.physics.rate_hz)
     if bar:
         bar.start()
@@ -49,10 +51,10 @@ def run(
         if bar:
             bar.stop()
     if json_:
-        output.emit_json(result.record.model_dump(mode="json"))
+        output.emit_json(env, result.record.model_dump(mode="json"))
     elif not quiet:
-        output.run_table(result.record, result.out_dir)
-    output.expectations(result.expectations, verbose=not (quiet or json_))
+        output.run_table(env, result.record, result.out_dir)
+    output.expectations(env, result.expectations, verbose=not (quiet or json_))
     if any(not r.passed for r in result.expectations):
         return ExitCode.EXPECTATION_FAILED
     return ExitCode.OK

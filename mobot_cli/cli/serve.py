@@ -12,6 +12,7 @@ from mobot_cli.errors import ExitCode, UsageError
 
 
 def serve(
+    ctx: typer.Context,
     target: Optional[str] = typer.Argument(None, metavar="[WORLD or SCENARIO]",
                                            help="A world (bundled name or file) or a scenario .yaml [default: empty]."),
     endpoint: Optional[str] = live_common.ENDPOINT,
@@ -31,19 +32,20 @@ def serve(
     from mobot_cli.live.start import serve_plan
     from mobot_cli.scenario.units import steps
 
+    env = ctx.obj
     pace = _pace(realtime, fast, rtf)
     if duration is not None and not duration > 0:
         raise UsageError(f"--duration {duration:g} must be above zero")
     prepared = serve_plan(target, set_)
     plan = prepared.plan
-    output.notices(plan.notices, quiet=quiet)
+    output.notices(env, plan.notices, quiet=quiet)
     stop_after = steps(duration, plan.physics.rate_hz) if duration is not None else None
     server = LiveServer(plan, endpoint or default_endpoint(), rtf=pace, bind_any=bind_any,
                         out_dir=out, resolved_yaml=prepared.resolved_yaml, stop_after=stop_after)
 
     def ready(where: str) -> None:
         if not quiet:
-            live_common.status(f"serving '{plan.name}' (world {plan.world.name}, {len(plan.robots)} robot(s)) "
+            live_common.status(env, f"serving '{plan.name}' (world {plan.world.name}, {len(plan.robots)} robot(s)) "
                                f"at {where}, {pace_text(pace)}, {plan.physics.rate_hz} Hz. "
                                "Stop with Ctrl-C or `mobot stop`.")
 
@@ -51,10 +53,10 @@ def serve(
     if not quiet:
         t = result.steps / plan.physics.rate_hz
         where = f"; record in {out}" if out is not None else ""
-        live_common.status(f"stopped after {t:.3f} s simulated, {sum(result.requests.values())} "
+        live_common.status(env, f"stopped after {t:.3f} s simulated, {sum(result.requests.values())} "
                            f"request(s){where}")
     if result.status == Status.FAULT:
-        live_common.status(f"error: {result.error}")
+        live_common.status(env, f"error: {result.error}")
         return ExitCode.SIMULATION_FAULT
     return ExitCode.OK
 

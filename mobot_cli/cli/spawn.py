@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 from typing import Optional
 
@@ -14,6 +13,7 @@ from mobot_cli.errors import ExitCode, UsageError
 
 
 def spawn(
+    ctx: typer.Context,
     name: str = typer.Argument(..., help="The robot's name (unique in the world)."),
     mappings: list[str] = typer.Argument(None, metavar="[NAME:=VALUE]...", help="xacro arguments."),
     file: Optional[str] = typer.Option(None, "--file", "-f", help="A .urdf/.xacro path or a bundled robot name."),
@@ -37,13 +37,14 @@ def spawn(
     json_: bool = typer.Option(False, "--json", help="Print the reply as JSON."),
 ) -> int:
     """Spawn a robot; the reply comes once it exists and passed the collision check."""
+    env = ctx.obj
     sources = [s for s in (file is not None, string is not None, stdin) if s]
     if len(sources) != 1:
         raise UsageError("give exactly one of --file, --string and --stdin",
                          hint="For example: mobot spawn r1 --file mobot -x 1.0 -y 2.0")
     if quat is not None and (roll or pitch or yaw):
         raise UsageError("give the orientation either as --quat or as -R -P -Y, not both")
-    text = sys.stdin.read() if stdin else string
+    text = env.stdin.read() if stdin else string
     pose: dict = {"xyz": [x, y, "auto" if z is None else z]}
     if quat is not None:
         pose["quat"] = list(quat)
@@ -55,11 +56,11 @@ def spawn(
     with live_common.client(endpoint, timeout) as world:
         reply = world.call("spawn", name=name, **{k: v for k, v in fields.items() if v is not None})
     if json_:
-        live_common.json_out(reply)
+        live_common.json_out(env, reply)
     live_common.checked(reply)
-    output.notices(reply.get("notices", []), quiet=json_)
+    output.notices(env, reply.get("notices", []), quiet=json_)
     if not json_:
         renamed = f" (renamed from '{name}')" if reply["renamed"] else ""
-        live_common.say(f"spawned '{reply['name']}'{renamed} in {reply['namespace']} at "
+        live_common.say(env, f"spawned '{reply['name']}'{renamed} in {reply['namespace']} at "
                         f"{live_common.pose_text(reply['pose'])}, t={reply['t']:.3f} s")
     return ExitCode.OK

@@ -11,11 +11,12 @@ from mobot_cli.errors import ExitCode
 
 
 def stop(
+    ctx: typer.Context,
     endpoint: Optional[str] = live_common.ENDPOINT,
     timeout: float = typer.Option(5.0, "--timeout", help=live_common.TIMEOUT_HELP),
 ) -> int:
     """Stop the live world at the endpoint."""
     with live_common.client(endpoint, timeout) as world:
         reply = live_common.checked(world.call("stop"))
-    live_common.say(f"stopped the live world at {world.endpoint} at t={reply['t']:.3f} s")
+    live_common.say(ctx.obj, f"stopped the live world at {world.endpoint} at t={reply['t']:.3f} s")
     return ExitCode.OK

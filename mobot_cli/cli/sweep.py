@@ -17,6 +17,7 @@ EXECUTORS = ("local", "ray")
 
 
 def sweep(
+    ctx: typer.Context,
     path: Path = typer.Argument(..., help="A scenario, or a sweep file (YAML naming a base 'scenario:' and "
                                           "grid/zip/random)."),
     grid: list[str] = typer.Option([], "--grid", help="KEY=V1,V2,...: one axis; several --grid make every combination."),
@@ -41,6 +42,7 @@ def sweep(
     from mobot_cli.sweep.runner import check_out_dir, run_sweep
     from mobot_cli.sweep.spec import build_spec
 
+    env = ctx.obj
     jobs = _check_args(jobs, executor, address, timeout, out, resume)
     runner = _executor(executor, jobs, timeout, address)
     spec = build_spec(path, grid, zip_, random, samples, seed, set_)
@@ -49,7 +51,7 @@ def sweep(
     done = check_out_dir(prepared, out_dir, resume)
     runner.start()  # e.g. join the Ray cluster: a failure here leaves no sweep folder behind
     total = len(prepared.variants)
-    bar = None if (quiet or json_) else output.sweep_progress(total, prepared.name)
+    bar = None if (quiet or json_) else output.sweep_progress(env, total, prepared.name)
     started = time.perf_counter()
     if bar:
         bar.start()
@@ -58,18 +60,18 @@ def sweep(
     except KeyboardInterrupt:
         if bar:
             bar.stop()
-        output.sweep_interrupted(out_dir)
+        output.sweep_interrupted(env, out_dir)
         raise
     finally:
         if bar:
             bar.stop()
     rows = [r for _, r in sorted(report.rows.items())]
     if json_:
-        output.emit_json({**report.document, "results": rows})
+        output.emit_json(env, {**report.document, "results": rows})
     elif quiet:
-        output.sweep_failures(out_dir, len(report.failed), total)
+        output.sweep_failures(env, out_dir, len(report.failed), total)
     else:
-        output.sweep_summary(out_dir, rows, list(prepared.keys), total, report.skipped,
+        output.sweep_summary(env, out_dir, rows, list(prepared.keys), total, report.skipped,
                              time.perf_counter() - started)
     return ExitCode.EXPECTATION_FAILED if report.failed else ExitCode.OK
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import typer
@@ -11,6 +10,7 @@ from mobot_cli.cli.args import parse_mappings
 
 
 def xacro(
+    ctx: typer.Context,
     file: str = typer.Argument(..., help="A .xacro/.urdf path or a bundled robot name."),
     mappings: list[str] = typer.Argument(None, metavar="[NAME:=VALUE]...", help="xacro arguments."),
 ) -> None:
@@ -18,4 +18,4 @@ def xacro(
     from mobot_cli.assets.description import expand_to_text
 
     text = expand_to_text(file, parse_mappings(mappings or []), Path.cwd())
-    sys.stdout.write(text if text.endswith("\n") else text + "\n")
+    ctx.obj.stdout.write(text if text.endswith("\n") else text + "\n")
