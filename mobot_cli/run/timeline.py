@@ -118,10 +118,11 @@ class Timeline:
         for name, linear, angular in self._commands.get(step, ()):
             if name in self.robots:  # a live world may have deleted it meanwhile
                 self.world.set_command(name, linear, angular)
-        for name, until in list(self._stops.items()):
-            if step >= until:
-                del self._stops[name]
-                self.world.set_command(name, 0.0, 0.0)
+        if self._stops:
+            for name, until in list(self._stops.items()):
+                if step >= until:
+                    del self._stops[name]
+                    self.world.set_command(name, 0.0, 0.0)
         if step % self.plan.log_every == 0 or step == self.plan.total_steps:
             self.log()
 
