@@ -28,15 +28,15 @@ def serve(
     """Keep a headless world running; spawn, delete, drive and read robots with the other commands."""
     from mobot_cli.live.endpoint import default_endpoint
     from mobot_cli.live.server import LiveServer, pace_text
+    from mobot_cli.run.prepare import prepare_target
     from mobot_cli.run.record import Status
-    from mobot_cli.live.start import serve_plan
     from mobot_cli.scenario.units import steps
 
     env = ctx.obj
     pace = _pace(realtime, fast, rtf)
     if duration is not None and not duration > 0:
         raise UsageError(f"--duration {duration:g} must be above zero")
-    prepared = serve_plan(target, set_)
+    prepared = prepare_target(target, set_)
     plan = prepared.plan
     output.notices(env, plan.notices, quiet=quiet)
     stop_after = steps(duration, plan.physics.rate_hz) if duration is not None else None

@@ -1,0 +1,174 @@
+"""A world on mobot's timeline, stepped by your own code: the Python door to `mobot run`.
+
+The same Timeline that `mobot run` and `mobot serve` drive, with the same records: open a
+scenario (or a bare world), command robots, step, read their odometry and ground truth,
+spawn and delete, and get the run folder on close. A command given at step ``n`` is in force
+from step ``n`` on, exactly as a scenario's ``{at: n / rate_hz, ...}`` command, so a loop that
+sends a script's commands at the script's steps writes the same files as `mobot run`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+from typing import Iterable, Mapping
+
+from pydantic import ValidationError
+
+from mobot_cli.errors import MobotError, UsageError, did_you_mean
+from mobot_cli.run.prepare import Prepared, prepare_target
+from mobot_cli.run.record import RunRecord, Status
+from mobot_cli.run.recording import Recording
+from mobot_cli.run.timeline import Timeline
+from mobot_cli.scenario.model import RobotSpec
+from mobot_cli.scenario.robots import RobotResolver
+from mobot_cli.scenario.units import steps
+from mobot_cli.sim.plan import Plan
+from mobot_cli.sim.state import RobotState
+from mobot_cli.sim.world import World
+
+NO_END = 2**62  # a spawned robot's commands come from your code, not a script
+
+
+class Simulation:
+    """One world on one timeline; use as a context manager, or call ``close()``."""
+
+    def __init__(self, prepared: Prepared, out: Path | str | None = None):
+        self.plan: Plan = prepared.plan
+        self._world = World(self.plan.physics, self.plan.world, seed=self.plan.seed)
+        try:
+            self._timeline = Timeline(self.plan, self._world)
+            self._timeline.start()  # the robots are placed and checked before any file is written
+            self._recording = None
+            if out is not None:
+                self._recording = Recording(self.plan, Path(out), prepared.resolved_yaml)
+                self._timeline.attach(self._recording)
+            else:
+                self._timeline.attach(lambda record: None)
+        except BaseException:
+            self._world.close()
+            raise
+        self._base_dir = Path.cwd()
+        self._closed = False
+        self.record: RunRecord | None = None
+
+    @classmethod
+    def open(cls, target: str | Path | None = None, *, out: Path | str | None = None,
+             overrides: Iterable[str] = (), seed: int | None = None) -> "Simulation":
+        """A scenario file (.yaml), or a world (bundled name or file) with no robots yet.
+
+        ``overrides`` are ``--set`` items (``"robots.mobot.pose.x=2"``); ``out`` is the run
+        folder written on close (None: no files).
+        """
+        items = list(overrides) + ([f"seed={seed}"] if seed is not None else [])
+        return cls(prepare_target(None if target is None else str(target), items), out)
+
+    # -- time -------------------------------------------------------------------------------
+
+    @property
+    def step_count(self) -> int:
+        """Physics steps taken since t = 0."""
+        return self._timeline.step
+
+    @property
+    def t(self) -> float:
+        """Simulated seconds since t = 0 (whole steps)."""
+        return self._timeline.step / self.plan.physics.rate_hz
+
+    @property
+    def rate_hz(self) -> int:
+        return self.plan.physics.rate_hz
+
+    def step(self, n: int = 1) -> None:
+        """Advance ``n`` physics steps: what is due at each step (script, log row), then physics."""
+        self._open()
+        if isinstance(n, bool) or not isinstance(n, int) or n < 0:
+            raise UsageError(f"step takes a whole number of steps >= 0, got {n!r}")
+        timeline = self._timeline
+        for _ in range(n):
+            timeline.tick()
+            timeline.advance()
+
+    def run_for(self, seconds: float) -> None:
+        """Advance ``seconds`` of simulated time (rounded to whole steps)."""
+        self.step(steps(seconds, self.rate_hz))
+
+    # -- robots -----------------------------------------------------------------------------
+
+    @property
+    def robots(self) -> list[str]:
+        """The names of the robots in the world, in spawn order."""
+        return list(self._timeline.robots)
+
+    def state(self, name: str) -> RobotState:
+        """A robot's command, odometry (odom frame = its spawn pose) and ground truth now."""
+        self._known(name)
+        return self._world.read(name)
+
+    def command(self, name: str, linear: float = 0.0, angular: float = 0.0, *,
+                duration: float | None = None) -> None:
+        """Hold a body twist (m/s, rad/s) from this step on; with ``duration``, stop after it."""
+        self._known(name)
+        if not self._world.has_drive(name):
+            raise UsageError(f"robot '{name}' has no drive wheels: it does not take velocity commands")
+        span = None if duration is None else steps(duration, self.rate_hz)
+        self._timeline.command(name, float(linear), float(angular), span)
+
+    def spawn(self, name: str, description: str, *, x: float = 0.0, y: float = 0.0, z: float | None = None,
+              yaw: float = 0.0, args: Mapping[str, str] | None = None, namespace: str | None = None) -> None:
+        """Place a robot now (bundled name or .urdf/.xacro path), resting on the floor unless ``z``."""
+        self._open()
+        pose = {"x": x, "y": y, "yaw": yaw, "z": "auto" if z is None else z}
+        try:
+            spec = RobotSpec(name=name, description=description, args=dict(args or {}), pose=pose,
+                             **({"namespace": namespace} if namespace is not None else {}))
+        except ValidationError as exc:
+            first = exc.errors()[0]
+            key = ".".join(str(part) for part in first["loc"])
+            raise UsageError(f"spawn '{name}': {key}: {first['msg']}") from None
+        resolver = RobotResolver(self.rate_hz, 0, NO_END, base_dir=self._base_dir)
+        (plan,) = resolver.plans(spec, ())
+        self._timeline.spawn(dataclasses.replace(plan, spawn_step=self.step_count), "request")
+
+    def delete(self, name: str) -> None:
+        """Take a robot out of the world now."""
+        self._known(name)
+        self._timeline.delete(name, "request")
+
+    # -- the end ----------------------------------------------------------------------------
+
+    def close(self, status: Status = Status.OK, error: str | None = None) -> RunRecord | None:
+        """Record the state now, write summary.json (when recording) and free the world."""
+        if self._closed:
+            return self.record
+        self._closed = True
+        try:
+            if self._recording is not None:
+                if status != Status.FAULT:
+                    self._timeline.tick()  # what is due now, and the final row
+                    self._timeline.log()
+                self.record = self._recording.close(status, error, self.step_count)
+        finally:
+            self._world.close()
+        return self.record
+
+    def __enter__(self) -> "Simulation":
+        return self
+
+    def __exit__(self, kind, exc, tb) -> None:
+        if kind is None:
+            self.close()
+        elif issubclass(kind, KeyboardInterrupt):
+            self.close(Status.INTERRUPTED)
+        else:
+            self.close(Status.FAULT if isinstance(exc, MobotError) else Status.ERROR, str(exc) or repr(exc))
+
+    def _open(self) -> None:
+        if self._closed:
+            raise UsageError("this simulation is closed")
+
+    def _known(self, name: str) -> None:
+        self._open()
+        if name not in self._timeline.robots:
+            hint = did_you_mean(name, self._timeline.robots) or "Simulation.robots lists them."
+            raise UsageError(f"no robot named '{name}' in the world", hint=hint)
