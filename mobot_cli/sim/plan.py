@@ -62,6 +62,45 @@ class CommandStep:
 
 
 @dataclass(frozen=True)
+class RayAxis:
+    """One axis of a ray sensor's scan, as Gazebo's ``<horizontal>`` or ``<vertical>``."""
+
+    samples: int
+    min_angle: float  # rad
+    max_angle: float  # rad
+    resolution: float = 1.0  # Gazebo's multiplier of samples; mobot casts ``samples`` rays
+
+
+@dataclass(frozen=True)
+class SensorSpec:
+    """One sensor of a robot, resolved from its ``<gazebo><sensor>`` block and the scenario.
+
+    ``kind`` is "lidar" (Gazebo's ray, gpu_ray, lidar, gpu_lidar; 3D when ``vertical`` has
+    more than one sample), "imu" or "contact". Names are unprefixed: the robot's namespace
+    and frame prefix are added when the readings are recorded.
+    """
+
+    name: str  # the <sensor name>, unique within the robot
+    kind: str  # "lidar" | "imu" | "contact"
+    link: str  # the link it rides on
+    every: int  # physics steps between two readings: update_rate rounded to whole steps
+    xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)  # pose in the link frame
+    quat: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
+    topic: str = ""  # relative to the robot's namespace, e.g. "scan"
+    frame_id: str = ""  # the frame readings are stamped with (default: the link)
+    horizontal: RayAxis | None = None  # lidar only
+    vertical: RayAxis | None = None  # lidar only; None or one sample: a 2D scan
+    range_min: float = 0.0  # m, lidar only
+    range_max: float = 0.0
+    range_resolution: float = 0.0  # m; 0: ranges are not quantised
+    noise_mean: float = 0.0  # gaussian noise on ranges (lidar), on angular velocity (imu)
+    noise_stddev: float = 0.0
+    accel_noise_stddev: float = 0.0  # imu: gaussian noise on linear acceleration (m/s^2)
+    collision: str = ""  # contact: the collision element whose contacts count ("" = the whole link)
+    source: str = ""  # where it was declared, for messages
+
+
+@dataclass(frozen=True)
 class RobotPlan:
     """One robot to spawn: its expanded URDF text and everything needed to drive it."""
 
@@ -75,6 +114,7 @@ class RobotPlan:
     commands: tuple[CommandStep, ...] = ()
     spawn_step: int = 0
     source: str = ""  # the description file, for messages
+    sensors: tuple[SensorSpec, ...] = ()
 
 
 @dataclass(frozen=True)
