@@ -74,6 +74,7 @@ class Timeline:
         self.rate_hz = plan.physics.rate_hz
         self.robots: dict[str, RobotPlan] = {}  # the plans of the robots in the world, in spawn order
         self._held: list[Record] | None = []  # records made before a consumer is attached
+        self._consumers: list[Consumer] = []
         self._consume: Consumer = self._held.append
         self._on_refused = on_refused  # None: a refused scripted event ends the run
         self._events: dict[int, list[Event]] = defaultdict(list)
@@ -98,11 +99,17 @@ class Timeline:
         return self.step >= self.plan.total_steps
 
     def attach(self, consumer: Consumer) -> None:
-        """Send every record to ``consumer`` from now on, beginning with those made before."""
-        held, self._held = self._held or [], None
-        self._consume = consumer
-        for record in held:
-            consumer(record)
+        """Send every record to ``consumer`` from now on; the first one attached also gets the
+        records made before (the spawns of ``start``)."""
+        if self._held is not None:
+            held, self._held = self._held, None
+            self._consumers = [consumer]
+            for record in held:
+                consumer(record)
+        else:
+            self._consumers.append(consumer)
+        consumers = self._consumers
+        self._consume = consumers[0] if len(consumers) == 1 else lambda r: [c(r) for c in consumers]
 
     def start(self) -> None:
         """Spawn the plan's own robots at t = 0."""
