@@ -153,7 +153,7 @@ def test_model_sdf_follows_model_config(corpus, tmp_path):
 
 
 def test_cache_dir_precedence(monkeypatch, tmp_path):
-    from mobot_cli.assets.cache import cache_dir
+    from mobot_cli.common.cache import cache_dir
 
     monkeypatch.setenv("MOBOT_CACHE_DIR", str(tmp_path / "explicit"))
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))

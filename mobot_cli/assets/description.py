@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from mobot_cli.assets import cache
+from mobot_cli.common import cache
 from mobot_cli.assets.drive_detect import detect_drive
 from mobot_cli.assets.frames import LinkTree, floats
 from mobot_cli.assets.resources import ResourceResolver, bundled_dir, model_sdf

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from mobot_cli.assets.frames import LinkTree, floats, origin_frame
+from mobot_cli.common.transforms import mat_vec
 from mobot_cli.errors import DescriptionError, Location, Notice, did_you_mean
 from mobot_cli.sim.plan import DriveSpec
 
@@ -58,7 +59,7 @@ def _wheel(tree: LinkTree, joint_name: str, strict: bool) -> Wheel | None:
     if joint is None:
         return None
     frame = tree.frame(joint.child)
-    axis_root = _rotate(frame.rot, joint.axis)
+    axis_root = mat_vec(frame.rot, joint.axis)
     axis = axis_root[1]  # how much the spin axis points along +y of the root
     if strict:
         spins = joint.type == "continuous" or (
@@ -71,10 +72,6 @@ def _wheel(tree: LinkTree, joint_name: str, strict: bool) -> Wheel | None:
         return None
     return Wheel(joint=joint.name, x=frame.pos[0], y=frame.pos[1], radius=radius,
                  sign=1.0 if axis >= 0 else -1.0)
-
-
-def _rotate(rot, v):
-    return tuple(sum(rot[i][k] * v[k] for k in range(3)) for i in range(3))
 
 
 def _wheel_radius(tree: LinkTree, link: str, axis_root) -> float | None:
@@ -92,7 +89,7 @@ def _wheel_radius(tree: LinkTree, link: str, axis_root) -> float | None:
             return floats(sphere.get("radius"), 1, (0.0,))[0] or None
         if cylinder is not None:
             rot = link_frame.compose(origin_frame(collision)).rot
-            along = _rotate(rot, (0.0, 0.0, 1.0))  # a URDF cylinder's axis is its local z
+            along = mat_vec(rot, (0.0, 0.0, 1.0))  # a URDF cylinder's axis is its local z
             if abs(sum(a * b for a, b in zip(along, axis_root))) >= _PARALLEL:
                 return floats(cylinder.get("radius"), 1, (0.0,))[0] or None
     return None

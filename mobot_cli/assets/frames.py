@@ -1,7 +1,8 @@
 """The link tree of a URDF and each link's pose in the root frame, in plain Python.
 
 Drive detection and footprints only need a handful of 3x3 products at zero joint
-positions, so this avoids both numpy and yourdfpy's scene graph (and their import time).
+positions (common.transforms), so this avoids both numpy and yourdfpy's scene graph (and
+their import time).
 """
 
 from __future__ import annotations
@@ -10,50 +11,7 @@ import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
-Vec = tuple[float, float, float]
-Mat = tuple[Vec, Vec, Vec]
-
-IDENTITY: Mat = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
-
-
-def rpy_matrix(roll: float, pitch: float, yaw: float) -> Mat:
-    """URDF's fixed-axis roll, pitch, yaw: R = Rz(yaw) * Ry(pitch) * Rx(roll)."""
-    cr, sr = math.cos(roll), math.sin(roll)
-    cp, sp = math.cos(pitch), math.sin(pitch)
-    cy, sy = math.cos(yaw), math.sin(yaw)
-    return ((cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr),
-            (sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr),
-            (-sp, cp * sr, cp * cr))
-
-
-def mat_mul(a: Mat, b: Mat) -> Mat:
-    """The product a * b of two 3x3 matrices."""
-    return tuple(tuple(sum(a[i][k] * b[k][j] for k in range(3)) for j in range(3))
-                 for i in range(3))  # type: ignore[return-value]
-
-
-def mat_vec(a: Mat, v: Vec) -> Vec:
-    """The product a * v."""
-    return tuple(sum(a[i][k] * v[k] for k in range(3)) for i in range(3))  # type: ignore
-
-
-@dataclass(frozen=True)
-class Frame:
-    """A rigid transform: x_parent = rot * x_child + pos."""
-
-    rot: Mat = IDENTITY
-    pos: Vec = (0.0, 0.0, 0.0)
-
-    def compose(self, other: "Frame") -> "Frame":
-        """self * other: first other, then self."""
-        moved = mat_vec(self.rot, other.pos)
-        return Frame(mat_mul(self.rot, other.rot),
-                     (moved[0] + self.pos[0], moved[1] + self.pos[1], moved[2] + self.pos[2]))
-
-    def point(self, v: Vec) -> Vec:
-        """A point given in the child frame, expressed in the parent frame."""
-        moved = mat_vec(self.rot, v)
-        return (moved[0] + self.pos[0], moved[1] + self.pos[1], moved[2] + self.pos[2])
+from mobot_cli.common.transforms import Frame, Vec, rpy_matrix
 
 
 def floats(text: str | None, count: int, default: tuple[float, ...]) -> tuple[float, ...]:

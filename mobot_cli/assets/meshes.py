@@ -10,12 +10,11 @@ STL and OBJ files are used as they are.
 from __future__ import annotations
 
 import logging
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from mobot_cli.assets import cache
+from mobot_cli.common import cache
+from mobot_cli.common.files import write_text_atomic
 from mobot_cli.errors import Location, WorldError
 
 
@@ -115,11 +114,4 @@ def _write_obj(path: Path, vertices, faces, source: Path) -> None:
     lines.extend(f"v {x:.9g} {y:.9g} {z:.9g}\n" for x, y, z in vertices.tolist())
     lines.extend(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces.tolist())
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as out:
-            out.writelines(lines)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    write_text_atomic(path, "".join(lines))

@@ -15,7 +15,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from mobot_cli.assets import cache
+from mobot_cli.common import cache
 from mobot_cli.assets.resources import ResourceResolver, bundled_dir
 from mobot_cli.errors import Location, WorldError, did_you_mean
 from mobot_cli.sim.plan import StaticBody, StaticShape, WorldPlan

@@ -15,7 +15,8 @@ from mobot_cli.assets.description import RobotDescription, load_robot
 from mobot_cli.assets.world_load import LoadedWorld, WorldRobot
 from mobot_cli.errors import Location, MobotError, ScenarioError
 from mobot_cli.scenario.model import RobotSpec
-from mobot_cli.scenario.units import quat_from_rpy, spawn_pose, steps
+from mobot_cli.common.transforms import quat_from_rpy
+from mobot_cli.scenario.units import spawn_pose, steps
 from mobot_cli.scenario.yamlsource import Source
 from mobot_cli.sim.plan import CommandStep, DriveSpec, RobotPlan, SpawnPose
 

@@ -1,4 +1,4 @@
-"""A small on-disk cache of JSON documents keyed by content hashes, written atomically."""
+"""mobot's cache folder, and a small on-disk cache of JSON documents keyed by content hashes."""
 
 from __future__ import annotations
 
@@ -6,25 +6,35 @@ import functools
 import hashlib
 import json
 import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
-import mobot_cli
-from mobot_cli.sim.urdf_file import cache_dir  # noqa: F401  (one rule for the whole cache folder)
+from mobot_cli.common.files import write_text_atomic
 
 # Bump when the layout of a cached document changes, so old entries are simply missed.
 CACHE_FORMAT = 1
+_PACKAGE = Path(__file__).resolve().parent.parent  # mobot_cli/
+
+
+def cache_dir() -> Path:
+    """mobot's cache folder: $MOBOT_CACHE_DIR, else $XDG_CACHE_HOME/mobot, else ~/.cache/mobot."""
+    explicit = os.environ.get("MOBOT_CACHE_DIR")
+    if explicit:
+        return Path(explicit).expanduser()
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    return (Path(xdg).expanduser() if xdg else Path.home() / ".cache") / "mobot"
 
 
 @functools.lru_cache(maxsize=1)
 def _code_version() -> str:
     # The code that builds cached results is part of every key, so an edited checkout (an
     # editable install keeps its version number) never reads entries an older build wrote.
-    sha = hashlib.sha256(f"mobot {mobot_cli.__version__} cache {CACHE_FORMAT}".encode())
-    package = Path(__file__).resolve().parent
-    for source in sorted([*package.glob("*.py"), package.parent / "sim" / "plan.py"]):
+    # All of the package's sources (mobot_cli/__init__.py holds the version): cheaper to
+    # read than to keep a list of the modules that shape cached documents up to date.
+    sha = hashlib.sha256(f"mobot cache {CACHE_FORMAT}".encode())
+    for source in sorted(_PACKAGE.rglob("*.py")):
         try:
+            sha.update(str(source.relative_to(_PACKAGE)).encode())
             sha.update(source.read_bytes())
         except OSError:
             pass
@@ -63,13 +73,6 @@ def store(kind: str, key: str, document: Any) -> None:
     folder = cache_dir() / kind
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{key}.", suffix=".tmp")
-        try:
-            with os.fdopen(fd, "w", encoding="utf-8") as out:
-                json.dump(document, out)
-            os.replace(tmp, folder / f"{key}.json")
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        write_text_atomic(folder / f"{key}.json", json.dumps(document))
     except OSError:
         pass
