@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from mobot_cli.assets.drive_detect import detect_drive
+from mobot_cli.assets.description.drive import detect_drive
 from mobot_cli.errors import DescriptionError, Notice
 from mobot_cli.sim.drive import default_separation_multiplier
 

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
+from mobot_cli.assets.description.xacro import expand, expand_file, is_xacro
 from mobot_cli.assets.resources import ResourceResolver
-from mobot_cli.assets.xacro_expand import expand, expand_file, is_xacro
 from mobot_cli.errors import DescriptionError, ResourceError
 
 XACRO_HEAD = '<?xml version="1.0"?>\n<robot name="t" xmlns:xacro="http://www.ros.org/wiki/xacro">\n'

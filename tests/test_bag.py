@@ -335,7 +335,7 @@ def test_tf_transforms_match_yourdfpy_forward_kinematics(corpus, monkeypatch, ro
     import numpy as np
     import yourdfpy
 
-    from mobot_cli.assets.description import load_robot
+    from mobot_cli.assets.description.load import load_robot
     from mobot_cli.run.tf import RobotFrames
 
     monkeypatch.setenv("MOBOT_RESOURCE_PATH", ":".join(str(corpus / p) for p in ("turtlebot3", "husky")))

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pytest
 
+from mobot_cli.common.transforms import quat_from_rpy
 from mobot_cli.errors import ScenarioError
 from mobot_cli.scenario.load import load_scenario
-from mobot_cli.common.transforms import quat_from_rpy
 from mobot_cli.scenario.units import spawn_pose, steps
 
 SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from mobot_cli.assets.world_load import load_world
+from mobot_cli.assets.world.load import load_world
 from mobot_cli.errors import WorldError
 from mobot_cli.run.preflight import check_world
 

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from mobot_cli.assets import world_build
-from mobot_cli.assets.world_load import load_world
+from mobot_cli.assets.world import build as world_build
+from mobot_cli.assets.world.load import load_world
 from mobot_cli.cli import _dispatch
 from mobot_cli.errors import WorldError
 
@@ -320,7 +320,7 @@ def _collada_box(meter: float, size, lift: float) -> str:
 
 
 def test_pose_helpers_round_trip():
-    from mobot_cli.assets.sdf_pose import parse_pose, rpy, xyz_quat
+    from mobot_cli.assets.world.pose import parse_pose, rpy, xyz_quat
 
     m = parse_pose("1 2 3 0.1 -0.2 0.3")
     assert rpy(m) == pytest.approx((0.1, -0.2, 0.3))
@@ -337,8 +337,8 @@ def test_pose_helpers_round_trip():
 def test_sdf_robot_joint_axes_end_up_in_the_joint_frame(tmp_path, axis, expected):
     import xml.etree.ElementTree as ET
 
+    from mobot_cli.assets.description.sdf import expand_sdf
     from mobot_cli.assets.resources import ResourceResolver
-    from mobot_cli.assets.sdf_description import expand_sdf
 
     (tmp_path / "r.sdf").write_text(sdf(f"""<model name='r'>
       <link name='base'><collision name='c'><geometry><box><size>0.3 0.2 0.1</size></box></geometry></collision></link>

@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 import trimesh
 
-from mobot_cli.assets.description import load_robot
-from mobot_cli.assets.world_load import load_world
+from mobot_cli.assets.description.load import load_robot
+from mobot_cli.assets.world.load import load_world
 from mobot_cli.cli import _dispatch
 from mobot_cli.errors import ScenarioError, SpawnError
 from mobot_cli.run.prepare import prepare

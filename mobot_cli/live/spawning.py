@@ -11,7 +11,7 @@ import math
 import re
 from pathlib import Path
 
-from mobot_cli.assets.description import resolve_description
+from mobot_cli.assets.description.load import resolve_description
 from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.common.transforms import compose_poses, quat_from_rpy
 from mobot_cli.errors import DescriptionError, MobotError, ResourceError, SpawnError

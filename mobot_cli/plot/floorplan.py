@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 import xml.etree.ElementTree as ET
 
-from mobot_cli.assets.frames import LinkTree, floats, origin_frame
+from mobot_cli.assets.description.frames import LinkTree, floats, origin_frame
 from mobot_cli.common.transforms import Quat, Vec, compose_poses, pose_point, quat_from_matrix, \
     quat_matrix
 from mobot_cli.sim.plan import StaticShape, WorldPlan

@@ -26,9 +26,9 @@ import re
 import shutil
 from pathlib import Path
 
+from mobot_cli.common.transforms import yaw_quat
 from mobot_cli.run.cdr import Layout, Packer
 from mobot_cli.run.ros_msgs import MESSAGES
-from mobot_cli.common.transforms import yaw_quat
 from mobot_cli.run.tf import RobotFrames
 from mobot_cli.run.timeline import Sample
 from mobot_cli.sim.plan import Plan, RobotPlan, SpawnPose

@@ -13,7 +13,7 @@ import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
-from mobot_cli.assets.frames import LinkTree, floats
+from mobot_cli.assets.description.frames import LinkTree, floats
 from mobot_cli.common.transforms import Frame, Quat, Vec, quat_from_matrix, quat_mul
 
 MOVING = ("revolute", "continuous", "prismatic")

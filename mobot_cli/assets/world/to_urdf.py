@@ -13,8 +13,8 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from mobot_cli.assets.sdf import Link, Model
-from mobot_cli.assets.sdf_pose import inverse, rpy
+from mobot_cli.assets.world.pose import inverse, rpy
+from mobot_cli.assets.world.reader import Link, Model
 from mobot_cli.errors import DescriptionError, Location, Notice
 
 # Revolute limits this wide (SDF's default is +-1e16) mean "turns freely": continuous.
@@ -115,7 +115,7 @@ def _link(robot: ET.Element, link: Link, frame, notices: list[Notice]) -> None:
         for shape in shapes:
             _shape(element, kind, shape, to_urdf, link.name, notices)
     frictions = [s.friction for s in link.collisions if s.friction is not None]
-    if frictions:  # urdf_process.apply_friction turns this into PyBullet's lateral_friction
+    if frictions:  # description.process.apply_friction turns this into PyBullet's lateral_friction
         gazebo = ET.SubElement(robot, "gazebo", reference=link.name)
         ET.SubElement(gazebo, "mu1").text = f"{min(frictions):.12g}"
         ET.SubElement(gazebo, "mu2").text = f"{min(frictions):.12g}"

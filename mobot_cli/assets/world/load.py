@@ -10,47 +10,17 @@ A warm load reads one JSON document and checks the files it was built from.
 from __future__ import annotations
 
 import os
-from collections import Counter
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from mobot_cli.common import cache
 from mobot_cli.assets.resources import ResourceResolver, bundled_dir
+from mobot_cli.assets.world.loaded import LoadedWorld, WorldRobot
+from mobot_cli.common import cache
 from mobot_cli.errors import Location, WorldError, did_you_mean
 from mobot_cli.sim.plan import StaticBody, StaticShape, WorldPlan
 
 WORLD_SUFFIXES = (".world", ".sdf")
-# A model placed farther than this from the origin is a typo (the AWS bookstore has a book
-# at z = 343 km): it is left out with a warning rather than stretching the world.
-ABSURD_DISTANCE = 10_000.0  # m
-
-
-@dataclass(frozen=True)
-class WorldRobot:
-    """A model of the world with joints: a robot when the scenario lists its name."""
-
-    name: str
-    urdf: str  # converted from SDF, mesh paths absolute
-    xyz: tuple[float, float, float]
-    quat: tuple[float, float, float, float]
-    source: str  # the SDF file the model came from
-    notices: tuple[str, ...] = ()
-
-
-@dataclass(frozen=True)
-class LoadedWorld:
-    """A world ready for the simulation, its robots, what `mobot check` reports, and warnings."""
-
-    plan: WorldPlan
-    robots: tuple[WorldRobot, ...] = ()
-    static_models: tuple[str, ...] = ()
-    summary: dict[str, Any] = field(default_factory=dict)
-    notices: tuple[str, ...] = ()
-
-    def robot(self, name: str) -> WorldRobot | None:
-        """The world's robot model named ``name``, if there is one."""
-        return next((r for r in self.robots if r.name == name), None)
 
 
 def bundled_world_names() -> tuple[str, ...]:
@@ -90,7 +60,7 @@ def load_world(world: str, base_dir: Path | None = None,
                        str(bool(skip_missing)), fuel)
     loaded = _from_document(cache.load("world", key))
     if loaded is None:
-        from mobot_cli.assets.world_build import build_world  # lxml, numpy, trimesh: cold only
+        from mobot_cli.assets.world.build import build_world  # lxml, numpy, trimesh: cold only
 
         loaded, deps = build_world(path, resolver, skip_missing)
         cache.store("world", key, _to_document(loaded, deps))
@@ -133,26 +103,3 @@ def _from_document(doc: dict[str, Any] | None) -> LoadedWorld | None:
                            notices=tuple(doc["notices"]))
     except (KeyError, TypeError, ValueError):
         return None
-
-
-def ignored_line(file: str, ignored: dict[str, int], max_step: float | None) -> str | None:
-    """The one summary line naming what the world holds that mobot does not simulate."""
-    parts = []
-    for tag, count in sorted(ignored.items(), key=lambda kv: (-kv[1], kv[0])):
-        if tag.endswith(" geometry"):
-            continue  # each of those has its own warning
-        label = {"light": "light", "plugin": "plugin", "actor": "actor"}.get(tag)
-        text = f"{count} {label}{'s' if count > 1 else ''}" if label else tag
-        if tag == "physics" and max_step:
-            text += f" (max_step_size {max_step:g} s; mobot steps at physics.rate_hz)"
-        if tag == "gravity":
-            text += " (physics.gravity applies)"
-        parts.append(text)
-    if not parts:
-        return None
-    return f"{Path(file).name}: ignored {', '.join(parts)} (mobot simulates collision geometry)"
-
-
-def count(counter: Counter) -> dict[str, int]:
-    """A Counter as a plain dict sorted by key (stable JSON)."""
-    return {k: counter[k] for k in sorted(counter)}

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from mobot_cli.assets.sdf_pose import IDENTITY, Matrix
+from mobot_cli.assets.world.pose import IDENTITY, Matrix
 from mobot_cli.errors import Location, WorldError
 
 

@@ -13,7 +13,7 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
 
-from mobot_cli.assets.frames import LinkTree, floats, origin_frame
+from mobot_cli.assets.description.frames import LinkTree, floats, origin_frame
 from mobot_cli.common.transforms import mat_vec
 from mobot_cli.errors import DescriptionError, Location, Notice, did_you_mean
 from mobot_cli.sim.plan import DriveSpec

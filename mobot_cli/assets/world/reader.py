@@ -14,11 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
-from mobot_cli.assets import sdf_paths
-from mobot_cli.assets.sdf_frames import Scope, is_number, key_of, relative_to, truthy
-from mobot_cli.assets.sdf_geometry import parse_shape
-from mobot_cli.assets.sdf_pose import IDENTITY, Matrix, inverse, parse_pose
-from mobot_cli.assets.sdf_types import Inertial, Joint, Link, Model, World
+from mobot_cli.assets.world import paths as sdf_paths
+from mobot_cli.assets.world.frames import Scope, is_number, key_of, relative_to, truthy
+from mobot_cli.assets.world.geometry import parse_shape
+from mobot_cli.assets.world.model import Inertial, Joint, Link, Model, World
+from mobot_cli.assets.world.pose import IDENTITY, Matrix, inverse, parse_pose
 from mobot_cli.errors import Location, Notice, WorldError
 
 __all__ = ["Inertial", "Joint", "Link", "Model", "SdfReader", "World", "key_of", "truthy"]

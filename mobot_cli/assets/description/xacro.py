@@ -16,8 +16,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator, Mapping
 
-from mobot_cli.common import cache
 from mobot_cli.assets.resources import ResourceResolver
+from mobot_cli.common import cache
 from mobot_cli.errors import DescriptionError, Location, MobotError, Notice, ResourceError, \
     did_you_mean
 

@@ -21,7 +21,7 @@ import os
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from mobot_cli.assets.frames import LinkTree, floats, origin_frame
+from mobot_cli.assets.description.frames import LinkTree, floats, origin_frame
 from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.common.transforms import Frame
 from mobot_cli.errors import DescriptionError, Location, MobotError, Notice

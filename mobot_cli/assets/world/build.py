@@ -8,15 +8,18 @@ from pathlib import Path
 
 import numpy as np
 
-from mobot_cli.assets import meshes
 from mobot_cli.assets.resources import ResourceResolver
-from mobot_cli.assets.sdf import Model, SdfReader
-from mobot_cli.assets.sdf_paths import SdfPaths
-from mobot_cli.assets.sdf_pose import xyz_quat
-from mobot_cli.assets.sdf_robot import model_to_urdf
-from mobot_cli.assets.world_load import ABSURD_DISTANCE, LoadedWorld, WorldRobot, count, \
-    ignored_line
+from mobot_cli.assets.world import meshes
+from mobot_cli.assets.world.loaded import LoadedWorld, WorldRobot
+from mobot_cli.assets.world.paths import SdfPaths
+from mobot_cli.assets.world.pose import xyz_quat
+from mobot_cli.assets.world.reader import Model, SdfReader
+from mobot_cli.assets.world.to_urdf import model_to_urdf
 from mobot_cli.sim.plan import StaticBody, StaticShape, WorldPlan
+
+# A model placed farther than this from the origin is a typo (the AWS bookstore has a book
+# at z = 343 km): it is left out with a warning rather than stretching the world.
+ABSURD_DISTANCE = 10_000.0  # m
 
 
 class _Builder:
@@ -172,3 +175,26 @@ def build_world(path: Path, resolver: ResourceResolver,
 def _cm(value: float) -> str:
     """A coordinate for messages, to the centimetre, never '-0.00'."""
     return f"{round(value, 2) + 0.0:.2f}"
+
+
+def ignored_line(file: str, ignored: dict[str, int], max_step: float | None) -> str | None:
+    """The one summary line naming what the world holds that mobot does not simulate."""
+    parts = []
+    for tag, count in sorted(ignored.items(), key=lambda kv: (-kv[1], kv[0])):
+        if tag.endswith(" geometry"):
+            continue  # each of those has its own warning
+        label = {"light": "light", "plugin": "plugin", "actor": "actor"}.get(tag)
+        text = f"{count} {label}{'s' if count > 1 else ''}" if label else tag
+        if tag == "physics" and max_step:
+            text += f" (max_step_size {max_step:g} s; mobot steps at physics.rate_hz)"
+        if tag == "gravity":
+            text += " (physics.gravity applies)"
+        parts.append(text)
+    if not parts:
+        return None
+    return f"{Path(file).name}: ignored {', '.join(parts)} (mobot simulates collision geometry)"
+
+
+def count(counter: Counter) -> dict[str, int]:
+    """A Counter as a plain dict sorted by key (stable JSON)."""
+    return {k: counter[k] for k in sorted(counter)}

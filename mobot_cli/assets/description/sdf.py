@@ -1,6 +1,6 @@
 """SDF robots for the robot path: a model file as a `description:`, a world's model by name.
 
-Both become URDF text (sdf_robot.model_to_urdf) and then take the same path as every URDF
+Both become URDF text (world.to_urdf.model_to_urdf) and then take the same path as every URDF
 robot: checks, inertial fixes, friction, drive detection, the robot cache.
 """
 
@@ -8,17 +8,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from mobot_cli.assets.description import RobotDescription, describe_expansion
+from mobot_cli.assets.description.robot import RobotDescription, describe_expansion
+from mobot_cli.assets.description.xacro import Expansion
 from mobot_cli.assets.resources import ResourceResolver
-from mobot_cli.assets.xacro_expand import Expansion
 from mobot_cli.errors import DescriptionError, Location, Notice, WorldError
 
 
 def expand_sdf(source: Path, resolver: ResourceResolver) -> Expansion:
     """The URDF text of the first <model> in an SDF file, with what changed as notices."""
-    from mobot_cli.assets.sdf import SdfReader
-    from mobot_cli.assets.sdf_paths import SdfPaths
-    from mobot_cli.assets.sdf_robot import model_to_urdf
+    from mobot_cli.assets.world.paths import SdfPaths
+    from mobot_cli.assets.world.reader import SdfReader
+    from mobot_cli.assets.world.to_urdf import model_to_urdf
 
     paths = SdfPaths(source, resolver)
     reader = SdfReader(source, paths)
@@ -40,7 +40,7 @@ def expand_sdf(source: Path, resolver: ResourceResolver) -> Expansion:
 
 
 def describe_world_robot(robot, base_dir: Path | None) -> RobotDescription:
-    """The RobotDescription of a world's robot model (world_load.WorldRobot)."""
+    """The RobotDescription of a world's robot model (world.loaded.WorldRobot)."""
     expansion = Expansion(text=robot.urdf, files=(Path(robot.source),),
                           notices=tuple(Notice(n) for n in robot.notices))
     return describe_expansion(Path(robot.source), expansion, ResourceResolver(base_dir))

@@ -5,8 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from mobot_cli.assets.sdf_frames import key_of
-from mobot_cli.assets.sdf_pose import IDENTITY, Matrix
+from mobot_cli.assets.world.frames import key_of
+from mobot_cli.assets.world.pose import IDENTITY, Matrix
 from mobot_cli.errors import Location, MobotError, WorldError
 
 # Geometry mobot cannot collide with: warned about and left out (collisions only).

@@ -5,8 +5,8 @@ from __future__ import annotations
 from collections import Counter
 from dataclasses import dataclass, field
 
-from mobot_cli.assets.sdf_geometry import Shape
-from mobot_cli.assets.sdf_pose import IDENTITY, Matrix
+from mobot_cli.assets.world.geometry import Shape
+from mobot_cli.assets.world.pose import IDENTITY, Matrix
 from mobot_cli.errors import Location
 
 
