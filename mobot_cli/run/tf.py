@@ -94,13 +94,6 @@ class RobotFrames:
                 joint.axis, Frame(joint.origin.rot).point(joint.axis), leader, multiplier, offset))
         self.covariance = odometry_covariance(robot)
 
-    def moving_transforms(self, positions: dict[str, float]) -> list[float]:
-        """The flattened (x, y, z, qx, qy, qz, qw) of every moving joint, in ``self.moving`` order."""
-        out: list[float] = []
-        for joint in self.moving:
-            out.extend(joint.transform(positions))
-        return out
-
 
 def odometry_covariance(robot: ET.Element) -> tuple[float, ...]:
     """The 36 covariance values gazebo_ros_diff_drive sets, with the URDF plugin's overrides."""

@@ -11,9 +11,10 @@ import numpy as np
 from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.assets.world import meshes
 from mobot_cli.assets.world.loaded import LoadedWorld, WorldRobot
+from mobot_cli.assets.world.model import Model
 from mobot_cli.assets.world.paths import SdfPaths
 from mobot_cli.assets.world.pose import xyz_quat
-from mobot_cli.assets.world.reader import Model, SdfReader
+from mobot_cli.assets.world.reader import SdfReader
 from mobot_cli.assets.world.to_urdf import model_to_urdf
 from mobot_cli.sim.plan import StaticBody, StaticShape, WorldPlan
 

@@ -21,13 +21,7 @@ from mobot_cli.assets.world.model import Inertial, Joint, Link, Model, World
 from mobot_cli.assets.world.pose import IDENTITY, Matrix, inverse, parse_pose
 from mobot_cli.errors import Location, Notice, WorldError
 
-__all__ = ["Inertial", "Joint", "Link", "Model", "SdfReader", "World", "key_of", "truthy"]
-
 MAX_INCLUDE_DEPTH = 32
-# Elements of <world> that a headless simulation of collision geometry does not need.
-IGNORED_WORLD = ("light", "gui", "scene", "physics", "plugin", "spherical_coordinates",
-                 "gravity", "magnetic_field", "atmosphere", "wind", "audio", "actor", "road",
-                 "population", "frame", "joint")
 
 
 class SdfReader:

@@ -13,8 +13,8 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from mobot_cli.assets.world.pose import inverse, rpy
-from mobot_cli.assets.world.reader import Link, Model
+from mobot_cli.assets.world.model import Link, Model
+from mobot_cli.assets.world.pose import IDENTITY, inverse, rpy
 from mobot_cli.errors import DescriptionError, Location, Notice
 
 # Revolute limits this wide (SDF's default is +-1e16) mean "turns freely": continuous.
@@ -51,7 +51,7 @@ def model_to_urdf(model: Model, source: Path) -> tuple[str, list[Notice]]:
         raise DescriptionError(f"the joints of model '{model.name}' form a loop",
                                location=model.location, hint="Links must form a tree.")
     root = roots[0]
-    frames = {root: _eye()}  # the root link's URDF frame is the model frame
+    frames = {root: IDENTITY.copy()}  # the root link's URDF frame is the model frame
     robot = ET.Element("robot", name=model.name)
     for extra in roots[1:]:  # SDF lets links float free; a robot keeps them on its root
         notices.append(Notice(f"link '{extra}' has no joint: it is fixed to '{root}'", where))
@@ -69,12 +69,6 @@ def model_to_urdf(model: Model, source: Path) -> tuple[str, list[Notice]]:
             _joint(robot, joint, frames, notices)
     _plugins(robot, model)
     return '<?xml version="1.0"?>\n' + ET.tostring(robot, encoding="unicode"), notices
-
-
-def _eye():
-    import numpy as np
-
-    return np.eye(4)
 
 
 def _tree_order(root: str, extra_roots: list[str], joints) -> list[str]:
@@ -133,7 +127,7 @@ def _shape(link: ET.Element, kind: str, shape, to_urdf, link_name: str,
         for dz, geometry in ((0.0, ("cylinder", {"radius": radius, "length": length})),
                              (length / 2, ("sphere", {"radius": radius})),
                              (-length / 2, ("sphere", {"radius": radius}))):
-            offset = _eye()
+            offset = IDENTITY.copy()
             offset[2, 3] = dz
             _element(link, kind, pose @ offset, *geometry)
         return
