@@ -21,7 +21,7 @@ from mobot_cli.sweep.runner import run_sweep
 from mobot_cli.sweep.spec import build_spec, split_values
 from mobot_cli.sweep.task import run_task
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 SPEED = """version: 1
 name: speed
 duration: 2.5

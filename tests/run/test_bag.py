@@ -229,7 +229,7 @@ def test_same_inputs_give_a_byte_identical_bag_and_a_rerun_replaces_it(bag_run, 
 
 def test_robots_that_come_and_go_get_their_topics_from_their_first_sample(tmp_path):
     """scenarios/events.yaml: mobot_1 is deleted at 3 s, 'late' spawns at 3.5 s."""
-    scenario = Path(__file__).resolve().parent.parent / "scenarios" / "events.yaml"
+    scenario = Path(__file__).resolve().parents[2] / "scenarios" / "events.yaml"
     out = tmp_path / "events"
     assert _dispatch(["run", str(scenario), "--out", str(out), "--quiet", "--set", "log.formats=[csv, mcap]"]) == 0
     msgs = messages(out / "bag")

@@ -13,7 +13,7 @@ from mobot_cli.cli import _dispatch
 from mobot_cli.errors import ScenarioError
 from mobot_cli.run.prepare import prepare
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 EVENTS = REPO / "scenarios" / "events.yaml"
 
 

@@ -14,7 +14,7 @@ from pathlib import Path
 from mobot_cli.errors import LiveWorldError
 from mobot_cli.live.client import Client
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 START_TIMEOUT = 60.0  # s; a cold first start imports pybullet and may expand xacro
 
 

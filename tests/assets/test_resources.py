@@ -22,7 +22,7 @@ def make_package(root: Path, folder: str, name: str, files: tuple[str, ...] = ()
 
 
 def test_bundled_dirs_are_the_repository_folders():
-    assert bundled_dir("robots") == Path(__file__).resolve().parent.parent / "robots"
+    assert bundled_dir("robots") == Path(__file__).resolve().parents[2] / "robots"
     assert (bundled_dir("robots") / "mobot" / "package.xml").is_file()
     with pytest.raises(ValueError):
         bundled_dir("meshes")

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from live_server import REPO, LiveProcess, wait_for_step
+from tests.live.live_server import REPO, LiveProcess, wait_for_step
 from mobot_cli.cli import _dispatch
 from mobot_cli.errors import RequestRefused
 

@@ -12,7 +12,7 @@ import pytest
 from mobot_cli.cli import _dispatch
 from mobot_cli.run.prepare import prepare
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 SCENARIOS = sorted((REPO / "scenarios").glob("*.yaml"))
 HEADER = ("t,cmd_linear,cmd_angular,odom_x,odom_y,odom_yaw,odom_vx,odom_wz,"
           "true_x,true_y,true_z,true_roll,true_pitch,true_yaw,true_vx,true_wz\n")
@@ -136,7 +136,7 @@ def test_set_and_seed_override(tmp_path):
 
 def test_resolved_quickstart_matches_golden_file():
     """The resolved format is a contract: a change here must be deliberate (regenerate and review)."""
-    golden = Path(__file__).parent / "golden" / "quickstart.resolved.yaml"
+    golden = REPO / "tests" / "golden" / "quickstart.resolved.yaml"
     assert prepare(REPO / "scenarios" / "quickstart.yaml").resolved_yaml == golden.read_text()
 
 

@@ -12,7 +12,7 @@ from mobot_cli.run.prepare import prepare
 from mobot_cli.sim.plan import SpawnPose, StaticBody, WorldPlan
 from mobot_cli.sim.world import World
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")

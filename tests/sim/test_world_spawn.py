@@ -18,7 +18,7 @@ from mobot_cli.run.prepare import prepare
 from mobot_cli.sim.plan import Physics, RobotPlan, SpawnPose
 from mobot_cli.sim.world import World
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 SMALL_HOUSE = "aws-robomaker-small-house-world/worlds/small_house.world"
 
 

@@ -10,7 +10,7 @@ import time
 import pytest
 import zmq
 
-from live_server import LiveProcess, wait_for_step
+from tests.live.live_server import LiveProcess, wait_for_step
 from mobot_cli.live.client import Client
 from mobot_cli.live.protocol import HARD_LIMIT_BYTES, MAX_REQUEST_BYTES
 

@@ -15,7 +15,7 @@ from mobot_cli.run.timeline import Sample
 from mobot_cli.sim.plan import Expectation, Physics, Plan, WorldPlan
 from mobot_cli.sim.state import RobotState
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 CHECKED = REPO / "scenarios" / "expectations.yaml"
 
 

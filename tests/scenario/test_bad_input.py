@@ -15,8 +15,8 @@ import pytest
 
 from mobot_cli.cli import _dispatch
 
-HERE = Path(__file__).parent
-BAD = sorted((HERE / "bad").glob("*.yaml"))
+TESTS = Path(__file__).parent.parent  # tests/, which holds bad/
+BAD = sorted((TESTS / "bad").glob("*.yaml"))
 
 
 def run_cli(args: list[str], capsys) -> tuple[int, str, str]:
@@ -27,14 +27,14 @@ def run_cli(args: list[str], capsys) -> tuple[int, str, str]:
 
 @pytest.mark.parametrize("path", BAD, ids=[p.stem for p in BAD])
 def test_bad_scenario_error_text(path: Path, capsys, monkeypatch):
-    monkeypatch.chdir(HERE)
+    monkeypatch.chdir(TESTS)
     code, out, err = run_cli(["check", f"bad/{path.name}"], capsys)
     assert code == 2
     assert out == ""
     assert "Traceback" not in err
     assert err.count("\n") == 1, "an error is one paragraph on one line"
     # Golden files must not depend on where the checkout is.
-    err = err.replace(str(HERE), "<tests>").replace(str(HERE.parent), "<repo>")
+    err = err.replace(str(TESTS), "<tests>").replace(str(TESTS.parent), "<repo>")
     golden = path.with_suffix(".expected")
     if os.environ.get("MOBOT_UPDATE_GOLDEN"):
         golden.write_text(err)
@@ -43,7 +43,7 @@ def test_bad_scenario_error_text(path: Path, capsys, monkeypatch):
 
 @pytest.mark.parametrize("path", BAD, ids=[p.stem for p in BAD])
 def test_bad_scenario_leaves_no_run_folder(path: Path, capsys, monkeypatch, tmp_path):
-    monkeypatch.chdir(HERE)
+    monkeypatch.chdir(TESTS)
     out_dir = tmp_path / "run"
     code, _, err = run_cli(["run", f"bad/{path.name}", "--out", str(out_dir), "--quiet"], capsys)
     assert code == 2, err
@@ -51,18 +51,18 @@ def test_bad_scenario_leaves_no_run_folder(path: Path, capsys, monkeypatch, tmp_
 
 
 def test_real_process_exit_code_and_no_traceback(tmp_path):
-    result = subprocess.run([sys.executable, "-m", "mobot_cli", "run", str(HERE / "bad" / "unknown_key.yaml"),
+    result = subprocess.run([sys.executable, "-m", "mobot_cli", "run", str(TESTS / "bad" / "unknown_key.yaml"),
                              "--out", str(tmp_path / "x")], capture_output=True, text=True, timeout=60)
     assert result.returncode == 2
     assert "Traceback" not in result.stderr
-    assert result.stderr == (f"mobot: error: {HERE}/bad/unknown_key.yaml:5, key 'robots.mobot.poze': "
+    assert result.stderr == (f"mobot: error: {TESTS}/bad/unknown_key.yaml:5, key 'robots.mobot.poze': "
                              "unknown key 'poze'. Did you mean 'pose'?\n")
     assert not (tmp_path / "x").exists()
 
 
 def test_traceback_flag_shows_one(tmp_path):
     result = subprocess.run([sys.executable, "-m", "mobot_cli", "--traceback", "check",
-                             str(HERE / "bad" / "unknown_key.yaml")], capture_output=True, text=True, timeout=60)
+                             str(TESTS / "bad" / "unknown_key.yaml")], capture_output=True, text=True, timeout=60)
     assert result.returncode != 0
     assert "Traceback" in result.stderr
 
@@ -82,7 +82,7 @@ def test_missing_scenario_file(capsys, tmp_path):
     ("nonsense", "--set 'nonsense' is not KEY=VALUE"),
 ])
 def test_bad_set_override(override, message, capsys, tmp_path):
-    scenario = HERE.parent / "scenarios" / "quickstart.yaml"
+    scenario = TESTS.parent / "scenarios" / "quickstart.yaml"
     code, _, err = run_cli(["run", str(scenario), "--set", override, "--out", str(tmp_path / "r")], capsys)
     assert code == 2
     assert message in err
@@ -98,7 +98,7 @@ def test_bad_set_override(override, message, capsys, tmp_path):
 def test_command_line_mistakes_exit_2_without_traceback(args, message):
     """Real processes: Typer's own usage errors must not escape as tracebacks."""
     result = subprocess.run([sys.executable, "-m", "mobot_cli", *args], capture_output=True, text=True,
-                            timeout=60, cwd=HERE.parent)
+                            timeout=60, cwd=TESTS.parent)
     assert result.returncode == 2
     assert "Traceback" not in result.stderr
     assert message in result.stderr and result.stdout == ""

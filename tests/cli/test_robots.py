@@ -13,7 +13,7 @@ import pytest
 
 from mobot_cli.cli import _dispatch
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 BURGER = "turtlebot3/turtlebot3_description/urdf/turtlebot3_burger.urdf.xacro"
 
 

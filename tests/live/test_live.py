@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from live_server import REPO, LiveProcess
+from tests.live.live_server import REPO, LiveProcess
 from mobot_cli.cli import _dispatch
 
 BAD_ROBOTS = REPO / "tests" / "bad" / "robots"

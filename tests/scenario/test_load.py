@@ -12,7 +12,7 @@ from mobot_cli.errors import ScenarioError
 from mobot_cli.scenario.load import load_scenario
 from mobot_cli.scenario.units import spawn_pose, steps
 
-SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
+SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 
 
 def write(tmp_path: Path, text: str) -> Path:
