@@ -152,19 +152,6 @@ def test_model_sdf_follows_model_config(corpus, tmp_path):
         model_sdf(tmp_path / "m")
 
 
-def test_cache_dir_precedence(monkeypatch, tmp_path):
-    from mobot_cli.common.cache import cache_dir
-
-    monkeypatch.setenv("MOBOT_CACHE_DIR", str(tmp_path / "explicit"))
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
-    assert cache_dir() == tmp_path / "explicit"
-    monkeypatch.delenv("MOBOT_CACHE_DIR")
-    assert cache_dir() == tmp_path / "xdg" / "mobot"
-    monkeypatch.delenv("XDG_CACHE_HOME")
-    monkeypatch.setenv("HOME", str(tmp_path / "home"))
-    assert cache_dir() == tmp_path / "home" / ".cache" / "mobot"
-
-
 def test_a_file_may_name_its_own_package_without_search_paths(tmp_path):
     pkg = make_package(tmp_path, "repo/robot_desc", "robot_description", ("meshes/a.stl",))
     urdf = pkg / "urdf" / "r.urdf"
