@@ -14,6 +14,9 @@ from mobot_cli.common.files import write_text_atomic
 # Bump when the layout of a cached document changes, so old entries are simply missed.
 CACHE_FORMAT = 1
 _PACKAGE = Path(__file__).resolve().parent.parent  # mobot_cli/
+# The code that builds cached documents (asset loading, the plan types it fills, this folder)
+# and the version number; paths, not imports: the cache sits below all of them.
+_BUILDERS = ("__init__.py", "common", "assets", "sim/plan.py")
 
 
 def cache_dir() -> Path:
@@ -29,10 +32,10 @@ def cache_dir() -> Path:
 def _code_version() -> str:
     # The code that builds cached results is part of every key, so an edited checkout (an
     # editable install keeps its version number) never reads entries an older build wrote.
-    # All of the package's sources (mobot_cli/__init__.py holds the version): cheaper to
-    # read than to keep a list of the modules that shape cached documents up to date.
     sha = hashlib.sha256(f"mobot cache {CACHE_FORMAT}".encode())
-    for source in sorted(_PACKAGE.rglob("*.py")):
+    sources = [p for name in _BUILDERS
+               for p in ([_PACKAGE / name] if name.endswith(".py") else (_PACKAGE / name).rglob("*.py"))]
+    for source in sorted(sources):
         try:
             sha.update(str(source.relative_to(_PACKAGE)).encode())
             sha.update(source.read_bytes())

@@ -34,3 +34,24 @@ def test_keys_separate_their_parts_and_a_read_only_cache_costs_nothing(monkeypat
     monkeypatch.setenv("MOBOT_CACHE_DIR", str(tmp_path / "file"))  # a file where the folder should be
     cache.store("kind", "key", {"a": 1})
     assert cache.load("kind", "key") is None
+
+
+def test_keys_change_with_the_code_that_builds_documents_only(monkeypatch, tmp_path):
+    for name in ("__init__.py", "common/cache.py", "assets/world/build.py", "sim/plan.py", "cli/run.py"):
+        (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / name).write_text("# v1\n", encoding="utf-8")
+    monkeypatch.setattr(cache, "_PACKAGE", tmp_path)
+
+    def key() -> str:
+        cache._code_version.cache_clear()
+        return cache.digest("world", "same input")
+
+    try:
+        first = key()
+        (tmp_path / "cli" / "run.py").write_text("# v2\n", encoding="utf-8")
+        assert key() == first  # the CLI builds no cached document
+        (tmp_path / "assets" / "world" / "build.py").write_text("# v2\n", encoding="utf-8")
+        assert key() != first  # a module in a subfolder of assets does
+    finally:
+        monkeypatch.undo()
+        cache._code_version.cache_clear()
