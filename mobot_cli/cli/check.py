@@ -64,7 +64,8 @@ def _check_scenario(path: Path, skip_missing: bool) -> dict:
 
 
 def _check_robot(path: Path, args: dict[str, str]) -> dict:
-    from mobot_cli.assets.description import inspect_summary, load_robot
+    from mobot_cli.assets.description.load import load_robot
+    from mobot_cli.assets.description.robot import inspect_summary
 
     desc = load_robot(str(path), args, Path.cwd())
     return {"ok": True, "kind": "robot", "path": str(path), **inspect_summary(desc),
@@ -81,13 +82,13 @@ def _is_world(path: Path) -> bool:
 
 
 def _bundled_world(path: Path) -> bool:
-    from mobot_cli.assets.world_load import bundled_world_names
+    from mobot_cli.assets.world.load import bundled_world_names
 
     return not path.exists() and str(path) in bundled_world_names()
 
 
 def _check_world(path: Path, skip_missing: bool) -> dict:
-    from mobot_cli.assets.world_load import load_world
+    from mobot_cli.assets.world.load import load_world
     from mobot_cli.run.preflight import check_world
 
     loaded = load_world(str(path), Path.cwd(), skip_missing=skip_missing)

@@ -18,7 +18,8 @@ def inspect(
     json_: bool = typer.Option(False, "--json", help="Print the result as JSON."),
 ) -> int:
     """Show a robot's link/joint tree, total mass, footprint and detected drive."""
-    from mobot_cli.assets.description import inspect_summary, load_robot
+    from mobot_cli.assets.description.load import load_robot
+    from mobot_cli.assets.description.robot import inspect_summary
 
     desc = load_robot(robot, parse_mappings(mappings or []), Path.cwd())
     summary = inspect_summary(desc)

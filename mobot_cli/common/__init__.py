@@ -1,1 +1,5 @@
-"""Shared code at the bottom of the package: maths and file helpers every layer may use."""
+"""Code every layer shares: rotations and poses, atomic file writes, the cache folder.
+
+Nothing here imports from mobot_cli but ``mobot_cli.errors``; the import rule is a test
+(tests/test_layers.py).
+"""

@@ -10,9 +10,10 @@ This module stays light (no pydantic, no zmq) so the CLI client imports it cheap
 from __future__ import annotations
 
 import json
-import math
 from enum import IntEnum
 from typing import Any
+
+from mobot_cli.common.files import json_default
 
 PROTOCOL_VERSION = 1
 # A request larger than this is refused with INVALID_REQUEST (robot descriptions sent with
@@ -55,7 +56,7 @@ class Refusal(Exception):
 
 def encode(document: dict[str, Any]) -> bytes:
     """One message: compact UTF-8 JSON; NaN and infinity are not JSON and never sent."""
-    return json.dumps(document, separators=(",", ":"), allow_nan=False, default=_plain).encode()
+    return json.dumps(document, separators=(",", ":"), allow_nan=False, default=json_default).encode()
 
 
 def decode(frame: bytes) -> dict[str, Any]:
@@ -93,8 +94,3 @@ def reply(request_id: Any, result: Result = Result.OK, message: str = "", **fiel
 def _no_constant(name: str) -> Any:
     raise ValueError(f"{name} is not a number JSON allows")
 
-
-def _plain(value: Any) -> Any:
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return str(value)

@@ -11,15 +11,15 @@ import math
 import re
 from pathlib import Path
 
-from mobot_cli.assets.description import resolve_description
+from mobot_cli.assets.description.load import resolve_description
 from mobot_cli.assets.resources import ResourceResolver
+from mobot_cli.common.transforms import compose_poses, quat_from_rpy
 from mobot_cli.errors import DescriptionError, MobotError, ResourceError, SpawnError
 from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.live.schema import Spawn, normalize_namespace
 from mobot_cli.run.timeline import NameTaken, NotInWorld
 from mobot_cli.scenario.model import RobotSpec
 from mobot_cli.scenario.robots import RobotResolver
-from mobot_cli.scenario.units import quat_from_rpy
 from mobot_cli.sim.plan import RobotPlan, SpawnPose
 from mobot_cli.sim.state import RobotState
 from mobot_cli.sim.urdf_file import urdf_path
@@ -113,21 +113,9 @@ def named(plan: RobotPlan, name: str, namespace: str | None, namespaces: dict[st
 def in_frame(pose: SpawnPose, ref: RobotState) -> SpawnPose:
     """A pose given relative to a robot's base link (its pose now) to the world frame."""
     q_ref = quat_from_rpy(ref.true_roll, ref.true_pitch, ref.true_yaw)
-    x, y, z = _rotate(q_ref, (pose.xyz[0], pose.xyz[1], 0.0 if pose.z_auto else pose.xyz[2]))
-    xyz = (ref.true_x + x, ref.true_y + y, ref.true_z + z)
-    return SpawnPose(xyz=xyz, quat=_multiply(q_ref, pose.quat), z_auto=pose.z_auto)
-
-
-def _multiply(a, b) -> tuple[float, float, float, float]:
-    ax, ay, az, aw = a
-    bx, by, bz, bw = b
-    return (aw * bx + ax * bw + ay * bz - az * by, aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw, aw * bw - ax * bx - ay * by - az * bz)
-
-
-def _rotate(q, v) -> tuple[float, float, float]:
-    x, y, z, _ = _multiply(_multiply(q, (*v, 0.0)), (-q[0], -q[1], -q[2], q[3]))
-    return x, y, z
+    local = (pose.xyz[0], pose.xyz[1], 0.0 if pose.z_auto else pose.xyz[2])
+    xyz, quat = compose_poses(((ref.true_x, ref.true_y, ref.true_z), q_ref), (local, pose.quat))
+    return SpawnPose(xyz=xyz, quat=quat, z_auto=pose.z_auto)
 
 
 def pose_fields(state: RobotState) -> dict[str, float]:

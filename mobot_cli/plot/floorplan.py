@@ -12,14 +12,13 @@ from __future__ import annotations
 import math
 import xml.etree.ElementTree as ET
 
-from mobot_cli.assets.frames import LinkTree, floats, origin_frame
-from mobot_cli.run.tf import quat_from_matrix, quat_mul
+from mobot_cli.assets.description.frames import LinkTree, floats, origin_frame
+from mobot_cli.common.transforms import Quat, Vec, compose_poses, pose_point, quat_from_matrix, \
+    quat_matrix
 from mobot_cli.sim.plan import StaticShape, WorldPlan
 
 Point = tuple[float, float]
 Polygon = list[Point]
-Vec3 = tuple[float, float, float]
-Quat = tuple[float, float, float, float]
 
 BAND = (0.02, 2.0)  # metres above z = 0: lower is floor, higher is ceiling
 ROUND = 24  # points on a projected circle
@@ -30,23 +29,23 @@ def floor_plan(world: WorldPlan) -> list[Polygon]:
     polygons: list[Polygon] = []
     for body in world.bodies:
         for shape in body.shapes or _urdf_shapes(body.urdf):
-            xyz, quat = _compose((body.xyz, body.quat), (shape.xyz, shape.quat))
+            xyz, quat = compose_poses((body.xyz, body.quat), (shape.xyz, shape.quat))
             polygons.extend(shape_shadow(shape, xyz, quat))
     return polygons
 
 
-def shape_shadow(shape: StaticShape, xyz: Vec3, quat: Quat) -> list[Polygon]:
+def shape_shadow(shape: StaticShape, xyz: Vec, quat: Quat) -> list[Polygon]:
     """The shadow of one shape posed in the world (none when it lies outside the band)."""
     if shape.kind == "mesh":
         return _mesh_shadow(shape.mesh, shape.size, xyz, quat)
-    points = [_apply(xyz, quat, p) for p in _outline_points(shape.kind, shape.size)]
+    points = [pose_point(xyz, quat, p) for p in _outline_points(shape.kind, shape.size)]
     if not points or not _in_band(min(p[2] for p in points), max(p[2] for p in points)):
         return []
     hull = convex_hull([(p[0], p[1]) for p in points])
     return [hull] if len(hull) >= 3 else []
 
 
-def _outline_points(kind: str, size: tuple[float, ...]) -> list[Vec3]:
+def _outline_points(kind: str, size: tuple[float, ...]) -> list[Vec]:
     """Points whose convex hull is the shape (exact for boxes, 24-gons for round parts)."""
     if kind == "box":
         hx, hy, hz = (s / 2.0 for s in size[:3])
@@ -63,7 +62,7 @@ def _outline_points(kind: str, size: tuple[float, ...]) -> list[Vec3]:
     return []  # a plane is a floor or a wall of infinite extent: not drawn
 
 
-def _mesh_shadow(path: str, scale: tuple[float, ...], xyz: Vec3, quat: Quat) -> list[Polygon]:
+def _mesh_shadow(path: str, scale: tuple[float, ...], xyz: Vec, quat: Quat) -> list[Polygon]:
     import numpy as np
 
     from mobot_cli.plot.meshread import read_mesh
@@ -71,7 +70,7 @@ def _mesh_shadow(path: str, scale: tuple[float, ...], xyz: Vec3, quat: Quat) -> 
     vertices, faces = read_mesh(path)
     if len(faces) == 0:
         return []
-    rot = np.array(_matrix(quat))
+    rot = np.array(quat_matrix(quat))
     world = (vertices * np.array(scale[:3])) @ rot.T + np.array(xyz)
     tri = world[faces]  # (n, 3 corners, xyz)
     z = tri[:, :, 2]
@@ -150,23 +149,4 @@ def _cross(o: Point, a: Point, b: Point) -> float:
 
 def _in_band(zmin: float, zmax: float) -> bool:
     return zmax >= BAND[0] and zmin <= BAND[1]
-
-
-def _matrix(q: Quat):
-    x, y, z, w = q
-    n = math.sqrt(x * x + y * y + z * z + w * w) or 1.0
-    x, y, z, w = x / n, y / n, z / n, w / n
-    return ((1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)),
-            (2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)),
-            (2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)))
-
-
-def _apply(xyz: Vec3, quat: Quat, p: Vec3) -> Vec3:
-    m = _matrix(quat)
-    return tuple(m[i][0] * p[0] + m[i][1] * p[1] + m[i][2] * p[2] + xyz[i] for i in range(3))  # type: ignore
-
-
-def _compose(a: tuple[Vec3, Quat], b: tuple[Vec3, Quat]) -> tuple[Vec3, Quat]:
-    """Pose a * pose b."""
-    return _apply(a[0], a[1], b[0]), quat_mul(a[1], b[1])
 

@@ -8,13 +8,14 @@ for x and y (equal aspect), a grid at the tick marks, the legend in a panel on t
 
 from __future__ import annotations
 
+import io
 import math
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from PIL import Image, ImageDraw, ImageFont
 
+from mobot_cli.common.files import write_bytes_atomic
 from mobot_cli.plot.floorplan import Polygon
 
 Point = tuple[float, float]
@@ -54,9 +55,9 @@ def render(tracks: list[Track], floor: list[Polygon], out: Path, title: str, sub
     if subtitle:
         canvas.text((MARGIN["left"], 36), subtitle, size=13, fill=(90, 90, 90))
     image = canvas.image.reduce(SS)
-    tmp = out.with_name(out.name + ".tmp")
-    image.save(tmp, format="PNG", compress_level=1)  # level 6 takes 2x as long for 40 % less
-    os.replace(tmp, out)
+    png = io.BytesIO()
+    image.save(png, format="PNG", compress_level=1)  # level 6 takes 2x as long for 40 % less
+    write_bytes_atomic(out, png.getvalue())
 
 
 def _bounds(tracks: list[Track], floor: list[Polygon]) -> tuple[float, float, float, float]:

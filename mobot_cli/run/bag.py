@@ -26,10 +26,11 @@ import re
 import shutil
 from pathlib import Path
 
+from mobot_cli.common.transforms import odom_origin, yaw_quat
 from mobot_cli.run.cdr import Layout, Packer
 from mobot_cli.run.ros_msgs import MESSAGES
-from mobot_cli.run.tf import RobotFrames, yaw_quat
 from mobot_cli.run.sinks import Sink
+from mobot_cli.run.tf import RobotFrames
 from mobot_cli.run.timeline import Sample
 from mobot_cli.sim.plan import Plan, RobotPlan
 from mobot_cli.sim.state import RobotState
@@ -144,12 +145,9 @@ class BagSink(Sink):
         robot = self.robots[name] = _RobotTopics(self, plan, state, reuse=same_ns[0] if same_ns else None)
         self.writer.write(robot.description, ns, robot.description_packer.pack(()))
         # The odom frame sits where odometry (0, 0, 0) is: the truth now, less the odometry so far.
-        yaw = state.true_yaw - state.odom_yaw
-        c, s = math.cos(yaw), math.sin(yaw)
-        x = state.true_x - (c * state.odom_x - s * state.odom_y)
-        y = state.true_y - (s * state.odom_x + c * state.odom_y)
+        origin = odom_origin(state.true_x, state.true_y, state.true_yaw, state.odom_x, state.odom_y, state.odom_yaw)
         frames = robot.frames
-        statics = [(WORLD_FRAME, frames.odom_frame, (x, y, state.true_z), yaw_quat(yaw))]
+        statics = [(WORLD_FRAME, frames.odom_frame, (origin.x, origin.y, state.true_z), yaw_quat(origin.yaw))]
         statics += [(t.parent, t.child, t.xyz, t.quat) for t in frames.static]
         layout = Layout().u32(len(statics))
         values: list[float] = []

@@ -3,7 +3,7 @@
 A run records thousands of messages whose frame names, joint names and covariances never
 change; only stamps, poses and joint values do. rosbags' serializer builds a message object
 and walks it for every message (~18 us for an Odometry); laying the bytes out once and
-filling in the numbers is ~1 us. tests/test_bag.py checks every layout byte for byte against
+filling in the numbers is ~1 us. tests/run/test_bag.py checks every layout byte for byte against
 rosbags' own serializer.
 """
 

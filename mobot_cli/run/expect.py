@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass, replace
 from typing import Any, Optional
 
+from mobot_cli.common.transforms import Planar
 from mobot_cli.run.sinks import Sink
 from mobot_cli.run.timeline import Sample
 from mobot_cli.sim.plan import Expectation, Plan, RobotPlan
@@ -69,9 +70,7 @@ def tilt(state: RobotState) -> float:
 def odom_error(first: RobotState, state: RobotState) -> tuple[float, float]:
     """Odometry position (m) and yaw (rad) error against the truth, the odom frame's origin
     being the first sample's true pose (the spawn pose, as on a real robot)."""
-    c, s = math.cos(first.true_yaw), math.sin(first.true_yaw)
-    x = first.true_x + c * state.odom_x - s * state.odom_y
-    y = first.true_y + s * state.odom_x + c * state.odom_y
+    x, y = Planar(first.true_x, first.true_y, first.true_yaw)(state.odom_x, state.odom_y)
     yaw = math.remainder(first.true_yaw + state.odom_yaw - state.true_yaw, math.tau)
     return math.hypot(x - state.true_x, y - state.true_y), yaw
 

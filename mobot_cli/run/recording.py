@@ -23,7 +23,7 @@ from mobot_cli.common.files import write_text_atomic
 from mobot_cli.run.expect import Checker, Result, odom_error
 from mobot_cli.run.record import (SUMMARY, ExpectationResult, Expectations, LiveInfo, OdomError, OdomPose, Pose,
                                   RobotRecord, RunRecord, Status, Versions)
-from mobot_cli.run.sinks import make_sinks
+from mobot_cli.run.sinks import CsvSink, Sink
 from mobot_cli.run.timeline import Deleted, Record, Sample, Spawned
 from mobot_cli.sim.plan import Plan, RobotPlan
 from mobot_cli.sim.state import RobotState
@@ -143,6 +143,21 @@ class Recording:
             notices=list(plan.notices),
             robots={key: life.record() for key, life in self._lives.items() if life.last is not None},
             expectations=expectations, live=live)
+
+
+def make_sinks(plan: Plan, out_dir: Path) -> list[Sink]:
+    """The sinks a plan's ``formats`` ask for."""
+    sinks: list[Sink] = []
+    if "csv" in plan.formats:
+        sinks.append(CsvSink(plan, out_dir))
+    if "mcap" in plan.formats:
+        from mobot_cli.run.bag import BagSink  # imports rosbags: only when a bag is asked for
+
+        sinks.append(BagSink(plan, out_dir))
+    from mobot_cli.run.trajectory import TrajectorySink
+
+    sinks.append(TrajectorySink(plan, out_dir))  # every run; last, as it draws when closed
+    return sinks
 
 
 def _version(package: str) -> str | None:

@@ -72,7 +72,7 @@ def replot(folder: Path, out: Path | None = None) -> PlotResult:
 
 def read_tracks(run: Path) -> list[_Points]:
     """Each odom CSV of a run folder as a track; odometry mapped into the world like the run does."""
-    from mobot_cli.run.trajectory import OdomToWorld
+    from mobot_cli.run.trajectory import odom_to_world
 
     tracks = []
     for path in sorted((run / "odom").glob("*.csv")):
@@ -83,7 +83,7 @@ def read_tracks(run: Path) -> list[_Points]:
                     state = _State(*(float(row[k]) for k in _State.FIELDS))
                 except (KeyError, TypeError, ValueError):
                     continue  # a row cut short by a killed run
-                to_world = to_world or OdomToWorld(state)
+                to_world = to_world or odom_to_world(state)
                 track.true.append((state.true_x, state.true_y))
                 track.odom.append(to_world(state.odom_x, state.odom_y))
         if track.true:
@@ -93,7 +93,7 @@ def read_tracks(run: Path) -> list[_Points]:
 
 @dataclass
 class _State:
-    """The CSV columns OdomToWorld and the plot use."""
+    """The CSV columns odom_to_world and the plot use."""
 
     FIELDS = ("true_x", "true_y", "true_yaw", "odom_x", "odom_y", "odom_yaw")
     true_x: float

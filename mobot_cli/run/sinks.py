@@ -7,11 +7,8 @@ named by their name in the record (``<name>__2`` for a name used again in a live
 
 from __future__ import annotations
 
-import json
-import math
-import os
 from pathlib import Path
-from typing import Any
+
 
 from mobot_cli.run.timeline import Sample
 from mobot_cli.sim.plan import Plan, RobotPlan
@@ -92,39 +89,3 @@ class CsvSink(Sink):
     def close(self) -> None:
         for csv in self._files.values():
             csv.close()
-
-
-def make_sinks(plan: Plan, out_dir: Path) -> list[Sink]:
-    """The sinks a plan's ``formats`` ask for."""
-    sinks: list[Sink] = []
-    if "csv" in plan.formats:
-        sinks.append(CsvSink(plan, out_dir))
-    if "mcap" in plan.formats:
-        from mobot_cli.run.bag import BagSink  # imports rosbags: only when a bag is asked for
-
-        sinks.append(BagSink(plan, out_dir))
-    from mobot_cli.run.trajectory import TrajectorySink
-
-    sinks.append(TrajectorySink(plan, out_dir))  # every run; last, as it draws when closed
-    return sinks
-
-
-def write_json_atomic(path: Path, data: dict[str, Any]) -> None:
-    """Write JSON to a temporary sibling and rename it into place."""
-    write_text_atomic(path, json.dumps(data, indent=2, allow_nan=False, default=_plain) + "\n")
-
-
-def write_text_atomic(path: Path, text: str) -> None:
-    """Write text to a temporary sibling, flush it to disk and rename it into place."""
-    tmp = path.with_name(path.name + ".tmp")
-    with tmp.open("w", encoding="utf-8") as f:
-        f.write(text)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
-
-
-def _plain(value: Any) -> Any:
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return str(value)

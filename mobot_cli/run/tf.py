@@ -13,10 +13,8 @@ import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
-from mobot_cli.assets.frames import Frame, LinkTree, floats
-
-Vec3 = tuple[float, float, float]
-Quat = tuple[float, float, float, float]  # x, y, z, w as in ROS
+from mobot_cli.assets.description.frames import LinkTree, floats
+from mobot_cli.common.transforms import Frame, Quat, Vec, quat_from_matrix, quat_mul
 
 MOVING = ("revolute", "continuous", "prismatic")
 # What gazebo_ros_diff_drive puts on the diagonal of both covariances unless the plugin's
@@ -31,7 +29,7 @@ class Transform:
 
     parent: str
     child: str
-    xyz: Vec3
+    xyz: Vec
     quat: Quat
 
 
@@ -43,10 +41,10 @@ class MovingJoint:
     parent: str
     child: str
     prismatic: bool
-    xyz: Vec3  # origin translation
+    xyz: Vec  # origin translation
     quat: Quat  # origin rotation
-    axis: Vec3  # unit axis in the joint frame
-    moved_axis: Vec3  # origin rotation * axis: a prismatic joint's direction in the parent frame
+    axis: Vec  # unit axis in the joint frame
+    moved_axis: Vec  # origin rotation * axis: a prismatic joint's direction in the parent frame
     leader: str  # the joint whose position drives this one (itself unless mimic)
     multiplier: float = 1.0
     offset: float = 0.0
@@ -63,41 +61,6 @@ class MovingJoint:
         if self.quat == (0.0, 0.0, 0.0, 1.0):  # most wheel joints: no origin rotation
             return (x, y, z, ax * s, ay * s, az * s, c)
         return (x, y, z, *quat_mul(self.quat, (ax * s, ay * s, az * s, c)))
-
-
-def quat_mul(a: Quat, b: Quat) -> Quat:
-    """The Hamilton product a * b (rotate by b first, then a)."""
-    ax, ay, az, aw = a
-    bx, by, bz, bw = b
-    return (aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-            aw * bw - ax * bx - ay * by - az * bz)
-
-
-def quat_from_matrix(m) -> Quat:
-    """A unit quaternion (x, y, z, w) from a 3x3 rotation matrix, w >= 0."""
-    trace = m[0][0] + m[1][1] + m[2][2]
-    if trace > 0.0:
-        s = 2.0 * math.sqrt(trace + 1.0)
-        q = ((m[2][1] - m[1][2]) / s, (m[0][2] - m[2][0]) / s, (m[1][0] - m[0][1]) / s, s / 4.0)
-    elif m[0][0] > m[1][1] and m[0][0] > m[2][2]:
-        s = 2.0 * math.sqrt(1.0 + m[0][0] - m[1][1] - m[2][2])
-        q = (s / 4.0, (m[0][1] + m[1][0]) / s, (m[0][2] + m[2][0]) / s, (m[2][1] - m[1][2]) / s)
-    elif m[1][1] > m[2][2]:
-        s = 2.0 * math.sqrt(1.0 + m[1][1] - m[0][0] - m[2][2])
-        q = ((m[0][1] + m[1][0]) / s, s / 4.0, (m[1][2] + m[2][1]) / s, (m[0][2] - m[2][0]) / s)
-    else:
-        s = 2.0 * math.sqrt(1.0 + m[2][2] - m[0][0] - m[1][1])
-        q = ((m[0][2] + m[2][0]) / s, (m[1][2] + m[2][1]) / s, s / 4.0, (m[1][0] - m[0][1]) / s)
-    norm = math.sqrt(sum(v * v for v in q))
-    sign = -1.0 if q[3] < 0.0 else 1.0
-    return tuple(sign * v / norm + 0.0 for v in q)  # type: ignore[return-value]
-
-
-def yaw_quat(yaw: float) -> Quat:
-    """The rotation about +z by ``yaw``."""
-    return (0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0))
 
 
 class RobotFrames:
@@ -130,13 +93,6 @@ class RobotFrames:
                 joint.name, parent, child, joint.type == "prismatic", joint.origin.pos, quat,
                 joint.axis, Frame(joint.origin.rot).point(joint.axis), leader, multiplier, offset))
         self.covariance = odometry_covariance(robot)
-
-    def moving_transforms(self, positions: dict[str, float]) -> list[float]:
-        """The flattened (x, y, z, qx, qy, qz, qw) of every moving joint, in ``self.moving`` order."""
-        out: list[float] = []
-        for joint in self.moving:
-            out.extend(joint.transform(positions))
-        return out
 
 
 def odometry_covariance(robot: ET.Element) -> tuple[float, ...]:

@@ -6,27 +6,22 @@ mesh worlds) is imported when the picture is drawn, at close.
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
+from mobot_cli.common.transforms import Planar, odom_origin
 from mobot_cli.run.sinks import Sink
 from mobot_cli.run.timeline import Sample
 from mobot_cli.sim.plan import Plan, WorldPlan
 from mobot_cli.sim.state import RobotState
 
 
-class OdomToWorld:
-    """Maps a robot's odometry into the world: its odom frame is where odometry started."""
+def odom_to_world(state: RobotState) -> Planar:
+    """Maps a robot's odometry into the world: its odom frame is where odometry started.
 
-    def __init__(self, state: RobotState):
-        # The truth now, less the odometry so far: exact at the first sample, whenever that is.
-        self.yaw = state.true_yaw - state.odom_yaw
-        self.c, self.s = math.cos(self.yaw), math.sin(self.yaw)
-        self.x = state.true_x - (self.c * state.odom_x - self.s * state.odom_y)
-        self.y = state.true_y - (self.s * state.odom_x + self.c * state.odom_y)
-
-    def __call__(self, x: float, y: float) -> tuple[float, float]:
-        return self.x + self.c * x - self.s * y, self.y + self.s * x + self.c * y
+    Taken at the robot's first sample, whenever that is: exact then.
+    """
+    return odom_origin(state.true_x, state.true_y, state.true_yaw,
+                       state.odom_x, state.odom_y, state.odom_yaw)
 
 
 class TrajectorySink(Sink):
@@ -38,7 +33,7 @@ class TrajectorySink(Sink):
         self.title = plan.name
         self.rate = plan.physics.rate_hz
         self.tracks: list = []  # plot.render.Track, created lazily to keep Pillow out of the run
-        self.open: dict[str, tuple[object, OdomToWorld]] = {}
+        self.open: dict[str, tuple[object, Planar]] = {}
         self.last_step = 0
 
     def deleted(self, step: int, key: str) -> None:
@@ -48,7 +43,7 @@ class TrajectorySink(Sink):
         for name, state in sample.states.items():
             entry = self.open.get(name)
             if entry is None:
-                entry = self.open[name] = (_Points(name), OdomToWorld(state))
+                entry = self.open[name] = (_Points(name), odom_to_world(state))
                 self.tracks.append(entry[0])
             points, to_world = entry
             points.true.append((state.true_x, state.true_y))

@@ -5,7 +5,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from mobot_cli.assets.world_load import LoadedWorld, load_world
+from mobot_cli.assets.world.load import load_world
+from mobot_cli.assets.world.loaded import LoadedWorld
 from mobot_cli.errors import MobotError, ScenarioError
 from mobot_cli.scenario.events import resolve_events
 from mobot_cli.scenario.expect_resolve import resolve_expectations

@@ -11,11 +11,13 @@ import dataclasses
 from pathlib import Path
 from typing import Any
 
-from mobot_cli.assets.description import RobotDescription, load_robot
-from mobot_cli.assets.world_load import LoadedWorld, WorldRobot
+from mobot_cli.assets.description.load import load_robot
+from mobot_cli.assets.description.robot import RobotDescription
+from mobot_cli.assets.world.loaded import LoadedWorld, WorldRobot
+from mobot_cli.common.transforms import quat_from_rpy
 from mobot_cli.errors import Location, MobotError, ScenarioError
 from mobot_cli.scenario.model import RobotSpec
-from mobot_cli.scenario.units import quat_from_rpy, spawn_pose, steps
+from mobot_cli.scenario.units import spawn_pose, steps
 from mobot_cli.scenario.yamlsource import Source
 from mobot_cli.sim.plan import CommandStep, DriveSpec, RobotPlan, SpawnPose
 
@@ -91,7 +93,7 @@ class RobotResolver:
         if in_world is not None:
             key = ("world model", in_world.name)
             if key not in self.loaded:
-                from mobot_cli.assets.sdf_description import describe_world_robot
+                from mobot_cli.assets.description.sdf import describe_world_robot
 
                 self.loaded[key] = describe_world_robot(in_world, self.base_dir)
                 self.notices.extend(str(n) for n in self.loaded[key].notices)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+from mobot_cli.common.transforms import quat_from_rpy
 from mobot_cli.scenario.model import PoseSpec
 from mobot_cli.sim.plan import SpawnPose
 
@@ -23,15 +24,6 @@ def spawn_pose(pose: PoseSpec) -> SpawnPose:
         quat = quat_from_rpy(pose.roll or 0.0, pose.pitch or 0.0, pose.yaw or 0.0)
     auto = z is None or z == "auto"
     return SpawnPose(xyz=(float(x), float(y), 0.0 if auto else float(z)), quat=_normalized(quat), z_auto=auto)
-
-
-def quat_from_rpy(roll: float, pitch: float, yaw: float) -> tuple[float, float, float, float]:
-    """ROS fixed-axis roll-pitch-yaw to a quaternion (x, y, z, w)."""
-    cr, sr = math.cos(roll / 2), math.sin(roll / 2)
-    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
-    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
-    return (sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy,
-            cr * cp * sy - sr * sp * cy, cr * cp * cy + sr * sp * sy)
 
 
 def _normalized(q) -> tuple[float, float, float, float]:

@@ -9,14 +9,8 @@ import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-
-def cache_dir() -> Path:
-    """mobot's cache folder: $MOBOT_CACHE_DIR, else $XDG_CACHE_HOME/mobot, else ~/.cache/mobot."""
-    explicit = os.environ.get("MOBOT_CACHE_DIR")
-    if explicit:
-        return Path(explicit).expanduser()
-    xdg = os.environ.get("XDG_CACHE_HOME")
-    return (Path(xdg).expanduser() if xdg else Path.home() / ".cache") / "mobot"
+from mobot_cli.common.cache import cache_dir
+from mobot_cli.common.files import write_text_atomic
 
 
 def urdf_path(text: str, folder: str = "urdf") -> Path:
@@ -25,10 +19,7 @@ def urdf_path(text: str, folder: str = "urdf") -> Path:
     path = cache_dir() / folder / f"{digest}.urdf"
     if not path.is_file():
         path.parent.mkdir(parents=True, exist_ok=True)
-        # Parallel sweep workers may write the same file: write aside, then rename.
-        tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
+        write_text_atomic(path, text)  # parallel sweep workers may write the same file
     return path
 
 

@@ -65,7 +65,7 @@ class World:
     def __init__(self, physics: Physics, world: WorldPlan, seed: int = 0):
         self.physics = physics
         self.plan = world
-        self.seed = seed  # PyBullet itself draws no random numbers; kept for sensors and noise
+        self.seed = seed  # handed in like every source of randomness; PyBullet itself draws none
         self._cid = p.connect(p.DIRECT)
         self._steps = 0
         self._robots: dict[str, SimRobot] = {}
@@ -133,7 +133,7 @@ class World:
 
     @property
     def client_id(self) -> int:
-        """The PyBullet client, for sensors living in ``mobot_cli.sim``."""
+        """The PyBullet client id, for code that queries PyBullet directly."""
         return self._cid
 
     def names(self) -> list[str]:

@@ -12,7 +12,8 @@ import io
 from pathlib import Path
 from typing import Any, Iterable
 
-from mobot_cli.run.sinks import number, write_json_atomic, write_text_atomic
+from mobot_cli.common.files import write_json_atomic, write_text_atomic
+from mobot_cli.run.sinks import number
 from mobot_cli.sweep.expand import Sweep, Variant
 from mobot_cli.sweep.task import Outcome
 

@@ -1,0 +1,1 @@
+"""Robot descriptions: URDF, xacro and SDF models to a checked RobotDescription (load.py)."""

@@ -1,0 +1,228 @@
+"""Turn an expanded URDF into the text PyBullet should load.
+
+* Mesh filenames become absolute paths. A mesh that cannot be found or read is an error,
+  visual meshes included: DESIGN.md makes every missing resource an error, and a missing
+  visual mesh nearly always means a wrong or incomplete package that the user should know
+  about before trusting the run.
+* Links without <inertial>, or with (near) zero mass or inertia, get 1 g and 1e-6 kg*m^2:
+  PyBullet would silently give them 1 kg, which doubles a turtlebot's mass. Each one is
+  reported as a notice.
+* Gazebo friction (<gazebo reference="LINK"><mu1>/<mu2>) becomes PyBullet's
+  <contact><lateral_friction>: the smaller of mu1 and mu2, because PyBullet's friction is
+  isotropic and a robot should never get more grip than Gazebo gives it. Links without mu
+  are left alone: the simulation layer (sim/world.py) gives them Gazebo's default, or caster
+  friction, and treats a <lateral_friction> in the text as the author's choice.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+from mobot_cli.assets.description.frames import LinkTree, floats, origin_frame
+from mobot_cli.assets.resources import ResourceResolver
+from mobot_cli.common.transforms import Frame
+from mobot_cli.errors import DescriptionError, Location, MobotError, Notice
+
+TINY_MASS = 0.001  # kg, given to links without a usable <inertial>
+TINY_INERTIA = 1e-6  # kg*m^2
+MIN_MASS = 1e-6
+MIN_INERTIA = 1e-9
+
+
+def resolve_meshes(robot: ET.Element, resolver: ResourceResolver, source: Path) -> list[str]:
+    """Rewrite every <mesh filename> to an absolute path; return the paths."""
+    paths = []
+    for link in robot.findall("link"):
+        for kind in ("collision", "visual"):
+            for element in link.findall(kind):
+                mesh = element.find("geometry/mesh")
+                if mesh is None:
+                    continue
+                uri = mesh.get("filename", "")
+                path = _mesh_path(uri, resolver, source, link.get("name", ""), kind)
+                mesh.set("filename", path)
+                paths.append(path)
+    return paths
+
+
+def _mesh_path(uri: str, resolver: ResourceResolver, source: Path, link: str, kind: str) -> str:
+    where = f"the {kind} mesh '{uri}' of link '{link}'"
+    if not uri:
+        raise DescriptionError(f"a {kind} <mesh> of link '{link}' has no filename",
+                               location=Location(file=source, key=f"link.{link}"),
+                               hint="Add filename=\"package://PKG/meshes/...\".")
+    try:
+        path = resolver.resolve_uri(uri, source)
+    except MobotError as exc:
+        detail = exc.message.removeprefix(f"'{uri}' ")
+        raise DescriptionError(f"{where} cannot be found: {detail}",
+                               location=Location(file=source, key=f"link.{link}"),
+                               hint=exc.hint) from None
+    if not path.is_file() or not os.access(path, os.R_OK):
+        raise DescriptionError(f"{where} resolves to {path}, which is not a readable file",
+                               location=Location(file=source, key=f"link.{link}"),
+                               hint="Check the file's permissions.")
+    return str(path)
+
+
+def fix_inertials(robot: ET.Element, source: Path) -> list[Notice]:
+    """Give links without a usable <inertial> a tiny one; one notice per link."""
+    notices = []
+    for link in robot.findall("link"):
+        name = link.get("name", "")
+        inertial = link.find("inertial")
+        mass, diagonal = inertial_values(inertial)
+        if inertial is None:
+            problem = "has no <inertial>"
+        elif mass < MIN_MASS:
+            problem = f"has a near-zero mass ({mass:g} kg)"
+        elif min(diagonal) < MIN_INERTIA:
+            # The mass is real; only the singular inertia would make the solver unstable.
+            _raise_diagonal(inertial)
+            shown = " ".join(f"{d:g}" for d in diagonal)
+            notices.append(Notice(
+                f"link '{name}' has a near-zero inertia (diagonal {shown}): mobot raises it to "
+                f"{TINY_INERTIA:g} kg*m^2 so PyBullet stays stable",
+                Location(file=source, key=f"link.{name}")))
+            continue
+        else:
+            continue
+        if inertial is not None:
+            link.remove(inertial)
+        link.insert(0, _tiny_inertial(inertial))
+        notices.append(Notice(
+            f"link '{name}' {problem}: PyBullet would give it 1 kg, so mobot gives it "
+            f"{TINY_MASS * 1000:g} g and {TINY_INERTIA:g} kg*m^2 (Gazebo lumps such links into "
+            "their parent through fixed joints, or drops them)",
+            Location(file=source, key=f"link.{name}")))
+    return notices
+
+
+def _raise_diagonal(inertial: ET.Element) -> None:
+    inertia = inertial.find("inertia")
+    if inertia is None:
+        inertia = ET.SubElement(inertial, "inertia", ixy="0", ixz="0", iyz="0")
+    for key in ("ixx", "iyy", "izz"):
+        if floats(inertia.get(key), 1, (0.0,))[0] < MIN_INERTIA:
+            inertia.set(key, f"{TINY_INERTIA:g}")
+
+
+def inertial_values(inertial: ET.Element | None) -> tuple[float, tuple[float, float, float]]:
+    """(mass, (ixx, iyy, izz)) of an <inertial>, zeros where absent."""
+    if inertial is None:
+        return 0.0, (0.0, 0.0, 0.0)
+    mass_el, inertia = inertial.find("mass"), inertial.find("inertia")
+    mass = floats(mass_el.get("value") if mass_el is not None else None, 1, (0.0,))[0]
+    diagonal = tuple(floats(inertia.get(k) if inertia is not None else None, 1, (0.0,))[0]
+                     for k in ("ixx", "iyy", "izz"))
+    return mass, diagonal  # type: ignore[return-value]
+
+
+def _tiny_inertial(old: ET.Element | None) -> ET.Element:
+    inertial = ET.Element("inertial")
+    origin = old.find("origin") if old is not None else None
+    if origin is not None:
+        inertial.append(origin)
+    ET.SubElement(inertial, "mass", value=f"{TINY_MASS:g}")
+    ET.SubElement(inertial, "inertia", ixx=f"{TINY_INERTIA:g}", ixy="0", ixz="0",
+                  iyy=f"{TINY_INERTIA:g}", iyz="0", izz=f"{TINY_INERTIA:g}")
+    return inertial
+
+
+def gazebo_friction(robot: ET.Element) -> dict[str, float]:
+    """Link name -> friction from <gazebo reference><mu1>/<mu2> (text or value= forms)."""
+    friction: dict[str, float] = {}
+    for gazebo in robot.findall("gazebo"):
+        reference = gazebo.get("reference")
+        if not reference:
+            continue
+        values = []
+        for tag in ("mu1", "mu2", "mu"):
+            element = gazebo.find(tag)
+            if element is not None:
+                text = (element.text or "").strip() or element.get("value", "")
+                value = floats(text, 1, (math.nan,))[0]
+                if not math.isnan(value):
+                    values.append(value)
+        if values:
+            friction[reference] = min(values)
+    return friction
+
+
+def apply_friction(robot: ET.Element) -> dict[str, float]:
+    """Put Gazebo's mu into links as <contact><lateral_friction>; return link -> friction."""
+    from_gazebo = gazebo_friction(robot)
+    for link in robot.findall("link"):
+        mu = from_gazebo.get(link.get("name", ""))
+        if mu is None:
+            continue
+        contact = link.find("contact")
+        if contact is None:
+            contact = ET.SubElement(link, "contact")
+        lateral = contact.find("lateral_friction")
+        if lateral is None:
+            lateral = ET.SubElement(contact, "lateral_friction")
+        lateral.set("value", f"{mu:g}")
+    return from_gazebo
+
+
+def collision_bounds(tree: LinkTree, source: Path,
+                     notices: list[Notice]) -> tuple[float, float, float, float, float]:
+    """(xmin, xmax, ymin, ymax, zmin) of all collision geometry in the root frame."""
+    points: list[tuple[float, float, float]] = []
+    for name, link in tree.links.items():
+        link_frame = tree.frame(name)
+        for collision in link.findall("collision"):
+            frame = link_frame.compose(origin_frame(collision))
+            points.extend(_geometry_points(frame, collision.find("geometry"), source, notices))
+    if not points:
+        return (0.0, 0.0, 0.0, 0.0, 0.0)
+    xs, ys, zs = zip(*points)
+    # Rounded to a nanometre: sin/cos noise (0.09999999999999999) helps nobody reading it.
+    return tuple(round(v, 9) + 0.0 for v in (min(xs), max(xs), min(ys), max(ys), min(zs)))
+
+
+def _geometry_points(frame: Frame, geometry: ET.Element | None, source: Path,
+                     notices: list[Notice]) -> list[tuple[float, float, float]]:
+    if geometry is None:
+        return []
+    box, cyl = geometry.find("box"), geometry.find("cylinder")
+    sphere, mesh = geometry.find("sphere"), geometry.find("mesh")
+    if box is not None:
+        sx, sy, sz = floats(box.get("size"), 3, (0.0, 0.0, 0.0))
+        return [frame.point((i * sx / 2, j * sy / 2, k * sz / 2))
+                for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)]
+    if cyl is not None:
+        r = floats(cyl.get("radius"), 1, (0.0,))[0]
+        half = floats(cyl.get("length"), 1, (0.0,))[0] / 2
+        # 32 points per rim: within 0.5 % of the true extent, good enough for a footprint.
+        return [frame.point((r * math.cos(a), r * math.sin(a), h))
+                for a in (2 * math.pi * i / 32 for i in range(32)) for h in (-half, half)]
+    if sphere is not None:
+        r = floats(sphere.get("radius"), 1, (0.0,))[0]
+        cx, cy, cz = frame.point((0.0, 0.0, 0.0))
+        return [(cx - r, cy - r, cz - r), (cx + r, cy + r, cz + r)]
+    if mesh is not None:
+        return _mesh_points(frame, mesh, source, notices)
+    return []
+
+
+def _mesh_points(frame: Frame, mesh: ET.Element, source: Path,
+                 notices: list[Notice]) -> list[tuple[float, float, float]]:
+    # Only collision meshes on a cold load get here; trimesh is imported for them alone.
+    # trimesh ignores COLLADA <unit>, so a footprint from a .dae mesh may be off by its unit.
+    import trimesh
+
+    scale = floats(mesh.get("scale"), 3, (1.0, 1.0, 1.0))
+    try:
+        loaded = trimesh.load(mesh.get("filename"), force="mesh")
+        (x0, y0, z0), (x1, y1, z1) = loaded.bounds
+    except Exception as exc:  # noqa: BLE001 - a footprint is informative only
+        notices.append(Notice(f"footprint ignores mesh {mesh.get('filename')}: {exc}",
+                              Location(file=source)))
+        return []
+    return [frame.point((x * scale[0], y * scale[1], z * scale[2]))
+            for x in (x0, x1) for y in (y0, y1) for z in (z0, z1)]

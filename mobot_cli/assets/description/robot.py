@@ -1,0 +1,209 @@
+"""An expanded robot description (URDF text) to a checked RobotDescription, cached by content.
+
+A cold load checks the URDF with yourdfpy, resolves meshes, fixes inertials and friction and
+detects the drive; the result is cached on disk by content, so a warm load of the same
+description reads one JSON file and never imports yourdfpy or trimesh.
+"""
+
+from __future__ import annotations
+
+import os
+import xml.etree.ElementTree as ET
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from mobot_cli.assets.description.check import check_geometry, check_tree, check_with_yourdfpy, \
+    parse_urdf
+from mobot_cli.assets.description.drive import detect_drive
+from mobot_cli.assets.description.frames import LinkTree, floats
+from mobot_cli.assets.description.process import apply_friction, collision_bounds, \
+    fix_inertials, inertial_values, resolve_meshes
+from mobot_cli.assets.description.xacro import Expansion
+from mobot_cli.assets.resources import ResourceResolver
+from mobot_cli.common import cache
+from mobot_cli.errors import Location, Notice
+from mobot_cli.sim.plan import DriveSpec
+
+
+@dataclass(frozen=True)
+class LinkInfo:
+    """A link's name and its mass as written in the file (0 without <inertial>)."""
+
+    name: str
+    mass: float
+    has_inertial: bool
+
+
+@dataclass(frozen=True)
+class JointInfo:
+    """A joint as written in the file."""
+
+    name: str
+    type: str
+    parent: str
+    child: str
+    axis: tuple[float, float, float]
+    xyz: tuple[float, float, float]
+    rpy: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class RobotDescription:
+    """A checked robot: the URDF text for PyBullet plus what `mobot inspect` shows."""
+
+    source: Path
+    name: str
+    urdf: str  # meshes absolute, tiny inertials and PyBullet friction injected
+    root_link: str
+    links: tuple[LinkInfo, ...]
+    joints: tuple[JointInfo, ...]
+    total_mass: float  # kg, as written in the file
+    footprint: tuple[float, float, float, float]  # xmin, xmax, ymin, ymax; root frame
+    drive: DriveSpec | None
+    notices: tuple[Notice, ...] = ()
+    bottom_z: float = 0.0  # lowest collision point in the root frame, all joints at zero
+    files: tuple[Path, ...] = field(default=())  # the description and every file it included
+
+    def tree(self) -> dict[str, Any]:
+        """The link tree as nested dicts: {link, mass, children: [{joint, type, link...}]}."""
+        masses = {link.name: link.mass for link in self.links}
+        below: dict[str, list[JointInfo]] = {}
+        for joint in self.joints:
+            below.setdefault(joint.parent, []).append(joint)
+
+        def node(link: str, seen: frozenset[str]) -> dict[str, Any]:
+            children = [dict(joint=j.name, type=j.type, **node(j.child, seen | {link}))
+                        for j in below.get(link, []) if j.child not in seen]
+            return {"link": link, "mass": masses.get(link, 0.0), "children": children}
+
+        return node(self.root_link, frozenset())
+
+
+def describe_expansion(source: Path, expansion: Expansion,
+                       resolver: ResourceResolver) -> RobotDescription:
+    """Check, cache and describe an expanded URDF text (from xacro or converted from SDF)."""
+    key = cache.digest("robot", expansion.text, resolver.fingerprint(), str(source))
+    loaded = _from_document(cache.load("robot", key))
+    if loaded is None:
+        loaded, meshes = _build(source, expansion, resolver)
+        cache.store("robot", key, _to_document(loaded, meshes))
+    return RobotDescription(**{**_fields(loaded), "notices": expansion.notices + loaded.notices,
+                               "files": expansion.files})
+
+
+def _build(source: Path, expansion: Expansion,
+           resolver: ResourceResolver) -> tuple[RobotDescription, list[str]]:
+    robot = parse_urdf(expansion.text, source)
+    root_link = check_tree(robot, source)
+    check_geometry(robot, source)
+    check_with_yourdfpy(expansion.text, source)
+    meshes = resolve_meshes(robot, resolver, source)
+    links = tuple(_link_info(link) for link in robot.findall("link"))
+    joints = tuple(_joint_info(joint) for joint in robot.findall("joint"))
+    notices = fix_inertials(robot, source)
+    apply_friction(robot)
+    bounds = collision_bounds(LinkTree(robot), source, notices)
+    drive = detect_drive(robot, notices=notices, source=source)
+    if drive is None:
+        notices.append(Notice("no drive wheels found: the robot will not move on commands",
+                              Location(file=source)))
+    urdf = '<?xml version="1.0"?>\n' + ET.tostring(robot, encoding="unicode")
+    description = RobotDescription(
+        source=source, name=robot.get("name", ""), urdf=urdf, root_link=root_link,
+        links=links, joints=joints, total_mass=sum(link.mass for link in links),
+        footprint=bounds[:4], drive=drive, notices=tuple(notices), bottom_z=bounds[4])
+    return description, meshes
+
+
+def _link_info(link: ET.Element) -> LinkInfo:
+    inertial = link.find("inertial")
+    return LinkInfo(name=link.get("name", ""), mass=inertial_values(inertial)[0],
+                    has_inertial=inertial is not None)
+
+
+def _joint_info(joint: ET.Element) -> JointInfo:
+    origin = joint.find("origin")
+    axis = joint.find("axis")
+
+    def get(element: ET.Element | None, attr: str, default: tuple[float, ...]):
+        return floats(element.get(attr) if element is not None else None, 3, default)
+
+    return JointInfo(
+        name=joint.get("name", ""), type=joint.get("type", ""),
+        parent=joint.find("parent").get("link", ""),  # type: ignore[union-attr]
+        child=joint.find("child").get("link", ""),  # type: ignore[union-attr]
+        axis=get(axis, "xyz", (1.0, 0.0, 0.0)), xyz=get(origin, "xyz", (0.0, 0.0, 0.0)),
+        rpy=get(origin, "rpy", (0.0, 0.0, 0.0)))  # type: ignore[arg-type]
+
+
+def _fields(description: RobotDescription) -> dict[str, Any]:
+    return {name: getattr(description, name) for name in description.__dataclass_fields__}
+
+
+def _to_document(description: RobotDescription, meshes: list[str]) -> dict[str, Any]:
+    document = asdict(description)
+    document["source"] = str(description.source)
+    document["files"] = []
+    document["notices"] = [
+        {"message": n.message,
+         "location": {"file": str(n.location.file) if n.location.file is not None else None,
+                      "line": n.location.line, "key": n.location.key}}
+        for n in description.notices]
+    document["meshes"] = [[path, *_stat(path)] for path in dict.fromkeys(meshes)]
+    return document
+
+
+def _stat(path: str) -> tuple[int, int]:
+    try:
+        info = os.stat(path)
+    except OSError:
+        return (-1, -1)
+    return (info.st_size, info.st_mtime_ns)
+
+
+def _from_document(document: dict[str, Any] | None) -> RobotDescription | None:
+    """Rebuild a cached description; None when absent, stale or from another layout."""
+    if not document:
+        return None
+    try:
+        # A mesh edited or removed since the entry was written makes it stale.
+        if any(list(_stat(path)) != [size, mtime] for path, size, mtime in document["meshes"]):
+            return None
+        drive = document["drive"]
+        if drive is not None:
+            drive = DriveSpec(**{**drive, "left_joints": tuple(drive["left_joints"]),
+                                 "right_joints": tuple(drive["right_joints"]),
+                                 "joint_signs": tuple(tuple(s) for s in drive["joint_signs"])})
+        return RobotDescription(
+            source=Path(document["source"]), name=document["name"], urdf=document["urdf"],
+            root_link=document["root_link"],
+            links=tuple(LinkInfo(**link) for link in document["links"]),
+            joints=tuple(JointInfo(**{k: tuple(v) if isinstance(v, list) else v
+                                      for k, v in joint.items()})
+                         for joint in document["joints"]),
+            total_mass=document["total_mass"], footprint=tuple(document["footprint"]),
+            drive=drive, bottom_z=document["bottom_z"],
+            notices=tuple(Notice(n["message"], Location(**n["location"]))
+                          for n in document["notices"]))
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
+def inspect_summary(desc: RobotDescription) -> dict[str, Any]:
+    """What `mobot inspect` shows, as plain data: tree, mass, footprint, drive, notices."""
+    xmin, xmax, ymin, ymax = desc.footprint
+    return {
+        "name": desc.name,
+        "source": str(desc.source),
+        "root_link": desc.root_link,
+        "links": len(desc.links),
+        "joints": len(desc.joints),
+        "total_mass": desc.total_mass,
+        "footprint": {"xmin": xmin, "xmax": xmax, "ymin": ymin, "ymax": ymax,
+                      "length": round(xmax - xmin, 9), "width": round(ymax - ymin, 9)},
+        "bottom_z": desc.bottom_z,
+        "tree": desc.tree(),
+        "drive": asdict(desc.drive) if desc.drive is not None else None,
+        "notices": [str(n) for n in desc.notices],
+    }

@@ -1,0 +1,1 @@
+"""Gazebo SDF worlds and models: read (reader.py), built into static bodies (build.py), cached (load.py)."""

@@ -1,0 +1,201 @@
+"""The cold path of world loading: read the SDF, convert meshes, make static bodies."""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+from mobot_cli.assets.resources import ResourceResolver
+from mobot_cli.assets.world import meshes
+from mobot_cli.assets.world.loaded import LoadedWorld, WorldRobot
+from mobot_cli.assets.world.model import Model
+from mobot_cli.assets.world.paths import SdfPaths
+from mobot_cli.assets.world.pose import xyz_quat
+from mobot_cli.assets.world.reader import SdfReader
+from mobot_cli.assets.world.to_urdf import model_to_urdf
+from mobot_cli.sim.plan import StaticBody, StaticShape, WorldPlan
+
+# A model placed farther than this from the origin is a typo (the AWS bookstore has a book
+# at z = 343 km): it is left out with a warning rather than stretching the world.
+ABSURD_DISTANCE = 10_000.0  # m
+
+
+class _Builder:
+    """Accumulates bodies, robots and the summary while walking a world's models."""
+
+    def __init__(self, reader: SdfReader):
+        self.reader = reader
+        self.bodies: list[StaticBody] = []
+        self.robots: list[WorldRobot] = []
+        self.static_models: list[str] = []
+        self.ground = False
+        self.shapes: Counter = Counter()
+        self.meshes: dict[str, meshes.MeshFile] = {}
+        self.lo = np.full(3, math.inf)
+        self.hi = np.full(3, -math.inf)
+        self.held_fixed: list[str] = []
+        self.skipped: list[str] = []
+
+    def model(self, model: Model) -> None:
+        position = model.pose[:3, 3]
+        if float(np.linalg.norm(position)) > ABSURD_DISTANCE:
+            x, y, z = position
+            self.reader.warn(f"model '{model.name}' is placed at ({x:.1f}, {y:.1f}, {z:.1f}), more "
+                             f"than {ABSURD_DISTANCE / 1000:g} km from the origin: left out as a "
+                             "typo", model.location)
+            self.skipped.append(model.name)
+            return
+        if not model.static and model.joints:
+            self.robot(model)
+            return
+        if not model.static:
+            self.held_fixed.append(model.name)
+        self.static_models.append(model.name)
+        self.static(model)
+
+    def robot(self, model: Model) -> None:
+        file = Path(str(model.location.file))
+        urdf, notices = model_to_urdf(model, file)
+        xyz, quat = xyz_quat(model.pose)
+        self.robots.append(WorldRobot(name=model.name, urdf=urdf, xyz=xyz, quat=quat,
+                                      source=str(file), notices=tuple(str(n) for n in notices)))
+
+    def static(self, model: Model) -> None:
+        shapes, frictions = [], []
+        xyz, quat = xyz_quat(model.pose)
+        label = f"world model '{model.name}' at ({_cm(xyz[0])}, {_cm(xyz[1])}, {_cm(xyz[2])})"
+        for link in model.links:
+            for shape in link.collisions:
+                local = link.pose @ shape.pose
+                self.shapes[shape.kind] += 1
+                if shape.friction is not None:
+                    frictions.append(min(1.0, shape.friction))
+                if shape.kind == "plane":
+                    self.plane(model, local, shape.size, label)
+                    continue
+                path = str(shape.mesh or "")
+                if shape.kind == "mesh":
+                    mesh = meshes.collision_mesh(shape.mesh, shape.location)
+                    self.meshes[mesh.source] = mesh
+                    path = mesh.path
+                    self.extend(model.pose @ local, _box_corners(mesh.bounds, shape.size))
+                else:
+                    self.extend(model.pose @ local, _corners(shape.kind, shape.size))
+                s_xyz, s_quat = xyz_quat(local)
+                shapes.append(StaticShape(kind=shape.kind, size=tuple(float(v) for v in shape.size),
+                                          mesh=path, xyz=s_xyz, quat=s_quat))
+        if shapes:
+            self.bodies.append(StaticBody(name=model.name, xyz=xyz, quat=quat, shapes=tuple(shapes),
+                                          friction=min(frictions) if frictions else None,
+                                          label=label))
+
+    def plane(self, model: Model, local, normal, label: str) -> None:
+        world = model.pose @ local
+        n = world[:3, :3] @ (np.array(normal) / np.linalg.norm(normal))
+        offset = float(n @ world[:3, 3])
+        if not self.ground and n[2] > 1.0 - 1e-9 and abs(offset) < 1e-9:
+            self.ground = True  # Gazebo's ground_plane: the simulation's own ground plane
+            return
+        xyz, quat = xyz_quat(world)
+        self.bodies.append(StaticBody(
+            name=model.name, xyz=xyz, quat=quat, label=label,
+            shapes=(StaticShape(kind="plane", size=tuple(float(v) for v in normal)),)))
+
+    def extend(self, pose, corners: np.ndarray) -> None:
+        points = corners @ pose[:3, :3].T + pose[:3, 3]
+        self.lo = np.minimum(self.lo, points.min(axis=0))
+        self.hi = np.maximum(self.hi, points.max(axis=0))
+
+
+def _box_corners(bounds, scale) -> np.ndarray:
+    lo, hi = np.array(bounds[0]) * scale, np.array(bounds[1]) * scale
+    return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                     for z in (lo[2], hi[2])])
+
+
+def _corners(kind: str, size) -> np.ndarray:
+    if kind == "box":
+        half = np.array(size) / 2
+    elif kind == "sphere":
+        half = np.array([size[0]] * 3)
+    elif kind == "capsule":
+        half = np.array([size[0], size[0], size[1] / 2 + size[0]])
+    else:  # cylinder
+        half = np.array([size[0], size[0], size[1] / 2])
+    return _box_corners((-half, half), (1.0, 1.0, 1.0))
+
+
+def build_world(path: Path, resolver: ResourceResolver,
+                skip_missing: bool) -> tuple[LoadedWorld, list[str]]:
+    """Read and convert a world; returns it and the files it depends on."""
+    paths = SdfPaths(path, resolver)
+    reader = SdfReader(path, paths, skip_missing)
+    world = reader.world()
+    builder = _Builder(reader)
+    for model in world.models:
+        builder.model(model)
+    line = ignored_line(str(path), dict(world.ignored), world.max_step_size)
+    notices = [*(str(n) for n in reader.notices), *([line] if line else [])]
+    if not builder.bodies and not builder.ground:
+        notices.append(f"{path.name} has no collision geometry and no ground plane: robots have "
+                       "nothing to stand on")
+    if builder.held_fixed:
+        notices.append(f"{path.name}: {len(builder.held_fixed)} non-static model(s) without joints "
+                       f"are held fixed, as the world is static: {', '.join(builder.held_fixed[:5])}"
+                       + (", ..." if len(builder.held_fixed) > 5 else ""))
+    bounds = None
+    if np.isfinite(builder.lo).all():
+        lo = [round(float(v), 4) + 0.0 for v in builder.lo]
+        hi = [round(float(v), 4) + 0.0 for v in builder.hi]
+        bounds = {"min": lo, "max": hi, "size": [round(b - a, 4) for a, b in zip(lo, hi)]}
+    converted = [m for m in builder.meshes.values() if m.converted]
+    summary = {
+        "kind": "world", "name": world.name, "path": str(path), "models": len(world.models),
+        "static_models": len(builder.static_models), "held_fixed": len(builder.held_fixed),
+        "robots": [r.name for r in builder.robots], "skipped_models": builder.skipped,
+        "links": sum(len(m.links) for m in world.models),
+        "shapes": count(builder.shapes), "ground_plane": builder.ground,
+        "meshes": {"files": len(builder.meshes), "converted": len(converted),
+                   "triangles": sum(m.triangles for m in builder.meshes.values())},
+        "ignored": count(world.ignored), "state_poses": world.state_poses,
+        "max_step_size": world.max_step_size, "bounds": bounds,
+    }
+    plan = WorldPlan(name=path.stem, ground_plane=builder.ground, bodies=tuple(builder.bodies),
+                     source=str(path), robot_models=tuple(r.name for r in builder.robots))
+    loaded = LoadedWorld(plan=plan, robots=tuple(builder.robots),
+                         static_models=tuple(builder.static_models), summary=summary,
+                         notices=tuple(dict.fromkeys(notices)))
+    deps = [*(str(p) for p in paths.files), *(m.source for m in builder.meshes.values()),
+            *(m.path for m in converted)]
+    return loaded, deps
+
+
+def _cm(value: float) -> str:
+    """A coordinate for messages, to the centimetre, never '-0.00'."""
+    return f"{round(value, 2) + 0.0:.2f}"
+
+
+def ignored_line(file: str, ignored: dict[str, int], max_step: float | None) -> str | None:
+    """The one summary line naming what the world holds that mobot does not simulate."""
+    parts = []
+    for tag, count in sorted(ignored.items(), key=lambda kv: (-kv[1], kv[0])):
+        if tag.endswith(" geometry"):
+            continue  # each of those has its own warning
+        label = {"light": "light", "plugin": "plugin", "actor": "actor"}.get(tag)
+        text = f"{count} {label}{'s' if count > 1 else ''}" if label else tag
+        if tag == "physics" and max_step:
+            text += f" (max_step_size {max_step:g} s; mobot steps at physics.rate_hz)"
+        if tag == "gravity":
+            text += " (physics.gravity applies)"
+        parts.append(text)
+    if not parts:
+        return None
+    return f"{Path(file).name}: ignored {', '.join(parts)} (mobot simulates collision geometry)"
+
+
+def count(counter: Counter) -> dict[str, int]:
+    """A Counter as a plain dict sorted by key (stable JSON)."""
+    return {k: counter[k] for k in sorted(counter)}

@@ -1,0 +1,108 @@
+"""The <geometry> of an SDF collision or visual: primitives, planes and meshes."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from mobot_cli.assets.world.frames import key_of
+from mobot_cli.assets.world.pose import IDENTITY, Matrix
+from mobot_cli.errors import Location, MobotError, WorldError
+
+# Geometry mobot cannot collide with: warned about and left out (collisions only).
+UNSUPPORTED = ("heightmap", "polyline", "image", "ellipsoid")
+
+
+@dataclass
+class Shape:
+    """One collision or visual geometry; ``pose`` is relative to its link."""
+
+    kind: str  # box | cylinder | capsule | sphere | plane | mesh
+    size: tuple[float, ...]  # box: x y z; cylinder, capsule: radius length; sphere: radius;
+    #                          plane: normal; mesh: scale
+    name: str
+    location: Location
+    mesh: Path | None = None  # the resolved mesh file
+    uri: str = ""
+    pose: Matrix = field(default_factory=lambda: IDENTITY.copy())
+    friction: float | None = None  # min(mu, mu2) when the surface gives them
+
+
+def parse_shape(reader, element, file: Path, collision: bool) -> Shape | None:
+    """The shape of a <collision> or <visual>; None for empty, unsupported or skipped ones."""
+    where = key_of(element, file)
+    geometry = element.find("geometry")
+    kind_el = next((c for c in (geometry if geometry is not None else ()) if isinstance(c.tag, str)),
+                   None)
+    if kind_el is None or kind_el.tag == "empty":
+        return None
+    kind = kind_el.tag
+    what = f"{element.tag} '{element.get('name', '')}'"
+    if kind in UNSUPPORTED or kind not in ("box", "cylinder", "capsule", "sphere", "plane", "mesh"):
+        if collision:
+            reader.warn(f"{what} uses <{kind}> geometry, which mobot does not simulate: it is "
+                        "left out", key_of(kind_el, file))
+            reader.ignored[f"{kind} geometry"] += 1
+        return None
+    shape = Shape(kind=kind, size=(), name=element.get("name", ""), location=where)
+    if kind == "box":
+        shape.size = reader.vector(kind_el, "size", file, (1.0, 1.0, 1.0))
+    elif kind in ("cylinder", "capsule"):
+        shape.size = (reader.number(kind_el, "radius", file, 0.5),
+                      reader.number(kind_el, "length", file, 1.0))
+    elif kind == "sphere":
+        shape.size = (reader.number(kind_el, "radius", file, 1.0),)
+    elif kind == "plane":
+        shape.size = reader.vector(kind_el, "normal", file, (0.0, 0.0, 1.0))
+    else:
+        if not _mesh(reader, shape, kind_el, file, collision, what):
+            return None
+    if kind != "plane" and any(v <= 0.0 for v in shape.size):
+        raise WorldError(f"{what} has a <{kind}> with a size of zero or less: {shape.size}",
+                         location=key_of(kind_el, file), hint="Sizes must be positive.")
+    if kind == "plane" and sum(v * v for v in shape.size) < 1e-12:
+        raise WorldError(f"{what} has a plane with a zero normal", location=key_of(kind_el, file),
+                         hint="Give <normal> a direction, e.g. 0 0 1.")
+    shape.friction = _friction(reader, element, file)
+    return shape
+
+
+def _mesh(reader, shape: Shape, mesh, file: Path, collision: bool, what: str) -> bool:
+    """Fill in a mesh shape; False when it is missing and may be skipped."""
+    uri_el = mesh.find("uri")
+    uri = (uri_el.text or "").strip() if uri_el is not None else ""
+    where = key_of(uri_el if uri_el is not None else mesh, file)
+    if not uri:
+        raise WorldError(f"{what} has a <mesh> without <uri>", location=where,
+                         hint="Add <uri>model://NAME/meshes/FILE</uri>.")
+    shape.uri = uri
+    shape.size = reader.vector(mesh, "scale", file, (1.0, 1.0, 1.0))
+    if mesh.find("submesh") is not None and collision:
+        reader.warn(f"{what} selects a <submesh>: mobot collides with the whole mesh", where)
+    try:
+        shape.mesh = reader.paths.mesh_path(uri, file, where)
+    except MobotError as exc:
+        if collision and not reader.skip_missing:
+            raise
+        if collision:
+            reader.warn(f"{what} left out: {exc.message}", where)
+        else:
+            reader.missing_visuals.append((uri, where))
+        return False
+    if shape.mesh.suffix.lower() not in (".dae", ".stl", ".obj"):
+        if collision:
+            raise WorldError(f"{what}: mesh '{uri}' is a {shape.mesh.suffix} file; mobot reads "
+                             "COLLADA (.dae), STL and OBJ", location=where,
+                             hint="Convert the mesh to one of those formats.")
+        reader.missing_visuals.append((uri, where))
+        return False
+    return True
+
+
+def _friction(reader, element, file: Path) -> float | None:
+    ode = element.find("surface/friction/ode")
+    if ode is None:
+        return None
+    values = [reader.number(ode, tag, file, -1.0) for tag in ("mu", "mu2")]
+    values = [v for v in values if v >= 0.0]
+    return min(values) if values else None

@@ -1,0 +1,117 @@
+"""Collision meshes of static worlds, ready for PyBullet: COLLADA converted to OBJ once.
+
+PyBullet cannot build a concave triangle mesh from COLLADA, and trimesh ignores COLLADA's
+``<unit>`` (the AWS worlds are in centimetres). A .dae file is therefore loaded with trimesh
++ pycollada, its node transforms applied, scaled by its unit, and written as a plain OBJ in
+the cache, keyed by the .dae file's content. ``<up_axis>`` is ignored, as Gazebo ignores it.
+STL and OBJ files are used as they are.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+
+from mobot_cli.common import cache
+from mobot_cli.common.files import write_text_atomic
+from mobot_cli.errors import Location, WorldError
+
+
+@dataclass(frozen=True)
+class MeshFile:
+    """A mesh PyBullet can load, with what the world summary reports about it."""
+
+    path: str  # what PyBullet loads: a cached OBJ for COLLADA, else the file itself
+    source: str  # the file the SDF names
+    triangles: int
+    bounds: tuple[tuple[float, float, float], tuple[float, float, float]]  # in the mesh frame
+    converted: bool  # a COLLADA file turned into OBJ
+
+
+def mesh_dir() -> Path:
+    """Where converted meshes live."""
+    return cache.cache_dir() / "meshes"
+
+
+def collision_mesh(source: Path, where: Location) -> MeshFile:
+    """The PyBullet-ready version of a collision mesh (converted and cached when COLLADA)."""
+    source = Path(source)
+    try:
+        data = source.read_bytes()
+    except OSError as exc:
+        raise WorldError(f"cannot read mesh {source}: {exc.strerror}", location=where,
+                         hint="Check the file's permissions.") from None
+    collada = source.suffix.lower() == ".dae"
+    key = cache.digest("mesh", data)
+    meta = cache.load("meshes", key)
+    obj = mesh_dir() / f"{key}.obj"
+    if meta is not None and (not collada or obj.is_file()):
+        return _from_meta(meta, source, obj if collada else source, collada)
+    vertices, faces = _load(source, data, collada, where)
+    if collada:
+        _write_obj(obj, vertices, faces, source)
+    meta = {"triangles": int(len(faces)),
+            "bounds": [[float(v) for v in vertices.min(axis=0)],
+                       [float(v) for v in vertices.max(axis=0)]]}
+    cache.store("meshes", key, meta)
+    return _from_meta(meta, source, obj if collada else source, collada)
+
+
+def _from_meta(meta: dict, source: Path, path: Path, collada: bool) -> MeshFile:
+    lo, hi = meta["bounds"]
+    return MeshFile(path=str(path), source=str(source), triangles=meta["triangles"],
+                    bounds=(tuple(lo), tuple(hi)), converted=collada)  # type: ignore[arg-type]
+
+
+def _load(source: Path, data: bytes, collada: bool, where: Location):
+    """Vertices (metres) and triangle indices of a mesh file."""
+    import numpy as np
+    import trimesh
+
+    # trimesh logs a traceback for every texture it cannot find; collisions need no textures.
+    logger = getattr(trimesh.util, "log", None) or logging.getLogger("trimesh")
+    was_disabled, logger.disabled = logger.disabled, True
+    try:
+        loaded = trimesh.load(str(source), force="scene")
+        merged = loaded.to_geometry() if hasattr(loaded, "to_geometry") else \
+            loaded.dump(concatenate=True)
+    except Exception as exc:  # noqa: BLE001 - any parser failure is a broken mesh to the user
+        raise WorldError(f"cannot read mesh {source.name}: {type(exc).__name__}: {exc}",
+                         location=where, hint="Open and re-export the mesh (COLLADA, STL or OBJ).") \
+            from None
+    finally:
+        logger.disabled = was_disabled
+    vertices = np.asarray(getattr(merged, "vertices", np.zeros((0, 3))), dtype=float)
+    faces = np.asarray(getattr(merged, "faces", np.zeros((0, 3))), dtype=np.int64)
+    if len(faces) == 0 or len(vertices) == 0:
+        raise WorldError(f"mesh {source.name} has no triangles", location=where,
+                         hint="A collision mesh needs triangles; check the exported file.")
+    if collada:
+        vertices = vertices * _collada_unit(data)
+    return vertices, faces
+
+
+def _collada_unit(data: bytes) -> float:
+    """The metres per unit of a COLLADA document's <asset><unit meter=...> (1 when absent)."""
+    from lxml import etree
+
+    try:
+        root = etree.fromstring(data, etree.XMLParser(resolve_entities=False, huge_tree=True))
+    except etree.XMLSyntaxError:
+        return 1.0  # trimesh read it, so it is good enough; assume metres
+    unit = root.find("{*}asset/{*}unit")
+    try:
+        meter = float(unit.get("meter", "1")) if unit is not None else 1.0
+    except ValueError:
+        return 1.0
+    return meter if meter > 0 else 1.0
+
+
+def _write_obj(path: Path, vertices, faces, source: Path) -> None:
+    """Write a minimal OBJ (vertices and triangles only) atomically."""
+    lines = [f"# mobot: collision mesh from {source.name}, in metres\n"]
+    lines.extend(f"v {x:.9g} {y:.9g} {z:.9g}\n" for x, y, z in vertices.tolist())
+    lines.extend(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces.tolist())
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_text_atomic(path, "".join(lines))

@@ -1,0 +1,356 @@
+"""SDF worlds from small hand-written files: includes, poses, frames, geometry, bad input."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import astuple
+from pathlib import Path
+
+import pytest
+
+from mobot_cli.assets.world import build as world_build
+from mobot_cli.assets.world.load import load_world
+from mobot_cli.cli import invoke
+from mobot_cli.errors import WorldError
+
+CONFIG = '<?xml version="1.0"?><model><name>{name}</name><sdf version="1.5">old.sdf</sdf>' \
+         '<sdf version="1.6">model.sdf</sdf></model>'
+
+
+def sdf(body: str, version: str = "1.6") -> str:
+    return f'<?xml version="1.0"?>\n<sdf version="{version}">\n{body}\n</sdf>\n'
+
+
+def model_dir(root: Path, name: str, body: str) -> Path:
+    folder = root / "models" / name
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "model.config").write_text(CONFIG.format(name=name))
+    (folder / "model.sdf").write_text(sdf(body))
+    (folder / "old.sdf").write_text("this is not read: model.config names a newer version")
+    return folder
+
+
+def world_file(root: Path, body: str, name: str = "w.world") -> Path:
+    path = root / "worlds" / name
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(sdf(f"<world name='w'>\n{body}\n</world>"))
+    return path
+
+
+BOX = ("<model name='{name}'><static>{static}</static>{pose}<link name='l'>"
+       "<collision name='c'><geometry><box><size>1 2 3</size></box></geometry></collision>"
+       "</link></model>")
+
+
+def box_model(name: str, pose: str = "", static: str = "true") -> str:
+    return BOX.format(name=name, static=static, pose=f"<pose>{pose}</pose>" if pose else "")
+
+
+def body(world, name):
+    return next(b for b in world.plan.bodies if b.name == name)
+
+
+# --- includes and poses ------------------------------------------------------------------
+
+def test_wrapper_model_with_include_composes_poses(tmp_path):
+    """The AWS layout: <model><static/><include/><pose/></model>, the model's own pose inside."""
+    model_dir(tmp_path, "crate", box_model("crate", "1 0 0 0 0 0", static="false"))
+    path = world_file(tmp_path, "<model name='crate_1'><static>true</static>"
+                                "<include><uri>model://crate</uri></include>"
+                                "<pose frame=''>0 5 0 0 0 1.5707963267948966</pose></model>")
+    world = load_world(str(path), tmp_path)
+    crate = body(world, "crate_1")
+    assert crate.xyz == pytest.approx((0.0, 5.0, 0.0))
+    shape = crate.shapes[0]
+    assert shape.kind == "box" and shape.size == (1.0, 2.0, 3.0)
+    assert shape.xyz == pytest.approx((1.0, 0.0, 0.0))  # the included model's pose, in the wrapper
+    assert world.summary["models"] == 1 and world.summary["held_fixed"] == 0  # the wrapper is static
+    assert world.summary["bounds"]["min"] == pytest.approx([-1.0, 5.5, -1.5])
+    assert world.summary["bounds"]["max"] == pytest.approx([1.0, 6.5, 1.5])
+
+
+def test_include_name_pose_and_static_override_the_model(tmp_path):
+    model_dir(tmp_path, "crate", box_model("crate", "9 9 9 0 0 0", static="false"))
+    path = world_file(tmp_path, "<include><uri>model://crate</uri><name>a</name><pose>1 2 0 0 0 0</pose>"
+                                "<static>true</static></include>"
+                                "<include><uri>model://crate</uri><name>b</name></include>")
+    world = load_world(str(path), tmp_path)
+    assert body(world, "a").xyz == pytest.approx((1.0, 2.0, 0.0))  # include pose replaces the model's
+    assert body(world, "b").xyz == pytest.approx((9.0, 9.0, 9.0))  # none given: the model's own
+    assert world.summary["held_fixed"] == 1  # b is not static and has no joints
+
+
+def test_nested_models_relative_to_and_frames(tmp_path):
+    path = world_file(tmp_path, """
+      <model name='outer'><static>true</static><pose>10 0 0 0 0 0</pose>
+        <frame name='corner'><pose>1 1 0 0 0 0</pose></frame>
+        <link name='base'><pose relative_to='corner'>0 0 1 0 0 0</pose>
+          <collision name='c'><geometry><sphere><radius>0.5</radius></sphere></geometry></collision></link>
+        <model name='inner'><pose>0 0 2 0 0 3.141592653589793</pose>
+          <link name='l'><pose>1 0 0 0 0 0</pose>
+            <collision name='c'><geometry><cylinder><radius>0.1</radius><length>1</length></cylinder></geometry></collision>
+          </link></model>
+      </model>""", "frames.sdf")
+    world = load_world(str(path), tmp_path)
+    shapes = {s.kind: s for s in body(world, "outer").shapes}
+    assert shapes["sphere"].xyz == pytest.approx((1.0, 1.0, 1.0))
+    assert shapes["cylinder"].xyz == pytest.approx((-1.0, 0.0, 2.0), abs=1e-9)  # turned by the nested pose
+    assert world.summary["links"] == 2
+
+
+def test_model_config_picks_the_newest_sdf(tmp_path):
+    model_dir(tmp_path, "crate", box_model("crate"))  # old.sdf is garbage: reading it would fail
+    path = world_file(tmp_path, "<include><uri>model://crate</uri></include>")
+    assert len(load_world(str(path), tmp_path).plan.bodies) == 1
+
+
+def test_search_paths_from_the_environment(tmp_path, monkeypatch):
+    elsewhere = tmp_path / "elsewhere"
+    model_dir(elsewhere, "crate", box_model("crate"))
+    path = world_file(tmp_path / "w", "<include><uri>model://crate</uri></include>")
+    with pytest.raises(WorldError, match="model 'crate' not found. Folders searched: "):
+        load_world(str(path), tmp_path / "w")
+    for var in ("GAZEBO_MODEL_PATH", "GZ_SIM_RESOURCE_PATH", "MOBOT_RESOURCE_PATH"):
+        monkeypatch.setenv(var, str(elsewhere / "models"))
+        assert len(load_world(str(path), tmp_path / "w").plan.bodies) == 1
+        monkeypatch.delenv(var)
+
+
+def test_ground_plane_and_other_planes(tmp_path):
+    path = world_file(tmp_path, """
+      <include><uri>model://ground_plane</uri></include>
+      <model name='ramp'><static>true</static><pose>0 0 1 0.3 0 0</pose><link name='l'>
+        <collision name='c'><geometry><plane><normal>0 0 1</normal></plane></geometry></collision>
+      </link></model>""")
+    world = load_world(str(path), tmp_path)
+    assert world.plan.ground_plane  # the bundled ground_plane model: the simulation's own plane
+    ramp = body(world, "ramp")
+    assert [s.kind for s in ramp.shapes] == ["plane"] and ramp.xyz == pytest.approx((0, 0, 1))
+
+
+# --- geometry -----------------------------------------------------------------------------
+
+def test_collada_unit_and_node_transform_are_applied(tmp_path):
+    """A 100 x 200 x 50 cm box whose node moves it 100 cm up becomes 1 x 2 x 0.5 m at z 1..1.5."""
+    folder = model_dir(tmp_path, "cm_box", "<model name='cm_box'><static>true</static><link name='l'>"
+                       "<collision name='c'><geometry><mesh><uri>model://cm_box/box.dae</uri>"
+                       "<scale>2 1 1</scale></mesh></geometry></collision></link></model>")
+    (folder / "box.dae").write_text(_collada_box(meter=0.01, size=(100, 200, 50), lift=100))
+    path = world_file(tmp_path, "<include><uri>model://cm_box</uri></include>")
+    world = load_world(str(path), tmp_path)
+    shape = body(world, "cm_box").shapes[0]
+    assert shape.kind == "mesh" and shape.mesh.endswith(".obj") and shape.size == (2.0, 1.0, 1.0)
+    bounds = world.summary["bounds"]
+    assert bounds["min"] == pytest.approx([-1.0, -1.0, 1.0]) and bounds["max"] == pytest.approx([1.0, 1.0, 1.5])
+    assert world.summary["meshes"] == {"files": 1, "converted": 1, "triangles": 12}
+
+
+def test_unsupported_geometry_is_left_out_with_a_warning(tmp_path):
+    path = world_file(tmp_path, """
+      <model name='terrain'><static>true</static><link name='l'><collision name='c'>
+        <geometry><heightmap><uri>file://hm.png</uri></heightmap></geometry></collision></link></model>
+      <model name='curb'><static>true</static><link name='l'><collision name='c'>
+        <geometry><polyline><point>0 0</point><point>1 0</point><height>0.1</height></polyline></geometry>
+      </collision></link></model>""" + box_model("crate"))
+    world = load_world(str(path), tmp_path)
+    assert [b.name for b in world.plan.bodies] == ["crate"]
+    text = "\n".join(world.notices)
+    assert "<heightmap> geometry, which mobot does not simulate" in text
+    assert "<polyline> geometry, which mobot does not simulate" in text
+
+
+def test_lights_gui_physics_plugins_are_one_summary_line(tmp_path):
+    path = world_file(tmp_path, "<light name='a' type='point'/><light name='b' type='point'/><gui/><scene/>"
+                                "<physics type='ode'><max_step_size>0.001</max_step_size></physics>"
+                                "<plugin name='p' filename='x.so'/>" + box_model("crate"))
+    world = load_world(str(path), tmp_path)
+    lines = [n for n in world.notices if "ignored" in n]
+    assert lines == ["w.world: ignored 2 lights, gui, physics (max_step_size 0.001 s; mobot steps at "
+                     "physics.rate_hz), 1 plugin, scene (mobot simulates collision geometry)"]
+
+
+def test_state_poses_move_models_as_gazebo_classic_does(tmp_path):
+    path = world_file(tmp_path, box_model("crate", "1 0 0 0 0 0")
+                      + "<state world_name='w'><model name='crate'><pose>4 5 0 0 0 0</pose></model></state>")
+    world = load_world(str(path), tmp_path)
+    assert body(world, "crate").xyz == pytest.approx((4.0, 5.0, 0.0))
+    assert world.summary["state_poses"] == 1
+
+
+def test_absurd_pose_is_left_out_with_a_warning(tmp_path):
+    path = world_file(tmp_path, box_model("book", "1 1 343582.7 0 0 0") + box_model("crate"))
+    world = load_world(str(path), tmp_path)
+    assert [b.name for b in world.plan.bodies] == ["crate"]
+    assert world.summary["skipped_models"] == ["book"]
+    assert any("'book' is placed at (1.0, 1.0, 343582.7)" in n for n in world.notices)
+
+
+# --- bad input ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("text, message, line", [
+    ("<world name='w'><model name='m'><link name='l'></model></world>", "malformed XML: Opening and ending tag "
+     "mismatch", 3),
+    ("<world name='w'>" + box_model("m", "0 0 nan 0 0 0") + "</world>", "pose '0 0 nan 0 0 0' has a non-finite", 3),
+    ("<world name='w'>" + box_model("m", "0 0 0") + "</world>", "pose '0 0 0' needs 6 numbers, got 3", 3),
+    ("<world name='w'>" + box_model("m") + box_model("m") + "</world>", "two models are named 'm'", 3),
+    ("<world name='w'><include><uri></uri></include></world>", "<include> has no <uri>", 3),
+    ("<world name='w'><model name='m'><link name='l'><pose relative_to='x'>0 0 0 0 0 0</pose></link></model>"
+     "</world>", "link 'l' is placed relative to 'x', which this model does not have", 3),
+    ("<world name='w'><model name='m'><link name='l'><collision name='c'><geometry><box><size>1 0 1</size>"
+     "</box></geometry></collision></link></model></world>", "size of zero or less", 3),
+])
+def test_malformed_worlds_are_located_errors(tmp_path, text, message, line):
+    path = tmp_path / "bad.world"
+    path.write_text(f'<?xml version="1.0"?>\n<sdf version="1.6">\n{text}\n</sdf>\n')
+    with pytest.raises(WorldError, match=message.replace("(", r"\(")) as info:
+        load_world(str(path), tmp_path)
+    assert info.value.location.file is not None and Path(info.value.location.file).name == "bad.world"
+    assert info.value.location.line == line
+
+
+def test_include_cycle_names_the_chain(tmp_path):
+    model_dir(tmp_path, "a", "<model name='a'><include><uri>model://b</uri></include></model>")
+    model_dir(tmp_path, "b", "<model name='b'><include><uri>model://a</uri></include></model>")
+    path = world_file(tmp_path, "<include><uri>model://a</uri></include>")
+    with pytest.raises(WorldError, match=r"include cycle: a/model.sdf -> b/model.sdf -> a/model.sdf"):
+        load_world(str(path), tmp_path)
+
+
+def test_missing_mesh_is_an_error_or_skipped_when_asked(tmp_path):
+    path = world_file(tmp_path, "<model name='m'><static>1</static><link name='l'><collision name='c'>"
+                                "<geometry><mesh><uri>meshes/gone.stl</uri></mesh></geometry></collision>"
+                                "</link></model>" + box_model("crate"))
+    with pytest.raises(WorldError, match=r"mesh 'meshes/gone.stl' not found. Folders searched: ") as info:
+        load_world(str(path), tmp_path)
+    assert info.value.location.line == 4 and "--skip-missing" in info.value.hint
+    world = load_world(str(path), tmp_path, skip_missing=True)
+    assert [b.name for b in world.plan.bodies] == ["crate"]
+    assert any("collision 'c' left out: mesh 'meshes/gone.stl' not found" in n for n in world.notices)
+
+
+def test_file_name_case_mismatch_names_both_names(tmp_path):
+    folder = tmp_path / "worlds" / "meshes"
+    folder.mkdir(parents=True)
+    (folder / "box.stl").write_bytes(b"")
+    path = world_file(tmp_path, "<model name='m'><static>1</static><link name='l'><collision name='c'>"
+                                "<geometry><mesh><uri>meshes/Box.STL</uri></mesh></geometry></collision>"
+                                "</link></model>")
+    with pytest.raises(WorldError, match=r"'meshes/Box.STL' not found: .*has 'box.stl', which differs only "
+                                         r"in case from 'Box.STL'"):
+        load_world(str(path), tmp_path)
+
+
+def test_fuel_include_needs_a_local_copy(tmp_path, monkeypatch):
+    uri = "https://fuel.gazebosim.org/1.0/OpenRobotics/models/Ground Plane"
+    path = world_file(tmp_path, f"<include><uri>{uri}</uri></include>" + box_model("crate"))
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))  # no Fuel cache of the user's
+    with pytest.raises(WorldError, match=f"'{uri}' is on Gazebo Fuel and mobot never downloads: it needs a "
+                                         "local copy") as info:
+        load_world(str(path), tmp_path)
+    assert "gz fuel download" in info.value.hint and "--skip-missing" in info.value.hint
+    assert len(load_world(str(path), tmp_path, skip_missing=True).plan.bodies) == 1
+    cached = tmp_path / "home/.gz/fuel/fuel.gazebosim.org/openrobotics/models/ground plane/3"
+    cached.mkdir(parents=True)
+    (cached / "model.config").write_text(CONFIG.format(name="gp"))
+    (cached / "model.sdf").write_text(sdf(box_model("gp")))
+    assert {b.name for b in load_world(str(path), tmp_path).plan.bodies} == {"gp", "crate"}
+
+
+def test_unknown_bundled_world_suggests_one():
+    with pytest.raises(WorldError, match="'hosue' is neither a bundled world") as info:
+        load_world("hosue")
+    assert "Did you mean 'house'?" in info.value.hint
+
+
+# --- cache --------------------------------------------------------------------------------
+
+def test_warm_load_reads_the_cache_and_an_edit_invalidates_it(tmp_path, monkeypatch):
+    folder = model_dir(tmp_path, "crate", box_model("crate"))
+    path = world_file(tmp_path, "<include><uri>model://crate</uri></include>")
+    first = load_world(str(path), tmp_path)
+    calls = []
+    real = world_build.build_world
+    monkeypatch.setattr(world_build, "build_world", lambda *a: calls.append(a) or real(*a))
+    assert load_world(str(path), tmp_path) == first and calls == []
+    (folder / "model.sdf").write_text(sdf(box_model("crate", "3 0 0 0 0 0")))
+    assert body(load_world(str(path), tmp_path), "crate").xyz == pytest.approx((3.0, 0.0, 0.0))
+    assert len(calls) == 1
+
+
+def test_mobot_check_prints_the_world_summary(tmp_path):
+    path = world_file(tmp_path, box_model("crate", "1 2 1.5 0 0 0") + "<light name='a' type='point'/>")
+    code, out, err = astuple(invoke(["check", path]))
+    assert code == 0
+    assert out.splitlines() == [
+        f"ok: world 'w' ({path})",
+        "  models   1 (1 static)",
+        "  shapes   1 collision shape in 1 link: box 1",
+        "  meshes   none",
+        "  ground   no ground plane: floors are world geometry",
+        "  robots   none",
+        "  ignored  light",
+        "  extent   x 0.50..1.50, y 1.00..3.00, z 0.00..3.00 m (1.00 x 2.00 x 3.00 m)"]
+    assert "ignored 1 light" in err
+    missing = invoke(["check", tmp_path / "nope.world"])
+    assert (missing.exit_code, missing.stdout) == (2, "") and missing.stderr.startswith("mobot: error: ")
+
+
+def _collada_box(meter: float, size, lift: float) -> str:
+    x, y, z = (s / 2 for s in size)
+    corners = [(sx * x, sy * y, sz * z) for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]
+    faces = [(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1),
+             (2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3)]
+    floats = " ".join(f"{v:g}" for c in corners for v in c)
+    indices = " ".join(str(i) for f in faces for i in f)
+    return f"""<?xml version="1.0"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><unit meter="{meter}" name="centimeter"/><up_axis>Z_UP</up_axis></asset>
+  <library_geometries><geometry id="g"><mesh>
+    <source id="p"><float_array id="pa" count="24">{floats}</float_array>
+      <technique_common><accessor source="#pa" count="8" stride="3">
+        <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+      </accessor></technique_common></source>
+    <vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
+    <triangles count="12"><input semantic="VERTEX" source="#v" offset="0"/><p>{indices}</p></triangles>
+  </mesh></geometry></library_geometries>
+  <library_visual_scenes><visual_scene id="s"><node id="n">
+    <matrix>1 0 0 0 0 1 0 0 0 0 1 {lift + z:g} 0 0 0 1</matrix>
+    <instance_geometry url="#g"/></node></visual_scene></library_visual_scenes>
+  <scene><instance_visual_scene url="#s"/></scene>
+</COLLADA>
+"""
+
+
+def test_pose_helpers_round_trip():
+    from mobot_cli.assets.world.pose import parse_pose, rpy, xyz_quat
+
+    m = parse_pose("1 2 3 0.1 -0.2 0.3")
+    assert rpy(m) == pytest.approx((0.1, -0.2, 0.3))
+    xyz, quat = xyz_quat(parse_pose("0 0 0 0 0 90", degrees=True))
+    assert quat == pytest.approx((0.0, 0.0, math.sin(math.pi / 4), math.cos(math.pi / 4)))
+    assert xyz_quat(parse_pose("1 2 3 0 0 0 1", quaternion=True))[0] == (1.0, 2.0, 3.0)
+
+
+@pytest.mark.parametrize("axis, expected", [
+    ("<xyz>0 0 1</xyz>", "0 0 1"),  # SDF 1.6+: the joint frame, which the URDF keeps
+    ("<xyz>0 1 0</xyz><use_parent_model_frame>true</use_parent_model_frame>", "0 0 1"),
+    ("<xyz expressed_in='__model__'>0 1 0</xyz>", "0 0 1"),
+])
+def test_sdf_robot_joint_axes_end_up_in_the_joint_frame(tmp_path, axis, expected):
+    import xml.etree.ElementTree as ET
+
+    from mobot_cli.assets.description.sdf import expand_sdf
+    from mobot_cli.assets.resources import ResourceResolver
+
+    (tmp_path / "r.sdf").write_text(sdf(f"""<model name='r'>
+      <link name='base'><collision name='c'><geometry><box><size>0.3 0.2 0.1</size></box></geometry></collision></link>
+      <link name='wheel'><pose>0 0.15 0 -1.5707963267948966 0 0</pose>
+        <collision name='c'><geometry><cylinder><radius>0.05</radius><length>0.02</length></cylinder></geometry></collision></link>
+      <joint name='j' type='revolute'><parent>base</parent><child>wheel</child><axis>{axis}</axis></joint>
+    </model>""", version="1.8"))
+    expansion = expand_sdf(tmp_path / "r.sdf", ResourceResolver(tmp_path))
+    joint = ET.fromstring(expansion.text).find("joint")
+    assert joint.get("type") == "continuous"  # SDF's default +-1e16 limits: it turns freely
+    assert joint.find("axis").get("xyz") == expected
+    assert joint.find("origin").get("xyz") == "0 0.15 0"
+    assert any("has no <inertial>" in str(n) for n in expansion.notices)
