@@ -126,6 +126,8 @@ class Notice:
 
 def shown(value: object, limit: int = 60) -> str:
     """A user's value as an error message quotes it: its repr (one line), at most ``limit`` characters."""
+    if value is None or isinstance(value, bool):
+        return {None: "null", True: "true", False: "false"}[value]  # as the YAML spells them
     text = repr(value)
     if len(text) <= limit:
         return text

@@ -21,6 +21,7 @@ MIN_LOG_RATE_HZ = 1e-3  # one log row every 1000 s
 MAX_GRAVITY = 1000.0  # m/s^2, the length of physics.gravity (about 100 g)
 MAX_COORDINATE = 1e6  # m, any spawn position component
 MAX_NAME_LENGTH = 64  # robot and scenario names: file names (odom/<name>.csv) and ROS names
+MAX_REFERENCE_LENGTH = 1024  # a world or description: a bundled name or a path
 
 NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 FLEET_NAME_RE = re.compile(r"^[A-Za-z_]([A-Za-z0-9_]|\{i\})*$")
@@ -47,6 +48,16 @@ def _coordinate(value: float) -> float:
     return value
 
 
+def _reference(value: str) -> str:
+    if len(value) > MAX_REFERENCE_LENGTH:
+        raise ValueError(f"{shown(value, 40)} is {len(value)} characters long, the limit for a name or "
+                         f"path is {MAX_REFERENCE_LENGTH}")
+    if any(ord(c) < 32 or ord(c) == 127 for c in value):
+        raise ValueError(f"{shown(value, 40)} holds a control character (a newline, a tab): give a bundled "
+                         "name or a path")
+    return value
+
+
 def gravity_length(vector: tuple[float, float, float]) -> tuple[float, float, float]:
     """Refuse a gravity vector longer than MAX_GRAVITY (math.hypot never overflows)."""
     if math.hypot(*vector) > MAX_GRAVITY:
@@ -63,6 +74,7 @@ Seconds = Annotated[Float, Field(ge=0), AfterValidator(_seconds)]  # a moment: a
 Duration = Annotated[Float, Field(gt=0), AfterValidator(_seconds)]  # a span: duration, for
 Coordinate = Annotated[Float, AfterValidator(_coordinate)]
 Vector3 = tuple[Float, Float, Float]
+Reference = Annotated[str, AfterValidator(_reference)]  # a world or description: bundled name or path
 
 
 def check_name(value: str, what: str, pattern: re.Pattern, rule: str) -> str:

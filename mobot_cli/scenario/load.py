@@ -100,7 +100,7 @@ def _to_scenario_error(exc: ValidationError, source: Source) -> ScenarioError:
         message = f"unknown key {shown(word)}"
         hint = hint or did_you_mean(word, _fields_at(path[:-1]))
     elif kind not in ("value_error", "assertion_error"):
-        message += f", got {err.get('input')!r}"
+        message += f", got {shown(err.get('input'))}"
     more = len({_data_path(e["loc"], source.data) for e in exc.errors()}) - 1
     if more:
         message += f" (and {more} more problem{'s' if more > 1 else ''})"

@@ -16,7 +16,7 @@ from mobot_cli.errors import shown
 from mobot_cli.scenario.expect_model import ExpectSpec
 from mobot_cli.scenario.limits import (FLEET_NAME_RE, MAX_RATE_HZ, MIN_LOG_RATE_HZ, NAME_RE, NAMESPACE_RE,
                                        SCENARIO_NAME_RE, Coordinate, Duration, Float, Int, NonNegativeFloat,
-                                       PositiveFloat, Seconds, Vector3, check_name, gravity_length)
+                                       PositiveFloat, Reference, Seconds, Vector3, check_name, gravity_length)
 
 assert NAME_RE  # re-exported: live requests check names with the scenario's rule
 MAX_NAMESPACE_LENGTH = 256
@@ -96,7 +96,7 @@ class CommandSpec(Strict):
 class RobotSpec(Strict):
     name: str
     namespace: Optional[str] = None
-    description: str = "mobot"
+    description: Reference = "mobot"
     args: dict[str, Union[str, bool, int, float]] = Field(default_factory=dict)
     pose: PoseSpec = Field(default_factory=PoseSpec)
     drive: Optional[DriveOverrides] = None
@@ -162,7 +162,7 @@ class Scenario(Strict):
 
     version: Literal[1]
     name: str = "scenario"
-    world: str = "empty"
+    world: Reference = "empty"
     # World models whose files are missing (Fuel includes, meshes) are left out with a warning.
     skip_missing: bool = False
     physics: PhysicsSpec = Field(default_factory=PhysicsSpec)

@@ -102,15 +102,19 @@ def compose(text: str, where: Location, numbered: bool = True) -> yaml.Node | No
     """
     if len(text) > MAX_YAML_BYTES:
         raise ScenarioError(f"the YAML text is longer than {MAX_YAML_BYTES / 2**20:g} MiB", location=where)
-    loader = Loader(text)
+    loader = None
     try:
+        loader = Loader(text)  # its reader already refuses control characters
         return loader.get_single_node()
     except TooDeep as exc:
         raise ScenarioError(f"the YAML nests deeper than {MAX_DEPTH} levels", location=_at(where, exc.mark, numbered),
                             hint="The scenario format nests a few levels; look for runaway brackets.") from None
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
-        raise ScenarioError(f"malformed YAML: {_one_line(exc.problem or str(exc))}", location=_at(where, mark, numbered),
+        problem = exc.problem or str(exc)
+        if exc.context and "duplicate anchor" in exc.context:  # the problem alone says "second occurrence"
+            problem = exc.context.partition(";")[0]
+        raise ScenarioError(f"malformed YAML: {_one_line(problem)}", location=_at(where, mark, numbered),
                             hint="Fix the YAML syntax at or just before that line.") from None
     except yaml.YAMLError as exc:  # ReaderError: a control character; it knows its offset only
         offset = getattr(exc, "position", None)
@@ -119,7 +123,8 @@ def compose(text: str, where: Location, numbered: bool = True) -> yaml.Node | No
                             location=Location(file=where.file, line=line if numbered else None),
                             hint="Remove control characters; a scenario is plain UTF-8 text.") from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()
 
 
 def construct_scalar(node: yaml.ScalarNode, where: Location) -> Any:
@@ -129,8 +134,8 @@ def construct_scalar(node: yaml.ScalarNode, where: Location) -> Any:
     try:
         return Loader.yaml_constructors[tag](_CONSTRUCTOR, node)
     except (ValueError, LookupError, TypeError, OverflowError, yaml.YAMLError):
-        raise ScenarioError(f"{shown(node.value, 40)} is not a valid {short_tag(tag)}", location=where,
-                            hint="Drop the tag or fix the value.") from None
+        raise ScenarioError(f"{shown(node.value, 40)} cannot be read as {short_tag(tag)}", location=where,
+                            hint="Fix the value, or quote it to make it text.") from None
 
 
 def check_tag(node: yaml.Node, where: Location) -> None:
