@@ -17,6 +17,7 @@ from mobot_cli.scenario.limits import SCENARIO_NAME_RE, check_name
 from mobot_cli.scenario.yamlsafe import read_yaml_file
 from mobot_cli.scenario.yamlsource import Source, parse_value, parse_yaml
 
+MAX_RUNS = 10_000  # runs of one sweep (each is prepared up front, ~10 ms apiece)
 SWEEP_FILE_KEYS = ("scenario", "name", "seed", "set", "grid", "zip", "random", "samples")
 
 
@@ -166,6 +167,12 @@ def check_spec(spec: SweepSpec) -> SweepSpec:
     if spec.samples is not None and spec.samples < 1:
         raise UsageError(f"samples must be at least 1, got {spec.samples}: the sweep has no runs",
                          location=spec.where.get("samples"))
+    runs = math.prod(spec.samples if a.kind == "random" else len(a.rows) for a in spec.axes)
+    if runs > MAX_RUNS:
+        where = next((a.where[0] for a in spec.axes if a.kind != "random"), spec.where.get("samples"))
+        count = f"{runs:,}" if runs < 10**12 else "over 10^12"
+        raise UsageError(f"the sweep has {count} runs, more than the limit of {MAX_RUNS:,}", location=where,
+                         hint="Every run is prepared before the first starts; split the sweep.")
     if spec.seed is not None and not 0 <= spec.seed < 2**32:
         raise UsageError(f"seed must be in 0..{2**32 - 1}, got {spec.seed}", location=spec.where.get("seed"))
     seen: dict[str, Location] = {}
