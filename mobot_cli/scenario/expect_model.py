@@ -87,7 +87,7 @@ class ExpectSpec(_Strict):
     """One expectation: a robot (or ``all``), one check and when it applies."""
 
     robot: str
-    at: Union[Literal["end"], Seconds] = "end"
+    at: Union[Seconds, Literal["end"]] = "end"  # Seconds first: its error is the one shown
     within: Optional[WithinSpec] = None
     collisions: Optional[Annotated[Int, Field(ge=0)]] = None
     distance: Optional[RangeSpec] = None

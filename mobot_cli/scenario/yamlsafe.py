@@ -4,12 +4,14 @@ A YAML text is untrusted input: a 400-byte file of nested aliases expands to gig
 FIFO never ends, a thousand brackets overflow the Python stack and ``!!python/...`` tags name
 code. So: only regular files of at most ``MAX_YAML_BYTES`` are read, nesting stops at
 ``MAX_DEPTH``, the expanded document holds at most ``MAX_NODES`` values (aliases counted every
-time they are used), only the plain YAML types are built, and dates stay text.
+time they are used), only the plain YAML types are built, and dates stay text (a date where a
+number goes is then an error about that value, never a datetime reaching the model).
 """
 
 from __future__ import annotations
 
 import os
+import re
 import stat
 from pathlib import Path
 from typing import Any
@@ -31,7 +33,10 @@ _KINDS = {stat.S_IFDIR: "a directory", stat.S_IFIFO: "a FIFO (named pipe)", stat
 
 
 class Loader(yaml.SafeLoader):
-    """SafeLoader without dates, merge keys (``<<``) or ``=``, composing at most MAX_DEPTH deep."""
+    """SafeLoader without dates, merge keys (``<<``) or ``=``, composing at most MAX_DEPTH deep.
+
+    Plain scalars become null, bool, int, float (also 1e5, as YAML 1.2 reads it) or str.
+    """
 
     yaml_implicit_resolvers = {
         first: [(tag, regexp) for tag, regexp in resolvers if tag in SCALAR_TAGS]
@@ -51,6 +56,11 @@ class Loader(yaml.SafeLoader):
             return super().compose_node(parent, index)
         finally:
             self.depth -= 1
+
+
+# YAML 1.2 floats without a dot (1e308, 5E-3): PyYAML's 1.1 rules read them as text.
+Loader.add_implicit_resolver(_CORE + "float", re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+                             list("-+0123456789"))
 
 
 class TooDeep(Exception):
