@@ -198,7 +198,7 @@ def check(path: Path, overrides: list[str] = ()) -> str:
         outcome = "accepted"
     except MobotError as exc:
         text = str(exc)
-        assert "\n" not in text and "\r" not in text, f"not one paragraph: {text!r}"
+        assert len(text.splitlines()) == 1, f"not one paragraph: {text!r}"  # also \x85, \u2028, ...
         assert str(path) in text or "--set" in text or _names_a_file(text), f"names no file: {text!r}"
         outcome = "refused"
     elapsed = time.perf_counter() - started

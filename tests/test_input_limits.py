@@ -106,9 +106,14 @@ def test_alias_bomb_is_refused_quickly(tmp_path):
 
 
 def test_node_budget_edge():
-    assert len(parse_yaml("[" + "0," * (MAX_NODES - 1) + "]", None).data) == MAX_NODES - 1
+    # The root list + 99 lists of 1000 values (98 of them aliases) + `rest` values: each alias counts again.
+    def text(rest: int) -> str:
+        return "[&a [" + "0," * 999 + "]," + "*a," * 98 + "1," * rest + "]"
+
+    assert 1 + 99 * 1000 + 999 == MAX_NODES
+    assert len(parse_yaml(text(999), None).data) == 99 + 999
     with pytest.raises(ScenarioError, match="more than 100000 values"):
-        parse_yaml("[" + "0," * MAX_NODES + "]", None)
+        parse_yaml(text(1000), None)
 
 
 def test_depth_edge():

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import re
+import unicodedata
 from typing import Annotated, Any
 
 from pydantic import AfterValidator, BeforeValidator, Field
@@ -21,6 +22,7 @@ MIN_LOG_RATE_HZ = 1e-3  # one log row every 1000 s
 MAX_GRAVITY = 1000.0  # m/s^2, the length of physics.gravity (about 100 g)
 MAX_COORDINATE = 1e6  # m, any spawn position component
 MAX_NAME_LENGTH = 64  # robot and scenario names: file names (odom/<name>.csv) and ROS names
+MAX_NAMESPACE_LENGTH = 256
 MAX_REFERENCE_LENGTH = 1024  # a world or description: a bundled name or a path
 
 NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
@@ -48,11 +50,12 @@ def _coordinate(value: float) -> float:
     return value
 
 
-def _reference(value: str) -> str:
+def check_reference(value: str) -> str:
+    """A world, description or scenario path: bounded, no control characters (ValueError if not)."""
     if len(value) > MAX_REFERENCE_LENGTH:
         raise ValueError(f"{shown(value, 40)} is {len(value)} characters long, the limit for a name or "
                          f"path is {MAX_REFERENCE_LENGTH}")
-    if any(ord(c) < 32 or ord(c) == 127 for c in value):
+    if any(unicodedata.category(c) in ("Cc", "Zl", "Zp") for c in value):  # controls and line breaks
         raise ValueError(f"{shown(value, 40)} holds a control character (a newline, a tab): give a bundled "
                          "name or a path")
     return value
@@ -74,7 +77,7 @@ Seconds = Annotated[Float, Field(ge=0), AfterValidator(_seconds)]  # a moment: a
 Duration = Annotated[Float, Field(gt=0), AfterValidator(_seconds)]  # a span: duration, for
 Coordinate = Annotated[Float, AfterValidator(_coordinate)]
 Vector3 = tuple[Float, Float, Float]
-Reference = Annotated[str, AfterValidator(_reference)]  # a world or description: bundled name or path
+Reference = Annotated[str, AfterValidator(check_reference)]  # a world or description: bundled name or path
 
 
 def check_name(value: str, what: str, pattern: re.Pattern, rule: str) -> str:

@@ -14,12 +14,10 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, field_validat
 
 from mobot_cli.errors import shown
 from mobot_cli.scenario.expect_model import ExpectSpec
-from mobot_cli.scenario.limits import (FLEET_NAME_RE, MAX_RATE_HZ, MIN_LOG_RATE_HZ, NAME_RE, NAMESPACE_RE,
-                                       SCENARIO_NAME_RE, Coordinate, Duration, Float, Int, NonNegativeFloat,
-                                       PositiveFloat, Reference, Seconds, Vector3, check_name, gravity_length)
-
-assert NAME_RE  # re-exported: live requests check names with the scenario's rule
-MAX_NAMESPACE_LENGTH = 256
+from mobot_cli.scenario.limits import NAME_RE  # noqa: F401 - live/schema.py imports the name rule from here
+from mobot_cli.scenario.limits import (FLEET_NAME_RE, MAX_NAMESPACE_LENGTH, MAX_RATE_HZ, MIN_LOG_RATE_HZ,
+                                       NAMESPACE_RE, SCENARIO_NAME_RE, Coordinate, Duration, Float, Int, PositiveFloat, Reference, Seconds, Vector3,
+                                       check_name, gravity_length)
 
 
 class Strict(BaseModel):

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from mobot_cli.errors import Location, ScenarioError, UsageError, did_you_mean, shown
-from mobot_cli.scenario.limits import SCENARIO_NAME_RE, check_name
+from mobot_cli.scenario.limits import SCENARIO_NAME_RE, check_name, check_reference
 from mobot_cli.scenario.yamlsafe import read_yaml_file
 from mobot_cli.scenario.yamlsource import Source, parse_value, parse_yaml
 
@@ -250,6 +250,10 @@ def _scenario_path(source: Source, path: Path) -> Path:
     where = source.locate_key(("scenario",))
     if not isinstance(value, str) or not value:
         raise ScenarioError("'scenario' must name the base scenario file", location=where)
+    try:
+        check_reference(value)
+    except ValueError as exc:
+        raise ScenarioError(str(exc), location=where) from None
     scenario = (path.parent / value).resolve()
     if not scenario.is_file():
         raise ScenarioError(f"scenario file not found: {scenario}", location=where,
