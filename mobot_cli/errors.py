@@ -35,10 +35,18 @@ class Location:
     def __str__(self) -> str:
         parts = []
         if self.file is not None:
-            parts.append(str(self.file) + (f":{self.line}" if self.line else ""))
+            parts.append(_origin(self.file) + (f":{self.line}" if self.line else ""))
         if self.key:
-            parts.append(f"key '{self.key}'")
+            parts.append(f"key {shown(self.key, 80)}")
         return ", ".join(parts)
+
+
+def _origin(file: str | Path) -> str:
+    """A path as is; a command-line origin (``--set KEY=VALUE``) on one line and cut short."""
+    if not (isinstance(file, str) and file.startswith("--")):
+        return str(file)
+    text = " ".join(file.split())
+    return text if len(text) <= 100 else text[:97] + "..."
 
 
 class MobotError(Exception):
@@ -114,6 +122,17 @@ class Notice:
     def __str__(self) -> str:
         where = str(self.location)
         return f"{where}: {self.message}" if where else self.message
+
+
+def shown(value: object, limit: int = 60) -> str:
+    """A user's value as an error message quotes it: its repr (one line), at most ``limit`` characters."""
+    if value is None or isinstance(value, bool):
+        return {None: "null", True: "true", False: "false"}[value]  # as the YAML spells them
+    text = repr(value)
+    if len(text) <= limit:
+        return text
+    quote = text[0] if text[0] in "'\"" else ""
+    return text[: limit - 4] + "..." + quote
 
 
 def did_you_mean(word: str, choices: Iterable[str]) -> str:

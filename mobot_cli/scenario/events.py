@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 from typing import Sequence
 
-from mobot_cli.errors import ScenarioError, did_you_mean
+from mobot_cli.errors import ScenarioError, did_you_mean, shown
 from mobot_cli.scenario.model import EventSpec
 from mobot_cli.scenario.robots import RobotResolver
 from mobot_cli.scenario.units import steps
@@ -35,7 +35,7 @@ def resolve_events(specs: Sequence[EventSpec], robots: tuple[RobotPlan, ...],
         if spec.delete is not None:
             if spec.delete not in alive:
                 gone = f"It was deleted at {deleted[spec.delete] / rate:g} s." if spec.delete in deleted else ""
-                raise ScenarioError(f"event at {spec.at:g} s deletes '{spec.delete}', which is not in the "
+                raise ScenarioError(f"event at {spec.at:g} s deletes {shown(spec.delete)}, which is not in the "
                                     f"world then", location=ctx.locate_key(path + ("delete",)),
                                     hint=gone or did_you_mean(spec.delete, alive)
                                     or "Delete a robot listed in robots: or spawned by an earlier event.")

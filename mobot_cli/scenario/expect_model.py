@@ -12,8 +12,7 @@ from typing import Annotated, Literal, Optional, Union
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-NonNegativeFloat = Annotated[float, Field(ge=0)]
-PositiveFloat = Annotated[float, Field(gt=0)]
+from mobot_cli.scenario.limits import Float, Int, NonNegativeFloat, PositiveFloat, Seconds
 
 KINDS = ("within", "collisions", "distance", "upright", "odom_error")
 # Tilt (angle between the robot's z axis and the world's) beyond which a robot has tipped over.
@@ -27,13 +26,13 @@ class _Strict(BaseModel):
 class WithinSpec(_Strict):
     """A circle {x, y, radius} or a box {xmin, xmax, ymin, ymax}, in the world frame (metres)."""
 
-    x: Optional[float] = None
-    y: Optional[float] = None
+    x: Optional[Float] = None
+    y: Optional[Float] = None
     radius: Optional[PositiveFloat] = None
-    xmin: Optional[float] = None
-    xmax: Optional[float] = None
-    ymin: Optional[float] = None
-    ymax: Optional[float] = None
+    xmin: Optional[Float] = None
+    xmax: Optional[Float] = None
+    ymin: Optional[Float] = None
+    ymax: Optional[Float] = None
 
     @model_validator(mode="after")
     def _one_shape(self) -> "WithinSpec":
@@ -68,7 +67,7 @@ class RangeSpec(_Strict):
 class UprightSpec(_Strict):
     """The largest tilt (radians from vertical) that still counts as upright."""
 
-    max_tilt: Annotated[float, Field(gt=0, le=math.pi)] = DEFAULT_MAX_TILT
+    max_tilt: Annotated[Float, Field(gt=0, le=math.pi)] = DEFAULT_MAX_TILT
 
 
 class OdomErrorSpec(_Strict):
@@ -88,9 +87,9 @@ class ExpectSpec(_Strict):
     """One expectation: a robot (or ``all``), one check and when it applies."""
 
     robot: str
-    at: Union[Literal["end"], NonNegativeFloat] = "end"
+    at: Union[Seconds, Literal["end"]] = "end"  # Seconds first: its error is the one shown
     within: Optional[WithinSpec] = None
-    collisions: Optional[Annotated[int, Field(ge=0)]] = None
+    collisions: Optional[Annotated[Int, Field(ge=0)]] = None
     distance: Optional[RangeSpec] = None
     upright: Optional[Union[Literal[True], UprightSpec]] = None
     odom_error: Optional[Union[NonNegativeFloat, OdomErrorSpec]] = None

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Sequence
 
-from mobot_cli.errors import ScenarioError, did_you_mean
+from mobot_cli.errors import ScenarioError, did_you_mean, shown
 from mobot_cli.scenario.expect_model import ExpectSpec, OdomErrorSpec, UprightSpec
 from mobot_cli.scenario.model import Scenario
 from mobot_cli.scenario.units import steps
@@ -36,7 +36,7 @@ def resolve_expectations(scenario: Scenario, source: Source, robots: Sequence[Ro
         elif spec.robot in fleets:
             members = fleets[spec.robot]
         else:
-            raise ScenarioError(f"expectation names robot '{spec.robot}', which is not in the scenario",
+            raise ScenarioError(f"expectation names robot {shown(spec.robot)}, which is not in the scenario",
                                 location=source.locate_key(path + ("robot",)),
                                 hint=did_you_mean(spec.robot, [*names, *fleets, ALL]))
         limits = _limits(spec)

@@ -8,8 +8,9 @@ from typing import Any, Iterable
 
 from pydantic import BaseModel, ValidationError
 
-from mobot_cli.errors import Location, ScenarioError, did_you_mean
+from mobot_cli.errors import Location, ScenarioError, did_you_mean, shown
 from mobot_cli.scenario.model import Scenario
+from mobot_cli.scenario.yamlsafe import read_yaml_file
 from mobot_cli.scenario.yamlsource import PathKey, Source, parse_value, parse_yaml
 
 NOT_YET: dict[str, str] = {}
@@ -18,14 +19,7 @@ NOT_YET: dict[str, str] = {}
 def load_scenario(path: Path | str, overrides: Iterable[str] = ()) -> tuple[Scenario, Source]:
     """Read, override and validate a scenario file."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ScenarioError(f"scenario file not found: {path}",
-                            hint="Check the path; bundled examples are in scenarios/.") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ScenarioError(f"cannot read scenario file {path}: {exc}") from None
-    source = parse_yaml(text, path)
+    source = parse_yaml(read_yaml_file(path), path)
     return validate(source, overrides), source
 
 
@@ -40,9 +34,9 @@ def validate(source: Source, overrides: Iterable[str] = ()) -> Scenario:
     for item in overrides:
         apply_override(source, item)
     version = source.data.get("version")
-    if version != 1:
+    if version != 1 or isinstance(version, bool):  # True == 1 in Python
         raise ScenarioError(
-            "missing 'version'" if version is None else f"unsupported version {version!r}",
+            "missing 'version'" if version is None else f"unsupported version {shown(version)}",
             location=source.locate(("version",)), hint="This mobot reads 'version: 1' scenarios.")
     try:
         return Scenario.model_validate(source.data)
@@ -64,7 +58,7 @@ def apply_override(source: Source, item: str) -> None:
             index = _list_index(node, part, item, path, source)
             path += (index,)
             if last:
-                node[index] = parse_value(raw)
+                node[index] = parse_value(raw, Location(file="--set " + item))
             else:
                 node = node[index]
             continue
@@ -73,7 +67,7 @@ def apply_override(source: Source, item: str) -> None:
                                 location=source.locate(path))
         path += (part,)
         if last:
-            node[part] = parse_value(raw)
+            node[part] = parse_value(raw, Location(file="--set " + item))
         else:
             node = node.setdefault(part, [] if part == "robots" else {})
     source.overrides[path] = item
@@ -103,10 +97,10 @@ def _to_scenario_error(exc: ValidationError, source: Source) -> ScenarioError:
     elif kind == "extra_forbidden":
         word = str(path[-1])
         hint = NOT_YET.get(word) if len(path) == 1 and word in NOT_YET else None
-        message = f"unknown key '{word}'"
+        message = f"unknown key {shown(word)}"
         hint = hint or did_you_mean(word, _fields_at(path[:-1]))
     elif kind not in ("value_error", "assertion_error"):
-        message += f", got {err.get('input')!r}"
+        message += f", got {shown(err.get('input'))}"
     more = len({_data_path(e["loc"], source.data) for e in exc.errors()}) - 1
     if more:
         message += f" (and {more} more problem{'s' if more > 1 else ''})"

@@ -8,20 +8,16 @@ so that a scenario which constructs is one that can be resolved.
 from __future__ import annotations
 
 import math
-import re
 from typing import Annotated, Literal, Optional, Union
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from mobot_cli.errors import shown
 from mobot_cli.scenario.expect_model import ExpectSpec
-
-NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
-FLEET_NAME_RE = re.compile(r"^[A-Za-z_]([A-Za-z0-9_]|\{i\})*$")
-NAMESPACE_RE = re.compile(r"^(/[A-Za-z_][A-Za-z0-9_]*)+$")
-
-PositiveFloat = Annotated[float, Field(gt=0)]
-NonNegativeFloat = Annotated[float, Field(ge=0)]
-Vector3 = tuple[float, float, float]
+from mobot_cli.scenario.limits import NAME_RE  # noqa: F401 - live/schema.py imports the name rule from here
+from mobot_cli.scenario.limits import (FLEET_NAME_RE, MAX_NAMESPACE_LENGTH, MAX_RATE_HZ, MIN_LOG_RATE_HZ,
+                                       NAMESPACE_RE, SCENARIO_NAME_RE, Coordinate, Duration, Float, Int, PositiveFloat, Reference, Seconds, Vector3,
+                                       check_name, gravity_length)
 
 
 class Strict(BaseModel):
@@ -31,29 +27,29 @@ class Strict(BaseModel):
 
 
 class PhysicsSpec(Strict):
-    rate_hz: Annotated[int, Field(gt=0, le=10_000)] = 240
-    gravity: Vector3 = (0.0, 0.0, -9.81)
-    solver_iterations: Annotated[int, Field(gt=0, le=1000)] = 50
+    rate_hz: Annotated[Int, Field(gt=0, le=MAX_RATE_HZ)] = 240
+    gravity: Annotated[Vector3, AfterValidator(gravity_length)] = (0.0, 0.0, -9.81)
+    solver_iterations: Annotated[Int, Field(gt=0, le=1000)] = 50
 
 
 class LogSpec(Strict):
     # None: about 50 Hz, rounded down to a whole number of physics steps (48 Hz at 240 Hz).
-    rate_hz: Optional[Annotated[float, Field(gt=0)]] = None
+    rate_hz: Optional[Annotated[Float, Field(ge=MIN_LOG_RATE_HZ, le=MAX_RATE_HZ)]] = None
     formats: list[Literal["csv", "mcap"]] = Field(default_factory=lambda: ["csv"])  # mcap: DIR/bag/
 
 
 class PoseSpec(Strict):
     """A spawn pose: {x, y, z, roll, pitch, yaw}, {xyz, rpy} or {xyz, quat: [x, y, z, w]}."""
 
-    x: Optional[float] = None
-    y: Optional[float] = None
-    z: Union[float, Literal["auto"], None] = None
-    roll: Optional[float] = None
-    pitch: Optional[float] = None
-    yaw: Optional[float] = None
-    xyz: Optional[tuple[float, float, Union[float, Literal["auto"]]]] = None
+    x: Optional[Coordinate] = None
+    y: Optional[Coordinate] = None
+    z: Union[Coordinate, Literal["auto"], None] = None
+    roll: Optional[Float] = None
+    pitch: Optional[Float] = None
+    yaw: Optional[Float] = None
+    xyz: Optional[tuple[Coordinate, Coordinate, Union[Coordinate, Literal["auto"]]]] = None
     rpy: Optional[Vector3] = None
-    quat: Optional[tuple[float, float, float, float]] = None
+    quat: Optional[tuple[Float, Float, Float, Float]] = None
 
     @model_validator(mode="after")
     def _one_form(self) -> "PoseSpec":
@@ -87,10 +83,10 @@ class DriveOverrides(Strict):
 class CommandSpec(Strict):
     """From ``at`` on, drive with this twist; ``for`` ends it with a stop."""
 
-    at: NonNegativeFloat
-    linear: float = 0.0
-    angular: float = 0.0
-    for_: Optional[PositiveFloat] = Field(default=None, alias="for")
+    at: Seconds
+    linear: Float = 0.0
+    angular: Float = 0.0
+    for_: Optional[Duration] = Field(default=None, alias="for")
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True, populate_by_name=True)
 
@@ -98,27 +94,29 @@ class CommandSpec(Strict):
 class RobotSpec(Strict):
     name: str
     namespace: Optional[str] = None
-    description: str = "mobot"
+    description: Reference = "mobot"
     args: dict[str, Union[str, bool, int, float]] = Field(default_factory=dict)
     pose: PoseSpec = Field(default_factory=PoseSpec)
     drive: Optional[DriveOverrides] = None
     commands: list[CommandSpec] = Field(default_factory=list)
-    count: Optional[Annotated[int, Field(ge=1, le=1000)]] = None
-    poses: Optional[list[Vector3]] = None
+    count: Optional[Annotated[Int, Field(ge=1, le=1000)]] = None
+    poses: Optional[list[tuple[Coordinate, Coordinate, Float]]] = None
 
     @field_validator("name")
     @classmethod
     def _name(cls, v: str) -> str:
-        if not FLEET_NAME_RE.match(v):
-            raise ValueError(f"'{v}' is not a valid robot name: use letters, digits and '_', "
-                             "not starting with a digit ('{i}' allowed in fleets)")
-        return v
+        # '{i}' becomes at most 3 digits (count <= 1000): a fleet's names are no longer than its template.
+        return check_name(v, "robot", FLEET_NAME_RE, "use letters, digits and '_', not starting with a "
+                                                    "digit ('{i}' allowed in fleets)")
 
     @field_validator("namespace")
     @classmethod
     def _namespace(cls, v: Optional[str]) -> Optional[str]:
+        if v is not None and len(v) > MAX_NAMESPACE_LENGTH:
+            raise ValueError(f"{shown(v, 40)} is not a valid ROS namespace: it is {len(v)} characters long, "
+                             f"the limit is {MAX_NAMESPACE_LENGTH}")
         if v is not None and not NAMESPACE_RE.match(v):
-            raise ValueError(f"'{v}' is not a valid ROS namespace: it must start with '/' and "
+            raise ValueError(f"{shown(v, 40)} is not a valid ROS namespace: it must start with '/' and "
                              "hold names of letters, digits and '_' separated by '/', e.g. /robot1")
         return v
 
@@ -144,7 +142,7 @@ class RobotSpec(Strict):
 class EventSpec(Strict):
     """At ``at`` seconds, spawn one robot or delete one by name."""
 
-    at: NonNegativeFloat
+    at: Seconds
     spawn: Optional[RobotSpec] = None
     delete: Optional[str] = None
 
@@ -162,13 +160,13 @@ class Scenario(Strict):
 
     version: Literal[1]
     name: str = "scenario"
-    world: str = "empty"
+    world: Reference = "empty"
     # World models whose files are missing (Fuel includes, meshes) are left out with a warning.
     skip_missing: bool = False
     physics: PhysicsSpec = Field(default_factory=PhysicsSpec)
-    duration: Annotated[float, Field(gt=0, le=1e6)]
-    seed: Annotated[int, Field(ge=0, lt=2**32)] = 0
-    settle: Annotated[float, Field(ge=0)] = 0.5
+    duration: Duration
+    seed: Annotated[Int, Field(ge=0, lt=2**32)] = 0
+    settle: Seconds = 0.5
     log: LogSpec = Field(default_factory=LogSpec)
     robots: list[RobotSpec] = Field(default_factory=list)
     events: list[EventSpec] = Field(default_factory=list)
@@ -177,6 +175,4 @@ class Scenario(Strict):
     @field_validator("name")
     @classmethod
     def _name(cls, v: str) -> str:
-        if not re.match(r"^[A-Za-z0-9_.-]+$", v):
-            raise ValueError(f"'{v}' is not a valid scenario name: use letters, digits, '_', '-' and '.'")
-        return v
+        return check_name(v, "scenario", SCENARIO_NAME_RE, "use letters, digits, '_', '-' and '.'")

@@ -7,14 +7,17 @@ found later, while preparing one run, points back at it.
 from __future__ import annotations
 
 import json
-import re
+import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from mobot_cli.errors import Location, ScenarioError, UsageError, did_you_mean
+from mobot_cli.errors import Location, ScenarioError, UsageError, did_you_mean, shown
+from mobot_cli.scenario.limits import SCENARIO_NAME_RE, check_name, check_reference
+from mobot_cli.scenario.yamlsafe import read_yaml_file
 from mobot_cli.scenario.yamlsource import Source, parse_value, parse_yaml
 
+MAX_RUNS = 10_000  # runs of one sweep (each is prepared up front, ~10 ms apiece)
 SWEEP_FILE_KEYS = ("scenario", "name", "seed", "set", "grid", "zip", "random", "samples")
 
 
@@ -136,14 +139,14 @@ def _bounds(low: Any, high: Any, where: Location) -> tuple[Any, Any]:
     """LOW and HIGH as numbers (texts from a flag are parsed as YAML)."""
     if high is None:
         raise UsageError("random needs LOW:HIGH", location=where, hint="e.g. --random robots.mobot.pose.yaw=-3.14:3.14")
-    lo = parse_value(low) if isinstance(low, str) else low
-    hi = parse_value(high) if isinstance(high, str) else high
+    lo = parse_value(low, where) if isinstance(low, str) else low
+    hi = parse_value(high, where) if isinstance(high, str) else high
     for v in (lo, hi):
-        if isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise UsageError(f"random bounds must be numbers, got {v!r}", location=where,
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise UsageError(f"random bounds must be finite numbers, got {shown(v)}", location=where,
                              hint="e.g. 0.1:0.5 (floats) or 1:4 (whole numbers, both ends included)")
     if not lo < hi:
-        raise UsageError(f"random LOW {lo!r} must be below HIGH {hi!r}", location=where)
+        raise UsageError(f"random LOW {shown(lo)} must be below HIGH {shown(hi)}", location=where)
     return lo, hi
 
 
@@ -164,6 +167,12 @@ def check_spec(spec: SweepSpec) -> SweepSpec:
     if spec.samples is not None and spec.samples < 1:
         raise UsageError(f"samples must be at least 1, got {spec.samples}: the sweep has no runs",
                          location=spec.where.get("samples"))
+    runs = math.prod(spec.samples if a.kind == "random" else len(a.rows) for a in spec.axes)
+    if runs > MAX_RUNS:
+        where = next((a.where[0] for a in spec.axes if a.kind != "random"), spec.where.get("samples"))
+        count = f"{runs:,}" if runs < 10**12 else "over 10^12"
+        raise UsageError(f"the sweep has {count} runs, more than the limit of {MAX_RUNS:,}", location=where,
+                         hint="Every run is prepared before the first starts; split the sweep.")
     if spec.seed is not None and not 0 <= spec.seed < 2**32:
         raise UsageError(f"seed must be in 0..{2**32 - 1}, got {spec.seed}", location=spec.where.get("seed"))
     seen: dict[str, Location] = {}
@@ -179,18 +188,14 @@ def check_spec(spec: SweepSpec) -> SweepSpec:
 
 def load_sweep_file(path: Path) -> SweepSpec:
     """Read a sweep file: {scenario, name, seed, set, grid, zip, random, samples}; unchecked."""
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ScenarioError(f"cannot read sweep file {path}: {exc.strerror or exc}") from None
-    source = parse_yaml(text, path)
+    source = parse_yaml(read_yaml_file(path, "sweep"), path)
     data = source.data
     if not isinstance(data, dict):
         raise ScenarioError("a sweep file must be a mapping (scenario, grid, zip, random, ...)",
                             location=Location(file=path))
     for key in data:
         if key not in SWEEP_FILE_KEYS:
-            raise ScenarioError(f"unknown key '{key}' in a sweep file", location=source.locate_key((key,)),
+            raise ScenarioError(f"unknown key {shown(key)} in a sweep file", location=source.locate_key((key,)),
                                 hint=did_you_mean(str(key), SWEEP_FILE_KEYS))
     scenario = _scenario_path(source, path)
     axes = []
@@ -214,19 +219,28 @@ def load_sweep_file(path: Path) -> SweepSpec:
     fixed = [(f"{k}={_text(v)}", _at(source, "set", k)) for k, v in _mapping(source, "set").items()]
     where = {k: source.locate_key((k,)) if k in data else Location(file=path) for k in ("samples", "seed")}
     name = data.get("name")
-    if name is not None and not (isinstance(name, str) and re.match(r"^[A-Za-z0-9_.-]+$", name)):
-        raise ScenarioError(f"'{name}' is not a valid sweep name: use letters, digits, '_', '-' and '.'",
-                            location=source.locate_key(("name",)))
+    if name is not None:
+        _sweep_name(name, source.locate_key(("name",)))
     return SweepSpec(scenario=scenario, axes=tuple(axes), sets=tuple(fixed), samples=_int(source, "samples"),
                      seed=_int(source, "seed"), name=name or path.stem, sweep_file=path, where=where)
+
+
+def _sweep_name(name: Any, where: Location) -> None:
+    """The sweep's name names its folder: the scenario name's rule."""
+    if not isinstance(name, str):
+        raise ScenarioError(f"the sweep name must be text, got {shown(name)}", location=where)
+    try:
+        check_name(name, "sweep", SCENARIO_NAME_RE, "use letters, digits, '_', '-' and '.'")
+    except ValueError as exc:
+        raise ScenarioError(str(exc), location=where) from None
 
 
 def is_sweep_file(path: Path) -> bool:
     """True when a YAML file is a sweep file (it names a base ``scenario:``), not a scenario."""
     try:
-        head = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError):
-        return False
+        head = read_yaml_file(path)
+    except ScenarioError:
+        return False  # loading it as a scenario reports what is wrong with the file
     data = parse_yaml(head, path).data if head.strip() else None
     return isinstance(data, dict) and "scenario" in data and "version" not in data
 
@@ -236,6 +250,10 @@ def _scenario_path(source: Source, path: Path) -> Path:
     where = source.locate_key(("scenario",))
     if not isinstance(value, str) or not value:
         raise ScenarioError("'scenario' must name the base scenario file", location=where)
+    try:
+        check_reference(value)
+    except ValueError as exc:
+        raise ScenarioError(str(exc), location=where) from None
     scenario = (path.parent / value).resolve()
     if not scenario.is_file():
         raise ScenarioError(f"scenario file not found: {scenario}", location=where,
