@@ -13,7 +13,6 @@ from mobot_cli.scenario.model import Scenario
 from mobot_cli.scenario.yamlsafe import read_yaml_file
 from mobot_cli.scenario.yamlsource import PathKey, Source, parse_value, parse_yaml
 
-NOT_YET: dict[str, str] = {}
 
 
 def load_scenario(path: Path | str, overrides: Iterable[str] = ()) -> tuple[Scenario, Source]:
@@ -96,9 +95,8 @@ def _to_scenario_error(exc: ValidationError, source: Source) -> ScenarioError:
         message = f"'{path[-1]}' is required"
     elif kind == "extra_forbidden":
         word = str(path[-1])
-        hint = NOT_YET.get(word) if len(path) == 1 and word in NOT_YET else None
         message = f"unknown key {shown(word)}"
-        hint = hint or did_you_mean(word, _fields_at(path[:-1]))
+        hint = did_you_mean(word, _fields_at(path[:-1]))
     elif kind not in ("value_error", "assertion_error"):
         message += f", got {shown(err.get('input'))}"
     more = len({_data_path(e["loc"], source.data) for e in exc.errors()}) - 1
