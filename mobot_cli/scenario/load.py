@@ -14,7 +14,6 @@ from mobot_cli.scenario.yamlsafe import read_yaml_file
 from mobot_cli.scenario.yamlsource import PathKey, Source, parse_value, parse_yaml
 
 
-
 def load_scenario(path: Path | str, overrides: Iterable[str] = ()) -> tuple[Scenario, Source]:
     """Read, override and validate a scenario file."""
     path = Path(path)
