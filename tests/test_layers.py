@@ -12,7 +12,7 @@ REPO = Path(__file__).resolve().parent.parent
 # everything; mobot_cli/__main__.py is the entry point above everything.
 LAYERS = {
     "cli": 4,
-    "run": 3, "live": 3, "sweep": 3, "plot": 3, "view": 3, "api": 3, "ros2": 3,
+    "run": 3, "live": 3, "sweep": 3, "plot": 3, "view": 3, "api": 3, "ros2": 3, "gym": 3,
     "scenario": 2, "assets": 2,
     "sim": 1,
     "common": 0,
@@ -20,7 +20,7 @@ LAYERS = {
 BOTTOM = {"", "errors"}  # the package itself, mobot_cli.errors
 TOP = {"__main__"}
 # The only imports between two packages of the same layer, each one way.
-SAME_LAYER = {("run", "plot"), ("live", "run"), ("sweep", "run"), ("api", "run"), ("scenario", "assets")}
+SAME_LAYER = {("run", "plot"), ("live", "run"), ("sweep", "run"), ("api", "run"), ("gym", "api"), ("scenario", "assets")}
 
 
 def module_name(root: Path, path: Path) -> str:

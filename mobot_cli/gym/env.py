@@ -1,0 +1,120 @@
+"""A Gymnasium environment on mobot's timeline: one robot, a twist as the action.
+
+Observation: the robot's odometry ``[x, y, yaw, vx, wz]`` in its odom frame (its spawn pose)
+and the goal in that frame ``[gx, gy]``. Action: ``[linear, angular]`` (m/s, rad/s), held for
+one control period (``physics rate / control_hz`` whole steps). Reward and termination are
+yours to give (callables of an ``Outcome``); by default the reward is minus the distance to the
+goal per control period, and an episode ends when the robot is within ``goal_tolerance``.
+Every ``reset`` builds the world afresh, so ``reset(seed=s)`` always starts the same episode.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Optional
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from mobot_cli.api import RobotState, Simulation
+from mobot_cli.errors import UsageError
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What the reward and termination callables see after a control period."""
+
+    state: RobotState  # odometry and ground truth (see RobotState)
+    goal: tuple[float, float]  # in the robot's odom frame
+    action: tuple[float, float]
+    steps: int  # control periods since reset
+
+    @property
+    def distance(self) -> float:
+        """Distance from the robot's odometry to the goal (m)."""
+        return math.hypot(self.goal[0] - self.state.odom_x, self.goal[1] - self.state.odom_y)
+
+
+Reward = Callable[[Outcome], float]
+Termination = Callable[[Outcome], bool]
+
+
+class MobotEnv(gym.Env):
+    """Drive one robot of a mobot world toward a goal (or whatever your reward says)."""
+
+    metadata = {"render_modes": []}
+
+    def __init__(self, world: str | Path = "empty", description: str = "mobot", *, robot: str = "robot",
+                 pose: tuple[float, float, float] = (0.0, 0.0, 0.0), goal: tuple[float, float] = (2.0, 0.0),
+                 goal_tolerance: float = 0.1, control_hz: float = 10.0, max_linear: float = 0.5,
+                 max_angular: float = 2.0, settle: float = 0.5, reward: Optional[Reward] = None,
+                 terminated: Optional[Termination] = None, args: Optional[dict[str, str]] = None):
+        self.world, self.description, self.robot = str(world), description, robot
+        self.pose, self.goal = tuple(pose), (float(goal[0]), float(goal[1]))
+        self.goal_tolerance, self.control_hz, self.settle = goal_tolerance, control_hz, settle
+        self.reward_fn = reward or (lambda o: -o.distance)
+        self.terminated_fn = terminated or (lambda o: o.distance < self.goal_tolerance)
+        self.args = dict(args or {})
+        high = np.array([max_linear, max_angular], dtype=np.float32)
+        self.action_space = spaces.Box(-high, high, dtype=np.float32)
+        # Odometry is bounded by the farthest spawn a scenario allows and by what a robot can do.
+        far, turn = 2e6, np.float32(np.pi)
+        bound = np.array([far, far, turn, 1e3, 1e3, far, far], dtype=np.float32)
+        self.observation_space = spaces.Box(-bound, bound, dtype=np.float32)
+        self._sim: Simulation | None = None
+        self._steps_per_action = 0
+        self._count = 0
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        """A fresh world at t = 0 with the robot at its pose, settled; ``seed`` seeds the world."""
+        super().reset(seed=seed)
+        self._close_sim()
+        world_seed = int(self.np_random.integers(0, 2**31 - 1))
+        self._sim = Simulation.open(self.world, seed=world_seed)
+        rate = self._sim.rate_hz
+        steps = rate / self.control_hz
+        if abs(steps - round(steps)) > 1e-9 or round(steps) < 1:
+            raise UsageError(f"control_hz {self.control_hz:g} is not a whole number of physics steps at {rate} Hz",
+                             hint=f"Pick a divisor of {rate}, e.g. 10 at 240 Hz.")
+        self._steps_per_action = round(steps)
+        x, y, yaw = self.pose
+        self._sim.spawn(self.robot, self.description, x=x, y=y, yaw=yaw, args=self.args)
+        self._sim.run_for(self.settle)
+        self._count = 0
+        return self._observation(), {}
+
+    def step(self, action):
+        """Hold ``action`` for one control period."""
+        if self._sim is None:
+            raise UsageError("call reset() before step()")
+        low, high = self.action_space.low, self.action_space.high
+        linear, angular = (float(v) for v in np.clip(np.asarray(action, dtype=np.float64), low, high))
+        self._sim.command(self.robot, linear, angular)
+        self._sim.step(self._steps_per_action)
+        self._count += 1
+        outcome = Outcome(self._sim.state(self.robot), self._goal_in_odom(), (linear, angular), self._count)
+        reward = float(self.reward_fn(outcome))
+        return self._observation(), reward, bool(self.terminated_fn(outcome)), False, {"t": self._sim.t}
+
+    def close(self) -> None:
+        self._close_sim()
+
+    def _goal_in_odom(self) -> tuple[float, float]:
+        """The goal (world frame) in the robot's odom frame, whose origin is its spawn pose."""
+        x0, y0, yaw0 = self.pose
+        dx, dy = self.goal[0] - x0, self.goal[1] - y0
+        c, s = math.cos(yaw0), math.sin(yaw0)
+        return c * dx + s * dy, -s * dx + c * dy
+
+    def _observation(self) -> np.ndarray:
+        s = self._sim.state(self.robot)
+        gx, gy = self._goal_in_odom()
+        return np.array([s.odom_x, s.odom_y, s.odom_yaw, s.odom_vx, s.odom_wz, gx, gy], dtype=np.float32)
+
+    def _close_sim(self) -> None:
+        if self._sim is not None:
+            self._sim.close()
+            self._sim = None
