@@ -64,6 +64,8 @@ class MobotEnv(gym.Env):
         far, turn = 2e6, np.float32(np.pi)
         bound = np.array([far, far, turn, 1e3, 1e3, far, far], dtype=np.float32)
         self.observation_space = spaces.Box(-bound, bound, dtype=np.float32)
+        self._low, self._high = tuple(float(v) for v in -high), tuple(float(v) for v in high)
+        self._goal = self._goal_in_odom()
         self._sim: Simulation | None = None
         self._steps_per_action = 0
         self._count = 0
@@ -84,20 +86,21 @@ class MobotEnv(gym.Env):
         self._sim.spawn(self.robot, self.description, x=x, y=y, yaw=yaw, args=self.args)
         self._sim.run_for(self.settle)
         self._count = 0
-        return self._observation(), {}
+        self._goal = self._goal_in_odom()
+        return self._observation(self._sim.state(self.robot)), {}
 
     def step(self, action):
         """Hold ``action`` for one control period."""
         if self._sim is None:
             raise UsageError("call reset() before step()")
-        low, high = self.action_space.low, self.action_space.high
-        linear, angular = (float(v) for v in np.clip(np.asarray(action, dtype=np.float64), low, high))
+        linear, angular = (min(max(float(v), lo), hi) for v, lo, hi in zip(action, self._low, self._high))
         self._sim.command(self.robot, linear, angular)
         self._sim.step(self._steps_per_action)
         self._count += 1
-        outcome = Outcome(self._sim.state(self.robot), self._goal_in_odom(), (linear, angular), self._count)
+        state = self._sim.state(self.robot)
+        outcome = Outcome(state, self._goal, (linear, angular), self._count)
         reward = float(self.reward_fn(outcome))
-        return self._observation(), reward, bool(self.terminated_fn(outcome)), False, {"t": self._sim.t}
+        return self._observation(state), reward, bool(self.terminated_fn(outcome)), False, {"t": self._sim.t}
 
     def close(self) -> None:
         self._close_sim()
@@ -109,9 +112,8 @@ class MobotEnv(gym.Env):
         c, s = math.cos(yaw0), math.sin(yaw0)
         return c * dx + s * dy, -s * dx + c * dy
 
-    def _observation(self) -> np.ndarray:
-        s = self._sim.state(self.robot)
-        gx, gy = self._goal_in_odom()
+    def _observation(self, s: RobotState) -> np.ndarray:
+        gx, gy = self._goal
         return np.array([s.odom_x, s.odom_y, s.odom_yaw, s.odom_vx, s.odom_wz, gx, gy], dtype=np.float32)
 
     def _close_sim(self) -> None:
