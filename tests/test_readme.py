@@ -46,3 +46,16 @@ def test_the_in_process_example_runs(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     exec(compile(block, "README.md", "exec"), {})
     assert (tmp_path / "runs" / "api" / "summary.json").is_file() and (tmp_path / "runs" / "tty").is_dir()
+
+
+def test_the_python_api_example_runs(tmp_path, monkeypatch):
+    """The Python API section's go-to-goal controller reaches its goal as written."""
+    section = README[README.index("## Python API and Gymnasium"):]
+    block = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    monkeypatch.chdir(tmp_path)
+    scope: dict = {}
+    exec(compile(block, "README.md", "exec"), scope)
+    sim = scope["sim"]
+    final = sim.record.robots["r1"].final_pose
+    assert abs(final.x - 1.5) < 0.1 and abs(final.y - 0.5) < 0.1
+    assert (tmp_path / "runs" / "goal" / "odom" / "r1.csv").is_file()
