@@ -96,8 +96,7 @@ def _dispatch(argv: list[str] | None) -> int:
     except UsageProblem as exc:
         exc.show()
         return ExitCode.BAD_INPUT
-    except KeyboardInterrupt:
+    except KeyboardInterrupt:  # `mobot: interrupted` is printed by the entry point (__main__.py)
         if STATE.traceback:
             raise
-        sys.stderr.write("mobot: interrupted\n")
         return ExitCode.INTERRUPTED
