@@ -141,7 +141,7 @@ def test_a_full_disk_mid_run_stops_with_the_file_and_leaves_whole_rows(tmp_path)
 
 
 @needs_tmpfs
-def test_a_full_disk_while_writing_the_bag_leaves_whole_rows_and_a_torn_bag(tmp_path):
+def test_a_full_disk_while_writing_the_bag_leaves_a_bag_that_check_can_repair(tmp_path):
     scenario = tmp_path / "bag.yaml"
     scenario.write_text(QUICKSTART.read_text().replace("duration: 12.0", "duration: 60.0")
                         .replace("formats: [csv]", "formats: [csv, mcap]"))
@@ -155,6 +155,13 @@ def test_a_full_disk_while_writing_the_bag_leaves_whole_rows_and_a_torn_bag(tmp_
     assert no_temporaries(run) == [] and not (run / "bag" / "metadata.yaml").exists()
     check = mobot("check", run)
     assert check.returncode == 2
+    assert check.stdout.endswith(f"\n  bag can be repaired: mobot check {run} --repair\n")
+    repair = mobot("check", run, "--repair")
+    assert repair.returncode == 2 and repair.stdout.startswith("repaired bag/bag.mcap: ")
+    from rosbags.highlevel import AnyReader
+
+    with AnyReader([run / "bag"]) as reader:
+        assert reader.message_count > 0 and reader.message_count == sum(1 for _ in reader.messages())
 
 
 def test_the_file_size_limit_mid_run_leaves_whole_rows_and_a_summary_saying_error(tmp_path):
