@@ -14,9 +14,11 @@ milliseconds instead of the 0.5 s a spawned one needs; spawn where there is no f
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import os
 import signal
+import threading
 import time
 from collections import deque
 from multiprocessing.connection import Connection, wait
@@ -59,7 +61,8 @@ class _Worker:
     def __init__(self, ctx, runner: Runner):
         self.conn, child = ctx.Pipe()
         self.process = ctx.Process(target=_worker_main, args=(child, runner, os.getpid()), daemon=True)
-        self.process.start()
+        with _sigint_ignored():
+            self.process.start()
         child.close()
         self.task: Task | None = None
         self.ready = False
@@ -169,6 +172,21 @@ class LocalExecutor:
         except (BrokenPipeError, OSError):
             pass
         worker.kill()
+
+
+@contextlib.contextmanager
+def _sigint_ignored():
+    """Ctrl-C ignored while a worker (and the fork server, with the first) is started: a new
+    Python inherits that through exec, so an interrupt cannot kill it mid-import with a
+    traceback on the terminal. The sweep itself handles Ctrl-C once the start is done."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
 
 
 def _context():
