@@ -44,16 +44,18 @@ def _can_unshare() -> bool:
 needs_tmpfs = pytest.mark.skipif(not _can_unshare(), reason="no mount namespace (unshare) to mount a tmpfs in")
 
 
-def on_tmpfs(options: str, mount: Path, copy: Path, *args) -> subprocess.CompletedProcess:
+def on_tmpfs(options: str, mount: Path, copy: Path, *args, fill: bool = False) -> subprocess.CompletedProcess:
     """`mobot ARGS` with a tmpfs (``options``) on ``mount``, in a mount namespace of its own; what
-    it wrote is copied to ``copy`` before the namespace, and the tmpfs, go away."""
+    it wrote is copied to ``copy`` before the namespace, and the tmpfs, go away. ``fill``: a file
+    takes all its space first."""
     mount.mkdir()
-    script = 'mount -t tmpfs -o "$1" mobot-test "$2" || exit 99; shift 3; "$@"; rc=$?; cp -a "$MNT/." "$COPY"; exit $rc'
+    script = ('mount -t tmpfs -o "$1" mobot-test "$2" || exit 99; [ -z "$FILL" ] || cat /dev/zero > "$2/fill" 2>/dev/null; '
+              'shift 3; "$@"; rc=$?; cp -a "$MNT/." "$COPY"; exit $rc')
     copy.mkdir()
     return subprocess.run(["unshare", "--mount", "--map-root-user", "sh", "-c", script, "sh", options, str(mount),
                            "-", sys.executable, "-m", "mobot_cli", *map(str, args)],
                           capture_output=True, text=True, cwd=REPO, timeout=120,
-                          env={**os.environ, "MNT": str(mount), "COPY": str(copy)})
+                          env={**os.environ, "MNT": str(mount), "COPY": str(copy), "FILL": "1" if fill else ""})
 
 
 def assert_whole_rows(csv_path: Path) -> int:
@@ -123,6 +125,15 @@ def test_a_read_only_file_system_is_refused_before_the_run(tmp_path):
 
 
 # the disk fills, the file-size limit is reached, a path grows too long: mid-run ---------------
+
+
+@needs_tmpfs
+def test_a_disk_already_full_leaves_no_run_folder(tmp_path):
+    mount, copy = tmp_path / "full", tmp_path / "copy"
+    done = on_tmpfs("size=8k", mount, copy, "run", QUICKSTART, "--out", mount / "run", "--quiet", fill=True)
+    assert done.returncode == 2
+    assert done.stderr == f"mobot: error: cannot write {mount / 'run' / 'scenario.yaml'}: {NO_SPACE}\n"
+    assert sorted(p.name for p in copy.iterdir()) == ["fill"]
 
 
 @needs_tmpfs

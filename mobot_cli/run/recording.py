@@ -81,6 +81,7 @@ class Recording:
         self._lives: dict[str, _Life] = {}  # record name -> life, in order of arrival
         self._renamed = False
         self._started = time.perf_counter()
+        made = not out_dir.exists()
         try:
             out_dir.mkdir(parents=True, exist_ok=True)
             (out_dir / SUMMARY).unlink(missing_ok=True)  # a reused folder must not look finished early
@@ -89,6 +90,8 @@ class Recording:
         except OSError as exc:
             failure = self._failed(exc)
             self._save(self._record(Status.ERROR, str(failure), 0, None))
+            if made:
+                _remove_if_empty(out_dir)  # nothing written, not even the summary: leave nothing
             raise failure from exc
         self.sinks.append(self.checker)
 
@@ -184,6 +187,13 @@ class Recording:
             notices=list(plan.notices),
             robots={key: life.record() for key, life in self._lives.items() if life.last is not None},
             expectations=expectations, live=live)
+
+
+def _remove_if_empty(folder: Path) -> None:
+    try:
+        folder.rmdir()
+    except OSError:
+        pass
 
 
 def _version(package: str) -> str | None:
