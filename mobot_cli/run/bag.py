@@ -21,6 +21,7 @@ scanning it reads up to its last chunk (metadata.yaml is written only when the b
 
 from __future__ import annotations
 
+import contextlib
 import math
 import re
 import shutil
@@ -179,22 +180,22 @@ class BagSink(Sink):
         storage = self.writer.storage
         if storage is None:
             return
-        if self.broken:  # writing more would fail again; what is on disk can be repaired
-            self._abandon(storage)
-            return
-        self._record()
         try:
-            self.writer.close()  # the MCAP summary and footer, then metadata.yaml
+            if not self.broken:  # else writing more would fail again; what is on disk can be repaired
+                self._record()
+                self.writer.close()  # the MCAP summary and footer, then metadata.yaml
         except OSError as exc:
-            self.broken = True
             failed = storage.path if self.writer.storage is not None else self.path / "metadata.yaml"
-            self._abandon(storage)
-            (self.path / "metadata.yaml.tmp").unlink(missing_ok=True)
+            with contextlib.suppress(OSError):
+                (self.path / "metadata.yaml.tmp").unlink(missing_ok=True)
             raise named(exc, failed) from None
+        finally:
+            if self.writer.storage is not None:
+                self._abandon(storage)
 
     def _abandon(self, storage) -> None:
         """Let go of the MCAP file without its summary: it stays as a killed run leaves it."""
-        self.writer.storage = None
+        self.broken, self.writer.storage = True, None
         try:
             storage.bio.close()  # may still add pending bytes: they continue the file, in order
         except (OSError, ValueError):
