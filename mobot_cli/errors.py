@@ -7,6 +7,7 @@ Only ``mobot_cli.cli`` turns these into printed text and exit codes.
 from __future__ import annotations
 
 import difflib
+import errno
 from dataclasses import dataclass
 from enum import IntEnum
 from pathlib import Path
@@ -90,6 +91,34 @@ class WorldError(MobotError):
 
 class SpawnError(MobotError):
     """A robot cannot be placed where it was asked to be."""
+
+
+class OutputError(MobotError):
+    """A file of the output folder cannot be written: a full disk, a read-only folder, a bad --out.
+
+    Exit 2, as for bad input: the fix is on the user's side (free space, pick another --out)."""
+
+
+_WRITE_HINTS = {
+    errno.ENOSPC: "Free some space or pick another --out.",
+    errno.EDQUOT: "Free some space (your disk quota is used up) or pick another --out.",
+    errno.EFBIG: "The file reached the size limit of this process (ulimit -f): raise the limit, or log less "
+                 "(a shorter duration, a lower log.rate_hz).",
+    errno.EROFS: "The file system is read-only: pick another --out.",
+    errno.EACCES: "Pick a folder you may write to with --out.",
+    errno.EPERM: "Pick a folder you may write to with --out.",
+    errno.ENAMETOOLONG: "Use shorter names (scenario, robots, namespaces) or a shorter --out path.",
+    errno.ENOTDIR: "--out must be a folder, or a path where one can be made.",
+    errno.EEXIST: "--out must be a folder, or a path where one can be made.",
+    errno.EISDIR: "Remove the folder that is in the way, or pick another --out.",
+}
+
+
+def cannot_write(path: str | Path, exc: OSError) -> OutputError:
+    """``cannot write PATH: No space left on device [Errno 28]``, with what to do about it."""
+    reason = f"{exc.strerror} [Errno {exc.errno}]" if exc.strerror and exc.errno else str(exc) or repr(exc)
+    return OutputError(f"cannot write {path}: {reason}",
+                       hint=_WRITE_HINTS.get(exc.errno, "Check the disk, or pick another --out."))
 
 
 class SimulationFault(MobotError):

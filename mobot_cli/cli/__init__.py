@@ -24,7 +24,7 @@ from mobot_cli.cli import sweep as sweep_command
 from mobot_cli.cli import cmd, delete, odom, serve, spawn, stop
 from mobot_cli.cli import list as list_command  # not `list`: that would shadow the builtin here
 from mobot_cli.cli.environment import Environment
-from mobot_cli.cli.output import interrupted, report_error
+from mobot_cli.cli.output import report_error
 from mobot_cli.errors import ExitCode, MobotError
 
 app = typer.Typer(
@@ -132,10 +132,9 @@ def _execute(args: list[str], env: Environment) -> int:
     except UsageProblem as exc:
         exc.show(file=env.stderr)
         return ExitCode.BAD_INPUT
-    except KeyboardInterrupt:
+    except KeyboardInterrupt:  # `mobot: interrupted` is said once, by the entry point (__main__.py)
         if env.traceback:
             raise
-        interrupted(env)
         return ExitCode.INTERRUPTED
 
 

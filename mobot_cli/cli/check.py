@@ -24,6 +24,8 @@ def check(
     mappings: list[str] = typer.Argument(None, metavar="[NAME:=VALUE]...", help="xacro arguments for a robot."),
     json_: bool = typer.Option(False, "--json", help="Print the result as JSON."),
     skip_missing: bool = typer.Option(False, "--skip-missing", help=SKIP_HELP),
+    repair: bool = typer.Option(False, "--repair", help="For a run folder: make a killed run's bag readable "
+                                                        "(its complete chunks, with an index and metadata.yaml)."),
 ) -> int:
     """Validate a scenario, robot description or world; exit 0 when it is usable, 2 when not.
 
@@ -33,7 +35,9 @@ def check(
     env = ctx.obj
     model_folder = (path / "model.config").is_file()  # a Gazebo model: a robot description
     if path.is_dir() and not model_folder:
-        return _check_run_folder(env, path, json_)
+        return _check_run_folder(env, path, json_, repair)
+    if repair:
+        raise UsageError("--repair is for run folders", hint="Give the folder that mobot run --out wrote.")
     if path.suffix in SCENARIO_SUFFIXES:
         result = _check_scenario(path, skip_missing)
     elif path.suffix in ROBOT_SUFFIXES or model_folder or (path.suffix == ".sdf" and not _is_world(path)):
@@ -96,10 +100,13 @@ def _check_world(path: Path, skip_missing: bool) -> dict:
     return {"ok": True, **loaded.summary, "notices": list(loaded.notices)}
 
 
-def _check_run_folder(env, path: Path, json_: bool) -> int:
-    from mobot_cli.run.folder import run_status
+def _check_run_folder(env, path: Path, json_: bool, repair: bool) -> int:
+    from mobot_cli.run.folder import repair_run, run_status
 
+    repaired = repair_run(path) if repair else None
     result = run_status(path)
+    if repaired is not None:
+        result["repaired"] = repaired
     if json_:
         output.emit_json(env, result)
     else:

@@ -18,11 +18,6 @@ def report_error(env: Environment, exc: MobotError) -> None:
     env.stderr.write(f"mobot: error: {exc}\n")
 
 
-def interrupted(env: Environment) -> None:
-    """The one line after Ctrl-C."""
-    env.stderr.write("mobot: interrupted\n")
-
-
 def notices(env: Environment, lines: Iterable[str], quiet: bool = False) -> None:
     """Print warnings that did not stop the command."""
     if quiet:
@@ -244,6 +239,11 @@ def run_folder_status(env: Environment, result: dict[str, Any]) -> None:
     elif result["problems"]:
         line += ": " + "; ".join(result["problems"])
     lines = [line]
+    repaired = result.get("repaired")
+    if repaired is not None:
+        lines.insert(0, f"repaired {repaired['file']}: {repaired['messages']} messages from {repaired['chunks']} "
+                        f"complete chunks, up to t = {repaired['last_t']:g} s; metadata.yaml written"
+                     if repaired["done"] else f"nothing repaired: {repaired['why']}")
     if not result["ok"]:
         for robot, extent in result["csv"].items():
             upto = f", up to t = {extent['last_t']:g} s" if extent["last_t"] is not None else ""
@@ -253,6 +253,8 @@ def run_folder_status(env: Environment, result: dict[str, Any]) -> None:
             upto = f", messages up to t = {bag['last_t']:g} s" if bag.get("last_t") is not None else ""
             closed = "closed" if bag["complete"] else "not closed (no metadata.yaml)"
             lines.append(f"  bag/{bag['file']}: {closed}; {bag['chunks']} complete chunks{upto}")
+            if bag.get("repairable"):
+                lines.append(f"  bag can be repaired: mobot check {result['path']} --repair")
     env.stdout.write("\n".join(lines) + "\n")
 
 

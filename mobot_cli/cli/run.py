@@ -27,6 +27,7 @@ def run(
                                       help="Leave out world models whose files are missing, with a warning."),
 ) -> int:
     """Run a scenario to its end and write odometry, a summary and the resolved scenario."""
+    from mobot_cli.common.files import check_out_folder
     from mobot_cli.run.execute import execute
     from mobot_cli.run.prepare import prepare
 
@@ -41,6 +42,7 @@ def run(
     prepared = prepare(scenario, overrides)
     output.notices(env, prepared.plan.notices, quiet=quiet or json_)
     out_dir = out or default_out("runs", prepared.plan.name)
+    check_out_folder(out_dir)  # a file, a path under a file, a read-only folder: before the run
     bar = None if (quiet or json_) else output.progress_bar(env, prepared.plan.total_steps, prepared.plan.name)
     progress = _progress(bar, realtime, prepared.plan.physics.rate_hz)
     if bar:

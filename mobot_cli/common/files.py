@@ -7,12 +7,15 @@ mix their bytes, and a file that exists is whole.
 
 from __future__ import annotations
 
+import errno
 import json
 import math
 import os
 import secrets
 from pathlib import Path
 from typing import Any
+
+from mobot_cli.errors import OutputError, cannot_write
 
 
 def write_bytes_atomic(path: Path, data: bytes) -> None:
@@ -27,6 +30,13 @@ def write_bytes_atomic(path: Path, data: bytes) -> None:
             out.flush()
             os.fsync(out.fileno())
         os.replace(tmp, path)
+    except OSError as exc:
+        try:
+            tmp.unlink(missing_ok=True)  # never leave half a file behind (a full disk)
+        except OSError:
+            pass
+        exc.filename = str(path)  # the file the user knows, not its temporary sibling
+        raise
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
@@ -47,3 +57,26 @@ def json_default(value: Any) -> Any:
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return str(value)
+
+
+def check_out_folder(path: Path, flag: str = "--out") -> None:
+    """Refuse an output folder that cannot be made or written, before any work starts.
+
+    Nothing is created: a folder that does not exist yet is judged by its nearest existing
+    parent. (Root may write where the mode bits say no; only a read-only mount stops it.)
+    """
+    try:
+        if path.exists() and not path.is_dir():
+            raise OutputError(f"{flag} {path} is a file", hint=f"Give {flag} a folder, new or existing.")
+        existing = path
+        while not existing.exists() and not existing.is_symlink() and existing != existing.parent:
+            existing = existing.parent
+    except OSError as exc:  # a name too long, a loop of links
+        raise cannot_write(path, exc) from None
+    if not existing.is_dir():
+        raise OutputError(f"{flag} {path} cannot be made: {existing} is a file",
+                          hint=f"Give {flag} a folder, new or existing.")
+    if os.statvfs(existing).f_flag & os.ST_RDONLY:
+        raise cannot_write(path, OSError(errno.EROFS, os.strerror(errno.EROFS)))
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise cannot_write(path, OSError(errno.EACCES, os.strerror(errno.EACCES)))

@@ -21,6 +21,7 @@ scanning it reads up to its last chunk (metadata.yaml is written only when the b
 
 from __future__ import annotations
 
+import contextlib
 import math
 import re
 import shutil
@@ -29,7 +30,7 @@ from pathlib import Path
 from mobot_cli.common.transforms import odom_origin, yaw_quat
 from mobot_cli.run.cdr import Layout, Packer
 from mobot_cli.run.ros_msgs import MESSAGES
-from mobot_cli.run.sinks import Sink
+from mobot_cli.run.sinks import Sink, named
 from mobot_cli.run.tf import RobotFrames
 from mobot_cli.run.timeline import Sample
 from mobot_cli.sim.plan import Plan, RobotPlan
@@ -78,6 +79,7 @@ class BagSink(Sink):
         # need no extra step.
         self.writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
         self.writer.open()
+        self.broken = False  # a write failed: the file ends torn, as a killed run's (mobot check --repair)
         self.clock = self.topic("/clock", CLOCK)
         self.tf = self.topic("/tf", TF)
         self.tf_static = self.topic("/tf_static", TF, latched=True)
@@ -108,15 +110,19 @@ class BagSink(Sink):
 
     def _record(self) -> None:
         """Record the waiting samples and close their chunk."""
-        for item in self.pending:
-            if isinstance(item, Sample):
-                self._record_one(item)
-            else:
-                key, robot = item
-                self.arriving[key] = robot
-        self.pending.clear()
-        self.waiting = 0
-        self._flush()
+        try:
+            for item in self.pending:
+                if isinstance(item, Sample):
+                    self._record_one(item)
+                else:
+                    key, robot = item
+                    self.arriving[key] = robot
+            self.pending.clear()
+            self.waiting = 0
+            self._flush()
+        except OSError as exc:
+            self.broken = True
+            raise named(exc, self.writer.storage.path) from None
 
     def _record_one(self, sample: Sample) -> None:
         ns = sample.step * 1_000_000_000 // self.rate
@@ -169,9 +175,29 @@ class BagSink(Sink):
             pass
 
     def close(self) -> None:
-        if self.writer.storage is not None:
-            self._record()
-            self.writer.close()
+        storage = self.writer.storage
+        if storage is None:
+            return
+        try:
+            if not self.broken:  # else writing more would fail again; what is on disk can be repaired
+                self._record()
+                self.writer.close()  # the MCAP summary and footer, then metadata.yaml
+        except OSError as exc:
+            failed = storage.path if self.writer.storage is not None else self.path / "metadata.yaml"
+            with contextlib.suppress(OSError):
+                (self.path / "metadata.yaml.tmp").unlink(missing_ok=True)
+            raise named(exc, failed) from None
+        finally:
+            if self.writer.storage is not None:
+                self._abandon(storage)
+
+    def _abandon(self, storage) -> None:
+        """Let go of the MCAP file without its summary: it stays as a killed run leaves it."""
+        self.broken, self.writer.storage = True, None
+        try:
+            storage.bio.close()  # may still add pending bytes: they continue the file, in order
+        except (OSError, ValueError):
+            pass
 
 
 class _RobotTopics:

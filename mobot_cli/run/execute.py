@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
-from mobot_cli.errors import MobotError
+from mobot_cli.errors import MobotError, OutputError
 from mobot_cli.run.expect import Result
 from mobot_cli.run.record import RunRecord, Status
 from mobot_cli.run.recording import Recording
@@ -34,10 +34,13 @@ def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | 
         timeline = Timeline(plan, world)
         timeline.start()
         recording = Recording(plan, out_dir, resolved_yaml)
-        timeline.attach(recording)
         status, error = Status.OK, None
         try:
+            timeline.attach(recording)  # the spawns' records: a robot's CSV opens here
             _play(timeline, progress)
+        except OutputError as exc:  # a file of the run folder cannot be written
+            status, error = Status.ERROR, str(exc)
+            raise
         except MobotError as exc:
             status, error = Status.FAULT, str(exc)
             raise

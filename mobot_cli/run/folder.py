@@ -2,7 +2,8 @@
 
 A run folder is complete when summary.json says ``ok`` and every file it promises is there.
 summary.json is written last and atomically, so a run killed mid-way has none; its CSV files
-end at their last flush and its bag at its last MCAP chunk, which this module measures.
+end at their last flush and its bag at its last MCAP chunk, which this module measures (and
+``repair_run`` makes readable again, see bag_repair).
 """
 
 from __future__ import annotations
@@ -12,7 +13,8 @@ import struct
 from pathlib import Path
 from typing import Any
 
-from mobot_cli.errors import ExitCode, UsageError
+from mobot_cli.errors import ExitCode, UsageError, cannot_write
+from mobot_cli.run.bag_repair import needs_repair, repair_bag
 from mobot_cli.run.record import SUMMARY, RunRecord, Status
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
@@ -97,7 +99,28 @@ def bag_status(bag: Path) -> dict[str, Any] | None:
     status: dict[str, Any] = {"complete": (bag / "metadata.yaml").is_file(), "file": files[0].name if files else None}
     if files:
         status.update(mcap_chunks(files[0]))
+    status["repairable"] = needs_repair(bag) and status.get("chunks", 0) > 0
     return status
+
+
+def repair_run(folder: Path) -> dict[str, Any]:
+    """Make the bag of a killed run readable (``mobot check DIR --repair``): what it now holds,
+    or why there was nothing to do."""
+    if not is_run_folder(folder):
+        raise UsageError(f"'{folder}' is not a run folder (it has no summary.json or scenario.yaml)",
+                         hint="--repair takes the folder that mobot run --out wrote.")
+    bag = folder / "bag"
+    if not bag.is_dir():
+        return {"done": False, "why": "the run has no bag"}
+    if not needs_repair(bag):
+        return {"done": False, "why": "the bag was closed: it needs no repair"}
+    try:
+        repaired = repair_bag(bag)
+    except OSError as exc:
+        raise cannot_write(exc.filename or bag, exc) from None
+    if not repaired.messages:
+        return {"done": False, "why": f"bag/{bag.name}.mcap holds no complete chunk: nothing to keep"}
+    return {"done": True, "file": f"bag/{bag.name}.mcap", **repaired.as_dict()}
 
 
 def mcap_chunks(path: Path) -> dict[str, Any]:

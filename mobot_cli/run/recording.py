@@ -20,6 +20,7 @@ from typing import Optional
 
 from mobot_cli import __version__
 from mobot_cli.common.files import write_text_atomic
+from mobot_cli.errors import OutputError, cannot_write
 from mobot_cli.run.expect import Checker, Result, odom_error
 from mobot_cli.run.record import (SUMMARY, ExpectationResult, Expectations, LiveInfo, OdomError, OdomPose, Pose,
                                   RobotRecord, RunRecord, Status, Versions)
@@ -62,34 +63,59 @@ class _Life:
 
 
 class Recording:
-    """Takes a timeline's records into ``out_dir``; ``close`` writes the RunRecord last."""
+    """Takes a timeline's records into ``out_dir``; ``close`` writes the RunRecord last.
+
+    A file that cannot be written (a full disk, a read-only folder, a name too long) raises an
+    OutputError naming it, once; ``close`` then still finishes what it can and writes a
+    summary.json with status ``error`` and that message, where it can.
+    """
 
     def __init__(self, plan: Plan, out_dir: Path, resolved_yaml: str):
         self.plan, self.out_dir = plan, out_dir
-        out_dir.mkdir(parents=True, exist_ok=True)
-        (out_dir / SUMMARY).unlink(missing_ok=True)  # a reused folder must not look finished early
-        write_text_atomic(out_dir / "scenario.yaml", resolved_yaml)
-        self.sinks = make_sinks(plan, out_dir)
         self.checker = Checker(plan)
-        self.sinks.append(self.checker)
+        self.sinks: list[Sink] = []
+        self.failure: OutputError | None = None  # the first write that failed
         self.results: list[Result] = []
         self.last_step = 0
         self._keys: dict[str, str] = {}  # robot name -> its name in the record
         self._lives: dict[str, _Life] = {}  # record name -> life, in order of arrival
         self._renamed = False
         self._started = time.perf_counter()
+        made = not out_dir.exists()
+        try:
+            out_dir.mkdir(parents=True, exist_ok=True)
+            (out_dir / SUMMARY).unlink(missing_ok=True)  # a reused folder must not look finished early
+            write_text_atomic(out_dir / "scenario.yaml", resolved_yaml)
+            self.sinks = make_sinks(plan, out_dir)
+        except OSError as exc:
+            failure = self._failed(exc)
+            self._save(self._record(Status.ERROR, str(failure), 0, None))
+            if made:
+                _remove_if_empty(out_dir)  # nothing written, not even the summary: leave nothing
+            raise failure from exc
+        self.sinks.append(self.checker)
 
     def __call__(self, record: Record) -> None:
         """Take one record of the timeline (the Consumer interface)."""
-        if isinstance(record, Sample):
-            self._sample(record)
-        elif isinstance(record, Spawned):
-            self._spawned(record)
-        elif isinstance(record, Deleted):
-            key = self._keys.pop(record.name)
-            self._lives[key].deleted_at = record.step / self.plan.physics.rate_hz
-            for sink in self.sinks:
-                sink.deleted(record.step, key)
+        try:
+            if isinstance(record, Sample):
+                self._sample(record)
+            elif isinstance(record, Spawned):
+                self._spawned(record)
+            elif isinstance(record, Deleted):
+                key = self._keys.pop(record.name)
+                self._lives[key].deleted_at = record.step / self.plan.physics.rate_hz
+                for sink in self.sinks:
+                    sink.deleted(record.step, key)
+        except OSError as exc:
+            raise self._failed(exc) from exc
+
+    def _failed(self, exc: OSError) -> OutputError:
+        """The first failed write, as the error to report: later ones follow from it (a full
+        disk stays full)."""
+        if self.failure is None:
+            self.failure = cannot_write(exc.filename or self.out_dir, exc)
+        return self.failure
 
     def _spawned(self, record: Spawned) -> None:
         name, lives = record.robot.name, 1
@@ -115,16 +141,34 @@ class Recording:
 
     def close(self, status: Status, error: str | None = None, steps: int | None = None,
               live: LiveInfo | None = None) -> RunRecord:
-        """Close every writer and write summary.json last; returns the record."""
+        """Close every writer and write summary.json last; returns the record.
+
+        Raises OutputError when a file could not be written here (an earlier failure was
+        raised when it happened); every writer is closed all the same."""
+        raised = self.failure
         try:
             for sink in self.sinks:
-                sink.close()
+                try:
+                    sink.close()
+                except OSError as exc:
+                    self._failed(exc)
         finally:
-            if self.plan.expectations and status == Status.OK:
+            if self.failure is not None:
+                status, error = Status.ERROR, str(self.failure)
+            elif self.plan.expectations and status == Status.OK:
                 self.results = self.checker.results()
             record = self._record(status, error, self.last_step if steps is None else steps, live)
-            record.save(self.out_dir)
+            self._save(record)
+        if self.failure is not raised:
+            raise self.failure
         return record
+
+    def _save(self, record: RunRecord) -> None:
+        """Write summary.json; when even that fails, the failure is the error to report."""
+        try:
+            record.save(self.out_dir)
+        except OSError as exc:
+            self._failed(exc)
 
     def _record(self, status: Status, error: str | None, steps: int, live: LiveInfo | None) -> RunRecord:
         wall = time.perf_counter() - self._started
@@ -158,6 +202,13 @@ def make_sinks(plan: Plan, out_dir: Path) -> list[Sink]:
 
     sinks.append(TrajectorySink(plan, out_dir))  # every run; last, as it draws when closed
     return sinks
+
+
+def _remove_if_empty(folder: Path) -> None:
+    try:
+        folder.rmdir()
+    except OSError:
+        pass
 
 
 def _version(package: str) -> str | None:

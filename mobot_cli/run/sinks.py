@@ -7,8 +7,8 @@ named by their name in the record (``<name>__2`` for a name used again in a live
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
-
 
 from mobot_cli.run.timeline import Sample
 from mobot_cli.sim.plan import Plan, RobotPlan
@@ -51,24 +51,56 @@ def csv_row(values: tuple[float, ...]) -> str:
 
 
 class OdomCsv:
-    """One robot's odometry log, flushed every few rows so a killed run keeps what it had."""
+    """One robot's odometry log, written every few rows so a killed run keeps what it had.
+
+    Rows wait in a list and reach the file together: the file only grows at these writes, so a
+    killed run leaves whole rows, never half a line. A write that fails part-way (a full disk,
+    the size limit) is cut back to the last whole row before the error goes up.
+    """
 
     def __init__(self, path: Path):
         path.parent.mkdir(parents=True, exist_ok=True)
-        # A buffer far larger than FLUSH_EVERY_ROWS rows: the file only grows at our flushes,
-        # so a killed run leaves whole rows, never half a line.
-        self._file = path.open("w", encoding="utf-8", newline="\n", buffering=1 << 20)
-        self._file.write(",".join(CSV_COLUMNS) + "\n")
-        self._rows = 0
+        self.path = path
+        self._fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o666)
+        self._size = 0  # bytes of whole rows in the file
+        self._rows: list[str] = []
+        try:
+            self._write((",".join(CSV_COLUMNS) + "\n").encode())
+        except OSError:
+            os.close(self._fd)
+            raise
 
     def write(self, t: float, state: RobotState) -> None:
-        self._file.write(csv_row((t, *state.row())))
-        self._rows += 1
-        if self._rows % FLUSH_EVERY_ROWS == 0:
-            self._file.flush()
+        rows = self._rows
+        rows.append(csv_row((t, *state.row())))
+        if len(rows) >= FLUSH_EVERY_ROWS:
+            self.flush()
+
+    def flush(self) -> None:
+        """Write the waiting rows."""
+        if self._rows:
+            data = "".join(self._rows).encode()
+            self._rows.clear()
+            self._write(data)
 
     def close(self) -> None:
-        self._file.close()
+        try:
+            self.flush()
+        finally:
+            os.close(self._fd)
+
+    def _write(self, data: bytes) -> None:
+        view = memoryview(data)
+        try:
+            while view:
+                view = view[os.write(self._fd, view):]
+        except OSError as exc:
+            try:
+                os.ftruncate(self._fd, self._size)  # no torn row: back to the last whole one
+            except OSError:
+                pass
+            raise named(exc, self.path) from None
+        self._size += len(data)
 
 
 class CsvSink(Sink):
@@ -89,3 +121,10 @@ class CsvSink(Sink):
     def close(self) -> None:
         for csv in self._files.values():
             csv.close()
+
+
+def named(exc: OSError, path: Path) -> OSError:
+    """``exc`` naming the file it happened to, for the error message."""
+    if exc.filename is None:
+        exc.filename = str(path)
+    return exc

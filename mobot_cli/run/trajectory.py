@@ -9,7 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from mobot_cli.common.transforms import Planar, odom_origin
-from mobot_cli.run.sinks import Sink
+from mobot_cli.run.sinks import Sink, named
 from mobot_cli.run.timeline import Sample
 from mobot_cli.sim.plan import Plan, WorldPlan
 from mobot_cli.sim.state import RobotState
@@ -51,8 +51,12 @@ class TrajectorySink(Sink):
         self.last_step = sample.step
 
     def close(self) -> None:
-        draw(self.tracks, self.world, self.path, self.title,
-             f"{self.last_step / self.rate:g} s simulated; {_robots(len(self.tracks))}")
+        try:
+            draw(self.tracks, self.world, self.path, self.title,
+                 f"{self.last_step / self.rate:g} s simulated; {_robots(len(self.tracks))}")
+        except OSError as exc:
+            self.path.with_name(self.path.name + ".tmp").unlink(missing_ok=True)  # no half a picture
+            raise named(exc, self.path) from None
 
 
 class _Points:

@@ -4,7 +4,8 @@ concurrent.futures' ProcessPoolExecutor marks every pending future broken when o
 dies (a segfault in PyBullet, an out-of-memory kill), so a sweep could not go on past one
 bad run. Here each worker is a process with a pipe: the parent waits on the pipes and on the
 processes themselves, and a worker that dies or overruns its timeout is killed, its run is
-marked failed, and a fresh worker takes its place. Workers stay alive for the whole sweep,
+marked failed, and a fresh worker takes its place. A worker dies with its sweep, even with one
+killed by SIGKILL (guard.die_with_sweep). Workers stay alive for the whole sweep,
 so imports and in-process caches are paid once per worker, not once per run. They come from
 multiprocessing's fork server with mobot and PyBullet imported once (never forked from the
 parent, which may run threads such as the progress bar), so a replacement is ready in
@@ -13,13 +14,17 @@ milliseconds instead of the 0.5 s a spawned one needs; spawn where there is no f
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
+import os
 import signal
+import threading
 import time
 from collections import deque
 from multiprocessing.connection import Connection, wait
 from typing import Callable, Iterable
 
+from mobot_cli.sweep.guard import die_with_sweep
 from mobot_cli.sweep.task import Outcome, Task, failed, run_task
 
 Runner = Callable[[Task], Outcome]
@@ -28,10 +33,11 @@ POLL_S = 0.5  # how often a wait wakes up to look at deadlines when none is clos
 READY = "ready"  # a worker's first message: imports done, the timeout clock may start
 
 
-def _worker_main(conn: Connection, runner: Runner) -> None:
-    """A worker's life: take tasks from the pipe until told to stop (None)."""
+def _worker_main(conn: Connection, runner: Runner, sweep_pid: int) -> None:
+    """A worker's life: take tasks from the pipe until told to stop (None), or the sweep ends."""
     # Ctrl-C reaches the whole process group; the parent decides what stops, not each worker.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    die_with_sweep(sweep_pid)  # a sweep killed with SIGKILL cannot stop its workers itself
     import mobot_cli.run.execute  # noqa: F401  (warm up before the first task)
 
     conn.send(READY)
@@ -54,8 +60,9 @@ class _Worker:
 
     def __init__(self, ctx, runner: Runner):
         self.conn, child = ctx.Pipe()
-        self.process = ctx.Process(target=_worker_main, args=(child, runner), daemon=True)
-        self.process.start()
+        self.process = ctx.Process(target=_worker_main, args=(child, runner, os.getpid()), daemon=True)
+        with _sigint_ignored():
+            self.process.start()
         child.close()
         self.task: Task | None = None
         self.ready = False
@@ -165,6 +172,21 @@ class LocalExecutor:
         except (BrokenPipeError, OSError):
             pass
         worker.kill()
+
+
+@contextlib.contextmanager
+def _sigint_ignored():
+    """Ctrl-C ignored while a worker (and the fork server, with the first) is started: a new
+    Python inherits that through exec, so an interrupt cannot kill it mid-import with a
+    traceback on the terminal. The sweep itself handles Ctrl-C once the start is done."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
 
 
 def _context():

@@ -8,8 +8,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Protocol
 
-from mobot_cli.errors import UsageError
+from mobot_cli.common.files import check_out_folder
+from mobot_cli.errors import UsageError, cannot_write
 from mobot_cli.sweep.expand import Sweep
+from mobot_cli.sweep.guard import LOCK_FILE, FolderLock, check_unlocked
 from mobot_cli.sweep.results import (ResultsCsv, columns, folder, read_rows, rewrite_sorted, row,
                                      sweep_document, write_document)
 from mobot_cli.sweep.task import FAILED, Outcome, Task
@@ -44,14 +46,18 @@ class SweepReport:
 
 
 def check_out_dir(sweep: Sweep, out_dir: Path, resume: bool) -> dict[int, dict[str, str]]:
-    """Refuse to mix sweeps in one folder; with resume, the rows already finished."""
+    """Refuse to mix sweeps in one folder, or to race a live one; with resume, the rows already
+    finished."""
+    check_out_folder(out_dir)
+    if out_dir.is_dir():
+        check_unlocked(out_dir)
     header = columns(sweep.keys, sweep.robots())
     stored = out_dir / "sweep.json"
     if not resume:
         if stored.exists():
             raise UsageError(f"{out_dir} already holds a sweep",
                              hint="Add --resume to finish it, or choose another --out.")
-        if out_dir.exists() and any(out_dir.iterdir()):
+        if out_dir.exists() and any(p.name != LOCK_FILE for p in out_dir.iterdir()):
             raise UsageError(f"{out_dir} is not empty", hint="Choose a new or empty folder for --out.")
         return {}
     if not stored.exists():
@@ -72,10 +78,20 @@ def check_out_dir(sweep: Sweep, out_dir: Path, resume: bool) -> dict[int, dict[s
 
 def run_sweep(sweep: Sweep, out_dir: Path, executor: Executor, done_rows: dict[int, dict[str, str]],
               progress: Progress | None = None) -> SweepReport:
-    """Run every run not in ``done_rows``; Ctrl-C stops it, keeping the finished rows."""
+    """Run every run not in ``done_rows``, holding the folder's lock; Ctrl-C stops it, keeping the
+    finished rows. A file of the sweep folder that cannot be written stops it with an OutputError."""
+    try:
+        (out_dir / "runs").mkdir(parents=True, exist_ok=True)
+        with FolderLock(out_dir):
+            return _run(sweep, out_dir, executor, done_rows, progress)
+    except OSError as exc:
+        raise cannot_write(exc.filename or out_dir, exc) from exc
+
+
+def _run(sweep: Sweep, out_dir: Path, executor: Executor, done_rows: dict[int, dict[str, str]],
+         progress: Progress | None) -> SweepReport:
     total = len(sweep.variants)
     header = columns(sweep.keys, sweep.robots())
-    (out_dir / "runs").mkdir(parents=True, exist_ok=True)
     document = sweep_document(sweep, executor.name, executor.jobs, executor.timeout)
     write_document(out_dir / "sweep.json", document)
     report = SweepReport(out_dir, document, dict(done_rows), skipped=len(done_rows))
@@ -100,6 +116,9 @@ def run_sweep(sweep: Sweep, out_dir: Path, executor: Executor, done_rows: dict[i
     try:
         executor.run(tasks, on_done)
         status = "complete"
+    except OSError:  # results.csv cannot be written (a full disk): the sweep stops
+        status = "error"
+        raise
     finally:
         results.close()
         rewrite_sorted(out_dir / "results.csv", header, report.rows)

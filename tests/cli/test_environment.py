@@ -87,7 +87,8 @@ def test_ctrl_c_is_exit_130(monkeypatch, tiny, tmp_path):
         raise KeyboardInterrupt
 
     monkeypatch.setattr("mobot_cli.run.prepare.prepare", interrupted)  # where Ctrl-C lands in a run
-    # Typer turns Ctrl-C into exit 130 quietly; a command that has more to say (sweep) says it first.
+    # Typer turns Ctrl-C into a quiet exit 130; the console script's entry point says
+    # `mobot: interrupted` (tests/cli/test_interrupt.py), in-process callers get the code.
     assert invoke(["run", tiny, "--out", tmp_path / "r"]) == Outcome(130, "", "")
     assert not (tmp_path / "r").exists()
 

@@ -304,11 +304,13 @@ def test_killed_run_keeps_whole_csv_rows_and_readable_chunks(tmp_path):
     assert (len(lines) - 1) % 50 == 0 and len(lines) > 100  # header + whole flushes
     assert all(len(line.split(",")) == 16 for line in lines)
     # The MCAP file has no summary; a reader that scans it reads every chunk that was closed.
-    odom = []
+    odom, held, last_ns = [], {}, 0
     with (out / "bag" / "bag.mcap").open("rb") as f:
         reader = mcap_reader.NonSeekingReader(f, decoder_factories=[mcap_ros2.DecoderFactory()])
         with pytest.raises(EndOfFile):
-            for _, channel, _, decoded in reader.iter_decoded_messages(log_time_order=False):
+            for _, channel, message, decoded in reader.iter_decoded_messages(log_time_order=False):
+                held[channel.topic] = held.get(channel.topic, 0) + 1
+                last_ns = max(last_ns, message.log_time)
                 if channel.topic == "/alpha/odom":
                     odom.append(decoded)
     assert len(odom) >= 50 and len(odom) % 50 == 0
@@ -319,6 +321,78 @@ def test_killed_run_keeps_whole_csv_rows_and_readable_chunks(tmp_path):
     assert check.stdout.startswith(f"incomplete: run in {out}: no summary.json: the run was killed")
     assert f"odom/alpha.csv: {len(lines) - 1} whole rows" in check.stdout
     assert f"bag/bag.mcap: not closed (no metadata.yaml); {len(odom) // 50} complete chunks" in check.stdout
+    assert check.stdout.endswith(f"\n  bag can be repaired: mobot check {out} --repair\n")
+    assert_repaired(out, held, last_ns, len(odom) // 50)
+
+
+def assert_repaired(out: Path, held: dict[str, int], last_ns: int, chunks: int) -> None:
+    """`mobot check --repair` keeps every message of the complete chunks (``held``, per topic),
+    and rosbags and mcap's indexed reader read the bag as a closed one."""
+    from rosbags.highlevel import AnyReader
+
+    total = sum(held.values())
+    repair = subprocess.run([sys.executable, "-m", "mobot_cli", "check", str(out), "--repair"],
+                            capture_output=True, text=True)
+    assert repair.returncode == 2, repair.stderr  # the run stays incomplete: it has no summary.json
+    assert repair.stdout.startswith(f"repaired bag/bag.mcap: {total} messages from {chunks} complete chunks, "
+                                    f"up to t = {last_ns / 1e9:g} s; metadata.yaml written\n")
+    assert "bag can be repaired" not in repair.stdout and "bag/bag.mcap: closed;" in repair.stdout
+    assert sorted(p.name for p in (out / "bag").iterdir()) == ["bag.mcap", "metadata.yaml"]
+    assert [p.name for p in out.iterdir() if p.name.startswith(".")] == []  # no work folder left
+    with AnyReader([out / "bag"]) as reader:  # metadata.yaml + the MCAP summary
+        assert reader.message_count == total
+        assert {c.topic: c.msgcount for c in reader.connections} == held
+        stamps = [timestamp for _, timestamp, _ in reader.messages()]
+        assert len(stamps) == total and max(stamps) == last_ns
+        odom = [reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages()
+                if c.topic == "/alpha/odom"]
+    assert len(odom) == held["/alpha/odom"] and odom[-1].header.stamp.sec == last_ns // 1_000_000_000
+    with (out / "bag" / "bag.mcap").open("rb") as f:  # the seeking reader: summary, index, footer
+        reader = mcap_reader.make_reader(f, decoder_factories=[mcap_ros2.DecoderFactory()])
+        assert reader.get_summary().statistics.message_count == total
+        decoded = list(reader.iter_decoded_messages())
+    assert len(decoded) == total and decoded[-1][2].log_time == last_ns
+    topics = {}
+    for _, channel, _, _ in decoded:
+        topics[channel.topic] = topics.get(channel.topic, 0) + 1
+    assert topics == held
+
+
+@pytest.mark.parametrize("cut", [0.5, 0.02])
+def test_repair_keeps_the_complete_chunks_of_a_bag_cut_anywhere(bag_run, tmp_path, cut):
+    """A closed bag cut short (as a full disk or a kill leaves it): the repair keeps exactly the
+    messages a front-to-back reader finds in its whole chunks; with none, it changes nothing."""
+    import shutil
+
+    from mcap.exceptions import EndOfFile
+
+    from mobot_cli.run.folder import mcap_chunks
+
+    out = tmp_path / "run"
+    shutil.copytree(bag_run[0], out)
+    (out / "summary.json").unlink()
+    (out / "bag" / "metadata.yaml").unlink()
+    mcap_path = out / "bag" / "bag.mcap"
+    data = mcap_path.read_bytes()
+    mcap_path.write_bytes(data[:int(len(data) * cut)])
+    held, last_ns = {}, 0
+    with mcap_path.open("rb") as f:
+        reader = mcap_reader.NonSeekingReader(f)
+        with pytest.raises(EndOfFile):
+            for _, channel, message in reader.iter_messages(log_time_order=False):
+                held[channel.topic] = held.get(channel.topic, 0) + 1
+                last_ns = max(last_ns, message.log_time)
+    chunks = mcap_chunks(mcap_path)["chunks"]
+    assert bool(held) == (cut == 0.5)  # 2 % is inside the first chunk (it holds the descriptions)
+    if held:
+        assert_repaired(out, held, last_ns, chunks)
+        return
+    assert chunks == 0
+    repair = subprocess.run([sys.executable, "-m", "mobot_cli", "check", str(out), "--repair"],
+                            capture_output=True, text=True)
+    assert repair.returncode == 2
+    assert repair.stdout.startswith("nothing repaired: bag/bag.mcap holds no complete chunk: nothing to keep\n")
+    assert mcap_path.read_bytes() == data[:int(len(data) * cut)]
 
 
 def test_covariance_follows_the_urdf_diff_drive_plugin():
