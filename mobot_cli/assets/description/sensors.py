@@ -62,7 +62,7 @@ class DescribedSensor:
     accel_noise_stddev: float = 0.0
     collision: str = ""
     topic: str = ""
-    frame_id: str = ""
+    frame_id: str = ""  # "" when the block names none: the link's name
 
     @property
     def kind(self) -> str:
@@ -163,8 +163,7 @@ def _check_placement(xml: SensorXml, links: dict[str, ET.Element],
 
 def _read(xml: SensorXml) -> DescribedSensor:
     values = dict(name=xml.name, type=xml.type, link=xml.link,
-                  rate_hz=xml.number("update_rate", 0.0), topic=xml.topic(),
-                  frame_id=xml.frame() or xml.link)
+                  rate_hz=xml.number("update_rate", 0.0), topic=xml.topic(), frame_id=xml.frame())
     values["xyz"], values["quat"] = xml.pose()
     kind = KINDS[xml.type]
     if kind == "lidar":
