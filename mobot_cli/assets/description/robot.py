@@ -19,7 +19,8 @@ from mobot_cli.assets.description.drive import detect_drive
 from mobot_cli.assets.description.frames import LinkTree, floats
 from mobot_cli.assets.description.process import apply_friction, collision_bounds, \
     fix_inertials, inertial_values, resolve_meshes
-from mobot_cli.assets.description.sensors import DescribedSensor, collision_names, read_sensors
+from mobot_cli.assets.description.sensors import DescribedSensor, collision_names, read_sensors, \
+    sensor_summary
 from mobot_cli.assets.description.xacro import Expansion
 from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.common import cache
@@ -200,7 +201,7 @@ def _from_document(document: dict[str, Any] | None) -> RobotDescription | None:
 
 
 def inspect_summary(desc: RobotDescription) -> dict[str, Any]:
-    """What `mobot inspect` shows, as plain data: tree, mass, footprint, drive, notices."""
+    """What `mobot inspect` shows, as plain data: tree, mass, footprint, drive, sensors, notices."""
     xmin, xmax, ymin, ymax = desc.footprint
     return {
         "name": desc.name,
@@ -214,5 +215,6 @@ def inspect_summary(desc: RobotDescription) -> dict[str, Any]:
         "bottom_z": desc.bottom_z,
         "tree": desc.tree(),
         "drive": asdict(desc.drive) if desc.drive is not None else None,
+        "sensors": [sensor_summary(s) for s in desc.sensors],
         "notices": [str(n) for n in desc.notices],
     }

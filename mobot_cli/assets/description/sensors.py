@@ -88,6 +88,19 @@ class DescribedSensor:
 SENSOR_FIELDS = tuple(f.name for f in fields(DescribedSensor))
 
 
+def sensor_summary(sensor: DescribedSensor) -> dict:
+    """A sensor as `mobot inspect --json` shows it: the fields its kind uses."""
+    lidar = ("samples", "min_angle", "max_angle", "resolution", "vertical_samples",
+             "vertical_min_angle", "vertical_max_angle", "vertical_resolution", "range_min",
+             "range_max", "range_resolution", "noise_mean", "noise_stddev")
+    own = {"lidar": lidar, "imu": ("noise_mean", "noise_stddev", "accel_noise_stddev"),
+           "contact": ("collision",)}[sensor.kind]
+    out = {"name": sensor.name, "type": sensor.type, "kind": sensor.kind, "link": sensor.link,
+           "topic": sensor.topic, "frame_id": sensor.frame_id or sensor.link,
+           "rate_hz": sensor.rate_hz, "xyz": list(sensor.xyz), "quat": list(sensor.quat)}
+    return {**out, **{name: getattr(sensor, name) for name in own}}
+
+
 def read_sensors(robot: ET.Element, source: Path,
                  notices: list[Notice]) -> tuple[DescribedSensor, ...]:
     """Every simulated sensor of an expanded URDF, checked; others skipped with one notice."""
