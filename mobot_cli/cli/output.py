@@ -140,7 +140,7 @@ def sensor_lines(s: dict[str, Any]) -> list[str]:
     head = f"  {s['name']} ({what}) on {s['link']}, topic {s['topic']}, {rate}"
     if s["kind"] == "lidar":
         rays = f"{s['samples']}" + (f" x {s['vertical_samples']}" if s["vertical_samples"] > 1 else "")
-        detail = (f"{rays} rays {s['min_angle']:.3f}..{s['max_angle']:.3f} rad, range "
+        detail = (f"{rays} ray{'s' if rays != '1' else ''} {s['min_angle']:.3f}..{s['max_angle']:.3f} rad, range "
                   f"{s['range_min']:g}..{s['range_max']:g} m, noise {s['noise_stddev']:g} m")
     elif s["kind"] == "imu":
         detail = f"noise: gyro {s['noise_stddev']:g} rad/s, accel {s['accel_noise_stddev']:g} m/s^2"

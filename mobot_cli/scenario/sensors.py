@@ -13,7 +13,7 @@ from typing import Protocol
 
 from mobot_cli.assets.description.robot import RobotDescription
 from mobot_cli.assets.description.sensors import KINDS, DescribedSensor, check_values, \
-    default_topic
+    default_topic, with_gazebo_collision
 from mobot_cli.errors import Location, ScenarioError, did_you_mean
 from mobot_cli.scenario.model import RobotSpec
 from mobot_cli.scenario.sensor_model import LIDAR_FIELDS, TOPIC_RE, SensorOverride
@@ -76,7 +76,7 @@ def resolve_sensors(spec: RobotSpec, desc: RobotDescription, path: tuple,
                                                                             desc, ctx)
         sensors[sensor.name] = sensor
         touched[sensor.name] = key
-        _check(sensor, entry, where, desc, ctx)
+        sensor = _check(sensor, entry, where, desc, ctx)
     out = tuple(_spec(s, touched.get(s.name), spec, desc, path, ctx) for s in sensors.values())
     _unique_topics(out, spec, path, ctx)
     return out
@@ -122,7 +122,8 @@ def _fields_fit(kind: str, entry: SensorOverride, where: tuple, ctx: Context) ->
 
 
 def _check(sensor: DescribedSensor, entry: SensorOverride, where: tuple, desc: RobotDescription,
-           ctx: Context) -> None:
+           ctx: Context) -> DescribedSensor:
+    """``sensor`` when its values are sound (its collision named as Gazebo does), else an error."""
     links = {link.name: link for link in desc.links}
     if sensor.link not in links:
         raise ScenarioError(f"link '{sensor.link}' is not a link of '{desc.name}'",
@@ -135,6 +136,7 @@ def _check(sensor: DescribedSensor, entry: SensorOverride, where: tuple, desc: R
         key = where + (given[0],) if given else where
         raise ScenarioError(f"sensor '{sensor.name}' {message}", location=ctx.locate_key(key),
                             hint=hint.replace("{field}", field))
+    return with_gazebo_collision(sensor, links[sensor.link].collisions)
 
 
 def _spec(sensor: DescribedSensor, key: str | None, spec: RobotSpec, desc: RobotDescription,

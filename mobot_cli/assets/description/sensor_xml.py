@@ -119,9 +119,10 @@ class SensorXml:
             gyro.append((self.number("imu/noise/rate/mean", 0.0),
                          self.number("imu/noise/rate/stddev", 0.0)))
             accel.append((0.0, self.number("imu/noise/accel/stddev", 0.0)))
-        mean, stddev = max(gyro, key=lambda n: n[1])
+        # One value for all axes: the noisiest (by magnitude, so a negative one is reported).
+        mean, stddev = max(gyro, key=lambda n: abs(n[1]))
         return dict(noise_mean=mean, noise_stddev=stddev,
-                    accel_noise_stddev=max(a[1] for a in accel))
+                    accel_noise_stddev=max((a[1] for a in accel), key=abs))
 
     def noise(self, path: str, default_type: str) -> tuple[float, float]:
         """(mean, stddev) of a <noise> block; zeros when absent or of type none."""

@@ -118,15 +118,24 @@ def read_sensors(robot: ET.Element, source: Path,
     if skipped:
         notices.append(Notice("sensors of types mobot does not simulate are left out: "
                               + ", ".join(skipped), Location(file=source)))
-    found = default_topics(found)
-    for sensor in found:
-        problem = check_values(sensor, collision_names(links[sensor.link]))
+    checked = []
+    for sensor in default_topics(found):
+        collisions = collision_names(links[sensor.link])
+        problem = check_values(sensor, collisions)
         if problem is not None:
             field, message, hint = problem
             raise DescriptionError(f"sensor '{sensor.name}' {message}", location=Location(
                 file=source, key=f"gazebo.sensor.{sensor.name}.{XML_KEYS.get(field, field)}"),
                 hint=hint.replace("{field}", XML_NAMES.get(field, field)))
-    return tuple(found)
+        checked.append(with_gazebo_collision(sensor, collisions))
+    return tuple(checked)
+
+
+def with_gazebo_collision(sensor: DescribedSensor, collisions: tuple[str, ...]) -> DescribedSensor:
+    """A checked contact sensor names its collision as Gazebo does (LINK_collision, ...)."""
+    if sensor.kind != "contact":
+        return sensor
+    return replace(sensor, collision=contact_collision(sensor.collision, collisions) or "")
 
 
 def default_topic(sensor: DescribedSensor) -> str:
@@ -200,20 +209,21 @@ def collision_names(link: ET.Element) -> tuple[str, ...]:
     return tuple(out)
 
 
-def contact_collision(wanted: str, names: tuple[str, ...], link: str) -> str | None:
-    """The Gazebo name of the collision ``wanted`` names on ``link`` ("" = whole link), or None.
+def contact_collision(wanted: str, names: tuple[str, ...]) -> str | None:
+    """The Gazebo name of the collision ``wanted`` names ("" = the whole link), or None.
 
-    Also accepted: a <collision name> as written, and Gazebo's fixed-joint-lumped
-    names (PARENT_fixed_joint_lump__LINK_collision).
+    Accepted: Gazebo's name (LINK_collision, NAME_collision_1), the <collision name> as
+    written (NAME), and Gazebo's fixed-joint-lumped form (PARENT_fixed_joint_lump__NAME...).
     """
-    if wanted in ("", "__default__") or wanted in names:
-        return "" if wanted == "__default__" else wanted
-    lumped = wanted.split("_fixed_joint_lump__")[-1]
-    if lumped in names:
-        return lumped
-    for name in (wanted, lumped):
-        if f"{name}_collision" in names:
-            return f"{name}_collision"
+    if wanted in ("", "__default__"):
+        return ""
+    for candidate in dict.fromkeys((wanted, wanted.split("_fixed_joint_lump__")[-1])):
+        if candidate in names:
+            return candidate
+        written = [n for n in names if n == f"{candidate}_collision"
+                   or n.startswith(f"{candidate}_collision_")]
+        if len(written) == 1:
+            return written[0]
     return None
 
 
@@ -255,8 +265,7 @@ def check_values(sensor: DescribedSensor,
             "Give {field} a value of 0 or more."
     if sensor.kind == "lidar":
         return _check_lidar(sensor)
-    if sensor.kind == "contact" and contact_collision(sensor.collision, collisions,
-                                                      sensor.link) is None:
+    if sensor.kind == "contact" and contact_collision(sensor.collision, collisions) is None:
         return "collision", f"counts contacts of collision '{sensor.collision}', which link " \
             f"'{sensor.link}' does not have", (did_you_mean(sensor.collision, collisions)
                                                or "Name one of the link's collisions.") + \

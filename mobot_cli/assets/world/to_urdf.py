@@ -154,7 +154,7 @@ def _shape(link: ET.Element, kind: str, shape, to_urdf, link_name: str,
                              (-length / 2, ("sphere", {"radius": radius}))):
             offset = IDENTITY.copy()
             offset[2, 3] = dz
-            _element(link, kind, pose @ offset, *geometry)
+            _element(link, kind, pose @ offset, *geometry, name=shape.name)
         return
     if shape.kind == "box":
         attrs = {"size": " ".join(f"{v:.12g}" for v in shape.size)}
@@ -164,11 +164,13 @@ def _shape(link: ET.Element, kind: str, shape, to_urdf, link_name: str,
         attrs = {"radius": shape.size[0]}
     else:
         attrs = {"filename": str(shape.mesh), "scale": " ".join(f"{v:.12g}" for v in shape.size)}
-    _element(link, kind, pose, shape.kind, attrs)
+    _element(link, kind, pose, shape.kind, attrs, name=shape.name)
 
 
-def _element(link: ET.Element, kind: str, pose, geometry: str, attrs: dict) -> None:
-    element = ET.SubElement(link, kind)
+def _element(link: ET.Element, kind: str, pose, geometry: str, attrs: dict, name: str = "") -> None:
+    # Collisions keep their SDF name: a contact sensor's <collision> names one.
+    element = ET.SubElement(link, kind, name=name) if name and kind == "collision" else \
+        ET.SubElement(link, kind)
     _origin(element, pose)
     shape = ET.SubElement(ET.SubElement(element, "geometry"), geometry)
     for key, value in attrs.items():
