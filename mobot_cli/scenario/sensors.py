@@ -8,6 +8,7 @@ log period: a sensor reads at most once per step.
 
 from __future__ import annotations
 
+import difflib
 from dataclasses import replace
 from typing import Protocol
 
@@ -68,15 +69,14 @@ def resolve_sensors(spec: RobotSpec, desc: RobotDescription, path: tuple,
             if not found:
                 raise ScenarioError(f"'{key}' turns off a sensor that '{spec.description}' does "
                                     "not have", location=ctx.locate_key(where),
-                                    hint=_choices(key, desc))
+                                    hint=_choices(key, desc, adding=False))
             del sensors[found[0].name]
             touched[found[0].name] = key
             continue
         sensor = _changed(found[0], entry, where, ctx) if found else _added(key, entry, where,
                                                                             desc, ctx)
-        sensors[sensor.name] = sensor
+        sensors[sensor.name] = _check(sensor, entry, where, desc, ctx)
         touched[sensor.name] = key
-        sensor = _check(sensor, entry, where, desc, ctx)
     out = tuple(_spec(s, touched.get(s.name), spec, desc, path, ctx) for s in sensors.values())
     _unique_topics(out, spec, path, ctx)
     return out
@@ -101,9 +101,7 @@ def _added(key: str, entry: SensorOverride, where: tuple, desc: RobotDescription
     if missing:
         raise ScenarioError(f"'{desc.name}' has no sensor named '{key}' (by name or topic), and "
                             f"adding one needs {' and '.join(repr(m) for m in missing)}",
-                            location=ctx.locate_key(where),
-                            hint=did_you_mean(key, sensor_keys(desc.sensors))
-                            or "Give type (lidar, imu or contact) and link to add a sensor.")
+                            location=ctx.locate_key(where), hint=_choices(key, desc, adding=True))
     _fields_fit(KINDS[entry.type], entry, where, ctx)  # type: ignore[index]
     added = replace(DescribedSensor(name=key.replace("/", "_"), type=entry.type,  # type: ignore[arg-type]
                                     link=entry.link), **entry.changes())  # type: ignore[arg-type]
@@ -179,8 +177,12 @@ def _unique_topics(sensors: tuple[SensorSpec, ...], spec: RobotSpec, path: tuple
                                      f"{{{sensor.name}: {{topic: {sensor.topic}_2}}}}.")
 
 
-def _choices(key: str, desc: RobotDescription) -> str:
-    if not desc.sensors:
-        return f"'{desc.name}' has no sensors mobot simulates."
-    return did_you_mean(key, sensor_keys(desc.sensors)) or ""
-
+def _choices(key: str, desc: RobotDescription, adding: bool) -> str:
+    """A close key, else the keys that name its sensors (and how to add one)."""
+    keys = sensor_keys(desc.sensors)
+    close = difflib.get_close_matches(key, keys, n=1, cutoff=0.6)
+    if close:
+        return f"Did you mean '{close[0]}'?"
+    named = (f"Its sensors answer to {', '.join(repr(k) for k in keys)}" if keys
+             else f"'{desc.name}' has no sensors mobot simulates")
+    return named + ("; to add one, give type (lidar, imu or contact) and link." if adding else ".")
