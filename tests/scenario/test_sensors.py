@@ -293,3 +293,13 @@ def test_any_rate_becomes_whole_steps_and_reloads_to_the_same(tmp_path, rate, ph
     again = tmp_path / "again.yaml"
     again.write_text(first.resolved_yaml)
     assert prepare(again).plan.robots == first.plan.robots
+
+
+def test_the_readme_sensors_example(tmp_path):
+    readme = (REPO / "README.md").read_text()
+    section = readme[readme.index("### Where sensors come from"):]
+    example = next(b for b in section.split("```yaml\n")[1:] if "sensors:" in b).split("```")[0]
+    plan = prepare(scenario(tmp_path, example)).plan
+    assert [(s.name, s.kind, s.every) for s in plan.robots[0].sensors] == \
+        [("lidar", "lidar", 24), ("bumper", "contact", 1)]
+    assert plan.robots[0].sensors[0].range_max == 8.0
