@@ -303,3 +303,39 @@ def test_the_readme_sensors_example(tmp_path):
     assert [(s.name, s.kind, s.every) for s in plan.robots[0].sensors] == \
         [("lidar", "lidar", 24), ("bumper", "contact", 1)]
     assert plan.robots[0].sensors[0].range_max == 8.0
+
+
+FIELDS = ["enabled", "type", "link", "rate_hz", "pose", "samples", "min_angle", "max_angle", "vertical_samples",
+          "vertical_min_angle", "vertical_max_angle", "range_min", "range_max", "range_resolution", "noise_mean",
+          "noise_stddev", "accel_noise_stddev", "collision", "topic", "frame_id", "xyz", "rpy", "quat"]
+WORDS = ["scan", "imu", "lidar", "ray", "contact", "base_link", "lidar_link", "caster", "off", "on", "a/b",
+         "base_link_collision", "", " ", "/scan", "-x", "x" * 300]
+LEAF = st.one_of(st.floats(), st.integers(-10**6, 10**6), st.booleans(), st.none(), st.sampled_from(WORDS),
+                 st.text(max_size=8))
+VALUE = st.recursive(LEAF, lambda inner: st.lists(inner, max_size=4) | st.dictionaries(
+    st.sampled_from(FIELDS), inner, max_size=3), max_leaves=8)
+ENTRY = st.one_of(VALUE, st.dictionaries(st.sampled_from(FIELDS), VALUE, max_size=5))
+
+
+@settings(max_examples=80, derandomize=True, deadline=None, database=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(entries=st.dictionaries(st.sampled_from(WORDS) | st.text(max_size=6), ENTRY, max_size=3))
+def test_any_sensors_mapping_loads_or_is_refused_with_one_paragraph(tmp_path, entries):
+    """Fuzzed sensors: entries resolve, or fail as a located MobotError; never another exception."""
+    import yaml
+
+    from mobot_cli.errors import MobotError
+
+    os.makedirs(tmp_path, exist_ok=True)
+    document = {"version": 1, "duration": 1, "robots": [{"name": "mobot", "args": {"lidar": "true"},
+                                                         "sensors": entries}]}
+    path = tmp_path / "fuzz.yaml"
+    path.write_text(yaml.safe_dump(document))
+    try:
+        first = prepare(path)
+    except MobotError as exc:
+        assert "\n" not in str(exc) and str(path) in str(exc)
+        return
+    again = tmp_path / "again.yaml"
+    again.write_text(first.resolved_yaml)
+    assert prepare(again).plan.robots == first.plan.robots
