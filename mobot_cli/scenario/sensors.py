@@ -57,7 +57,7 @@ def resolve_sensors(spec: RobotSpec, desc: RobotDescription, path: tuple,
         where = path + ("sensors", key)
         found = find_sensors(key, desc.sensors)
         if len(found) > 1:
-            raise ScenarioError(f"'{key}' names {len(found)} sensors of '{spec.description}': "
+            raise ScenarioError(f"'{key}' names {len(found)} sensors of '{desc.name}': "
                                 + ", ".join(f"'{s.name}' (topic {s.topic})" for s in found),
                                 location=ctx.locate_key(where),
                                 hint="Use a sensor's name or its whole topic as the key.")
@@ -67,7 +67,7 @@ def resolve_sensors(spec: RobotSpec, desc: RobotDescription, path: tuple,
                                 hint="Give each sensor one entry.")
         if entry.enabled is False:
             if not found:
-                raise ScenarioError(f"'{key}' turns off a sensor that '{spec.description}' does "
+                raise ScenarioError(f"'{key}' turns off a sensor that '{desc.name}' does "
                                     "not have", location=ctx.locate_key(where),
                                     hint=_choices(key, desc, adding=False))
             del sensors[found[0].name]

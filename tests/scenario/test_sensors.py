@@ -188,7 +188,7 @@ def test_a_key_naming_two_sensors_is_an_error(tmp_path, two_lidars):
         prepare(scenario(tmp_path, body))
     assert str(err.value) == (
         f"{tmp_path / 's.yaml'}:5, key 'robots.r.sensors.scan': 'scan' names 2 sensors of "
-        f"'{two_lidars}': 'front_lidar' (topic front/scan), 'rear_lidar' (topic rear/scan). Use a "
+        "'two': 'front_lidar' (topic front/scan), 'rear_lidar' (topic rear/scan). Use a "
         "sensor's name or its whole topic as the key.")
     body = f"robots:\n  - {{name: r, description: {two_lidars}, sensors: {{rear/scan: {{rate_hz: 5}}}}}}\n"
     assert [s.every for s in prepare(scenario(tmp_path, body)).plan.robots[0].sensors] == [24, 48]
@@ -339,3 +339,12 @@ def test_any_sensors_mapping_loads_or_is_refused_with_one_paragraph(tmp_path, en
     again = tmp_path / "again.yaml"
     again.write_text(first.resolved_yaml)
     assert prepare(again).plan.robots == first.plan.robots
+
+
+def test_a_world_robot_takes_sensors_too(corpus, tmp_path):
+    world = corpus / "dolly/dolly_gazebo/worlds/dolly_empty.world"
+    plan = prepare(scenario(tmp_path, f"world: {world}\nrobots:\n"
+                                      "  - {name: Dolly, sensors: {laser_scan: {rate_hz: 48}}}\n")).plan
+    laser, = plan.robots[0].sensors
+    assert (laser.name, laser.topic, laser.link, laser.every, laser.horizontal.samples) == \
+        ("sensor_ray", "laser_scan", "chassis", 5, 200)
