@@ -114,11 +114,35 @@ def inspect_tree(env: Environment, summary: dict[str, Any]) -> None:
     drive = summary["drive"]
     if drive is None:
         console.print("drive: none detected (set drive: in the scenario to command this robot)")
-        return
-    console.print(f"drive ({drive['source']}): left {', '.join(drive['left_joints'])}; right "
-                  f"{', '.join(drive['right_joints'])}; wheel radius {drive['wheel_radius']:.4f} m, separation "
-                  f"{drive['wheel_separation']:.4f} m x {drive['wheel_separation_multiplier']:g}; "
-                  f"max torque {drive['max_wheel_torque']:g} N*m")
+    else:
+        console.print(f"drive ({drive['source']}): left {', '.join(drive['left_joints'])}; right "
+                      f"{', '.join(drive['right_joints'])}; wheel radius {drive['wheel_radius']:.4f} m, "
+                      f"separation {drive['wheel_separation']:.4f} m x {drive['wheel_separation_multiplier']:g}; "
+                      f"max torque {drive['max_wheel_torque']:g} N*m")
+    console.print("sensors:" if summary["sensors"] else "sensors: none")
+    for sensor in summary["sensors"]:
+        for line in sensor_lines(sensor):
+            console.print(line, markup=False)
+
+
+def sensor_lines(s: dict[str, Any]) -> list[str]:
+    """Two short lines per sensor (they fit 80 columns): where and how often, then what it measures."""
+    rate = f"{s['rate_hz']:g} Hz" if s["rate_hz"] else "every step"
+    kind = s["kind"]
+    if kind == "lidar":
+        kind = "3D lidar" if s["vertical_samples"] > 1 else "2D lidar"
+    what = s["type"] if s["type"] == kind else f"{s['type']}, {kind}"
+    head = f"  {s['name']} ({what}) on {s['link']}, topic {s['topic']}, {rate}"
+    if s["kind"] == "lidar":
+        rays = f"{s['samples']}" + (f" x {s['vertical_samples']}" if s["vertical_samples"] > 1 else "")
+        detail = (f"{rays} ray{'s' if rays != '1' else ''} {s['min_angle']:.3f}..{s['max_angle']:.3f} rad, range "
+                  f"{s['range_min']:g}..{s['range_max']:g} m, noise {s['noise_stddev']:g} m")
+    elif s["kind"] == "imu":
+        detail = f"noise: gyro {s['noise_stddev']:g} rad/s, accel {s['accel_noise_stddev']:g} m/s^2"
+    else:
+        detail = f"contacts of {s['collision'] or 'the whole link'}"
+    frame = f", frame {s['frame_id']}" if s["frame_id"] != s["link"] else ""
+    return [head + frame, f"    {detail}"]
 
 
 def expectations(env: Environment, results, verbose: bool = True) -> None:

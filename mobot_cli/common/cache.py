@@ -12,7 +12,7 @@ from typing import Any
 from mobot_cli.common.files import write_text_atomic
 
 # Bump when the layout of a cached document changes, so old entries are simply missed.
-CACHE_FORMAT = 1
+CACHE_FORMAT = 2
 _PACKAGE = Path(__file__).resolve().parent.parent  # mobot_cli/
 # The code that builds cached documents (asset loading, the plan types it fills, this folder)
 # and the version number; paths, not imports: the cache sits below all of them.

@@ -1,7 +1,10 @@
 """The resolved scenario: one YAML document that reloads to the same Plan.
 
 Fleets are expanded, defaults and detected drive values filled in, paths made absolute and
-times written as the exact step times they were rounded to.
+times written as the exact step times they were rounded to. A robot's ``sensors:`` is written
+as the scenario gave it (rates as the step rates they became): its description, written beside
+it with its args, supplies every other sensor value, so scenarios without ``sensors:`` resolve
+to the same document as before sensors existed.
 """
 
 from __future__ import annotations
@@ -13,6 +16,7 @@ import yaml
 
 from mobot_cli.scenario.expect_resolve import expect_document
 from mobot_cli.scenario.model import RobotSpec, Scenario
+from mobot_cli.scenario.units import steps
 from mobot_cli.sim.plan import DriveSpec, Plan, RobotPlan
 
 DRIVE_KEYS = ("odometry", "left_joints", "right_joints", "wheel_radius", "wheel_separation",
@@ -81,6 +85,8 @@ def _robot(spec: RobotSpec, robot: RobotPlan, base_dir: Path, rate: int) -> dict
     }
     if robot.drive is not None:
         out["drive"] = _drive(robot.drive)
+    if spec.sensors:
+        out["sensors"] = _sensors(spec, rate)
     out["commands"] = _commands(robot, rate)
     return out
 
@@ -92,6 +98,29 @@ def _drive(drive: DriveSpec) -> dict[str, Any]:
         if value is not None:
             out[key] = list(value) if isinstance(value, tuple) else value
     return out
+
+
+def _sensors(spec: RobotSpec, rate: int) -> dict[str, Any]:
+    """The scenario's own ``sensors:`` (the description supplies the rest), rates as step rates."""
+    out: dict[str, Any] = {}
+    for key, entry in spec.sensors.items():
+        if entry.enabled is False:
+            out[key] = False
+            continue
+        fields = entry.model_dump(exclude={"enabled"}, exclude_none=True)
+        if entry.rate_hz is not None:
+            fields["rate_hz"] = rate / max(1, steps(1.0 / entry.rate_hz, rate))
+        out[key] = _plain(fields)
+    return out
+
+
+def _plain(value: Any) -> Any:
+    """Tuples as lists, all the way down: YAML's safe dumper writes no tuples."""
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
 
 
 def _commands(robot: RobotPlan, rate: int) -> list[dict[str, Any]]:

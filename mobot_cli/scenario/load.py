@@ -10,6 +10,7 @@ from pydantic import BaseModel, ValidationError
 
 from mobot_cli.errors import Location, ScenarioError, did_you_mean, shown
 from mobot_cli.scenario.model import Scenario
+from mobot_cli.scenario.sensor_model import HINTS as SENSOR_HINTS
 from mobot_cli.scenario.yamlsafe import read_yaml_file
 from mobot_cli.scenario.yamlsource import PathKey, Source, parse_value, parse_yaml
 
@@ -98,6 +99,8 @@ def _to_scenario_error(exc: ValidationError, source: Source) -> ScenarioError:
         hint = did_you_mean(word, _fields_at(path[:-1]))
     elif kind not in ("value_error", "assertion_error"):
         message += f", got {shown(err.get('input'))}"
+    if kind != "extra_forbidden" and len(path) > 3 and path[2] == "sensors":
+        hint = SENSOR_HINTS.get(str(path[-1]))
     more = len({_data_path(e["loc"], source.data) for e in exc.errors()}) - 1
     if more:
         message += f" (and {more} more problem{'s' if more > 1 else ''})"
@@ -123,11 +126,14 @@ def _data_path(loc: tuple, data: Any) -> PathKey:
 def _fields_at(path: PathKey) -> list[str]:
     """Names of the keys allowed by the model found at a data path."""
     model: type[BaseModel] | None = Scenario
+    keyed = False  # the part after a mapping field (robots.NAME.sensors.KEY) is a user's key
     for part in path:
-        if isinstance(part, int) or model is None:
+        if isinstance(part, int) or model is None or keyed:
+            keyed = False
             continue
         field = model.model_fields.get(str(part)) or model.model_fields.get(f"{part}_")
         model = _model_in(field.annotation) if field else None
+        keyed = field is not None and typing.get_origin(field.annotation) is dict
     if model is None:
         return []
     return [f.alias or name for name, f in model.model_fields.items()]

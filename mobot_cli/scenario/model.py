@@ -14,6 +14,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, field_validat
 
 from mobot_cli.errors import shown
 from mobot_cli.scenario.expect_model import ExpectSpec
+from mobot_cli.scenario.sensor_model import SensorEntry, SensorKey
 from mobot_cli.scenario.limits import NAME_RE  # noqa: F401 - live/schema.py imports the name rule from here
 from mobot_cli.scenario.limits import (FLEET_NAME_RE, MAX_NAMESPACE_LENGTH, MAX_RATE_HZ, MIN_LOG_RATE_HZ,
                                        NAMESPACE_RE, SCENARIO_NAME_RE, Coordinate, Duration, Float, Int, PositiveFloat, Reference, Seconds, Vector3,
@@ -98,6 +99,7 @@ class RobotSpec(Strict):
     args: dict[str, Union[str, bool, int, float]] = Field(default_factory=dict)
     pose: PoseSpec = Field(default_factory=PoseSpec)
     drive: Optional[DriveOverrides] = None
+    sensors: dict[SensorKey, SensorEntry] = Field(default_factory=dict)  # see sensor_model.py
     commands: list[CommandSpec] = Field(default_factory=list)
     count: Optional[Annotated[Int, Field(ge=1, le=1000)]] = None
     poses: Optional[list[tuple[Coordinate, Coordinate, Float]]] = None

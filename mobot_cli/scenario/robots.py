@@ -1,8 +1,8 @@
 """Robot specs to RobotPlans: the one path that scenario robots, spawn events and live spawns take.
 
 A ``RobotSpec`` (the scenario's robot entry; a live spawn request is validated into one too)
-becomes a ``RobotPlan``: description loaded with its xacro args, drive overrides merged, pose
-converted, command times rounded to whole steps, name and namespace claimed.
+becomes a ``RobotPlan``: description loaded with its xacro args, drive and sensor overrides merged
+(sensors.py), pose converted, command times rounded to whole steps, name and namespace claimed.
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ from mobot_cli.assets.world.loaded import LoadedWorld, WorldRobot
 from mobot_cli.common.transforms import quat_from_rpy
 from mobot_cli.errors import Location, MobotError, ScenarioError
 from mobot_cli.scenario.model import RobotSpec
+from mobot_cli.scenario.sensors import resolve_sensors
 from mobot_cli.scenario.units import spawn_pose, steps
 from mobot_cli.scenario.yamlsource import Source
 from mobot_cli.sim.plan import CommandStep, DriveSpec, RobotPlan, SpawnPose
@@ -48,6 +49,7 @@ class RobotResolver:
         """One RobotPlan per robot (a fleet gives ``count`` of them), spawned at ``spawn_step``."""
         desc = self.describe(spec, path)
         drive = self.drive(spec, desc, path)
+        sensors = resolve_sensors(spec, desc, path, self)
         commands = self.commands(spec, path, spawn_step)
         if commands and drive is None:
             raise ScenarioError(f"robot '{spec.name}' has commands but no drive wheels were detected in "
@@ -68,7 +70,8 @@ class RobotResolver:
             self.claim(name, namespace, path)
             out.append(RobotPlan(name=name, namespace=namespace, frame_prefix=namespace.lstrip("/") + "/",
                                  urdf=desc.urdf, root_link=desc.root_link, pose=pose, drive=drive,
-                                 commands=commands, spawn_step=spawn_step, source=str(desc.source)))
+                                 commands=commands, spawn_step=spawn_step, source=str(desc.source),
+                                 sensors=sensors))
         return out
 
     def claim(self, name: str, namespace: str, path: tuple) -> None:

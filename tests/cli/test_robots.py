@@ -50,6 +50,39 @@ def test_inspect_text_shows_tree_and_drive():
     assert "wheel radius 0.0500 m" in out
 
 
+def test_inspect_lists_sensors_in_80_columns():
+    code, out, err = astuple(invoke(["inspect", "mobot", "lidar:=true"]))
+    assert code == 0 and err == ""
+    listed = out.split("sensors:\n", 1)[1].splitlines()
+    assert listed == ["  lidar (ray, 2D lidar) on lidar_link, topic scan, 10 Hz",
+                      "    360 rays -3.142..3.142 rad, range 0.12..12 m, noise 0.01 m",
+                      "  imu (imu) on base_link, topic imu, 120 Hz",
+                      "    noise: gyro 0.0002 rad/s, accel 0.017 m/s^2"]
+    assert max(len(line) for line in listed) <= 80
+
+
+def test_inspect_json_sensors_hold_their_kind_fields():
+    code, out, err = astuple(invoke(["inspect", "mobot", "lidar:=true", "--json"]))
+    lidar, imu = json.loads(out)["sensors"]
+    assert {k: lidar[k] for k in ("name", "type", "kind", "link", "topic", "frame_id", "rate_hz",
+                                  "samples", "vertical_samples", "range_min", "range_max")} == \
+        {"name": "lidar", "type": "ray", "kind": "lidar", "link": "lidar_link", "topic": "scan",
+         "frame_id": "lidar_link", "rate_hz": 10.0, "samples": 360, "vertical_samples": 1,
+         "range_min": 0.12, "range_max": 12.0}
+    assert imu == {"name": "imu", "type": "imu", "kind": "imu", "link": "base_link", "topic": "imu",
+                   "frame_id": "base_link", "rate_hz": 120.0, "xyz": [0.0, 0.0, 0.0],
+                   "quat": [0.0, 0.0, 0.0, 1.0], "noise_mean": 0.0, "noise_stddev": 0.0002,
+                   "accel_noise_stddev": 0.017}
+
+
+def test_inspect_a_robot_without_sensors(tmp_path):
+    path = tmp_path / "r.urdf"
+    path.write_text('<robot name="r"><link name="a"><inertial><mass value="1"/><inertia ixx="1" ixy="0" '
+                    'ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link></robot>')
+    code, out, err = astuple(invoke(["inspect", str(path)]))
+    assert code == 0 and out.rstrip().endswith("sensors: none")
+
+
 def test_xacro_prints_expanded_urdf_with_args():
     code, out, err = astuple(invoke(["xacro", "mobot", "lidar:=true"]))
     assert code == 0 and err == ""

@@ -19,6 +19,8 @@ from mobot_cli.assets.description.drive import detect_drive
 from mobot_cli.assets.description.frames import LinkTree, floats
 from mobot_cli.assets.description.process import apply_friction, collision_bounds, \
     fix_inertials, inertial_values, resolve_meshes
+from mobot_cli.assets.description.sensors import DescribedSensor, collision_names, read_sensors, \
+    sensor_summary
 from mobot_cli.assets.description.xacro import Expansion
 from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.common import cache
@@ -33,6 +35,7 @@ class LinkInfo:
     name: str
     mass: float
     has_inertial: bool
+    collisions: tuple[str, ...] = ()  # Gazebo's names of its <collision>s (LINK_collision, ...)
 
 
 @dataclass(frozen=True)
@@ -64,6 +67,7 @@ class RobotDescription:
     notices: tuple[Notice, ...] = ()
     bottom_z: float = 0.0  # lowest collision point in the root frame, all joints at zero
     files: tuple[Path, ...] = field(default=())  # the description and every file it included
+    sensors: tuple[DescribedSensor, ...] = ()  # from its <gazebo><sensor> blocks
 
     def tree(self) -> dict[str, Any]:
         """The link tree as nested dicts: {link, mass, children: [{joint, type, link...}]}."""
@@ -102,6 +106,7 @@ def _build(source: Path, expansion: Expansion,
     links = tuple(_link_info(link) for link in robot.findall("link"))
     joints = tuple(_joint_info(joint) for joint in robot.findall("joint"))
     notices = fix_inertials(robot, source)
+    sensors = read_sensors(robot, source, notices)
     apply_friction(robot)
     bounds = collision_bounds(LinkTree(robot), source, notices)
     drive = detect_drive(robot, notices=notices, source=source)
@@ -112,14 +117,15 @@ def _build(source: Path, expansion: Expansion,
     description = RobotDescription(
         source=source, name=robot.get("name", ""), urdf=urdf, root_link=root_link,
         links=links, joints=joints, total_mass=sum(link.mass for link in links),
-        footprint=bounds[:4], drive=drive, notices=tuple(notices), bottom_z=bounds[4])
+        footprint=bounds[:4], drive=drive, notices=tuple(notices), bottom_z=bounds[4],
+        sensors=sensors)
     return description, meshes
 
 
 def _link_info(link: ET.Element) -> LinkInfo:
     inertial = link.find("inertial")
     return LinkInfo(name=link.get("name", ""), mass=inertial_values(inertial)[0],
-                    has_inertial=inertial is not None)
+                    has_inertial=inertial is not None, collisions=collision_names(link))
 
 
 def _joint_info(joint: ET.Element) -> JointInfo:
@@ -178,12 +184,16 @@ def _from_document(document: dict[str, Any] | None) -> RobotDescription | None:
         return RobotDescription(
             source=Path(document["source"]), name=document["name"], urdf=document["urdf"],
             root_link=document["root_link"],
-            links=tuple(LinkInfo(**link) for link in document["links"]),
+            links=tuple(LinkInfo(**{**link, "collisions": tuple(link["collisions"])})
+                        for link in document["links"]),
             joints=tuple(JointInfo(**{k: tuple(v) if isinstance(v, list) else v
                                       for k, v in joint.items()})
                          for joint in document["joints"]),
             total_mass=document["total_mass"], footprint=tuple(document["footprint"]),
             drive=drive, bottom_z=document["bottom_z"],
+            sensors=tuple(DescribedSensor(**{k: tuple(v) if isinstance(v, list) else v
+                                             for k, v in sensor.items()})
+                          for sensor in document["sensors"]),
             notices=tuple(Notice(n["message"], Location(**n["location"]))
                           for n in document["notices"]))
     except (KeyError, TypeError, ValueError):
@@ -191,7 +201,7 @@ def _from_document(document: dict[str, Any] | None) -> RobotDescription | None:
 
 
 def inspect_summary(desc: RobotDescription) -> dict[str, Any]:
-    """What `mobot inspect` shows, as plain data: tree, mass, footprint, drive, notices."""
+    """What `mobot inspect` shows, as plain data: tree, mass, footprint, drive, sensors, notices."""
     xmin, xmax, ymin, ymax = desc.footprint
     return {
         "name": desc.name,
@@ -205,5 +215,6 @@ def inspect_summary(desc: RobotDescription) -> dict[str, Any]:
         "bottom_z": desc.bottom_z,
         "tree": desc.tree(),
         "drive": asdict(desc.drive) if desc.drive is not None else None,
+        "sensors": [sensor_summary(s) for s in desc.sensors],
         "notices": [str(n) for n in desc.notices],
     }

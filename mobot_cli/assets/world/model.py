@@ -30,6 +30,7 @@ class Link:
     visuals: list[Shape]
     inertial: Inertial
     location: Location
+    sensors: list = field(default_factory=list)  # (lxml <sensor>, its pose in the link frame)
 
 
 @dataclass

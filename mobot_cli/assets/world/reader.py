@@ -190,7 +190,9 @@ class SdfReader:
         top.links.append(Link(name=prefix + name, pose=base @ pose,
                               collisions=self._shapes(link, "collision", file, scope, pose),
                               visuals=self._shapes(link, "visual", file, scope, pose),
-                              inertial=self._inertial(link, file), location=key_of(link, file)))
+                              inertial=self._inertial(link, file), location=key_of(link, file),
+                              sensors=[(sensor, self._local(sensor, file, scope, pose))
+                                       for sensor in link.findall("sensor")]))
         if not static:
             top.dynamic_links += 1
 

@@ -5,7 +5,8 @@ The URDF's root link frame is the model frame, every other link's frame is its j
 Joint axes come out in the joint frame. Ball joints become fixed: the caster sphere then
 slides with mobot's low caster friction (sim/world.py), which is how URDF robots model
 casters too. The diff-drive <plugin> is kept as a <gazebo><plugin> block so drive detection
-reads it exactly as it reads gazebo_ros plugins in URDF.
+reads it exactly as it reads gazebo_ros plugins in URDF; each link's <sensor>s likewise become
+<gazebo reference="LINK"><sensor> blocks, their <pose> re-expressed in the URDF link frame.
 """
 
 from __future__ import annotations
@@ -108,11 +109,35 @@ def _link(robot: ET.Element, link: Link, frame, notices: list[Notice]) -> None:
     for kind, shapes in (("visual", link.visuals), ("collision", link.collisions)):
         for shape in shapes:
             _shape(element, kind, shape, to_urdf, link.name, notices)
+    for sensor, pose in link.sensors:  # description.sensors reads them as from URDF
+        _sensor(robot, link.name, sensor, to_urdf @ pose)
     frictions = [s.friction for s in link.collisions if s.friction is not None]
     if frictions:  # description.process.apply_friction turns this into PyBullet's lateral_friction
         gazebo = ET.SubElement(robot, "gazebo", reference=link.name)
         ET.SubElement(gazebo, "mu1").text = f"{min(frictions):.12g}"
         ET.SubElement(gazebo, "mu2").text = f"{min(frictions):.12g}"
+
+
+def _sensor(robot: ET.Element, link_name: str, sensor, pose) -> None:
+    """A copy of an SDF link's <sensor> in <gazebo reference>, posed in the URDF link frame."""
+    copy = _copy(sensor)
+    for old in copy.findall("pose"):
+        copy.remove(old)
+    x, y, z = (round(float(v), 12) + 0.0 for v in pose[:3, 3])
+    ET.SubElement(copy, "pose").text = " ".join(f"{v:.12g}" for v in (x, y, z, *rpy(pose)))
+    ET.SubElement(robot, "gazebo", reference=link_name).append(copy)
+
+
+def _copy(element) -> ET.Element:
+    """An lxml element as an ElementTree one, comments and processing instructions left out."""
+    copy = ET.Element(element.tag, dict(element.attrib))
+    copy.text = element.text
+    for child in element:
+        if isinstance(child.tag, str):
+            inner = _copy(child)
+            inner.tail = child.tail
+            copy.append(inner)
+    return copy
 
 
 def _shape(link: ET.Element, kind: str, shape, to_urdf, link_name: str,
@@ -129,7 +154,7 @@ def _shape(link: ET.Element, kind: str, shape, to_urdf, link_name: str,
                              (-length / 2, ("sphere", {"radius": radius}))):
             offset = IDENTITY.copy()
             offset[2, 3] = dz
-            _element(link, kind, pose @ offset, *geometry)
+            _element(link, kind, pose @ offset, *geometry, name=shape.name)
         return
     if shape.kind == "box":
         attrs = {"size": " ".join(f"{v:.12g}" for v in shape.size)}
@@ -139,11 +164,13 @@ def _shape(link: ET.Element, kind: str, shape, to_urdf, link_name: str,
         attrs = {"radius": shape.size[0]}
     else:
         attrs = {"filename": str(shape.mesh), "scale": " ".join(f"{v:.12g}" for v in shape.size)}
-    _element(link, kind, pose, shape.kind, attrs)
+    _element(link, kind, pose, shape.kind, attrs, name=shape.name)
 
 
-def _element(link: ET.Element, kind: str, pose, geometry: str, attrs: dict) -> None:
-    element = ET.SubElement(link, kind)
+def _element(link: ET.Element, kind: str, pose, geometry: str, attrs: dict, name: str = "") -> None:
+    # Collisions keep their SDF name: a contact sensor's <collision> names one.
+    element = ET.SubElement(link, kind, name=name) if name and kind == "collision" else \
+        ET.SubElement(link, kind)
     _origin(element, pose)
     shape = ET.SubElement(ET.SubElement(element, "geometry"), geometry)
     for key, value in attrs.items():

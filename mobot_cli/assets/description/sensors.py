@@ -1,0 +1,301 @@
+"""A robot's sensors, read from its <gazebo reference="LINK"><sensor> blocks as Gazebo reads them.
+
+Types ray, gpu_ray, lidar and gpu_lidar are lidars (2D with one vertical sample), imu and
+contact (a bumper) are the others mobot simulates; cameras, GPS and the rest of SDFormat's
+types are left out with one notice. SDF models reach this module as URDF: model_to_urdf copies
+each link's sensors into such blocks, posed in the URDF link frame. Absent elements take
+SDFormat's defaults (sdf/1.6 sensor.sdf, lidar.sdf, imu.sdf, noise.sdf): update_rate 0 (every
+physics step), 640 horizontal samples between angles 0 and 0, one vertical sample, range 0..0,
+no noise. The topic and frame come from the sensor's plugin or gz-sim elements (sensor_xml.py).
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, fields, replace
+from pathlib import Path
+
+from mobot_cli.assets.description.sensor_xml import SensorXml
+from mobot_cli.errors import DescriptionError, Location, Notice, did_you_mean
+from mobot_cli.sim.plan import RayAxis, SensorSpec
+
+LIDAR_TYPES = ("ray", "gpu_ray", "lidar", "gpu_lidar")
+KINDS = {**{t: "lidar" for t in LIDAR_TYPES}, "imu": "imu", "contact": "contact"}
+# SDFormat's other sensor types (sdf/1.9 sensor.sdf): real, but not simulated by mobot.
+OTHER_TYPES = ("air_pressure", "air_speed", "altimeter", "boundingbox_camera", "boundingbox",
+               "camera", "custom", "depth_camera", "depth", "dvl", "force_torque", "gps",
+               "logical_camera", "magnetometer", "multicamera", "navsat", "rfid", "rfidtag",
+               "rgbd_camera", "rgbd", "segmentation_camera", "segmentation", "sonar",
+               "thermal_camera", "thermal", "wide_angle_camera", "wireless_receiver",
+               "wireless_transmitter")
+MAX_SAMPLES = 100_000  # rays along one axis of a scan
+MAX_RAYS = 1_000_000  # rays in one reading (horizontal x vertical samples)
+
+
+@dataclass(frozen=True)
+class DescribedSensor:
+    """One sensor with every value resolved but its rate, which becomes steps in a plan.
+
+    Field names are the scenario's ``sensors:`` keys, so overrides replace them one for one.
+    """
+
+    name: str  # the <sensor name>
+    type: str  # Gazebo's type as written: ray, gpu_lidar, imu, contact, ...
+    link: str
+    rate_hz: float = 0.0  # 0: every physics step, as Gazebo does without <update_rate>
+    xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    quat: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
+    samples: int = 640
+    min_angle: float = 0.0
+    max_angle: float = 0.0
+    resolution: float = 1.0
+    vertical_samples: int = 1
+    vertical_min_angle: float = 0.0
+    vertical_max_angle: float = 0.0
+    vertical_resolution: float = 1.0
+    range_min: float = 0.0
+    range_max: float = 0.0
+    range_resolution: float = 0.0
+    noise_mean: float = 0.0
+    noise_stddev: float = 0.0
+    accel_noise_stddev: float = 0.0
+    collision: str = ""
+    topic: str = ""
+    frame_id: str = ""  # "" when the block names none: the link's name
+
+    @property
+    def kind(self) -> str:
+        """"lidar", "imu" or "contact"."""
+        return KINDS[self.type]
+
+    def spec(self, every: int, source: str = "") -> SensorSpec:
+        """The plan's form, reading every ``every`` physics steps."""
+        lidar = self.kind == "lidar"
+        return SensorSpec(
+            name=self.name, kind=self.kind, link=self.link, every=every, xyz=self.xyz,
+            quat=self.quat, topic=self.topic, frame_id=self.frame_id or self.link,
+            horizontal=RayAxis(self.samples, self.min_angle, self.max_angle, self.resolution)
+            if lidar else None,
+            vertical=RayAxis(self.vertical_samples, self.vertical_min_angle,
+                             self.vertical_max_angle, self.vertical_resolution) if lidar else None,
+            range_min=self.range_min if lidar else 0.0, range_max=self.range_max if lidar else 0.0,
+            range_resolution=self.range_resolution if lidar else 0.0,
+            noise_mean=self.noise_mean, noise_stddev=self.noise_stddev,
+            accel_noise_stddev=self.accel_noise_stddev, collision=self.collision, source=source)
+
+
+SENSOR_FIELDS = tuple(f.name for f in fields(DescribedSensor))
+
+
+def sensor_summary(sensor: DescribedSensor) -> dict:
+    """A sensor as `mobot inspect --json` shows it: the fields its kind uses."""
+    lidar = ("samples", "min_angle", "max_angle", "resolution", "vertical_samples",
+             "vertical_min_angle", "vertical_max_angle", "vertical_resolution", "range_min",
+             "range_max", "range_resolution", "noise_mean", "noise_stddev")
+    own = {"lidar": lidar, "imu": ("noise_mean", "noise_stddev", "accel_noise_stddev"),
+           "contact": ("collision",)}[sensor.kind]
+    out = {"name": sensor.name, "type": sensor.type, "kind": sensor.kind, "link": sensor.link,
+           "topic": sensor.topic, "frame_id": sensor.frame_id or sensor.link,
+           "rate_hz": sensor.rate_hz, "xyz": list(sensor.xyz), "quat": list(sensor.quat)}
+    return {**out, **{name: getattr(sensor, name) for name in own}}
+
+
+def read_sensors(robot: ET.Element, source: Path,
+                 notices: list[Notice]) -> tuple[DescribedSensor, ...]:
+    """Every simulated sensor of an expanded URDF, checked; others skipped with one notice."""
+    links = {link.get("name", ""): link for link in robot.findall("link")}
+    found: list[DescribedSensor] = []
+    skipped: list[str] = []
+    for gazebo in robot.findall("gazebo"):
+        for element in gazebo.findall("sensor"):
+            xml = SensorXml(element, gazebo.get("reference", "").strip(), source)
+            if xml.type in OTHER_TYPES:
+                skipped.append(f"{xml.type} '{xml.name}'")
+                continue
+            _check_placement(xml, links, found)
+            found.append(_read(xml))
+    if skipped:
+        notices.append(Notice("sensors of types mobot does not simulate are left out: "
+                              + ", ".join(skipped), Location(file=source)))
+    checked = []
+    for sensor in default_topics(found):
+        collisions = collision_names(links[sensor.link])
+        problem = check_values(sensor, collisions)
+        if problem is not None:
+            field, message, hint = problem
+            raise DescriptionError(f"sensor '{sensor.name}' {message}", location=Location(
+                file=source, key=f"gazebo.sensor.{sensor.name}.{XML_KEYS.get(field, field)}"),
+                hint=hint.replace("{field}", XML_NAMES.get(field, field)))
+        checked.append(with_gazebo_collision(sensor, collisions))
+    return tuple(checked)
+
+
+def with_gazebo_collision(sensor: DescribedSensor, collisions: tuple[str, ...]) -> DescribedSensor:
+    """A checked contact sensor names its collision as Gazebo does (LINK_collision, ...)."""
+    if sensor.kind != "contact":
+        return sensor
+    return replace(sensor, collision=contact_collision(sensor.collision, collisions) or "")
+
+
+def default_topic(sensor: DescribedSensor) -> str:
+    """The topic of a sensor whose block names none: scan, points (3D), imu or bumper."""
+    if sensor.kind == "lidar":
+        return "scan" if sensor.vertical_samples <= 1 else "points"
+    return "bumper" if sensor.kind == "contact" else "imu"
+
+
+def default_topics(sensors: list[DescribedSensor]) -> list[DescribedSensor]:
+    """Give sensors without a topic their kind's usual one, or their name when it is taken."""
+    taken = {s.topic for s in sensors if s.topic}
+    out = []
+    for sensor in sensors:
+        if not sensor.topic:
+            topic = default_topic(sensor)
+            topic = sensor.name if topic in taken else topic
+            taken.add(topic)
+            sensor = replace(sensor, topic=topic)
+        out.append(sensor)
+    return out
+
+
+def _check_placement(xml: SensorXml, links: dict[str, ET.Element],
+                     found: list[DescribedSensor]) -> None:
+    where = xml.location()
+    if not xml.name:
+        raise DescriptionError(f"a <sensor> of type '{xml.type}' has no name", location=where,
+                               hint="Give it name=\"...\", unique within the robot.")
+    if xml.type not in KINDS:
+        raise DescriptionError(
+            f"sensor '{xml.name}' has unknown type '{xml.type}'", location=where,
+            hint=did_you_mean(xml.type, [*KINDS, *OTHER_TYPES]) or "Use ray, lidar, imu or contact.")
+    if not xml.link:
+        raise DescriptionError(f"sensor '{xml.name}' is in a <gazebo> block without a reference",
+                               location=where, hint="Put it in <gazebo reference=\"LINK\">.")
+    if xml.link not in links:
+        raise DescriptionError(f"sensor '{xml.name}' is on link '{xml.link}', which the robot "
+                               "does not have", location=where,
+                               hint=did_you_mean(xml.link, links) or "Name one of its links.")
+    twin = next((s for s in found if s.name == xml.name), None)
+    if twin is not None:
+        raise DescriptionError(f"two sensors are named '{xml.name}' (on links '{twin.link}' and "
+                               f"'{xml.link}')", location=where,
+                               hint="Give every sensor of a robot its own name.")
+
+
+def _read(xml: SensorXml) -> DescribedSensor:
+    values = dict(name=xml.name, type=xml.type, link=xml.link,
+                  rate_hz=xml.number("update_rate", 0.0), topic=xml.topic(), frame_id=xml.frame())
+    values["xyz"], values["quat"] = xml.pose()
+    kind = KINDS[xml.type]
+    if kind == "lidar":
+        values.update(xml.lidar())
+    elif kind == "imu":
+        values.update(xml.imu())
+    else:
+        values["collision"] = xml.text("contact/collision")
+    return DescribedSensor(**values)
+
+
+def collision_names(link: ET.Element) -> tuple[str, ...]:
+    """Gazebo's names for a URDF link's collisions: NAME_collision, then NAME_collision_1, ...
+
+    NAME is the <collision name> or else the link's name (sdformat's parser_urdf.cc).
+    """
+    out = []
+    for index, collision in enumerate(link.findall("collision")):
+        name = (collision.get("name") or link.get("name", "")) + "_collision"
+        out.append(name if index == 0 else f"{name}_{index}")
+    return tuple(out)
+
+
+def contact_collision(wanted: str, names: tuple[str, ...]) -> str | None:
+    """The Gazebo name of the collision ``wanted`` names ("" = the whole link), or None.
+
+    Accepted: Gazebo's name (LINK_collision, NAME_collision_1), the <collision name> as
+    written (NAME), and Gazebo's fixed-joint-lumped form (PARENT_fixed_joint_lump__NAME...).
+    """
+    if wanted in ("", "__default__"):
+        return ""
+    for candidate in dict.fromkeys((wanted, wanted.split("_fixed_joint_lump__")[-1])):
+        if candidate in names:
+            return candidate
+        written = [n for n in names if n == f"{candidate}_collision"
+                   or n.startswith(f"{candidate}_collision_")]
+        if len(written) == 1:
+            return written[0]
+    return None
+
+
+# Where each field lives in a <sensor> block, for messages about a description.
+XML_KEYS = {
+    "rate_hz": "update_rate", "samples": "ray.scan.horizontal.samples",
+    "min_angle": "ray.scan.horizontal.min_angle", "max_angle": "ray.scan.horizontal.max_angle",
+    "resolution": "ray.scan.horizontal.resolution", "vertical_samples": "ray.scan.vertical.samples",
+    "vertical_min_angle": "ray.scan.vertical.min_angle",
+    "vertical_max_angle": "ray.scan.vertical.max_angle",
+    "vertical_resolution": "ray.scan.vertical.resolution", "range_min": "ray.range.min",
+    "range_max": "ray.range.max", "range_resolution": "ray.range.resolution",
+    "noise_stddev": "noise.stddev", "accel_noise_stddev": "imu.linear_acceleration.noise.stddev",
+    "collision": "contact.collision"}
+XML_NAMES = {"rate_hz": "<update_rate>", "samples": "<horizontal><samples>",
+             "min_angle": "<horizontal><min_angle>", "max_angle": "<horizontal><max_angle>",
+             "resolution": "<horizontal><resolution>", "vertical_samples": "<vertical><samples>",
+             "vertical_min_angle": "<vertical><min_angle>",
+             "vertical_max_angle": "<vertical><max_angle>",
+             "vertical_resolution": "<vertical><resolution>", "range_min": "<range><min>",
+             "range_max": "<range><max>", "range_resolution": "<range><resolution>",
+             "noise_stddev": "<noise><stddev>", "accel_noise_stddev": "the accelerometer's <stddev>",
+             "collision": "<contact><collision>"}
+
+
+def check_values(sensor: DescribedSensor,
+                 collisions: tuple[str, ...]) -> tuple[str, str, str] | None:
+    """The first problem as (field, message, hint with a {field} slot), or None when sound."""
+    for name in SENSOR_FIELDS:
+        value = getattr(sensor, name)
+        if isinstance(value, float) and not math.isfinite(value):
+            return name, f"has a non-finite {name} ({value})", "Give {field} a finite number."
+    if sensor.rate_hz < 0:
+        return "rate_hz", f"has a negative rate ({sensor.rate_hz:g} Hz)", \
+            "Give {field} a rate in Hz (0: every physics step)."
+    if sensor.noise_stddev < 0 or sensor.accel_noise_stddev < 0:
+        field = "noise_stddev" if sensor.noise_stddev < 0 else "accel_noise_stddev"
+        return field, f"has a negative noise standard deviation ({getattr(sensor, field):g})", \
+            "Give {field} a value of 0 or more."
+    if sensor.kind == "lidar":
+        return _check_lidar(sensor)
+    if sensor.kind == "contact" and contact_collision(sensor.collision, collisions) is None:
+        return "collision", f"counts contacts of collision '{sensor.collision}', which link " \
+            f"'{sensor.link}' does not have", (did_you_mean(sensor.collision, collisions)
+                                               or "Name one of the link's collisions.") + \
+            " Gazebo names a link's collisions LINK_collision, LINK_collision_1, ..."
+    return None
+
+
+def _check_lidar(s: DescribedSensor) -> tuple[str, str, str] | None:
+    for prefix, label in (("", "horizontal"), ("vertical_", "vertical")):
+        samples = getattr(s, prefix + "samples")
+        low, high = getattr(s, prefix + "min_angle"), getattr(s, prefix + "max_angle")
+        if not 1 <= samples <= MAX_SAMPLES:
+            return prefix + "samples", f"has {samples} {label} samples", \
+                f"Give {{field}} a whole number from 1 to {MAX_SAMPLES}."
+        if getattr(s, prefix + "resolution") <= 0:
+            return prefix + "resolution", f"has a {label} resolution of " \
+                f"{getattr(s, prefix + 'resolution'):g}", "Give {field} a number above 0."
+        if low > high or (low == high and samples > 1):
+            return prefix + "max_angle", f"has {label} angles from {low:g} to {high:g} rad", \
+                "Make {field} greater than the min angle (equal only with one sample)."
+    if s.samples * s.vertical_samples > MAX_RAYS:
+        return "samples", f"casts {s.samples} x {s.vertical_samples} rays per reading", \
+            f"Keep a reading at or below {MAX_RAYS} rays."
+    if s.range_min < 0:
+        return "range_min", f"has a negative range min ({s.range_min:g} m)", \
+            "Give {field} a distance of 0 or more."
+    if s.range_max <= s.range_min:
+        return "range_max", f"has range max {s.range_max:g} m, not beyond its range min " \
+            f"{s.range_min:g} m", "Give {field} the farthest distance it measures."
+    if s.range_resolution < 0:
+        return "range_resolution", f"has a negative range resolution ({s.range_resolution:g})", \
+            "Give {field} a distance of 0 or more (0: not quantised)."
+    return None
