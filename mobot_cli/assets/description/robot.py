@@ -19,6 +19,7 @@ from mobot_cli.assets.description.drive import detect_drive
 from mobot_cli.assets.description.frames import LinkTree, floats
 from mobot_cli.assets.description.process import apply_friction, collision_bounds, \
     fix_inertials, inertial_values, resolve_meshes
+from mobot_cli.assets.description.sanity import check_mesh_file, check_sanity
 from mobot_cli.assets.description.sensors import DescribedSensor, collision_names, read_sensors, \
     sensor_summary
 from mobot_cli.assets.description.xacro import Expansion
@@ -102,7 +103,11 @@ def _build(source: Path, expansion: Expansion,
     root_link = check_tree(robot, source)
     check_geometry(robot, source)
     check_with_yourdfpy(expansion.text, source)
+    check_sanity(robot, source)
     meshes = resolve_meshes(robot, resolver, source)
+    for link in robot.findall("link"):
+        for mesh in link.findall("collision/geometry/mesh"):
+            check_mesh_file(Path(mesh.get("filename", "")), link.get("name", ""), source)
     links = tuple(_link_info(link) for link in robot.findall("link"))
     joints = tuple(_joint_info(joint) for joint in robot.findall("joint"))
     notices = fix_inertials(robot, source)
