@@ -22,6 +22,7 @@ WORLD_FRAME = "world"  # Gazebo's name for the frame all robots' odom frames han
 CLOCK, TF = "rosgraph_msgs/msg/Clock", "tf2_msgs/msg/TFMessage"
 ODOMETRY, TWIST = "nav_msgs/msg/Odometry", "geometry_msgs/msg/Twist"
 JOINT_STATE, STRING = "sensor_msgs/msg/JointState", "std_msgs/msg/String"
+LASER_SCAN = "sensor_msgs/msg/LaserScan"
 _MESH_PATH = re.compile(r'(<mesh\b[^>]*?\bfilename\s*=\s*")(/)')
 CLOCK_PACKER = Layout().var("i").var("I").build()
 
@@ -121,3 +122,13 @@ def tf_static(stamp: Stamp, transforms: Sequence[Transform]) -> bytes:
         layout.header(t.parent).string(t.child).var("d", 7)
         values.extend((*stamp, *t.xyz, *t.quat))
     return layout.build().pack(values)
+
+
+def laser_scan_layout(frame_id: str, rays: int, intensities: bool = False) -> Packer:
+    """sensor_msgs/LaserScan with ``rays`` ranges; values: sec, nanosec, angle_min, angle_max,
+    angle_increment, time_increment, scan_time, range_min, range_max, the ranges, then (with
+    ``intensities``) as many intensities."""
+    layout = Layout().header(frame_id).var("f", 7).u32(rays).var("f", rays)
+    if intensities:
+        return layout.u32(rays).var("f", rays).build()
+    return layout.u32(0).build()

@@ -1,0 +1,143 @@
+"""The world as a ROS 2 node: `mobot run --ros2`, `mobot serve --ros2` and a scenario's ``ros2:``.
+
+A ``Bridge`` rides along the timeline (an ``Attachment``): its consumer only queues the
+records, and a thread of its own turns them into DDS messages, so the world's thread pays a
+queue append per record. When that thread falls behind by more than ``MAX_BACKLOG`` samples,
+samples are dropped (and counted) rather than slowing the world; spawns and deletes never are.
+``/cmd_vel`` arrives on Cyclone's receive thread, waits in a deque, and enters the world
+through ``Timeline.command`` at the start of the next tick, on the world's thread, as a live
+`mobot cmd` does: it holds until the next one, or for ``cmd_vel_timeout`` when one is set.
+"""
+
+from __future__ import annotations
+
+import os
+import queue
+import threading
+import time
+from collections import deque
+from dataclasses import dataclass
+from typing import Mapping
+
+from mobot_cli.errors import Location, UsageError
+from mobot_cli.ros2 import names
+from mobot_cli.run.timeline import Record, Sample, Timeline
+from mobot_cli.sim.plan import Plan, Ros2Settings
+
+MAX_BACKLOG = 200  # records waiting for the bridge's thread before new samples are dropped
+_STOP = object()
+
+
+@dataclass(frozen=True)
+class BridgeStats:
+    """What the bridge did: messages sent, samples dropped, commands taken, its thread's time."""
+
+    domain_id: int
+    node: str
+    messages: int
+    unsent: int
+    dropped_samples: int
+    commands: int
+    busy_seconds: float
+    error: str | None = None
+
+
+class Bridge:
+    """Join ROS 2 as node ``settings.node``; checks every setting before touching the network."""
+
+    def __init__(self, plan: Plan, settings: Ros2Settings, env: Mapping[str, str] | None = None,
+                 where: Location | None = None):
+        env = os.environ if env is None else env
+        names.check_node(settings.node, settings.namespace, where)
+        robots = [*plan.robots, *(event.spawn for event in plan.events if event.spawn is not None)]
+        for robot in robots:
+            names.check_namespace(robot.namespace, Location(key=f"robots.{robot.name}.namespace"))
+        self.settings, self.rate = settings, plan.physics.rate_hz
+        self.domain_id = names.domain_id(settings.domain_id, env)
+        self.config = names.discovery_config(env, settings.ignore_fastdds_type_information)
+        self.gid_size = names.gid_size(env)
+        try:
+            from mobot_cli.ros2 import dds  # noqa: F401 - imports cyclonedds, the `ros2` extra
+        except ImportError as exc:
+            raise UsageError(f"ROS 2 needs the cyclonedds package, which is not installed ({exc})", location=where,
+                             hint="Install the extra: pip install 'mobot-cli[ros2]'.") from None
+        self._records: queue.SimpleQueue = queue.SimpleQueue()
+        self._twists: deque[tuple[str, float, float]] = deque()
+        self._timeline: Timeline | None = None
+        self._thread: threading.Thread | None = None
+        self._topics = None
+        self._dropped = self._commands = 0
+        self._busy = 0.0
+        self._error: str | None = None
+        self.stats: BridgeStats | None = None  # set by close
+
+    # -- the world's thread -------------------------------------------------------------------
+
+    def open(self, timeline: Timeline) -> None:
+        """Join the domain, announce the node and start publishing this timeline's records."""
+        from mobot_cli.ros2 import dds
+        from mobot_cli.ros2.publisher import RecordPublisher, Topics
+
+        participant = dds.Participant(self.domain_id, self.config)
+        try:
+            self._topics = Topics(participant, self.settings.node, self.settings.namespace, self.gid_size)
+            publisher = RecordPublisher(self._topics, self.rate, self._twist)
+        except BaseException:
+            participant.close()
+            raise
+        publisher.arriving.update(timeline.robots)  # robots placed before the bridge opened
+        self._timeline = timeline
+        timeline.attach(self)
+        timeline.add_input(self._drain)
+        self._thread = threading.Thread(target=self._run, args=(publisher,), name="mobot-ros2", daemon=True)
+        self._thread.start()
+
+    def __call__(self, record: Record) -> None:
+        if isinstance(record, Sample) and self._records.qsize() >= MAX_BACKLOG:
+            self._dropped += 1
+            return
+        self._records.put(record)
+
+    def _drain(self) -> None:
+        """Apply the /cmd_vel messages that arrived since the last tick."""
+        twists, timeline = self._twists, self._timeline
+        while twists:
+            name, linear, angular = twists.popleft()
+            if name in timeline.robots:  # it may have left since
+                timeline.command(name, linear, angular, self.settings.cmd_vel_timeout_steps)
+                self._commands += 1
+
+    def close(self) -> BridgeStats:
+        """Publish what is queued, leave the domain and say what was done."""
+        if self._thread is not None:
+            self._records.put(_STOP)
+            self._thread.join(timeout=10.0)
+            self._thread = None
+        if self._topics is not None and self.stats is None:
+            self._topics.participant.close()
+        topics = self._topics
+        self.stats = BridgeStats(self.domain_id, self.settings.node, topics.sent if topics else 0,
+                                 topics.unsent if topics else 0, self._dropped, self._commands, self._busy,
+                                 self._error)
+        return self.stats
+
+    # -- other threads ------------------------------------------------------------------------
+
+    def _twist(self, name: str, linear: float, angular: float) -> None:
+        """A /cmd_vel for robot ``name`` (Cyclone's receive thread)."""
+        self._twists.append((name, linear, angular))
+
+    def _run(self, publisher) -> None:
+        """The bridge's thread: publish records until told to stop."""
+        while True:
+            record = self._records.get()
+            if record is _STOP:
+                return
+            if self._error is not None:
+                continue  # broken: drain the queue so the world never waits
+            started = time.perf_counter()
+            try:
+                publisher(record)
+            except Exception as exc:  # noqa: BLE001 - reported when the bridge closes; the world goes on
+                self._error = f"{type(exc).__name__}: {exc}"
+            self._busy += time.perf_counter() - started
