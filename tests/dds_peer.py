@@ -15,6 +15,7 @@ from __future__ import annotations
 import ctypes as ct
 import dataclasses
 import json
+import os
 import sys
 import time
 
@@ -87,7 +88,7 @@ def graph(seconds: float) -> dict:
     from cyclonedds.domain import DomainParticipant
 
     lib = _lib()
-    dp = DomainParticipant(0)
+    dp = DomainParticipant(int(os.environ.get("ROS_DOMAIN_ID", "0")))
     readers = {kind: lib.dds_create_reader(dp._ref, handle, None, None) for kind, handle in BUILTIN.items()}
     time.sleep(seconds)
     out: dict = {"participants": [], "publications": [], "subscriptions": [], "self": dp.guid.bytes.hex()}
@@ -113,7 +114,7 @@ def take(topic: str, type_name: str, seconds: float, transient_local: bool = Fal
     from cyclonedds.topic import Topic
     from mobot_cli.ros2 import idl
 
-    dp = DomainParticipant(0)
+    dp = DomainParticipant(int(os.environ.get("ROS_DOMAIN_ID", "0")))
     policies = [Policy.Reliability.Reliable(max_blocking_time=0), Policy.History.KeepLast(100)]
     if transient_local:
         policies.append(Policy.Durability.TransientLocal)
@@ -132,7 +133,7 @@ def drive(topic: str, linear: float, angular: float, seconds: float) -> dict:
     from cyclonedds.topic import Topic
     from mobot_cli.ros2 import idl
 
-    dp = DomainParticipant(0)
+    dp = DomainParticipant(int(os.environ.get("ROS_DOMAIN_ID", "0")))
     writer = DataWriter(dp, Topic(dp, topic, idl.Twist))
     end, sent = time.monotonic() + seconds, 0
     while time.monotonic() < end:
