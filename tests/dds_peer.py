@@ -151,4 +151,4 @@ if __name__ == "__main__":
         result = take(args[0], args[1], float(args[2]), transient_local=len(args) > 3)
     else:
         result = drive(args[0], float(args[1]), float(args[2]), float(args[3]))
-    print(json.dumps(result, default=str))
+    print(json.dumps(result, default=lambda o: list(o) if isinstance(o, (bytes, bytearray)) else str(o)))

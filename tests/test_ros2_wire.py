@@ -220,7 +220,7 @@ def test_golden_messages():
     ("mo-bot", "/", "'mo-bot' is not a valid ROS 2 node name"),
     ("mobot", "sim", "'sim' is not a valid ROS 2 namespace"),
     ("mobot", "/sim/", "'/sim/' is not a valid ROS 2 namespace"),
-    ("mobot", "/a__b", "'/a__b' is not a valid ROS 2 namespace"),
+    ("mobot", "/" + "n" * 230, "namespace '/nnnnnnnnnnnnnnnnnnnnnnn...' is too long for ROS 2"),
     ("mobot", "/2d", "'/2d' is not a valid ROS 2 namespace"),
 ])
 def test_bad_node_names_are_usage_errors(name, namespace, message):

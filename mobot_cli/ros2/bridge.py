@@ -11,6 +11,7 @@ through ``Timeline.command`` at the start of the next tick, on the world's threa
 
 from __future__ import annotations
 
+import importlib
 import os
 import queue
 import threading
@@ -57,7 +58,7 @@ class Bridge:
         self.config = names.discovery_config(env, settings.ignore_fastdds_type_information)
         self.gid_size = names.gid_size(env)
         try:
-            from mobot_cli.ros2 import dds  # noqa: F401 - imports cyclonedds, the `ros2` extra
+            importlib.import_module("mobot_cli.ros2.dds")  # imports cyclonedds, the `ros2` extra
         except ImportError as exc:
             raise UsageError(f"ROS 2 needs the cyclonedds package, which is not installed ({exc})", location=where,
                              hint="Install the extra: pip install 'mobot-cli[ros2]'.") from None

@@ -18,6 +18,8 @@ MAX_DOMAIN_ID = 232  # the highest id whose RTPS ports fit in 16 bits (ROS 2 "do
 FASTDDS_VENDOR = "1.15"  # eProsima's RTPS vendor id, as Cyclone's IgnoreTypeInformation takes it
 NODE_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 NAMESPACE = re.compile(r"^/([A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*)?$")
+MAX_TOPIC = 255 - 8  # rmw's limit on a full topic name (DDS allows 256 with room for prefixes)
+LONGEST_SUFFIX = "/robot_description"  # the longest topic mobot makes under a robot's namespace
 OLD_GID_DISTROS = ("foxy", "galactic", "humble")  # rmw_dds_common's Gid was char[24] before Iron
 
 
@@ -52,11 +54,16 @@ def check_node(name: str, namespace: str, where: Location | None = None) -> None
 
 
 def check_namespace(namespace: str, where: Location | None = None) -> None:
-    """A UsageError unless ``namespace`` is a valid absolute ROS 2 namespace."""
-    if not NAMESPACE.match(namespace) or "__" in namespace:
+    """A UsageError unless ``namespace`` is a valid absolute ROS 2 namespace (rmw's rules) short
+    enough for every topic mobot makes under it."""
+    if not NAMESPACE.match(namespace):
         raise UsageError(f"'{namespace}' is not a valid ROS 2 namespace", location=where,
-                         hint="Start with '/', and use names of letters, digits and single '_' "
-                              "separated by '/', not starting with a digit, e.g. /robot1.")
+                         hint="Start with '/', and use names of letters, digits and '_' separated by "
+                              "'/', not starting with a digit, e.g. /robot1.")
+    if len(namespace.rstrip("/") + LONGEST_SUFFIX) > MAX_TOPIC:
+        raise UsageError(f"namespace '{namespace[:24]}...' is too long for ROS 2", location=where,
+                         hint=f"Keep it under {MAX_TOPIC - len(LONGEST_SUFFIX)} characters: ROS 2 topic "
+                              f"names have at most {MAX_TOPIC}.")
 
 
 def domain_id(configured: int | None, env: Mapping[str, str]) -> int:

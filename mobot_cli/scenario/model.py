@@ -147,9 +147,16 @@ class Ros2Spec(Strict):
     enabled: bool = True
     node: str = "mobot"
     namespace: str = "/"
-    domain_id: Optional[Annotated[int, Field(ge=0, le=232)]] = None  # default: ROS_DOMAIN_ID, else 0
+    domain_id: Optional[int] = None  # default: ROS_DOMAIN_ID, else 0
     cmd_vel_timeout: Optional[PositiveFloat] = None  # s; none: a command holds until the next
     ignore_fastdds_type_information: bool = True
+
+    @field_validator("domain_id")
+    @classmethod
+    def _domain(cls, v: Optional[int]) -> Optional[int]:
+        if v is not None and not 0 <= v <= 232:
+            raise ValueError(f"{v} is not a ROS 2 domain id: use 0 to 232 (0 to 101 is safe on every system)")
+        return v
 
     @field_validator("node")
     @classmethod
@@ -162,9 +169,9 @@ class Ros2Spec(Strict):
     @field_validator("namespace")
     @classmethod
     def _namespace(cls, v: str) -> str:
-        if v != "/" and (not NAMESPACE_RE.match(v) or "__" in v):
+        if v != "/" and not NAMESPACE_RE.match(v):
             raise ValueError(f"'{v}' is not a valid ROS 2 namespace: '/' or names of letters, digits "
-                             "and single '_' separated by '/', e.g. /sim")
+                             "and '_' separated by '/', e.g. /sim")
         return v
 
 
