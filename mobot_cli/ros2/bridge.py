@@ -1,9 +1,12 @@
 """The world as a ROS 2 node: `mobot run --ros2`, `mobot serve --ros2` and a scenario's ``ros2:``.
 
-A ``Bridge`` rides along the timeline (an ``Attachment``): its consumer only queues the
-records, and a thread of its own turns them into DDS messages, so the world's thread pays a
-queue append per record. When that thread falls behind by more than ``MAX_BACKLOG`` samples,
-samples are dropped (and counted) rather than slowing the world; spawns and deletes never are.
+A ``Bridge`` rides along the timeline (an ``Attachment``) and publishes each record as it
+comes, on the world's thread: a message is built only for a topic some reader matches, and a
+write never waits for a reader (one that stops acknowledging loses messages, counted as
+unsent, instead of stalling the world). ``threaded=True`` hands the records to a thread of
+the bridge's own through a queue instead (samples are dropped, and counted, past
+``MAX_BACKLOG`` records waiting); bench/bench_ros2.py measures both, and under CPython's GIL
+the thread costs the world more than it saves, so it is not the default.
 ``/cmd_vel`` arrives on Cyclone's receive thread, waits in a deque, and enters the world
 through ``Timeline.command`` at the start of the next tick, on the world's thread, as a live
 `mobot cmd` does: it holds until the next one, or for ``cmd_vel_timeout`` when one is set.
@@ -39,7 +42,7 @@ class BridgeStats:
     unsent: int
     dropped_samples: int
     commands: int
-    busy_seconds: float
+    busy_seconds: float  # CPU seconds spent publishing (the thread that did it)
     error: str | None = None
 
 
@@ -47,7 +50,7 @@ class Bridge:
     """Join ROS 2 as node ``settings.node``; checks every setting before touching the network."""
 
     def __init__(self, plan: Plan, settings: Ros2Settings, env: Mapping[str, str] | None = None,
-                 where: Location | None = None):
+                 where: Location | None = None, threaded: bool = False):
         env = os.environ if env is None else env
         names.check_node(settings.node, settings.namespace, where)
         robots = [*plan.robots, *(event.spawn for event in plan.events if event.spawn is not None)]
@@ -66,6 +69,8 @@ class Bridge:
         self._twists: deque[tuple[str, float, float]] = deque()
         self._timeline: Timeline | None = None
         self._thread: threading.Thread | None = None
+        self._threaded = threaded
+        self._publisher = None
         self._topics = None
         self._dropped = self._commands = 0
         self._busy = 0.0
@@ -90,10 +95,18 @@ class Bridge:
         self._timeline = timeline
         timeline.attach(self)
         timeline.add_input(self._drain)
-        self._thread = threading.Thread(target=self._run, args=(publisher,), name="mobot-ros2", daemon=True)
-        self._thread.start()
+        if self._threaded:
+            self._thread = threading.Thread(target=self._run, args=(publisher,), name="mobot-ros2", daemon=True)
+            self._thread.start()
+        else:
+            self._publisher = publisher
 
     def __call__(self, record: Record) -> None:
+        if self._publisher is not None:
+            started = time.thread_time()
+            self._publisher(record)
+            self._busy += time.thread_time() - started
+            return
         if isinstance(record, Sample) and self._records.qsize() >= MAX_BACKLOG:
             self._dropped += 1
             return
@@ -136,9 +149,9 @@ class Bridge:
                 return
             if self._error is not None:
                 continue  # broken: drain the queue so the world never waits
-            started = time.perf_counter()
+            started = time.thread_time()
             try:
                 publisher(record)
             except Exception as exc:  # noqa: BLE001 - reported when the bridge closes; the world goes on
                 self._error = f"{type(exc).__name__}: {exc}"
-            self._busy += time.perf_counter() - started
+            self._busy += time.thread_time() - started

@@ -8,7 +8,9 @@ and the XTypes type information cyclonedds needs to make a topic.
 
 QoS follows rmw_cyclonedds' ``create_readwrite_qos``: autodispose off, history, reliability,
 durability (transient local with a durability service of the same history), automatic
-liveliness, and ``typehash=RIHS01_...;`` in USER_DATA (Jazzy and later read it).
+liveliness, and ``typehash=RIHS01_...;`` in USER_DATA (Jazzy and later read it); one
+difference: a reliable write never blocks (max_blocking_time 0, where rmw waits forever), so
+a stalled reader can never stop the world's clock.
 """
 
 from __future__ import annotations
@@ -47,7 +49,7 @@ def qos(profile: QosProfile, userdata: bytes = b"") -> Qos:
     """The DDS QoS rmw_cyclonedds makes of a ROS profile."""
     history = Policy.History.KeepLast(profile.depth)
     policies = [Policy.WriterDataLifecycle(autodispose=False), history,
-                Policy.Reliability.Reliable(max_blocking_time=duration(milliseconds=100)) if profile.reliable
+                Policy.Reliability.Reliable(max_blocking_time=0) if profile.reliable
                 else Policy.Reliability.BestEffort,
                 Policy.Liveliness.Automatic(lease_duration=duration(infinite=True))]
     if profile.transient_local:
@@ -84,8 +86,7 @@ class Participant:
 
     def writer(self, dds_topic: str, struct: type, profile: QosProfile, userdata: bytes = b"") -> "Writer":
         """A writer of CDR bytes."""
-        topic = self.topic(dds_topic, struct)
-        return Writer(DataWriter(self.publisher, topic, qos=qos(profile, userdata)))
+        return Writer(self.publisher, self.topic(dds_topic, struct), qos(profile, userdata))
 
     def reader(self, dds_topic: str, struct: type, profile: QosProfile, on_data: Callable[[bytes], None],
                userdata: bytes = b"") -> "Reader":
@@ -100,11 +101,16 @@ class Participant:
 
 
 class Writer:
-    """Writes CDR bytes (encapsulation header included) as one sample."""
+    """Writes CDR bytes (encapsulation header included) as one sample, and knows how many
+    readers match: a volatile message nobody reads need not even be built."""
 
-    def __init__(self, writer: DataWriter):
-        self.dds = writer
-        self._ref = writer._ref  # noqa: SLF001 - the handle ddspy_write takes
+    def __init__(self, publisher: Publisher, topic: Topic, dds_qos: Qos):
+        self.readers = 0  # matched readers, kept by Cyclone's listener thread
+        self.dds = DataWriter(publisher, topic, qos=dds_qos, listener=Listener(on_publication_matched=self._matched))
+        self._ref = self.dds._ref  # noqa: SLF001 - the handle ddspy_write takes
+
+    def _matched(self, writer: DataWriter, status) -> None:
+        self.readers = status.current_count
 
     @property
     def gid(self) -> bytes:
@@ -112,7 +118,7 @@ class Writer:
 
     def write(self, data: bytes) -> bool:
         """Send one message (CDR bytes, padded to 4 as cyclonedds' own writer pads them); False
-        when it was not sent (a reliable reader that stopped acknowledging held it too long)."""
+        when it was not sent (reliable readers left too much unacknowledged: a write never waits)."""
         if len(data) % 4:
             data += b"\0" * (-len(data) % 4)
         return ddspy_write(self._ref, data) >= 0

@@ -15,6 +15,7 @@ e.g. a lidar's ``<ns>/scan`` from ``laser_scan_layout`` (run/ros_messages.py).
 from __future__ import annotations
 
 import struct
+from dataclasses import dataclass
 from typing import Callable
 
 from mobot_cli.run.cdr import Packer
@@ -79,11 +80,18 @@ class Topics:
         return writer
 
     def publish(self, name: str, msgtype: str, data: bytes, profile: dds.QosProfile = dds.DEFAULT) -> None:
-        """Send one message (CDR bytes) on ROS topic ``name``."""
-        if self.writer(name, msgtype, profile).write(data):
+        """Send one message (CDR bytes) on ROS topic ``name``; a volatile one only when read."""
+        writer = self.writer(name, msgtype, profile)
+        if not (writer.readers or profile.transient_local):
+            return
+        if writer.write(data):
             self.sent += 1
         else:
             self.unsent += 1
+
+    def wanted(self, name: str, msgtype: str) -> bool:
+        """Whether anyone reads ROS topic ``name`` now (build the message only then)."""
+        return self.writer(name, msgtype).readers > 0
 
     def subscribe(self, name: str, msgtype: str, on_data: Callable[[bytes], None]) -> None:
         """Take ROS topic ``name`` (reliable, volatile, keep last 10); ``on_data`` runs on Cyclone's thread."""
@@ -106,6 +114,16 @@ class Topics:
             [w.gid for w in self.writers.values()], self.gid_size))
 
 
+@dataclass
+class _Robot:
+    """A robot's message shapes and the writers its every sample goes to."""
+
+    messages: RobotMessages
+    namespace: str
+    odom: dds.Writer
+    joint_states: dds.Writer
+
+
 class RecordPublisher:
     """Turns records into messages: robots get their topics with their first sample."""
 
@@ -113,12 +131,12 @@ class RecordPublisher:
         self.topics, self.rate = topics, rate_hz
         self.on_twist = on_twist  # (robot, linear, angular), called on Cyclone's thread
         self.arriving: dict[str, RobotPlan] = {}
-        self.robots: dict[str, tuple[RobotMessages, str]] = {}  # name -> (messages, namespace)
+        self.robots: dict[str, _Robot] = {}
         self.statics: dict[str, list] = {}  # name -> its fixed transforms
         self.tf_packers: dict[tuple[str, ...], Packer] = {}
         self.clock_step = -1
-        topics.writer("/clock", CLOCK)  # in the graph from the start, before the first sample
-        topics.writer("/tf", TF)
+        self.clock = topics.writer("/clock", CLOCK)  # in the graph from the start
+        self.tf = topics.writer("/tf", TF)
         topics.writer("/tf_static", TF, dds.LATCHED)
 
     def __call__(self, record: Record) -> None:
@@ -132,34 +150,50 @@ class RecordPublisher:
             _HANDLERS[type(record)](self.topics, record)
 
     def sample(self, sample: Sample) -> None:
-        """/clock, each robot's odom and joint_states, and one /tf for all of them."""
-        ns, stamp = stamp_of(sample.step, self.rate)
-        publish = self.topics.publish
+        """/clock, each robot's odom and joint_states, and one /tf for all of them; a message
+        is built only for a topic that some reader matches."""
+        # Runs at the log rate: writers are looked up once per robot, not per message.
+        stamp = stamp_of(sample.step, self.rate)[1]
+        write = self._write
         if sample.step != self.clock_step:
             self.clock_step = sample.step
-            publish("/clock", CLOCK, CLOCK_PACKER.pack(stamp))
-        tf_values: list[float] = []
+            if self.clock.readers:
+                write(self.clock, CLOCK_PACKER.pack(stamp))
+        tf_values: list[float] | None = [] if self.tf.readers else None
+        robots = self.robots
         for name, state in sample.states.items():
             if name in self.arriving:
                 self.arrive(self.arriving.pop(name), state, stamp)
-            if name not in self.robots:  # a robot that was in the world before the bridge opened
+            robot = robots.get(name)
+            if robot is None:  # a robot that was in the world before the bridge opened
                 continue
-            messages, namespace = self.robots[name]
-            publish(names.join(namespace, "odom"), ODOMETRY, messages.odom(stamp, state))
-            publish(names.join(namespace, "joint_states"), JOINT_STATE, messages.joint_states(stamp, state))
-            messages.tf_values(stamp, state, tf_values)
-        robots = tuple(name for name in sample.states if name in self.robots)
-        if robots:
-            packer = self.tf_packers.get(robots)
-            if packer is None:
-                packer = self.tf_packers[robots] = tf_layout([self.robots[n][0].frames for n in robots])
-            publish("/tf", TF, packer.pack(tf_values))
+            messages = robot.messages
+            if robot.odom.readers:
+                write(robot.odom, messages.odom(stamp, state))
+            if robot.joint_states.readers:
+                write(robot.joint_states, messages.joint_states(stamp, state))
+            if tf_values is not None:
+                messages.tf_values(stamp, state, tf_values)
+        if tf_values is not None:
+            present = tuple(name for name in sample.states if name in robots)
+            if present:
+                packer = self.tf_packers.get(present)
+                if packer is None:
+                    packer = self.tf_packers[present] = tf_layout([robots[n].messages.frames for n in present])
+                write(self.tf, packer.pack(tf_values))
+
+    def _write(self, writer: dds.Writer, data: bytes) -> None:
+        if writer.write(data):
+            self.topics.sent += 1
+        else:
+            self.topics.unsent += 1
 
     def arrive(self, plan: RobotPlan, state: RobotState, stamp: tuple[int, int]) -> None:
         """A robot's topics, description and fixed frames, and its /cmd_vel reader if it drives."""
         messages = RobotMessages(plan, state)
         namespace = plan.namespace
-        self.robots[plan.name] = (messages, namespace)
+        self.robots[plan.name] = _Robot(messages, namespace, self.topics.writer(names.join(namespace, "odom"), ODOMETRY),
+                                        self.topics.writer(names.join(namespace, "joint_states"), JOINT_STATE))
         self.topics.publish(names.join(namespace, "robot_description"), STRING, messages.description(), dds.LATCHED)
         self.statics[plan.name] = messages.statics(state)
         self.publish_statics(stamp)
@@ -179,7 +213,7 @@ class RecordPublisher:
         self.arriving.pop(name, None)
         if name not in self.robots:
             return
-        _, namespace = self.robots.pop(name)
+        namespace = self.robots.pop(name).namespace
         self.statics.pop(name, None)
         self.topics.drop(*(names.join(namespace, t) for t in ("odom", "joint_states", "robot_description", "cmd_vel")))
         self.publish_statics(stamp_of(self.clock_step if self.clock_step >= 0 else 0, self.rate)[1])
