@@ -85,10 +85,11 @@ def test_topics_types_qos_and_the_node_as_another_participant_sees_them(tmp_path
 
 
 def test_discovery_info_names_the_node_and_every_endpoint(tmp_path, cache):
-    live = serve(tmp_path, cache, "ros2: {node: sim, namespace: /mobot_world}")
+    live = serve(tmp_path, cache, "ros2: {node: sim, namespace: /mobot_world, world_frame: false}")
     try:
         seen = peer("graph", "3")
         infos = peer("take", "ros_discovery_info", "rmw_dds_common/msg/ParticipantEntitiesInfo", "3", "latched")
+        statics = peer("take", "rt/tf_static", "tf2_msgs/msg/TFMessage", "2", "latched")
     finally:
         live.signal()
         live.kill()
@@ -102,6 +103,9 @@ def test_discovery_info_names_the_node_and_every_endpoint(tmp_path, cache):
     assert {bytes(g["data"]).hex() for g in node["writer_gid_seq"]} == writers
     assert {bytes(g["data"]).hex() for g in node["reader_gid_seq"]} == readers
     assert len(writers) == 6 and len(readers) == 1
+    # world_frame: false leaves r1/odom's parent to a localizer (slam_toolbox, AMCL: map -> odom)
+    frames = {(t["header"]["frame_id"], t["child_frame_id"]) for t in statics[-1]["transforms"]}
+    assert frames and all(parent != "world" for parent, _ in frames)
 
 
 def test_messages_arrive_and_a_late_joiner_gets_the_description(tmp_path, cache):

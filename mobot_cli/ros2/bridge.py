@@ -87,7 +87,7 @@ class Bridge:
         participant = dds.Participant(self.domain_id, self.config)
         try:
             self._topics = Topics(participant, self.settings.node, self.settings.namespace, self.gid_size)
-            publisher = RecordPublisher(self._topics, self.rate, self._twist)
+            publisher = RecordPublisher(self._topics, self.rate, self._twist, self.settings.world_frame)
         except BaseException:
             participant.close()
             raise

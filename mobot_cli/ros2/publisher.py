@@ -127,8 +127,10 @@ class _Robot:
 class RecordPublisher:
     """Turns records into messages: robots get their topics with their first sample."""
 
-    def __init__(self, topics: Topics, rate_hz: int, on_twist: Callable[[str, float, float], None]):
+    def __init__(self, topics: Topics, rate_hz: int, on_twist: Callable[[str, float, float], None],
+                 world_frame: bool = True):
         self.topics, self.rate = topics, rate_hz
+        self.world_frame = world_frame  # publish world -> <prefix>odom (off: a localizer owns the odom's parent)
         self.on_twist = on_twist  # (robot, linear, angular), called on Cyclone's thread
         self.arriving: dict[str, RobotPlan] = {}
         self.robots: dict[str, _Robot] = {}
@@ -195,7 +197,8 @@ class RecordPublisher:
         self.robots[plan.name] = _Robot(messages, namespace, self.topics.writer(names.join(namespace, "odom"), ODOMETRY),
                                         self.topics.writer(names.join(namespace, "joint_states"), JOINT_STATE))
         self.topics.publish(names.join(namespace, "robot_description"), STRING, messages.description(), dds.LATCHED)
-        self.statics[plan.name] = messages.statics(state)
+        statics = messages.statics(state)
+        self.statics[plan.name] = statics if self.world_frame else statics[1:]
         self.publish_statics(stamp)
         if plan.drive is not None:
             name = plan.name

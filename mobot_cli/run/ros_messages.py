@@ -92,7 +92,7 @@ class RobotMessages:
             out.extend((*stamp, *joint.transform(positions)))
 
     def statics(self, state: RobotState) -> list[Transform]:
-        """``world -> <prefix>odom`` where odometry (0, 0, 0) is, then every fixed joint."""
+        """``world -> <prefix>odom`` where odometry (0, 0, 0) is (always first), then every fixed joint."""
         # The odom frame sits where odometry (0, 0, 0) is: the truth now, less the odometry so far.
         yaw = state.true_yaw - state.odom_yaw
         c, s = math.cos(yaw), math.sin(yaw)

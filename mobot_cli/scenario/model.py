@@ -150,6 +150,7 @@ class Ros2Spec(Strict):
     domain_id: Optional[int] = None  # default: ROS_DOMAIN_ID, else 0
     cmd_vel_timeout: Optional[PositiveFloat] = None  # s; none: a command holds until the next
     ignore_fastdds_type_information: bool = True
+    world_frame: bool = True  # false: no world -> <prefix>odom (slam_toolbox or AMCL publish map -> odom)
 
     @field_validator("domain_id")
     @classmethod

@@ -62,7 +62,8 @@ def _ros2(scenario: Scenario) -> Ros2Settings | None:
     timeout = None if spec.cmd_vel_timeout is None else max(1, steps(spec.cmd_vel_timeout, scenario.physics.rate_hz))
     return Ros2Settings(node=spec.node, namespace=spec.namespace, domain_id=spec.domain_id,
                         cmd_vel_timeout_steps=timeout,
-                        ignore_fastdds_type_information=spec.ignore_fastdds_type_information)
+                        ignore_fastdds_type_information=spec.ignore_fastdds_type_information,
+                        world_frame=spec.world_frame)
 
 
 def _world(scenario: Scenario, source: Source, base_dir: Path) -> LoadedWorld:
