@@ -202,3 +202,43 @@ def test_a_robot_namespace_ros_rejects_is_bad_input(tmp_path):
     assert result.stderr == ("mobot: error: key 'robots.r1.namespace': namespace '/aaaaaaaaaaaaaaaaaaaaaaa...' is "
                              "too long for ROS 2. Keep it under 229 characters: ROS 2 topic names have at most 247.\n")
     assert not (tmp_path / "r").exists()
+
+
+def test_robots_spawned_and_deleted_live_join_and_leave_the_graph(tmp_path, cache):
+    live = serve(tmp_path, cache)
+    try:
+        with live.client() as client:
+            client.spawn("r2", description="mobot", pose={"x": 2.0, "y": 0.0})
+        spawned = peer("graph", "2")
+        with live.client() as client:
+            client.delete("r1")
+        deleted = peer("graph", "2")
+        statics = peer("take", "rt/tf_static", "tf2_msgs/msg/TFMessage", "1", "latched")
+    finally:
+        live.signal()
+        live.kill()
+
+    def topics(seen):
+        return {p["topic"] for p in seen["publications"] + seen["subscriptions"] if p["topic"].startswith("rt/r")}
+
+    assert topics(spawned) == {f"rt/{r}/{t}" for r in ("r1", "r2")
+                               for t in ("odom", "joint_states", "robot_description", "cmd_vel")}
+    assert topics(deleted) == {f"rt/r2/{t}" for t in ("odom", "joint_states", "robot_description", "cmd_vel")}
+    frames = {t["child_frame_id"] for t in statics[-1]["transforms"]}
+    assert "r2/odom" in frames and "r1/odom" not in frames
+
+
+def test_a_bridge_on_its_own_thread_publishes_the_same(tmp_path):
+    from mobot_cli.ros2.bridge import Bridge
+    from mobot_cli.run.execute import execute
+    from mobot_cli.run.prepare import prepare
+    from mobot_cli.sim.plan import Ros2Settings
+
+    prepared = prepare(REPO / "scenarios" / "fleet.yaml", ["duration=1.0", "log.formats=[csv]"])
+    counts = []
+    for threaded in (True, False):
+        bridge = Bridge(prepared.plan, Ros2Settings(), threaded=threaded)
+        execute(prepared.plan, prepared.resolved_yaml, tmp_path / str(threaded), attachments=[bridge])
+        assert bridge.stats.error is None and bridge.stats.dropped_samples == 0
+        counts.append(bridge.stats.messages)
+    assert counts == [5 + 5, 5 + 5]  # nobody listens: per arrival its description and the whole /tf_static
