@@ -34,11 +34,13 @@ from conftest import LOOPBACK_DDS  # noqa: E402  (tests/conftest.py: loopback on
 os.environ.update(ROS_DOMAIN_ID=str(150 + os.getpid() % 50), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
                   CYCLONEDDS_URI=LOOPBACK_DDS)
 
+from mobot_cli.ros2 import dds, names  # noqa: E402
 from mobot_cli.ros2 import publisher as publishing  # noqa: E402
 from mobot_cli.ros2.bridge import Bridge  # noqa: E402
 from mobot_cli.run.execute import execute  # noqa: E402
 from mobot_cli.run.prepare import prepare  # noqa: E402
 from mobot_cli.run.ros_messages import LASER_SCAN, laser_scan_layout, stamp_of  # noqa: E402
+from mobot_cli.run.timeline import simulate  # noqa: E402
 from mobot_cli.sim.plan import Ros2Settings  # noqa: E402
 
 ROBOTS, RAYS, SCAN_EVERY = 10, 360, 5  # a scan every 5th 50 Hz sample: 10 Hz
@@ -95,6 +97,39 @@ def run(prepared, out: Path, bridge: bool, threaded: bool = False) -> tuple[floa
     return wall, cpu, attachments[0].stats if attachments else None
 
 
+def isolated_cost(prepared, repeat: int) -> None:
+    """The same work measured apart, in CPU time of one thread: simulating the run (records
+    only), then publishing its records with the subscriber listening, then the same with the
+    DDS write left out (mobot's own Python)."""
+    started = time.thread_time()
+    records = list(simulate(prepared.plan))
+    sim = time.thread_time() - started
+    participant = dds.Participant(int(os.environ["ROS_DOMAIN_ID"]), names.discovery_config(os.environ, True))
+    topics = publishing.Topics(participant, "mobot", "/", 16)
+    publisher = publishing.RecordPublisher(topics, prepared.plan.physics.rate_hz, lambda *a: None)
+    for record in records[:20]:  # writers made, the subscriber matched
+        publisher(record)
+    time.sleep(2.0)
+    real_write, costs = dds.ddspy_write, []
+    for _ in range(repeat):
+        sent, started = topics.sent, time.thread_time()
+        for record in records[20:]:
+            publisher(record)
+        cost, sent = time.thread_time() - started, topics.sent - sent
+        dds.ddspy_write = lambda ref, data: 0
+        started = time.thread_time()
+        for record in records[20:]:
+            publisher(record)
+        python = time.thread_time() - started
+        dds.ddspy_write = real_write
+        costs.append((cost, python, sent))
+    participant.close()
+    cost, python, sent = (statistics.median(c[i] for c in costs) for i in range(3))
+    print(f"  apart, CPU of one thread: simulating {sim:.3f} s; publishing {cost:.3f} s = {cost / sim * 100:.1f} % "
+          f"of it ({python:.3f} s mobot's Python, {cost - python:.3f} s DDS writes); {sent:.0f} messages, "
+          f"{sent / cost:,.0f} per CPU second, {sent / (sim + cost):,.0f}/s at this run's pace")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=20.0)
@@ -110,7 +145,10 @@ def main() -> None:
     env = {**os.environ, "PYTHONPATH": str(REPO)}
     listener = subprocess.Popen([sys.executable, "-c", LISTENER, str(ROBOTS)], env=env, stdout=subprocess.PIPE, text=True)
     listener.stdout.readline()
+    print(f"{ROBOTS} robots, {args.seconds:g} s simulated, 250 Hz physics, 50 Hz odometry, "
+          f"{RAYS}-ray scans at 10 Hz; a subscriber takes every odom, scan and /tf")
     try:
+        isolated_cost(prepared, args.repeat)
         for i in range(args.repeat):  # interleaved, so that a busy neighbour hits every mode alike
             for label, (bridge, threaded) in modes.items():
                 if listener.poll() is not None:
@@ -120,8 +158,7 @@ def main() -> None:
         listener.kill()
     base_wall = statistics.median(w for w, _, _ in results["no bridge"])
     base_cpu = statistics.median(c for _, c, _ in results["no bridge"])
-    print(f"{ROBOTS} robots, {args.seconds:g} s simulated, 250 Hz physics, 50 Hz odometry, "
-          f"{RAYS}-ray scans at 10 Hz; median of {args.repeat}; CPU = every thread of the process")
+    print(f"  whole runs, interleaved, median of {args.repeat}; CPU = every thread of the process:")
     for label, runs in results.items():
         wall, cpu = statistics.median(w for w, _, _ in runs), statistics.median(c for _, c, _ in runs)
         line = f"  {label:32s} {wall:6.2f} s wall, {cpu:6.2f} s CPU"

@@ -1,4 +1,4 @@
-"""What the ROS 2 node publishes, from the timeline's records, on the bridge's own thread.
+"""What the ROS 2 node publishes, from the timeline's records (ros2/bridge.py hands them over).
 
 The same bytes as the bag (run/ros_messages.py): ``/clock`` and ``/tf`` every sample,
 ``/tf_static`` (every robot's fixed frames in one message, re-sent when a robot arrives or
@@ -18,9 +18,8 @@ import struct
 from dataclasses import dataclass
 from typing import Callable
 
-from mobot_cli.run.cdr import Packer
-
 from mobot_cli.ros2 import dds, graph, idl, names
+from mobot_cli.run.cdr import Packer
 from mobot_cli.run.ros_messages import (CLOCK, CLOCK_PACKER, JOINT_STATE, ODOMETRY, STRING, TF, TWIST,
                                         RobotMessages, stamp_of, tf_layout, tf_static)
 from mobot_cli.run.ros_msgs import MESSAGES
