@@ -242,3 +242,20 @@ def test_a_bridge_on_its_own_thread_publishes_the_same(tmp_path):
         assert bridge.stats.error is None and bridge.stats.dropped_samples == 0
         counts.append(bridge.stats.messages)
     assert counts == [5 + 5, 5 + 5]  # nobody listens: per arrival its description and the whole /tf_static
+
+
+def test_a_live_robot_ros_cannot_name_is_left_out_and_the_world_goes_on(tmp_path, cache):
+    live = serve(tmp_path, cache)
+    try:
+        with live.client() as client:
+            client.spawn("long", description="mobot", namespace="/" + "n" * 240, pose={"x": 2.0, "y": 0.0})
+            client.spawn("r3", description="mobot", pose={"x": -2.0, "y": 0.0})
+        seen = peer("graph", "2")
+        code = live.signal()
+        output = live.output()
+    finally:
+        live.kill()
+    assert code == 0
+    assert {p["topic"] for p in seen["publications"]} >= {"rt/r1/odom", "rt/r3/odom"}
+    assert not any(p["topic"].startswith("rt/nnn") for p in seen["publications"])
+    assert "mobot: warning: robot 'long' is not on ROS 2: namespace '/nnnnnnnnnnnnnnnnnnnnnnn...' is too long" in output

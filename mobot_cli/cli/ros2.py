@@ -39,6 +39,8 @@ def report(env: Environment, bridges: list, quiet: bool) -> None:
             continue
         if stats.error:
             env.stderr.write(f"mobot: warning: ROS 2 publishing stopped: {stats.error}\n")
+        for line in stats.left_out:
+            env.stderr.write(f"mobot: warning: {line}\n")
         if not quiet:
             dropped = f", {stats.dropped_samples} sample(s) dropped" if stats.dropped_samples else ""
             env.stderr.write(f"mobot: ROS 2: {stats.messages} message(s) sent, {stats.commands} cmd_vel "

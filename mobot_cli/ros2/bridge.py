@@ -49,6 +49,7 @@ class BridgeStats:
     commands: int
     busy_seconds: float  # CPU seconds spent publishing (the thread that did it)
     error: str | None = None
+    left_out: tuple[str, ...] = ()  # robots that got no topics, and why
 
 
 class Bridge:
@@ -76,6 +77,7 @@ class Bridge:
         self._thread: threading.Thread | None = None
         self._threaded = threaded
         self._publisher = None  # publishing on the world's thread: the RecordPublisher
+        self._record_publisher = None
         self._pending: list[Record] = []  # records waiting for the next batch
         self._published = 0.0  # monotonic time of the last batch
         self._topics = None
@@ -99,6 +101,7 @@ class Bridge:
             participant.close()
             raise
         publisher.arriving.update(timeline.robots)  # robots placed before the bridge opened
+        self._record_publisher = publisher
         self._timeline = timeline
         timeline.attach(self)
         timeline.add_input(self._drain)
@@ -121,10 +124,15 @@ class Bridge:
         self._records.put(record)
 
     def _publish_pending(self, now: float) -> None:
-        """Publish the records that waited (on the world's thread)."""
+        """Publish the records that waited (on the world's thread); a failure stops publishing
+        and is reported when the bridge closes, but never stops the world."""
         started, publisher = time.thread_time(), self._publisher
-        for record in self._pending:
-            publisher(record)
+        try:
+            if self._error is None:
+                for record in self._pending:
+                    publisher(record)
+        except Exception as exc:  # noqa: BLE001 - reported by close(); the world goes on
+            self._error = f"{type(exc).__name__}: {exc}"
         self._pending.clear()
         self._published = now
         self._busy += time.thread_time() - started
@@ -151,7 +159,7 @@ class Bridge:
         topics = self._topics
         self.stats = BridgeStats(self.domain_id, self.settings.node, topics.sent if topics else 0,
                                  topics.unsent if topics else 0, self._dropped, self._commands, self._busy,
-                                 self._error)
+                                 self._error, tuple(self._record_publisher.left_out) if self._record_publisher else ())
         return self.stats
 
     # -- other threads ------------------------------------------------------------------------

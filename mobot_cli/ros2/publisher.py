@@ -18,6 +18,7 @@ import struct
 from dataclasses import dataclass
 from typing import Callable
 
+from mobot_cli.errors import MobotError
 from mobot_cli.ros2 import dds, graph, idl, names
 from mobot_cli.run.cdr import Packer
 from mobot_cli.run.ros_messages import (CLOCK, CLOCK_PACKER, JOINT_STATE, ODOMETRY, STRING, TF, TWIST,
@@ -133,6 +134,7 @@ class RecordPublisher:
         self.on_twist = on_twist  # (robot, linear, angular), called on Cyclone's thread
         self.arriving: dict[str, RobotPlan] = {}
         self.robots: dict[str, _Robot] = {}
+        self.left_out: list[str] = []  # robots with no ROS 2 topics, and why
         self.statics: dict[str, list] = {}  # name -> its fixed transforms
         self.tf_packers: dict[tuple[str, ...], Packer] = {}
         self.clock_step = -1
@@ -190,9 +192,15 @@ class RecordPublisher:
             self.topics.unsent += 1
 
     def arrive(self, plan: RobotPlan, state: RobotState, stamp: tuple[int, int]) -> None:
-        """A robot's topics, description and fixed frames, and its /cmd_vel reader if it drives."""
-        messages = RobotMessages(plan, state)
+        """A robot's topics, description and fixed frames, and its /cmd_vel reader if it drives;
+        a robot whose namespace ROS 2 cannot take (a live spawn's) is left out, and said so."""
         namespace = plan.namespace
+        try:
+            names.check_namespace(namespace)
+        except MobotError as exc:
+            self.left_out.append(f"robot '{plan.name}' is not on ROS 2: {exc}")
+            return
+        messages = RobotMessages(plan, state)
         self.robots[plan.name] = _Robot(messages, namespace, self.topics.writer(names.join(namespace, "odom"), ODOMETRY),
                                         self.topics.writer(names.join(namespace, "joint_states"), JOINT_STATE))
         self.topics.publish(names.join(namespace, "robot_description"), STRING, messages.description(), dds.LATCHED)
