@@ -76,8 +76,7 @@ class Bridge:
         self._timeline: Timeline | None = None
         self._thread: threading.Thread | None = None
         self._threaded = threaded
-        self._publisher = None  # publishing on the world's thread: the RecordPublisher
-        self._record_publisher = None
+        self._publisher = None  # the RecordPublisher, once open
         self._pending: list[Record] = []  # records waiting for the next batch
         self._published = 0.0  # monotonic time of the last batch
         self._topics = None
@@ -101,18 +100,16 @@ class Bridge:
             participant.close()
             raise
         publisher.arriving.update(timeline.robots)  # robots placed before the bridge opened
-        self._record_publisher = publisher
+        self._publisher = publisher
         self._timeline = timeline
         timeline.attach(self)
         timeline.add_input(self._drain)
         if self._threaded:
             self._thread = threading.Thread(target=self._run, args=(publisher,), name="mobot-ros2", daemon=True)
             self._thread.start()
-        else:
-            self._publisher = publisher
 
     def __call__(self, record: Record) -> None:
-        if self._publisher is not None:
+        if not self._threaded:
             self._pending.append(record)
             now = time.monotonic()
             if now - self._published >= BATCH_SECONDS:
@@ -159,7 +156,7 @@ class Bridge:
         topics = self._topics
         self.stats = BridgeStats(self.domain_id, self.settings.node, topics.sent if topics else 0,
                                  topics.unsent if topics else 0, self._dropped, self._commands, self._busy,
-                                 self._error, tuple(self._record_publisher.left_out) if self._record_publisher else ())
+                                 self._error, tuple(self._publisher.left_out) if self._publisher else ())
         return self.stats
 
     # -- other threads ------------------------------------------------------------------------
