@@ -259,3 +259,15 @@ def test_a_live_robot_ros_cannot_name_is_left_out_and_the_world_goes_on(tmp_path
     assert {p["topic"] for p in seen["publications"]} >= {"rt/r1/odom", "rt/r3/odom"}
     assert not any(p["topic"].startswith("rt/nnn") for p in seen["publications"])
     assert "mobot: warning: robot 'long' is not on ROS 2: namespace '/nnnnnnnnnnnnnnnnnnnnnnn...' is too long" in output
+
+
+def test_a_dds_configuration_cyclone_refuses_is_bad_input_before_any_output(monkeypatch, tmp_path):
+    monkeypatch.setenv("CYCLONEDDS_URI", os.environ["CYCLONEDDS_URI"] + ",<CycloneDDS><Domain><General>"
+                       "<AllowMulticast>maybe</AllowMulticast></General></Domain></CycloneDDS>")
+    result = invoke(["run", str(REPO / "scenarios" / "quickstart.yaml"), "--ros2", "-o", str(tmp_path / "r")])
+    assert result.exit_code == 2
+    domain = os.environ["ROS_DOMAIN_ID"]
+    assert result.stderr == (f"mobot: error: cannot join ROS 2 domain {domain}: [DDS_RETCODE_ERROR] Non specific "
+                             "error. Occurred upon initialisation of a cyclonedds.domain.Domain. Check CYCLONEDDS_URI "
+                             "and the ROS discovery variables (ROS_AUTOMATIC_DISCOVERY_RANGE, ROS_STATIC_PEERS).\n")
+    assert not (tmp_path / "r").exists()

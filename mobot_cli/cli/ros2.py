@@ -32,11 +32,10 @@ def joined(env: Environment, bridges: list, quiet: bool) -> None:
 
 
 def report(env: Environment, bridges: list, quiet: bool) -> None:
-    """What each bridge sent, and whether it broke on the way."""
+    """What each bridge sent, and whether it broke on the way; a bridge the run never opened
+    (it stopped before) leaves the domain here."""
     for bridge in bridges:
-        stats = bridge.stats
-        if stats is None:
-            continue
+        stats = bridge.close()
         if stats.error:
             env.stderr.write(f"mobot: warning: ROS 2 publishing stopped: {stats.error}\n")
         for line in stats.left_out:

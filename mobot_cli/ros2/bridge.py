@@ -67,10 +67,16 @@ class Bridge:
         self.config = names.discovery_config(env, settings.ignore_fastdds_type_information)
         self.gid_size = names.gid_size(env)
         try:
-            importlib.import_module("mobot_cli.ros2.dds")  # imports cyclonedds, the `ros2` extra
+            dds = importlib.import_module("mobot_cli.ros2.dds")  # imports cyclonedds, the `ros2` extra
         except ImportError as exc:
             raise UsageError(f"ROS 2 needs the cyclonedds package, which is not installed ({exc})", location=where,
                              hint="Install the extra: pip install 'mobot-cli[ros2]'.") from None
+        try:  # joined now, so that a DDS that cannot start fails before any output is made
+            self._participant = dds.Participant(self.domain_id, self.config)
+        except Exception as exc:  # noqa: BLE001 - cyclonedds raises its own DDSException
+            raise UsageError(f"cannot join ROS 2 domain {self.domain_id}: {exc}", location=where,
+                             hint="Check CYCLONEDDS_URI and the ROS discovery variables "
+                                  "(ROS_AUTOMATIC_DISCOVERY_RANGE, ROS_STATIC_PEERS).") from None
         self._records: queue.SimpleQueue = queue.SimpleQueue()
         self._twists: deque[tuple[str, float, float]] = deque()
         self._timeline: Timeline | None = None
@@ -89,16 +95,10 @@ class Bridge:
 
     def open(self, timeline: Timeline) -> None:
         """Join the domain, announce the node and start publishing this timeline's records."""
-        from mobot_cli.ros2 import dds
         from mobot_cli.ros2.publisher import RecordPublisher, Topics
 
-        participant = dds.Participant(self.domain_id, self.config)
-        try:
-            self._topics = Topics(participant, self.settings.node, self.settings.namespace, self.gid_size)
-            publisher = RecordPublisher(self._topics, self.rate, self._twist, self.settings.world_frame)
-        except BaseException:
-            participant.close()
-            raise
+        self._topics = Topics(self._participant, self.settings.node, self.settings.namespace, self.gid_size)
+        publisher = RecordPublisher(self._topics, self.rate, self._twist, self.settings.world_frame)
         publisher.arriving.update(timeline.robots)  # robots placed before the bridge opened
         self._publisher = publisher
         self._timeline = timeline
@@ -144,15 +144,17 @@ class Bridge:
                 self._commands += 1
 
     def close(self) -> BridgeStats:
-        """Publish what is queued, leave the domain and say what was done."""
+        """Publish what is queued, leave the domain and say what was done (also when the bridge
+        never opened: the run stopped before it could); closing twice is harmless."""
+        if self.stats is not None:
+            return self.stats
         if self._pending:
             self._publish_pending(time.monotonic())
         if self._thread is not None:
             self._records.put(_STOP)
             self._thread.join(timeout=10.0)
             self._thread = None
-        if self._topics is not None and self.stats is None:
-            self._topics.participant.close()
+        self._participant.close()
         topics = self._topics
         self.stats = BridgeStats(self.domain_id, self.settings.node, topics.sent if topics else 0,
                                  topics.unsent if topics else 0, self._dropped, self._commands, self._busy,
