@@ -28,6 +28,7 @@ from mobot_cli.live import protocol, schema, spawning
 from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.live.session import Session
 from mobot_cli.run.record import LiveInfo, Status
+from mobot_cli.run.timeline import Attachment
 from mobot_cli.sim.plan import Plan
 from mobot_cli.sim.world import World
 
@@ -90,7 +91,7 @@ class LiveServer:
 
     def __init__(self, plan: Plan, endpoint: str, *, rtf: float | None = 1.0, bind_any: bool = False,
                  out_dir: Path | None = None, resolved_yaml: str = "", stop_after: int | None = None,
-                 attachments: Sequence[Any] = ()):
+                 attachments: Sequence[Attachment] = ()):
         self.plan, self.rtf, self.stop_after = plan, rtf, stop_after
         self.attachments = attachments  # ride along the timeline (the ROS 2 bridge): run/timeline.py
         self.out_dir, self.resolved_yaml = out_dir, resolved_yaml
@@ -114,7 +115,7 @@ class LiveServer:
             with World(self.plan.physics, self.plan.world, seed=self.plan.seed) as world:
                 self._bind()
                 self.session = Session(self.plan, world, self.out_dir, self.resolved_yaml)
-                opened: list[Any] = []
+                opened: list[Attachment] = []
                 try:
                     for attachment in self.attachments:
                         attachment.open(self.session.timeline)
