@@ -4,7 +4,7 @@ rclpy and Fast DDS come from community wheels on PyPI (``ros-jazzy-rclpy``,
 ``ros-jazzy-rmw-fastrtps-cpp``, the message packages; the same for ``ros-kilted-*``): large,
 unofficial, and never a dependency of mobot. This script puts them in a throwaway venv under
 /tmp, then runs the world and an rclpy node (bench/ros2_probe.py) in a private network
-namespace (``unshare -n``, root) that has only loopback, with multicast routed over it: the
+namespace (``unshare -n``; ``-rn`` when not root) that has only loopback, with multicast routed over it: the
 default ROS 2 setup (multicast discovery, Fast DDS, domain 0) with no packet leaving the
 machine. It checks:
 
@@ -60,7 +60,8 @@ def isolated(argv: list[str]) -> int:
     """Run this script again in a new network namespace with only loopback (multicast on it)."""
     setup = "ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo"
     command = " ".join(f"'{a}'" for a in argv)
-    return subprocess.run(["unshare", "-n", "sh", "-c", f"{setup} && MOBOT_ROS2_NETNS=1 exec {command}"]).returncode
+    unshare = ["unshare", "-n"] if os.geteuid() == 0 else ["unshare", "-rn"]  # -r: as root of a user namespace
+    return subprocess.run([*unshare, "sh", "-c", f"{setup} && MOBOT_ROS2_NETNS=1 exec {command}"]).returncode
 
 
 def mobot(*args: str, **kwargs) -> subprocess.CompletedProcess:
