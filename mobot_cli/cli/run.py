@@ -8,7 +8,7 @@ from typing import Optional
 
 import typer
 
-from mobot_cli.cli import output
+from mobot_cli.cli import output, ros2
 from mobot_cli.cli.args import default_out
 from mobot_cli.errors import ExitCode
 
@@ -25,6 +25,7 @@ def run(
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),
     skip_missing: bool = typer.Option(False, "--skip-missing",
                                       help="Leave out world models whose files are missing, with a warning."),
+    ros2_: bool = ros2.OPTION,
 ) -> int:
     """Run a scenario to its end and write odometry, a summary and the resolved scenario."""
     from mobot_cli.common.files import check_out_folder
@@ -41,17 +42,20 @@ def run(
         overrides.append("skip_missing=true")
     prepared = prepare(scenario, overrides)
     output.notices(env, prepared.plan.notices, quiet=quiet or json_)
+    bridges = ros2.bridges(prepared.plan, ros2_)
     out_dir = out or default_out("runs", prepared.plan.name)
     check_out_folder(out_dir)  # a file, a path under a file, a read-only folder: before the run
     bar = None if (quiet or json_) else output.progress_bar(env, prepared.plan.total_steps, prepared.plan.name)
     progress = _progress(bar, realtime, prepared.plan.physics.rate_hz)
+    ros2.joined(env, bridges, quiet=quiet or json_)
     if bar:
         bar.start()
     try:
-        result = execute(prepared.plan, prepared.resolved_yaml, out_dir, progress=progress)
+        result = execute(prepared.plan, prepared.resolved_yaml, out_dir, progress=progress, attachments=bridges)
     finally:
         if bar:
             bar.stop()
+        ros2.report(env, bridges, quiet=quiet or json_)
     if json_:
         output.emit_json(env, result.record.model_dump(mode="json"))
     elif not quiet:

@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from mobot_cli.cli import live_common, output
+from mobot_cli.cli import live_common, output, ros2
 from mobot_cli.errors import ExitCode, UsageError
 
 
@@ -24,6 +24,7 @@ def serve(
     set_: list[str] = typer.Option([], "--set", help="Override a key, e.g. physics.rate_hz=480 (repeatable)."),
     duration: Optional[float] = typer.Option(None, "--duration", help="Stop after this many simulated seconds."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),
+    ros2_: bool = ros2.OPTION,
 ) -> int:
     """Keep a headless world running; spawn, delete, drive and read robots with the other commands."""
     from mobot_cli.live.endpoint import default_endpoint
@@ -40,16 +41,22 @@ def serve(
     plan = prepared.plan
     output.notices(env, plan.notices, quiet=quiet)
     stop_after = steps(duration, plan.physics.rate_hz) if duration is not None else None
+    bridges = ros2.bridges(plan, ros2_)
     server = LiveServer(plan, endpoint or default_endpoint(), rtf=pace, bind_any=bind_any,
-                        out_dir=out, resolved_yaml=prepared.resolved_yaml, stop_after=stop_after)
+                        out_dir=out, resolved_yaml=prepared.resolved_yaml, stop_after=stop_after,
+                        attachments=bridges)
 
     def ready(where: str) -> None:
         if not quiet:
             live_common.status(env, f"serving '{plan.name}' (world {plan.world.name}, {len(plan.robots)} robot(s)) "
                                f"at {where}, {pace_text(pace)}, {plan.physics.rate_hz} Hz. "
                                "Stop with Ctrl-C or `mobot stop`.")
+            ros2.joined(env, bridges, quiet=False)
 
-    result = server.serve(ready)
+    try:
+        result = server.serve(ready)
+    finally:
+        ros2.report(env, bridges, quiet)
     if not quiet:
         t = result.steps / plan.physics.rate_hz
         where = f"; record in {out}" if out is not None else ""

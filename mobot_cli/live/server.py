@@ -17,7 +17,7 @@ import time
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Sequence
 
 import zmq
 
@@ -28,6 +28,7 @@ from mobot_cli.live import protocol, schema, spawning
 from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.live.session import Session
 from mobot_cli.run.record import LiveInfo, Status
+from mobot_cli.run.timeline import Attachment
 from mobot_cli.sim.plan import Plan
 from mobot_cli.sim.world import World
 
@@ -89,8 +90,10 @@ class LiveServer:
     """Serve ``plan``'s world; its robots, command scripts and events play as in `mobot run`."""
 
     def __init__(self, plan: Plan, endpoint: str, *, rtf: float | None = 1.0, bind_any: bool = False,
-                 out_dir: Path | None = None, resolved_yaml: str = "", stop_after: int | None = None):
+                 out_dir: Path | None = None, resolved_yaml: str = "", stop_after: int | None = None,
+                 attachments: Sequence[Attachment] = ()):
         self.plan, self.rtf, self.stop_after = plan, rtf, stop_after
+        self.attachments = attachments  # ride along the timeline (the ROS 2 bridge): run/timeline.py
         self.out_dir, self.resolved_yaml = out_dir, resolved_yaml
         self.endpoint = endpoints.check(endpoint, bind_any)
         self.session: Session | None = None  # made once the world is up and listening
@@ -112,7 +115,11 @@ class LiveServer:
             with World(self.plan.physics, self.plan.world, seed=self.plan.seed) as world:
                 self._bind()
                 self.session = Session(self.plan, world, self.out_dir, self.resolved_yaml)
+                opened: list[Attachment] = []
                 try:
+                    for attachment in self.attachments:
+                        attachment.open(self.session.timeline)
+                        opened.append(attachment)
                     self.session.start()
                     if ready:
                         ready(self.endpoint)
@@ -125,8 +132,12 @@ class LiveServer:
                     raise
                 finally:
                     self._answer_owed()
-                    self.session.close(self.status, self.error, LiveInfo(
-                        endpoint=self.endpoint, pace=pace_text(self.rtf), requests=self.counts))
+                    try:
+                        self.session.close(self.status, self.error, LiveInfo(
+                            endpoint=self.endpoint, pace=pace_text(self.rtf), requests=self.counts))
+                    finally:
+                        for attachment in opened:
+                            attachment.close()
         finally:
             self._shutdown()
             restore()

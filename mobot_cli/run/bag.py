@@ -22,26 +22,20 @@ scanning it reads up to its last chunk (metadata.yaml is written only when the b
 from __future__ import annotations
 
 import contextlib
-import math
-import re
 import shutil
 from pathlib import Path
 
-from mobot_cli.common.transforms import odom_origin, yaw_quat
-from mobot_cli.run.cdr import Layout, Packer
+from mobot_cli.run.cdr import Packer
+from mobot_cli.run.ros_messages import (CLOCK, CLOCK_PACKER, JOINT_STATE, ODOMETRY, STRING, TF, TWIST,
+                                        RobotMessages, file_uris, stamp_of, tf_layout, tf_static)
 from mobot_cli.run.ros_msgs import MESSAGES
 from mobot_cli.run.sinks import Sink, named
-from mobot_cli.run.tf import RobotFrames
 from mobot_cli.run.timeline import Sample
 from mobot_cli.sim.plan import Plan, RobotPlan
 from mobot_cli.sim.state import RobotState
 
-WORLD_FRAME = "world"  # Gazebo's name for the frame all robots' odom frames hang from
+__all__ = ["BagSink", "file_uris"]
 CHUNK_EVERY_SAMPLES = 50  # as the CSV's flush: about one second at the default log rate
-CLOCK, TF = "rosgraph_msgs/msg/Clock", "tf2_msgs/msg/TFMessage"
-ODOMETRY, TWIST = "nav_msgs/msg/Odometry", "geometry_msgs/msg/Twist"
-JOINT_STATE, STRING = "sensor_msgs/msg/JointState", "std_msgs/msg/String"
-_MESH_PATH = re.compile(r'(<mesh\b[^>]*?\bfilename\s*=\s*")(/)')
 
 
 def _latched_qos():
@@ -56,11 +50,6 @@ def _latched_qos():
     zero = QosTime(0, 0)
     return [Qos(QosHistory.KEEP_LAST, 1, QosReliability.RELIABLE, QosDurability.TRANSIENT_LOCAL,
                 zero, zero, QosLiveliness.AUTOMATIC, zero, False)]
-
-
-def file_uris(urdf: str) -> str:
-    """Absolute mesh paths as file:// URIs, which rviz and Foxglove load."""
-    return _MESH_PATH.sub(r"\1file://\2", urdf)
 
 
 class BagSink(Sink):
@@ -83,7 +72,6 @@ class BagSink(Sink):
         self.clock = self.topic("/clock", CLOCK)
         self.tf = self.topic("/tf", TF)
         self.tf_static = self.topic("/tf_static", TF, latched=True)
-        self.clock_packer = Layout().var("i").var("I").build()
         self.robots: dict[str, _RobotTopics] = {}  # by record name; kept after a delete for its topics
         self.arriving: dict[str, RobotPlan] = {}  # spawned, waiting for their first sample
         self.tf_packers: dict[tuple[str, ...], Packer] = {}  # the /tf shape for a set of robots
@@ -125,12 +113,11 @@ class BagSink(Sink):
             raise named(exc, self.writer.storage.path) from None
 
     def _record_one(self, sample: Sample) -> None:
-        ns = sample.step * 1_000_000_000 // self.rate
-        stamp = divmod(ns, 1_000_000_000)
+        ns, stamp = stamp_of(sample.step, self.rate)
         write = self.writer.write
         if sample.step != self.clock_step:  # a robot's own row may share its step with a log row
             self.clock_step = sample.step
-            write(self.clock, ns, self.clock_packer.pack(stamp))
+            write(self.clock, ns, CLOCK_PACKER.pack(stamp))
         names = tuple(sample.states)
         for name in names:
             if name in self.arriving:
@@ -141,7 +128,7 @@ class BagSink(Sink):
             robots[name].write(write, ns, stamp, state, tf_values)
         packer = self.tf_packers.get(names)
         if packer is None:
-            packer = self.tf_packers[names] = _tf_layout([robots[name].frames for name in names])
+            packer = self.tf_packers[names] = tf_layout([robots[name].messages.frames for name in names])
         write(self.tf, ns, packer.pack(tf_values))
 
     def _arrive(self, name: str, plan: RobotPlan, state: RobotState, ns: int, stamp: tuple[int, int]) -> None:
@@ -149,18 +136,8 @@ class BagSink(Sink):
         description."""
         same_ns = [r for r in self.robots.values() if r.plan.namespace == plan.namespace]
         robot = self.robots[name] = _RobotTopics(self, plan, state, reuse=same_ns[0] if same_ns else None)
-        self.writer.write(robot.description, ns, robot.description_packer.pack(()))
-        # The odom frame sits where odometry (0, 0, 0) is: the truth now, less the odometry so far.
-        origin = odom_origin(state.true_x, state.true_y, state.true_yaw, state.odom_x, state.odom_y, state.odom_yaw)
-        frames = robot.frames
-        statics = [(WORLD_FRAME, frames.odom_frame, (origin.x, origin.y, state.true_z), yaw_quat(origin.yaw))]
-        statics += [(t.parent, t.child, t.xyz, t.quat) for t in frames.static]
-        layout = Layout().u32(len(statics))
-        values: list[float] = []
-        for parent, child, xyz, quat in statics:
-            layout.header(parent).string(child).var("d", 7)
-            values.extend((*stamp, *xyz, *quat))
-        self.writer.write(self.tf_static, ns, layout.build().pack(values))
+        self.writer.write(robot.description, ns, robot.messages.description())
+        self.writer.write(self.tf_static, ns, tf_static(stamp, robot.messages.statics(state)))
 
     def _flush(self) -> None:
         """Close the open MCAP chunk and push it to the OS, so a killed run keeps it."""
@@ -201,12 +178,12 @@ class BagSink(Sink):
 
 
 class _RobotTopics:
-    """One robot's topics, frames and message layouts."""
+    """One robot's bag connections and message shapes."""
 
     def __init__(self, sink: BagSink, plan: RobotPlan, state: RobotState, reuse: "_RobotTopics | None" = None):
         ns = plan.namespace.rstrip("/")
         self.plan = plan
-        self.frames = RobotFrames(plan.urdf, plan.frame_prefix, plan.root_link)
+        self.messages = RobotMessages(plan, state)
         if reuse is not None:  # a topic is added once
             self.odom, self.cmd_vel = reuse.odom, reuse.cmd_vel
             self.joint_states, self.description = reuse.joint_states, reuse.description
@@ -215,49 +192,11 @@ class _RobotTopics:
             self.cmd_vel = sink.topic(f"{ns}/cmd_vel", TWIST)
             self.joint_states = sink.topic(f"{ns}/joint_states", JOINT_STATE)
             self.description = sink.topic(f"{ns}/robot_description", STRING, latched=True)
-        cov = self.frames.covariance
-        self.odom_packer = (Layout().header(self.frames.odom_frame).string(self.frames.base_frame)
-                            .var("d", 7).doubles(cov).var("d", 6).doubles(cov).build())
-        self.twist_packer = Layout().var("d", 6).build()
-        self.joints = list(state.joint_positions)
-        n = len(self.joints)
-        joints = Layout().header("").strings(self.joints)
-        if n:
-            joints.u32(n).var("d", n).u32(n).var("d", n)
-        else:
-            joints.u32(0).u32(0)
-        self.joint_packer = joints.u32(0).build()  # effort: none
-        self.description_packer = Layout().string(file_uris(plan.urdf)).build()
 
     def write(self, write, ns: int, stamp: tuple[int, int], state: RobotState, tf_values: list[float]) -> None:
         """This robot's messages of one sample; its /tf transforms go to ``tf_values``."""
-        # Runs at the log rate for every robot: plain tuples, one pack per message.
-        sec, nsec = stamp
-        half = state.odom_yaw / 2.0
-        qz, qw = math.sin(half), math.cos(half)
-        x, y = state.odom_x, state.odom_y
-        write(self.odom, ns, self.odom_packer.pack(
-            (sec, nsec, x, y, 0.0, 0.0, 0.0, qz, qw, state.odom_vx, 0.0, 0.0, 0.0, 0.0, state.odom_wz)))
-        write(self.cmd_vel, ns, self.twist_packer.pack((state.cmd_linear, 0.0, 0.0, 0.0, 0.0, state.cmd_angular)))
-        positions, velocities = state.joint_positions, state.joint_velocities
-        if len(positions) == len(velocities) == len(self.joints):  # the same joints, in order
-            values = (sec, nsec, *positions.values(), *velocities.values())
-        else:
-            values = (sec, nsec, *(positions.get(j, 0.0) for j in self.joints),
-                      *(velocities.get(j, 0.0) for j in self.joints))
-        write(self.joint_states, ns, self.joint_packer.pack(values))
-        tf_values.extend((sec, nsec, x, y, 0.0, 0.0, 0.0, qz, qw))
-        for joint in self.frames.moving:
-            tf_values.extend((sec, nsec, *joint.transform(positions)))
-
-
-def _tf_layout(robots: list[RobotFrames]) -> Packer:
-    """The /tf message shape for this set of robots: odom -> base, then every moving joint."""
-    pairs = []
-    for frames in robots:
-        pairs.append((frames.odom_frame, frames.base_frame))
-        pairs.extend((joint.parent, joint.child) for joint in frames.moving)
-    layout = Layout().u32(len(pairs))
-    for parent, child in pairs:
-        layout.header(parent).string(child).var("d", 7)
-    return layout.build()
+        messages = self.messages
+        write(self.odom, ns, messages.odom(stamp, state))
+        write(self.cmd_vel, ns, messages.cmd_vel(state))
+        write(self.joint_states, ns, messages.joint_states(stamp, state))
+        messages.tf_values(stamp, state, tf_values)

@@ -13,7 +13,7 @@ import struct
 from typing import Sequence
 
 ENCAPSULATION = b"\x00\x01\x00\x00"  # CDR, little endian: what rosbag2 stores for 'cdr'
-_SIZES = {"i": 4, "I": 4, "d": 8}
+_SIZES = {"i": 4, "I": 4, "f": 4, "d": 8}
 
 
 class Layout:
@@ -37,7 +37,7 @@ class Layout:
         self._size += len(data)
 
     def var(self, code: str, count: int = 1) -> "Layout":
-        """``count`` variable numbers of one type: 'i' int32, 'I' uint32, 'd' float64."""
+        """``count`` variable numbers of one type: 'i' int32, 'I' uint32, 'f' float32, 'd' float64."""
         self._pad(_SIZES[code])
         self._fmt.append(f"{count}{code}")
         self._args.extend(range(self._vars, self._vars + count))

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Sequence
 
 from mobot_cli.errors import MobotError, OutputError
 from mobot_cli.run.expect import Result
 from mobot_cli.run.record import RunRecord, Status
 from mobot_cli.run.recording import Recording
-from mobot_cli.run.timeline import Timeline
+from mobot_cli.run.timeline import Attachment, Timeline
 from mobot_cli.sim.plan import Plan
 from mobot_cli.sim.world import World
 
@@ -26,8 +26,10 @@ class RunResult:
     expectations: list[Result] = field(default_factory=list)  # empty when the run did not finish
 
 
-def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | None = None) -> RunResult:
-    """Run a plan and write its run folder; summary.json is written last and says how it ended."""
+def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | None = None,
+            attachments: Sequence[Attachment] = ()) -> RunResult:
+    """Run a plan and write its run folder; summary.json is written last and says how it ended.
+    ``attachments`` (the ROS 2 bridge) open after the robots are placed and close at the end."""
     with World(plan.physics, plan.world, seed=plan.seed) as world:
         # The robots are spawned and checked before the folder is made: a spawn refused
         # (inside furniture, below the floor) leaves no run folder behind.
@@ -35,8 +37,12 @@ def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | 
         timeline.start()
         recording = Recording(plan, out_dir, resolved_yaml)
         status, error = Status.OK, None
+        opened: list[Attachment] = []
         try:
             timeline.attach(recording)  # the spawns' records: a robot's CSV opens here
+            for attachment in attachments:
+                attachment.open(timeline)
+                opened.append(attachment)
             _play(timeline, progress)
         except OutputError as exc:  # a file of the run folder cannot be written
             status, error = Status.ERROR, str(exc)
@@ -51,6 +57,8 @@ def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | 
             status, error = Status.ERROR, str(exc) or repr(exc)
             raise
         finally:
+            for attachment in opened:
+                attachment.close()
             record = recording.close(status, error)
     return RunResult(out_dir=out_dir, record=record, expectations=recording.results)
 

@@ -3,8 +3,10 @@
 A Timeline owns the order of things within a physics step: scripted events, then the command
 scripts and the ends of timed commands, then the log row; requests of a live world enter
 between steps through the same ``spawn``, ``delete`` and ``command`` a scripted event uses.
-It never writes files: it hands records (``Spawned``, ``Deleted``, ``Sample``) to a consumer,
-and the run folder's writers take them from there.
+It never writes files: it hands records (``Spawned``, ``Deleted``, ``Sample``) to consumers,
+and the run folder's writers take them from there. Inputs from other threads (a ROS 2
+``/cmd_vel``) queue up and enter through an input polled at the start of every ``tick``, on
+the world's own thread, whichever loop drives it.
 """
 
 from __future__ import annotations
@@ -58,6 +60,15 @@ class Consumer(Protocol):
     def __call__(self, record: Record) -> None: ...
 
 
+class Attachment(Protocol):
+    """Something that rides along a timeline, such as the ROS 2 bridge: ``open`` attaches its
+    consumer and inputs, ``close`` ends it after the last step."""
+
+    def open(self, timeline: "Timeline") -> None: ...
+
+    def close(self) -> None: ...
+
+
 class NameTaken(SpawnError):
     """A robot's name or namespace is already in the world."""
 
@@ -76,6 +87,7 @@ class Timeline:
         self._held: list[Record] | None = []  # records made before a consumer is attached
         self._consumers: list[Consumer] = []
         self._consume: Consumer = self._held.append
+        self._inputs: list[Callable[[], None]] = []
         self._on_refused = on_refused  # None: a refused scripted event ends the run
         self._events: dict[int, list[Event]] = defaultdict(list)
         self._commands: dict[int, list[tuple[str, float, float]]] = defaultdict(list)
@@ -111,6 +123,11 @@ class Timeline:
         consumers = self._consumers
         self._consume = consumers[0] if len(consumers) == 1 else lambda r: [c(r) for c in consumers]
 
+    def add_input(self, poll: Callable[[], None]) -> None:
+        """Call ``poll`` at the start of every tick, on this thread; it may command, spawn or
+        delete (a thread-safe queue drained here is how other threads reach the world)."""
+        self._inputs.append(poll)
+
     def start(self) -> None:
         """Spawn the plan's own robots at t = 0."""
         for robot in self.plan.robots:
@@ -120,6 +137,8 @@ class Timeline:
         """Everything due at the current step, in order: events, commands, ends of timed
         commands, the log row."""
         step = self.step
+        for poll in self._inputs:
+            poll()
         for event in self._events.get(step, ()):
             self._scripted(event)
         for name, linear, angular in self._commands.get(step, ()):

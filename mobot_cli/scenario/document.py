@@ -51,7 +51,18 @@ def resolved_document(scenario: Scenario, plan: Plan, base_dir: Path) -> dict[st
         "robots": robots,
         **_events(scenario, plan, base_dir),
         **expect_document(plan.expectations, rate),
+        **_ros2(scenario, plan),
     }
+
+
+def _ros2(scenario: Scenario, plan: Plan) -> dict[str, Any]:
+    """``ros2:`` as given, its timeout the exact step time it was rounded to."""
+    if scenario.ros2 is None:
+        return {}
+    out = scenario.ros2.model_dump(exclude_defaults=True)
+    if plan.ros2 is not None and plan.ros2.cmd_vel_timeout_steps is not None:
+        out["cmd_vel_timeout"] = plan.ros2.cmd_vel_timeout_steps / plan.physics.rate_hz
+    return {"ros2": out}
 
 
 def _events(scenario: Scenario, plan: Plan, base_dir: Path) -> dict[str, Any]:

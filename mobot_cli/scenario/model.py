@@ -141,6 +141,41 @@ class RobotSpec(Strict):
         return self
 
 
+class Ros2Spec(Strict):
+    """``ros2:``: join a ROS 2 domain as a node (as `--ros2` does), publishing what the bag records."""
+
+    enabled: bool = True
+    node: str = "mobot"
+    namespace: str = "/"
+    domain_id: Optional[int] = None  # default: ROS_DOMAIN_ID, else 0
+    cmd_vel_timeout: Optional[PositiveFloat] = None  # s; none: a command holds until the next
+    ignore_fastdds_type_information: bool = True
+    world_frame: bool = True  # false: no world -> <prefix>odom (slam_toolbox or AMCL publish map -> odom)
+
+    @field_validator("domain_id")
+    @classmethod
+    def _domain(cls, v: Optional[int]) -> Optional[int]:
+        if v is not None and not 0 <= v <= 232:
+            raise ValueError(f"{v} is not a ROS 2 domain id: use 0 to 232 (0 to 101 is safe on every system)")
+        return v
+
+    @field_validator("node")
+    @classmethod
+    def _node(cls, v: str) -> str:
+        if not NAME_RE.match(v):
+            raise ValueError(f"'{v}' is not a valid ROS 2 node name: use letters, digits and '_', "
+                             "not starting with a digit")
+        return v
+
+    @field_validator("namespace")
+    @classmethod
+    def _namespace(cls, v: str) -> str:
+        if v != "/" and not NAMESPACE_RE.match(v):
+            raise ValueError(f"'{v}' is not a valid ROS 2 namespace: '/' or names of letters, digits "
+                             "and '_' separated by '/', e.g. /sim")
+        return v
+
+
 class EventSpec(Strict):
     """At ``at`` seconds, spawn one robot or delete one by name."""
 
@@ -173,6 +208,7 @@ class Scenario(Strict):
     robots: list[RobotSpec] = Field(default_factory=list)
     events: list[EventSpec] = Field(default_factory=list)
     expect: list[ExpectSpec] = Field(default_factory=list)
+    ros2: Optional[Ros2Spec] = None
 
     @field_validator("name")
     @classmethod

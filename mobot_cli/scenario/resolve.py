@@ -14,7 +14,7 @@ from mobot_cli.scenario.model import Scenario
 from mobot_cli.scenario.robots import RobotResolver, unlisted_robots
 from mobot_cli.scenario.units import steps
 from mobot_cli.scenario.yamlsource import Source
-from mobot_cli.sim.plan import Physics, Plan
+from mobot_cli.sim.plan import Physics, Plan, Ros2Settings
 
 DEFAULT_LOG_RATE_HZ = 50  # the log runs at most this fast when log.rate_hz is not given
 
@@ -52,7 +52,19 @@ def resolve(scenario: Scenario, source: Source) -> Plan:
     return Plan(name=scenario.name, physics=physics, world=world.plan, robots=robots,
                 total_steps=total, settle_steps=ctx.settle, log_every=log_every, seed=scenario.seed,
                 formats=tuple(dict.fromkeys(scenario.log.formats)), events=events,
-                notices=tuple(dict.fromkeys(notices)), expectations=expectations)
+                notices=tuple(dict.fromkeys(notices)), expectations=expectations, ros2=_ros2(scenario))
+
+
+def _ros2(scenario: Scenario) -> Ros2Settings | None:
+    """The ``ros2:`` block's settings, times in physics steps; None without one (or disabled)."""
+    spec = scenario.ros2
+    if spec is None or not spec.enabled:
+        return None
+    timeout = None if spec.cmd_vel_timeout is None else max(1, steps(spec.cmd_vel_timeout, scenario.physics.rate_hz))
+    return Ros2Settings(node=spec.node, namespace=spec.namespace, domain_id=spec.domain_id,
+                        cmd_vel_timeout_steps=timeout,
+                        ignore_fastdds_type_information=spec.ignore_fastdds_type_information,
+                        world_frame=spec.world_frame)
 
 
 def _world(scenario: Scenario, source: Source, base_dir: Path) -> LoadedWorld:

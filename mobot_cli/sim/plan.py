@@ -178,6 +178,18 @@ class Expectation:
 
 
 @dataclass(frozen=True)
+class Ros2Settings:
+    """How the world joins ROS 2 (``--ros2`` or a scenario's ``ros2:`` block)."""
+
+    node: str = "mobot"
+    namespace: str = "/"  # the node's namespace; robots' topics keep their own namespaces
+    domain_id: int | None = None  # None: ROS_DOMAIN_ID, else 0
+    cmd_vel_timeout_steps: int | None = None  # stop a robot whose /cmd_vel went quiet this long
+    ignore_fastdds_type_information: bool = True  # Fast DDS 3 (Kilted) sends some Cyclone cannot parse
+    world_frame: bool = True  # world -> <prefix>odom on /tf_static; off when a localizer owns map -> odom
+
+
+@dataclass(frozen=True)
 class Plan:
     """Everything a run needs, with all times already in whole physics steps."""
 
@@ -193,3 +205,4 @@ class Plan:
     events: tuple[Event, ...] = ()
     notices: tuple[str, ...] = field(default=())
     expectations: tuple[Expectation, ...] = ()
+    ros2: Ros2Settings | None = None  # None: the world does not join ROS 2 unless asked (--ros2)

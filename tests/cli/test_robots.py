@@ -77,8 +77,9 @@ def test_inspect_json_sensors_hold_their_kind_fields():
 
 def test_inspect_a_robot_without_sensors(tmp_path):
     path = tmp_path / "r.urdf"
-    path.write_text('<robot name="r"><link name="a"><inertial><mass value="1"/><inertia ixx="1" ixy="0" '
-                    'ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link></robot>')
+    path.write_text('<robot name="r"><link name="a"><collision><geometry><box size="1 1 1"/></geometry></collision>'
+                    '<inertial><mass value="1"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/>'
+                    '</inertial></link></robot>')
     code, out, err = astuple(invoke(["inspect", str(path)]))
     assert code == 0 and out.rstrip().endswith("sensors: none")
 

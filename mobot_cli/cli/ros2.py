@@ -1,0 +1,46 @@
+"""`--ros2` for `mobot run` and `mobot serve`: the bridge is imported only when it is asked for."""
+
+from __future__ import annotations
+
+import typer
+
+from mobot_cli.cli.environment import Environment
+from mobot_cli.errors import Location
+from mobot_cli.sim.plan import Plan, Ros2Settings
+
+OPTION = typer.Option(False, "--ros2", help="Join ROS 2 as node 'mobot': publish /clock, /tf, odom, "
+                      "joint_states, robot_description; take cmd_vel (extra 'ros2'; domain ROS_DOMAIN_ID).")
+
+
+def bridges(plan: Plan, asked: bool) -> list:
+    """The ROS 2 bridge when ``--ros2`` or the scenario's ``ros2:`` asks for one, checked now."""
+    if not asked and plan.ros2 is None:
+        return []
+    from mobot_cli.ros2.bridge import Bridge
+
+    where = Location(key="ros2") if plan.ros2 is not None else None
+    return [Bridge(plan, plan.ros2 or Ros2Settings(), where=where)]
+
+
+def joined(env: Environment, bridges: list, quiet: bool) -> None:
+    """One line: which domain and node the world joined."""
+    if quiet:
+        return
+    for bridge in bridges:
+        node = bridge.settings.namespace.rstrip("/") + "/" + bridge.settings.node
+        env.stderr.write(f"mobot: ROS 2: node {node} in domain {bridge.domain_id} (set use_sim_time:=true)\n")
+
+
+def report(env: Environment, bridges: list, quiet: bool) -> None:
+    """What each bridge sent, and whether it broke on the way; a bridge the run never opened
+    (it stopped before) leaves the domain here."""
+    for bridge in bridges:
+        stats = bridge.close()
+        if stats.error:
+            env.stderr.write(f"mobot: warning: ROS 2 publishing stopped: {stats.error}\n")
+        for line in stats.left_out:
+            env.stderr.write(f"mobot: warning: {line}\n")
+        if not quiet:
+            dropped = f", {stats.dropped_samples} sample(s) dropped" if stats.dropped_samples else ""
+            env.stderr.write(f"mobot: ROS 2: {stats.messages} message(s) sent, {stats.commands} cmd_vel "
+                             f"taken{dropped}\n")

@@ -1,0 +1,234 @@
+"""What the ROS 2 node publishes, from the timeline's records (ros2/bridge.py hands them over).
+
+The same bytes as the bag (run/ros_messages.py): ``/clock`` and ``/tf`` every sample,
+``/tf_static`` (every robot's fixed frames in one message, re-sent when a robot arrives or
+leaves, as tf2's static broadcaster does), per robot ``<ns>/odom`` and ``<ns>/joint_states``
+every sample and ``<ns>/robot_description`` once. Each robot's ``<ns>/cmd_vel`` reader is made
+here too, so that the node's endpoints in the graph are always the ones that exist.
+
+More topics plug in through ``Topics.publish(name, msgtype, cdr)``: a writer is made on first
+use with ROS's default QoS. A record type the timeline does not make yet (a sensor reading)
+gets a handler with ``register(record_type, handler)``; the handler turns it into publishes,
+e.g. a lidar's ``<ns>/scan`` from ``laser_scan_layout`` (run/ros_messages.py).
+"""
+
+from __future__ import annotations
+
+import struct
+from dataclasses import dataclass
+from typing import Callable
+
+from mobot_cli.errors import MobotError
+from mobot_cli.ros2 import dds, graph, idl, names
+from mobot_cli.run.cdr import Packer
+from mobot_cli.run.ros_messages import (CLOCK, CLOCK_PACKER, JOINT_STATE, ODOMETRY, STRING, TF, TWIST,
+                                        RobotMessages, stamp_of, tf_layout, tf_static)
+from mobot_cli.run.ros_msgs import MESSAGES
+from mobot_cli.run.timeline import Deleted, Record, Sample, Spawned
+from mobot_cli.sim.plan import RobotPlan
+from mobot_cli.sim.state import RobotState
+
+# Type hashes of the types mobot sends that the bag does not record (rosbags' RIHS01 of the
+# Jazzy definitions; tests/test_ros2_wire.py checks them).
+HASHES = {"sensor_msgs/msg/LaserScan": "RIHS01_64c191398013af96509d518dac71d5164f9382553fce5c1f8cca5be7924bd828",
+          graph.MSGTYPE: graph.RIHS01}
+TWIST_FIELDS = struct.Struct("<4x6d")  # encapsulation header, linear xyz, angular xyz
+Handler = Callable[["Topics", Record], None]
+_HANDLERS: dict[type, Handler] = {}
+
+
+def register(record_type: type, handler: Handler) -> None:
+    """Publish records of ``record_type`` with ``handler(topics, record)`` (sensor readings)."""
+    _HANDLERS[record_type] = handler
+
+
+def type_hash(msgtype: str) -> str:
+    """The RIHS01 hash ROS 2 Jazzy and later expect in an endpoint's USER_DATA."""
+    return MESSAGES[msgtype][1] if msgtype in MESSAGES else HASHES[msgtype]
+
+
+def twist(data: bytes) -> tuple[float, float]:
+    """(linear.x, angular.z) of a geometry_msgs/Twist in CDR; ValueError if it is not one."""
+    if len(data) < TWIST_FIELDS.size or data[1] != 1:  # little-endian plain CDR only, as ROS 2 sends
+        raise ValueError("not a little-endian CDR geometry_msgs/Twist")
+    lx, _, _, _, _, az = TWIST_FIELDS.unpack_from(data)
+    return lx, az
+
+
+class Topics:
+    """The node's writers and readers by ROS topic name; every change re-announces the node."""
+
+    def __init__(self, participant: dds.Participant, node: str, namespace: str, gid_size: int):
+        self.participant = participant
+        self.node, self.namespace, self.gid_size = node, namespace, gid_size
+        self.writers: dict[str, dds.Writer] = {}
+        self.readers: dict[str, dds.Reader] = {}
+        self.sent = 0  # messages written
+        self.unsent = 0  # messages a stalled reliable reader kept from being written
+        self._announcer = participant.writer(graph.TOPIC, idl.ParticipantEntitiesInfo if gid_size == 16
+                                             else idl.ParticipantEntitiesInfo24, dds.DISCOVERY,
+                                             dds.ros_topic_userdata(graph.RIHS01))
+        self.announce()
+
+    def writer(self, name: str, msgtype: str, profile: dds.QosProfile = dds.DEFAULT) -> dds.Writer:
+        """The writer of ROS topic ``name``, made on first use."""
+        writer = self.writers.get(name)
+        if writer is None:
+            writer = self.writers[name] = self.participant.writer(
+                names.topic(name), idl.TYPES[msgtype], profile, dds.ros_topic_userdata(type_hash(msgtype)))
+            self.announce()
+        return writer
+
+    def publish(self, name: str, msgtype: str, data: bytes, profile: dds.QosProfile = dds.DEFAULT) -> None:
+        """Send one message (CDR bytes) on ROS topic ``name``; a volatile one only when read."""
+        writer = self.writer(name, msgtype, profile)
+        if not (writer.readers or profile.transient_local):
+            return
+        if writer.write(data):
+            self.sent += 1
+        else:
+            self.unsent += 1
+
+    def wanted(self, name: str, msgtype: str) -> bool:
+        """Whether anyone reads ROS topic ``name`` now (build the message only then)."""
+        return self.writer(name, msgtype).readers > 0
+
+    def subscribe(self, name: str, msgtype: str, on_data: Callable[[bytes], None]) -> None:
+        """Take ROS topic ``name`` (reliable, volatile, keep last 10); ``on_data`` runs on Cyclone's thread."""
+        self.readers[name] = self.participant.reader(names.topic(name), idl.TYPES[msgtype], dds.DEFAULT, on_data,
+                                                     dds.ros_topic_userdata(type_hash(msgtype)))
+        self.announce()
+
+    def drop(self, *topics: str) -> None:
+        """Remove these topics' writers and readers from the graph."""
+        for name in topics:
+            for table in (self.writers, self.readers):
+                if name in table:
+                    table.pop(name).delete()
+        self.announce()
+
+    def announce(self) -> None:
+        """Tell the ROS graph this node's name and endpoints (ros_discovery_info)."""
+        self._announcer.write(graph.participant_entities_info(
+            self.participant.gid, self.namespace, self.node, [r.gid for r in self.readers.values()],
+            [w.gid for w in self.writers.values()], self.gid_size))
+
+
+@dataclass
+class _Robot:
+    """A robot's message shapes and the writers its every sample goes to."""
+
+    messages: RobotMessages
+    namespace: str
+    odom: dds.Writer
+    joint_states: dds.Writer
+
+
+class RecordPublisher:
+    """Turns records into messages: robots get their topics with their first sample."""
+
+    def __init__(self, topics: Topics, rate_hz: int, on_twist: Callable[[str, float, float], None],
+                 world_frame: bool = True):
+        self.topics, self.rate = topics, rate_hz
+        self.world_frame = world_frame  # publish world -> <prefix>odom (off: a localizer owns the odom's parent)
+        self.on_twist = on_twist  # (robot, linear, angular), called on Cyclone's thread
+        self.arriving: dict[str, RobotPlan] = {}
+        self.robots: dict[str, _Robot] = {}
+        self.left_out: list[str] = []  # robots with no ROS 2 topics, and why
+        self.statics: dict[str, list] = {}  # name -> its fixed transforms
+        self.tf_packers: dict[tuple[str, ...], Packer] = {}
+        self.clock_step = -1
+        self.clock = topics.writer("/clock", CLOCK)  # in the graph from the start
+        self.tf = topics.writer("/tf", TF)
+        topics.writer("/tf_static", TF, dds.LATCHED)
+
+    def __call__(self, record: Record) -> None:
+        if isinstance(record, Sample):
+            self.sample(record)
+        elif isinstance(record, Spawned):
+            self.arriving[record.robot.name] = record.robot
+        elif isinstance(record, Deleted):
+            self.leave(record.name)
+        elif type(record) in _HANDLERS:
+            _HANDLERS[type(record)](self.topics, record)
+
+    def sample(self, sample: Sample) -> None:
+        """/clock, each robot's odom and joint_states, and one /tf for all of them; a message
+        is built only for a topic that some reader matches."""
+        # Runs at the log rate: writers are looked up once per robot, not per message.
+        stamp = stamp_of(sample.step, self.rate)[1]
+        write = self._write
+        if sample.step != self.clock_step:
+            self.clock_step = sample.step
+            if self.clock.readers:
+                write(self.clock, CLOCK_PACKER.pack(stamp))
+        tf_values: list[float] | None = [] if self.tf.readers else None
+        robots = self.robots
+        for name, state in sample.states.items():
+            if name in self.arriving:
+                self.arrive(self.arriving.pop(name), state, stamp)
+            robot = robots.get(name)
+            if robot is None:  # a robot that was in the world before the bridge opened
+                continue
+            messages = robot.messages
+            if robot.odom.readers:
+                write(robot.odom, messages.odom(stamp, state))
+            if robot.joint_states.readers:
+                write(robot.joint_states, messages.joint_states(stamp, state))
+            if tf_values is not None:
+                messages.tf_values(stamp, state, tf_values)
+        if tf_values is not None:
+            present = tuple(name for name in sample.states if name in robots)
+            if present:
+                packer = self.tf_packers.get(present)
+                if packer is None:
+                    packer = self.tf_packers[present] = tf_layout([robots[n].messages.frames for n in present])
+                write(self.tf, packer.pack(tf_values))
+
+    def _write(self, writer: dds.Writer, data: bytes) -> None:
+        if writer.write(data):
+            self.topics.sent += 1
+        else:
+            self.topics.unsent += 1
+
+    def arrive(self, plan: RobotPlan, state: RobotState, stamp: tuple[int, int]) -> None:
+        """A robot's topics, description and fixed frames, and its /cmd_vel reader if it drives;
+        a robot whose namespace ROS 2 cannot take (a live spawn's) is left out, and said so."""
+        namespace = plan.namespace
+        try:
+            names.check_namespace(namespace)
+        except MobotError as exc:
+            self.left_out.append(f"robot '{plan.name}' is not on ROS 2: {exc}")
+            return
+        messages = RobotMessages(plan, state)
+        self.robots[plan.name] = _Robot(messages, namespace, self.topics.writer(names.join(namespace, "odom"), ODOMETRY),
+                                        self.topics.writer(names.join(namespace, "joint_states"), JOINT_STATE))
+        self.topics.publish(names.join(namespace, "robot_description"), STRING, messages.description(), dds.LATCHED)
+        statics = messages.statics(state)
+        self.statics[plan.name] = statics if self.world_frame else statics[1:]
+        self.publish_statics(stamp)
+        if plan.drive is not None:
+            name = plan.name
+
+            def take(data: bytes) -> None:
+                try:
+                    self.on_twist(name, *twist(data))
+                except ValueError:
+                    pass  # not a Twist we can read: ignored, as a ROS subscriber would fail to decode it
+
+            self.topics.subscribe(names.join(namespace, "cmd_vel"), TWIST, take)
+
+    def leave(self, name: str) -> None:
+        """A robot left: its topics leave the graph, its frames leave /tf_static."""
+        self.arriving.pop(name, None)
+        if name not in self.robots:
+            return
+        namespace = self.robots.pop(name).namespace
+        self.statics.pop(name, None)
+        self.topics.drop(*(names.join(namespace, t) for t in ("odom", "joint_states", "robot_description", "cmd_vel")))
+        self.publish_statics(stamp_of(self.clock_step if self.clock_step >= 0 else 0, self.rate)[1])
+
+    def publish_statics(self, stamp: tuple[int, int]) -> None:
+        """Every robot's fixed transforms in one latched message (a late joiner gets them all)."""
+        transforms = [t for robot in self.statics.values() for t in robot]
+        self.topics.publish("/tf_static", TF, tf_static(stamp, transforms), dds.LATCHED)

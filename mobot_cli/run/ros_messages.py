@@ -1,0 +1,132 @@
+"""The ROS 2 messages of a run as CDR bytes: what the bag stores and what `--ros2` publishes.
+
+One place builds them so that a recorded bag and a live ROS 2 topic carry the same bytes:
+``/clock``, ``/tf`` (every robot's odom -> base and moving joints in one message),
+``/tf_static`` (``world -> <prefix>odom`` and the fixed joints) and per robot odom, cmd_vel,
+joint_states and robot_description. Shapes are laid out once per robot (run/cdr.py); a
+message is then one ``struct.pack``.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Sequence
+
+from mobot_cli.common.transforms import odom_origin, yaw_quat
+from mobot_cli.run.cdr import Layout, Packer
+from mobot_cli.run.tf import RobotFrames, Transform
+from mobot_cli.sim.plan import RobotPlan
+from mobot_cli.sim.state import RobotState
+
+WORLD_FRAME = "world"  # Gazebo's name for the frame all robots' odom frames hang from
+CLOCK, TF = "rosgraph_msgs/msg/Clock", "tf2_msgs/msg/TFMessage"
+ODOMETRY, TWIST = "nav_msgs/msg/Odometry", "geometry_msgs/msg/Twist"
+JOINT_STATE, STRING = "sensor_msgs/msg/JointState", "std_msgs/msg/String"
+LASER_SCAN = "sensor_msgs/msg/LaserScan"
+_MESH_PATH = re.compile(r'(<mesh\b[^>]*?\bfilename\s*=\s*")(/)')
+CLOCK_PACKER = Layout().var("i").var("I").build()
+
+Stamp = tuple[int, int]  # (sec, nanosec)
+
+
+def stamp_of(step: int, rate_hz: int) -> tuple[int, Stamp]:
+    """Sim time of ``step`` as nanoseconds and as a ROS stamp, without float drift."""
+    ns = step * 1_000_000_000 // rate_hz
+    return ns, divmod(ns, 1_000_000_000)
+
+
+def file_uris(urdf: str) -> str:
+    """Absolute mesh paths as file:// URIs, which rviz and Foxglove load."""
+    return _MESH_PATH.sub(r"\1file://\2", urdf)
+
+
+class RobotMessages:
+    """One robot's message shapes: odometry, command, joint states, TF and its description."""
+
+    def __init__(self, plan: RobotPlan, state: RobotState):
+        self.plan = plan
+        self.frames = RobotFrames(plan.urdf, plan.frame_prefix, plan.root_link)
+        cov = self.frames.covariance
+        self.odom_packer = (Layout().header(self.frames.odom_frame).string(self.frames.base_frame)
+                            .var("d", 7).doubles(cov).var("d", 6).doubles(cov).build())
+        self.twist_packer = Layout().var("d", 6).build()
+        self.joints = list(state.joint_positions)
+        n = len(self.joints)
+        joints = Layout().header("").strings(self.joints)
+        if n:
+            joints.u32(n).var("d", n).u32(n).var("d", n)
+        else:
+            joints.u32(0).u32(0)
+        self.joint_packer = joints.u32(0).build()  # effort: none
+
+    def description(self) -> bytes:
+        """std_msgs/String with the URDF, mesh paths as file:// URIs."""
+        return Layout().string(file_uris(self.plan.urdf)).build().pack(())
+
+    def odom(self, stamp: Stamp, state: RobotState) -> bytes:
+        """nav_msgs/Odometry in the robot's odom frame."""
+        half = state.odom_yaw / 2.0
+        return self.odom_packer.pack((*stamp, state.odom_x, state.odom_y, 0.0, 0.0, 0.0, math.sin(half),
+                                      math.cos(half), state.odom_vx, 0.0, 0.0, 0.0, 0.0, state.odom_wz))
+
+    def cmd_vel(self, state: RobotState) -> bytes:
+        """geometry_msgs/Twist: the command the robot holds."""
+        return self.twist_packer.pack((state.cmd_linear, 0.0, 0.0, 0.0, 0.0, state.cmd_angular))
+
+    def joint_states(self, stamp: Stamp, state: RobotState) -> bytes:
+        """sensor_msgs/JointState: positions and velocities of every joint the robot had at spawn."""
+        positions, velocities = state.joint_positions, state.joint_velocities
+        if len(positions) == len(velocities) == len(self.joints):  # the same joints, in order
+            values = (*stamp, *positions.values(), *velocities.values())
+        else:
+            values = (*stamp, *(positions.get(j, 0.0) for j in self.joints),
+                      *(velocities.get(j, 0.0) for j in self.joints))
+        return self.joint_packer.pack(values)
+
+    def tf_values(self, stamp: Stamp, state: RobotState, out: list[float]) -> None:
+        """This robot's /tf numbers (odom -> base, then each moving joint), appended to ``out``."""
+        half = state.odom_yaw / 2.0
+        out.extend((*stamp, state.odom_x, state.odom_y, 0.0, 0.0, 0.0, math.sin(half), math.cos(half)))
+        positions = state.joint_positions
+        for joint in self.frames.moving:
+            out.extend((*stamp, *joint.transform(positions)))
+
+    def statics(self, state: RobotState) -> list[Transform]:
+        """``world -> <prefix>odom`` where odometry (0, 0, 0) is (always first), then every fixed joint."""
+        # The odom frame sits where odometry (0, 0, 0) is: the truth now, less the odometry so far.
+        origin = odom_origin(state.true_x, state.true_y, state.true_yaw, state.odom_x, state.odom_y, state.odom_yaw)
+        odom = Transform(WORLD_FRAME, self.frames.odom_frame, (origin.x, origin.y, state.true_z), yaw_quat(origin.yaw))
+        return [odom, *self.frames.static]
+
+
+def tf_layout(robots: Sequence[RobotFrames]) -> Packer:
+    """The /tf message shape for this set of robots: odom -> base, then every moving joint."""
+    pairs = []
+    for frames in robots:
+        pairs.append((frames.odom_frame, frames.base_frame))
+        pairs.extend((joint.parent, joint.child) for joint in frames.moving)
+    layout = Layout().u32(len(pairs))
+    for parent, child in pairs:
+        layout.header(parent).string(child).var("d", 7)
+    return layout.build()
+
+
+def tf_static(stamp: Stamp, transforms: Sequence[Transform]) -> bytes:
+    """A tf2_msgs/TFMessage of fixed transforms, all stamped ``stamp``."""
+    layout = Layout().u32(len(transforms))
+    values: list[float] = []
+    for t in transforms:
+        layout.header(t.parent).string(t.child).var("d", 7)
+        values.extend((*stamp, *t.xyz, *t.quat))
+    return layout.build().pack(values)
+
+
+def laser_scan_layout(frame_id: str, rays: int, intensities: bool = False) -> Packer:
+    """sensor_msgs/LaserScan with ``rays`` ranges; values: sec, nanosec, angle_min, angle_max,
+    angle_increment, time_increment, scan_time, range_min, range_max, the ranges, then (with
+    ``intensities``) as many intensities."""
+    layout = Layout().header(frame_id).var("f", 7).u32(rays).var("f", rays)
+    if intensities:
+        return layout.u32(rays).var("f", rays).build()
+    return layout.u32(0).build()
