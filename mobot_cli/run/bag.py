@@ -11,11 +11,15 @@ message definition embedded. Topics, per sample at the log rate unless noted:
   robot's odometry starts from, so every robot shows in one view, and every fixed joint;
 * ``<ns>/odom`` (nav_msgs/Odometry), ``<ns>/cmd_vel`` (geometry_msgs/Twist),
   ``<ns>/joint_states`` (sensor_msgs/JointState) and, once, ``<ns>/robot_description``
-  (std_msgs/String, transient local; mesh paths as file:// URIs).
+  (std_msgs/String, transient local; mesh paths as file:// URIs);
+* per sensor, at its own rate: ``<ns>/scan`` (LaserScan), ``<ns>/points`` (PointCloud2),
+  ``<ns>/imu`` (Imu), ``<ns>/bumper`` (gazebo_msgs/ContactsState), named and framed as
+  run/sensor_topics.py says, each sensor frame on /tf_static.
 
 Message log times and header stamps are both sim time (nanoseconds from the start), so the
-same run gives the same bytes. Samples are recorded ``CHUNK_EVERY_SAMPLES`` at a time, each
-batch closed as one MCAP chunk and flushed, so a killed run leaves an MCAP file that a reader
+same run gives the same bytes. Samples are recorded ``CHUNK_EVERY_SAMPLES`` at a time (or
+sooner when sensor readings pile up ``CHUNK_BYTES``), each batch closed as one MCAP chunk and
+flushed, so a killed run leaves an MCAP file that a reader
 scanning it reads up to its last chunk (metadata.yaml is written only when the bag closes).
 """
 
@@ -27,16 +31,19 @@ import shutil
 from pathlib import Path
 
 from mobot_cli.common.transforms import odom_origin, yaw_quat
+from mobot_cli.run import sensor_cdr, sensor_topics
 from mobot_cli.run.cdr import Layout, Packer
 from mobot_cli.run.ros_msgs import MESSAGES
+from mobot_cli.run.ros_sensor_msgs import SENSOR_MESSAGES
 from mobot_cli.run.sinks import Sink
 from mobot_cli.run.tf import RobotFrames
-from mobot_cli.run.timeline import Sample
+from mobot_cli.run.timeline import Reading, Sample
 from mobot_cli.sim.plan import Plan, RobotPlan
 from mobot_cli.sim.state import RobotState
 
 WORLD_FRAME = "world"  # Gazebo's name for the frame all robots' odom frames hang from
 CHUNK_EVERY_SAMPLES = 50  # as the CSV's flush: about one second at the default log rate
+CHUNK_BYTES = 8 << 20  # sensor data waiting before a chunk is closed anyway (3D lidars)
 CLOCK, TF = "rosgraph_msgs/msg/Clock", "tf2_msgs/msg/TFMessage"
 ODOMETRY, TWIST = "nav_msgs/msg/Odometry", "geometry_msgs/msg/Twist"
 JOINT_STATE, STRING = "sensor_msgs/msg/JointState", "std_msgs/msg/String"
@@ -85,13 +92,15 @@ class BagSink(Sink):
         self.robots: dict[str, _RobotTopics] = {}  # by record name; kept after a delete for its topics
         self.arriving: dict[str, RobotPlan] = {}  # spawned, waiting for their first sample
         self.tf_packers: dict[tuple[str, ...], Packer] = {}  # the /tf shape for a set of robots
-        self.pending: list[Sample | tuple[str, RobotPlan]] = []  # samples, and arrivals between them
+        self.pending: list = []  # samples, arrivals (key, plan) and readings (key, Reading), in order
         self.waiting = 0  # samples in ``pending``
+        self.waiting_bytes = 0  # sensor data in ``pending``
+        self.sensor_topics: dict[str, object] = {}  # topic name -> connection, added once
         self.clock_step = -1  # the step of the last /clock message
 
     def topic(self, name: str, msgtype: str, latched: bool = False):
         """Add a connection, with its message definition and type hash embedded."""
-        msgdef, rihs01 = MESSAGES[msgtype]
+        msgdef, rihs01 = MESSAGES[msgtype] if msgtype in MESSAGES else SENSOR_MESSAGES[msgtype]
         return self.writer.add_connection(name, msgtype, msgdef=msgdef, rihs01=rihs01,
                                           offered_qos_profiles=_latched_qos() if latched else ())
 
@@ -106,16 +115,26 @@ class BagSink(Sink):
         if self.waiting >= CHUNK_EVERY_SAMPLES:
             self._record()
 
+    def reading(self, key: str, reading: Reading) -> None:
+        self.pending.append((key, reading))
+        ranges = getattr(reading.data, "ranges", None)
+        self.waiting_bytes += 64 if ranges is None else ranges.nbytes
+        if self.waiting_bytes >= CHUNK_BYTES:
+            self._record()
+
     def _record(self) -> None:
-        """Record the waiting samples and close their chunk."""
+        """Record the waiting samples and readings and close their chunk."""
         for item in self.pending:
             if isinstance(item, Sample):
                 self._record_one(item)
+            elif isinstance(item[1], Reading):
+                key, reading = item
+                self.robots[key].write_reading(self.writer.write, reading, self.rate)
             else:
                 key, robot = item
                 self.arriving[key] = robot
         self.pending.clear()
-        self.waiting = 0
+        self.waiting = self.waiting_bytes = 0
         self._flush()
 
     def _record_one(self, sample: Sample) -> None:
@@ -149,6 +168,7 @@ class BagSink(Sink):
         frames = robot.frames
         statics = [(WORLD_FRAME, frames.odom_frame, (origin.x, origin.y, state.true_z), yaw_quat(origin.yaw))]
         statics += [(t.parent, t.child, t.xyz, t.quat) for t in frames.static]
+        statics += [(f.parent, f.frame, f.xyz, f.quat) for f in robot.sensor_frames.values() if f.parent]
         layout = Layout().u32(len(statics))
         values: list[float] = []
         for parent, child, xyz, quat in statics:
@@ -202,6 +222,28 @@ class _RobotTopics:
             joints.u32(0).u32(0)
         self.joint_packer = joints.u32(0).build()  # effort: none
         self.description_packer = Layout().string(file_uris(plan.urdf)).build()
+        self.sensor_frames = {spec.name: sensor_topics.sensor_frame(plan, spec) for spec in plan.sensors}
+        self.sensor_connections = {spec.name: _sensor_topic(sink, plan, spec) for spec in plan.sensors}
+        self.collision = {spec.name: f"{plan.name}::{spec.link}::{spec.collision or spec.link}"
+                          for spec in plan.sensors if spec.kind == "contact"}
+
+    def write_reading(self, write, reading: Reading, rate: int) -> None:
+        """One sensor reading as its ROS message."""
+        spec, data = reading.sensor, reading.data
+        ns = reading.step * 1_000_000_000 // rate
+        stamp = divmod(ns, 1_000_000_000)
+        frame = self.sensor_frames[spec.name].frame
+        if spec.kind == "lidar":
+            if sensor_topics.is_3d(spec):
+                message = sensor_cdr.point_cloud2(stamp, frame, data.ranges, data.beams)
+            else:
+                message = sensor_cdr.laser_scan(stamp, frame, spec, sensor_cdr.scan_row(data.ranges))
+        elif spec.kind == "imu":
+            message = sensor_cdr.imu(stamp, frame, spec, data.orientation, data.angular_velocity,
+                                     data.linear_acceleration)
+        else:  # in the world frame, as gazebo_ros_bumper without a <frame_name>
+            message = sensor_cdr.contacts_state(stamp, WORLD_FRAME, self.collision[spec.name], data.contacts)
+        write(self.sensor_connections[spec.name], ns, message)
 
     def write(self, write, ns: int, stamp: tuple[int, int], state: RobotState, tf_values: list[float]) -> None:
         """This robot's messages of one sample; its /tf transforms go to ``tf_values``."""
@@ -223,6 +265,14 @@ class _RobotTopics:
         tf_values.extend((sec, nsec, x, y, 0.0, 0.0, 0.0, qz, qw))
         for joint in self.frames.moving:
             tf_values.extend((sec, nsec, *joint.transform(positions)))
+
+
+def _sensor_topic(sink: BagSink, plan: RobotPlan, spec):
+    """A sensor's connection, added once per topic name."""
+    name = sensor_topics.topic(plan, spec)
+    if name not in sink.sensor_topics:
+        sink.sensor_topics[name] = sink.topic(name, sensor_topics.message_type(spec))
+    return sink.sensor_topics[name]
 
 
 def _tf_layout(robots: list[RobotFrames]) -> Packer:
