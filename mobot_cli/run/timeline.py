@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from typing import Callable, Iterator, Protocol, Union
 
 from mobot_cli.errors import MobotError, SpawnError
+from mobot_cli.sim.clearance import REACH_MARGIN
 from mobot_cli.sim.plan import Event, Plan, RobotPlan, SensorSpec
 from mobot_cli.sim.state import RobotState
 from mobot_cli.sim.world import World
@@ -97,6 +98,12 @@ class Timeline:
         self._ticked = -1  # the step of the last tick
         # step -> the sensors due then: (robot name, its plan, sensor); empty without sensors
         self._due: dict[int, list[tuple[str, RobotPlan, SensorSpec]]] = {}
+        # robot name (or "all") -> how far its clearance is measured, for `clearance` expectations
+        self._clearance: dict[str, float] = {}
+        for exp in plan.expectations:
+            if exp.kind == "clearance":
+                reach = exp.limit("min") + REACH_MARGIN
+                self._clearance[exp.robot] = max(reach, self._clearance.get(exp.robot, 0.0))
         for event in plan.events:
             self._events[event.step].append(event)
         spawned = [event.spawn for event in plan.events if event.spawn is not None]
@@ -184,6 +191,10 @@ class Timeline:
             raise NameTaken(f"robot '{robot.name}' or namespace '{robot.namespace}' is already in the world")
         self.world.spawn(robot)
         self.robots[robot.name] = robot
+        if self._clearance:
+            reach = max(self._clearance.get(robot.name, 0.0), self._clearance.get("all", 0.0))
+            if reach:
+                self.world.watch_clearance(robot.name, reach)
         state = self.world.read(robot.name)
         self._consume(Spawned(self.step, robot, by, state))
         if self._logged == self.step or self.step % self.plan.log_every:

@@ -11,7 +11,7 @@ from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from mobot_cli.errors import SimulationFault, SpawnError, WorldError, did_you_mean
-from mobot_cli.sim import placement, static_shapes, surroundings
+from mobot_cli.sim import clearance, placement, static_shapes, surroundings
 from mobot_cli.sim.bullet import p
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, ContactCounter
 from mobot_cli.sim.plan import Physics, RobotPlan, WorldPlan
@@ -79,6 +79,7 @@ class World:
         self._contacts = ContactCounter()
         self._contact_every = max(1, round(physics.rate_hz / CONTACT_RATE_HZ))
         self._sensing: Sensing | None = None  # made when the first robot with sensors arrives
+        self._clearance: dict[str, float] = {}  # robot -> how far its clearance is measured (m)
         try:
             self._build(world)
         except BaseException:
@@ -226,6 +227,7 @@ class World:
         self._contacts.forget(name)
         if self._sensing is not None:
             self._sensing.forget(name)
+        self._clearance.pop(name, None)
         if robot in self._ramping:
             self._ramping.remove(robot)
 
@@ -290,8 +292,17 @@ class World:
         return self._statics.get(body, f"body {body}")
 
     def read(self, name: str) -> RobotState:
-        """The robot's command, odometry and ground truth now."""
-        return self._robot(name).state(self._steps)
+        """The robot's command, odometry and ground truth now (and its clearance when watched)."""
+        robot = self._robot(name)
+        state = robot.state(self._steps)
+        if self._clearance and name in self._clearance:
+            state.clearance, state.nearest = clearance.nearest(
+                self._cid, robot.body, self._clearance[name], [r.body for r in self._robots.values()], self.label)
+        return state
+
+    def watch_clearance(self, name: str, reach: float) -> None:
+        """Measure the robot's clearance (up to ``reach`` m) whenever its state is read."""
+        self._clearance[name] = max(reach, self._clearance.get(name, 0.0))
 
     def _robot(self, name: str) -> SimRobot:
         try:
