@@ -19,13 +19,13 @@ from __future__ import annotations
 import ast
 import csv
 import io
+import json
 import re
 import struct
 from pathlib import Path
 
 import numpy as np
 
-from mobot_cli.common.files import write_json_atomic
 from mobot_cli.run.sinks import Sink, number
 from mobot_cli.run.timeline import Reading
 from mobot_cli.run import sensor_topics
@@ -168,7 +168,9 @@ class SensorFilesSink(Sink):
         path = self.out_dir / sensor_file(key, spec)
         path.parent.mkdir(parents=True, exist_ok=True)
         if spec.kind == "lidar":
-            write_json_atomic(path.with_suffix(".json"), describe(key, self.robots[key], spec, self.rate))
+            # Written whole at the first reading, not fsynced (summary.json is the record that is).
+            path.with_suffix(".json").write_text(
+                json.dumps(describe(key, self.robots[key], spec, self.rate), indent=2) + "\n", encoding="utf-8")
             return NpyRows(path, scan_dtype(spec))
         return _CsvRows(path, IMU_COLUMNS if spec.kind == "imu" else CONTACT_COLUMNS)
 

@@ -55,13 +55,9 @@ class TrajectorySink(Sink):
         self.last_step = sample.step
 
     def reading(self, key: str, reading: Reading) -> None:
-        """Keep each robot's last lidar scan (its returns in the floor plan's height band)."""
-        if reading.sensor.kind != "lidar" or key not in self.open:
-            return
-        points = reading.data.world_points()
-        if reading.data.ranges.shape[0] > 1:  # a 3D lidar: what a floor plan shows, not the floor
-            points = points[(points[:, 2] > SCAN_BAND[0]) & (points[:, 2] < SCAN_BAND[1])]
-        self.open[key][0].scan = [(float(x), float(y)) for x, y in points[::max(1, len(points) // MAX_SCAN_POINTS), :2]]
+        """Keep each robot's last lidar scan; its points are made when the picture is drawn."""
+        if reading.sensor.kind == "lidar" and key in self.open:
+            self.open[key][0].last_scan = reading.data
 
     def close(self) -> None:
         draw(self.tracks, self.world, self.path, self.title,
@@ -72,7 +68,18 @@ class _Points:
     """A track's points as they come (the plot's Track is made at drawing time)."""
 
     def __init__(self, label: str):
-        self.label, self.true, self.odom, self.scan = label, [], [], []
+        self.label, self.true, self.odom = label, [], []
+        self.last_scan = None  # sim.sensors.ScanData
+
+    @property
+    def scan(self) -> list[tuple[float, float]]:
+        """The last scan's returns in world x, y (a 3D lidar's within the floor plan's band)."""
+        if self.last_scan is None:
+            return []
+        points = self.last_scan.world_points()
+        if self.last_scan.ranges.shape[0] > 1:  # a 3D lidar: what a floor plan shows, not the floor
+            points = points[(points[:, 2] > SCAN_BAND[0]) & (points[:, 2] < SCAN_BAND[1])]
+        return [tuple(xy) for xy in points[::max(1, len(points) // MAX_SCAN_POINTS), :2].tolist()]
 
 
 def draw(tracks: list, world: WorldPlan | None, out: Path, title: str, subtitle: str) -> None:

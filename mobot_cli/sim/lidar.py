@@ -54,13 +54,15 @@ class Beams:
     horizontal: np.ndarray  # (H,) azimuths, rad
     vertical: np.ndarray  # (V,) elevations, rad
     directions: np.ndarray  # (V * H, 3) unit vectors, vertical-major
+    directions32: np.ndarray  # the same in float32, as the ray engine takes them
+    lengths32: np.ndarray  # (V * H,) float32: range_max - range_min, each ray's length
 
     @classmethod
     def of(cls, spec: SensorSpec) -> "Beams":
         h, v = axis_angles(spec.horizontal), axis_angles(spec.vertical)
         el, az = np.meshgrid(v, h, indexing="ij")
-        d = np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], axis=-1)
-        return cls(h, v, d.reshape(-1, 3))
+        d = np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], axis=-1).reshape(-1, 3)
+        return cls(h, v, d, d.astype(np.float32), np.full(len(d), spec.range_max - spec.range_min, np.float32))
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -80,30 +82,42 @@ class ScanJob:
 
 def cast(cid: int, scene: StaticScene | None, jobs: list[ScanJob],
          robot_boxes: dict[int, tuple[np.ndarray, np.ndarray]]) -> list[np.ndarray]:
-    """Ranges (float64, (V, H), +inf for no return) of every job, cast in one batch."""
-    dirs = np.concatenate([job.beams.directions @ job.rotation.T for job in jobs])
-    sizes = [len(job.beams.directions) for job in jobs]
-    starts = np.repeat([job.spec.range_min for job in jobs], sizes)
-    lengths = np.repeat([job.spec.range_max - job.spec.range_min for job in jobs], sizes)
-    origins = np.repeat(np.array([job.position for job in jobs]), sizes, axis=0) + dirs * starts[:, None]
-    owners = np.repeat([job.own_body for job in jobs], sizes)
+    """Ranges (float32, (V, H), +inf for no return) of every job, cast in one batch."""
+    # float32 throughout, as the ray engine and LaserScan take them (10 um at 100 m): a 360-beam
+    # scan must cost far less than the physics between two scans.
+    dirs = _joined([job.beams.directions32 @ job.rotation.T.astype(np.float32) for job in jobs])
+    lengths = _joined([job.beams.lengths32 for job in jobs])
+    origins = _joined([job.position.astype(np.float32) + d * np.float32(job.spec.range_min)
+                       for job, d in zip(jobs, _split(dirs, jobs))])
     if scene is not None and scene.complete:
         t = scene.cast(origins, dirs, lengths)
-        reach = np.minimum(t, lengths)
-        candidates = _near_robots(origins, dirs, reach, owners, robot_boxes)
+        candidates = _near_robots(origins, dirs, np.minimum(t, lengths), _owners(jobs), robot_boxes) \
+            if robot_boxes else ()
         mask = ROBOT_GROUP
     else:  # no Embree scene: PyBullet casts every ray at everything
-        t = np.full(len(dirs), np.inf)
-        reach, candidates, mask = lengths, np.arange(len(dirs)), -1
+        t = np.full(len(dirs), np.inf, dtype=np.float32)
+        candidates, mask = np.arange(len(dirs)), -1
     if len(candidates):
-        hit = _bullet(cid, origins[candidates], dirs[candidates], reach[candidates], owners[candidates], mask)
+        reach = np.minimum(t, lengths)
+        hit = _bullet(cid, origins[candidates].astype(float), dirs[candidates].astype(float),
+                      reach[candidates].astype(float), _owners(jobs)[candidates], mask)
         t[candidates] = np.minimum(t[candidates], hit)
-    ranges = np.where(t <= lengths, t + starts, np.inf)
-    out, at = [], 0
-    for job, n in zip(jobs, sizes):
-        out.append(ranges[at:at + n].reshape(job.beams.shape))
-        at += n
-    return out
+    return [(part + np.float32(job.spec.range_min)).reshape(job.beams.shape) for job, part in zip(jobs, _split(t, jobs))]
+
+
+def _joined(parts: list[np.ndarray]) -> np.ndarray:
+    return parts[0] if len(parts) == 1 else np.concatenate(parts)
+
+
+def _split(values: np.ndarray, jobs: list[ScanJob]) -> list[np.ndarray]:
+    """``values`` cut back into each job's share."""
+    if len(jobs) == 1:
+        return [values]
+    return np.split(values, np.cumsum([len(job.beams.directions) for job in jobs])[:-1])
+
+
+def _owners(jobs: list[ScanJob]) -> np.ndarray:
+    return np.repeat([job.own_body for job in jobs], [len(job.beams.directions) for job in jobs])
 
 
 def _near_robots(origins: np.ndarray, dirs: np.ndarray, reach: np.ndarray, owners: np.ndarray,

@@ -71,21 +71,23 @@ class StaticScene:
             TriangleMesh(self._scene, np.ascontiguousarray(self.triangles, dtype=np.float32))
 
     def cast(self, origins: np.ndarray, directions: np.ndarray, lengths: np.ndarray) -> np.ndarray:
-        """Distance along each ray (unit ``directions``) to the first static surface within its
-        length; +inf where there is none."""
-        out = np.full(len(origins), np.inf)
+        """Distance (float32) along each ray (unit ``directions``) to the first static surface
+        within its length; +inf where there is none."""
+        origins = np.ascontiguousarray(origins, dtype=np.float32)
+        directions = np.ascontiguousarray(directions, dtype=np.float32)
+        lengths = np.ascontiguousarray(lengths, dtype=np.float32)
         if self._scene is not None and len(origins):
-            hit = self._scene.run(np.ascontiguousarray(origins, dtype=np.float32),
-                                  np.ascontiguousarray(directions, dtype=np.float32),
-                                  dists=np.ascontiguousarray(lengths, dtype=np.float32), output=1)
-            found = hit["geomID"] >= 0
-            out[found] = hit["tfar"][found]
-        for point, normal in self.planes:
-            along = directions @ normal
-            with np.errstate(divide="ignore", invalid="ignore"):
-                t = ((point - origins) @ normal) / along
-            meets = (np.abs(along) > 1e-12) & (t >= 0.0) & (t <= lengths)
-            np.minimum(out, np.where(meets, t, np.inf), out=out)
+            # DISTANCE answers the ray's own length where it meets nothing.
+            out = self._scene.run(origins, directions, dists=lengths.copy(), query="DISTANCE")
+            out[out >= lengths] = np.inf
+        else:
+            out = np.full(len(origins), np.inf, dtype=np.float32)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            for point, normal in self.planes:
+                along = directions @ normal.astype(np.float32)
+                t = ((point.astype(np.float32) - origins) @ normal.astype(np.float32)) / along
+                t[~((t >= 0.0) & (t < lengths))] = np.inf
+                np.minimum(out, t, out=out)
         return out
 
 

@@ -228,16 +228,15 @@ def _aabb(cid: int, body: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _lidar_noise(rig: _Rig, ranges: np.ndarray) -> np.ndarray:
-    """Noise, quantisation and clamping as the sensor's <ray> block asks; float32."""
+    """Noise, quantisation and clamping as the sensor's <ray> block asks (float32, +inf kept)."""
     spec = rig.spec
-    finite = np.isfinite(ranges)
     if spec.noise_stddev > 0.0 or spec.noise_mean != 0.0:
-        noise = rig.rng.normal(spec.noise_mean, spec.noise_stddev, ranges.shape)
-        ranges = np.where(finite, ranges + noise, ranges)
-    if spec.range_resolution > 0.0:
-        ranges = np.where(finite, np.round(ranges / spec.range_resolution) * spec.range_resolution, ranges)
-    ranges = np.where(finite, np.clip(ranges, spec.range_min, spec.range_max), ranges)
-    return ranges.astype(np.float32)
+        returns = np.isfinite(ranges)
+        noisy = ranges + rig.rng.normal(spec.noise_mean, spec.noise_stddev, ranges.shape).astype(np.float32)
+        ranges = np.where(returns, np.clip(noisy, spec.range_min, spec.range_max), ranges)
+    if spec.range_resolution > 0.0:  # +inf stays +inf
+        ranges = np.round(ranges / np.float32(spec.range_resolution)) * np.float32(spec.range_resolution)
+    return ranges.astype(np.float32, copy=False)
 
 
 def _unit(q) -> tuple[float, float, float, float]:
