@@ -215,3 +215,11 @@ def test_a_killed_run_keeps_every_complete_chunk_of_its_scans(tmp_path):
     assert np.allclose(np.diff(scans["t"]), 2 / 240) and scans["t"][0] == 0.0
     assert np.isfinite(scans["ranges"]).sum(axis=1).min() > 100  # whole scans, not zeros
     assert not (tmp_path / "out/summary.json").exists()
+
+
+def test_sensors_do_not_change_the_physics(sensor_run, tmp_path):
+    """The same drive without its sensors writes the same odometry, byte for byte."""
+    plan, with_sensors = sensor_run
+    bare = replace(plan, robots=(replace(plan.robots[0], sensors=()),))
+    without = execute(bare, (with_sensors.out_dir / "scenario.yaml").read_text(), tmp_path / "bare")
+    assert (without.out_dir / "odom/mobot.csv").read_bytes() == (with_sensors.out_dir / "odom/mobot.csv").read_bytes()
