@@ -253,6 +253,9 @@ def run_folder_status(env: Environment, result: dict[str, Any]) -> None:
             upto = f", messages up to t = {bag['last_t']:g} s" if bag.get("last_t") is not None else ""
             closed = "closed" if bag["complete"] else "not closed (no metadata.yaml)"
             lines.append(f"  bag/{bag['file']}: {closed}; {bag['chunks']} complete chunks{upto}")
+        for name, extent in result.get("sensors", {}).items():
+            upto = f", up to t = {extent['last_t']:g} s" if extent["last_t"] is not None else ""
+            lines.append(f"  {name}: {extent['rows']} whole rows{upto}")
     env.stdout.write("\n".join(lines) + "\n")
 
 

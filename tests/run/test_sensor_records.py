@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from mobot_cli.cli import invoke
 from mobot_cli.run import sensor_cdr
 from mobot_cli.run.execute import execute
 from mobot_cli.run.ros_sensor_msgs import SENSOR_MESSAGES
@@ -215,6 +216,10 @@ def test_a_killed_run_keeps_every_complete_chunk_of_its_scans(tmp_path):
     assert np.allclose(np.diff(scans["t"]), 2 / 240) and scans["t"][0] == 0.0
     assert np.isfinite(scans["ranges"]).sum(axis=1).min() > 100  # whole scans, not zeros
     assert not (tmp_path / "out/summary.json").exists()
+    checked = invoke(["check", tmp_path / "out"])
+    assert checked.exit_code == 2 and "incomplete" in checked.stdout
+    last = scans["t"][-1]
+    assert f"  sensors/mobot/scan.npy: {rows} whole rows, up to t = {last:g} s\n" in checked.stdout
 
 
 def test_sensors_do_not_change_the_physics(sensor_run, tmp_path):
