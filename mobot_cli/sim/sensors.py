@@ -84,6 +84,7 @@ class _Rig:
     rng: np.random.Generator
     beams: lidar.Beams | None = None
     last: tuple[int, np.ndarray] | None = None  # imu: (step, world velocity) of the last reading
+    to_link: tuple | None = None  # on the base: PyBullet's base (inertial) frame -> the URDF link frame
 
 
 def noise_rng(seed: int, robot: str, sensor: str) -> np.random.Generator:
@@ -116,6 +117,9 @@ class Sensing:
                 raise SpawnError(f"robot '{name}': sensor '{spec.name}' has unknown kind '{spec.kind}'",
                                  hint="Sensor kinds are " + ", ".join(KINDS) + ".")
             rig = _Rig(spec, body, links[spec.link], noise_rng(self.seed, name, spec.name))
+            if rig.link < 0:
+                inertial = p.getDynamicsInfo(body, -1, physicsClientId=self.cid)
+                rig.to_link = p.invertTransform(inertial[3], inertial[4])
             if spec.kind == "lidar":
                 rig.beams = lidar.Beams.of(spec)
             rigs[spec.name] = rig
@@ -143,7 +147,8 @@ class Sensing:
             rig = self.rigs[robot][sensor]
             position, quat = self._pose(rig)
             if rig.spec.kind == "lidar":
-                job = lidar.ScanJob(rig.spec, rig.beams, np.array(position), np.array(quat_matrix(quat)), rig.body)
+                rotation = np.array(p.getMatrixFromQuaternion(quat)).reshape(3, 3)
+                job = lidar.ScanJob(rig.spec, rig.beams, np.array(position), rotation, rig.body)
                 scans.append((i, rig, job))
                 out[i] = (position, quat)
             elif rig.spec.kind == "imu":
@@ -173,9 +178,7 @@ class Sensing:
             state = p.getLinkState(rig.body, rig.link, computeForwardKinematics=1, physicsClientId=self.cid)
             return state[4], state[5]
         com, orn = p.getBasePositionAndOrientation(rig.body, physicsClientId=self.cid)
-        inertial = p.getDynamicsInfo(rig.body, -1, physicsClientId=self.cid)
-        to_link = p.invertTransform(inertial[3], inertial[4])
-        return p.multiplyTransforms(com, orn, to_link[0], to_link[1])
+        return p.multiplyTransforms(com, orn, rig.to_link[0], rig.to_link[1])
 
     def _velocity(self, rig: _Rig, position) -> tuple[np.ndarray, np.ndarray]:
         """World linear velocity of the sensor's origin and the link's angular velocity."""
