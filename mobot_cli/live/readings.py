@@ -56,8 +56,9 @@ def reading_fields(robot: RobotPlan, reading: Reading, rate_hz: int) -> dict[str
         "t": reading.step / rate_hz}
     if spec.kind == "lidar":
         ranges = [[None if r == float("inf") else float(r) for r in row] for row in data.ranges.tolist()]
-        fields.update(angle_min=spec.horizontal.min_angle, angle_max=spec.horizontal.max_angle,
-                      angle_increment=angle_step(spec.horizontal), range_min=spec.range_min,
+        axis = spec.horizontal
+        fields.update(angle_min=axis.min_angle if axis else 0.0, angle_max=axis.max_angle if axis else 0.0,
+                      angle_increment=angle_step(axis), range_min=spec.range_min,
                       range_max=spec.range_max, ranges=ranges[0] if len(ranges) == 1 else ranges)
         if len(ranges) > 1:
             fields.update(vertical_angle_min=spec.vertical.min_angle, vertical_angle_max=spec.vertical.max_angle,
