@@ -62,6 +62,7 @@ class StaticScene:
                 if len(local):
                     triangles.append(local @ rot.T + np.array(xyz))
         self.triangles = np.concatenate(triangles) if triangles else np.zeros((0, 3, 3))
+        self._planes32 = [(point.astype(np.float32), normal.astype(np.float32)) for point, normal in self.planes]
         self._scene = None
         if len(self.triangles):
             from embreex import rtcore_scene
@@ -82,12 +83,12 @@ class StaticScene:
             out[out >= lengths] = np.inf
         else:
             out = np.full(len(origins), np.inf, dtype=np.float32)
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            for point, normal in self.planes:
-                along = directions @ normal.astype(np.float32)
-                t = ((point.astype(np.float32) - origins) @ normal.astype(np.float32)) / along
-                t[~((t >= 0.0) & (t < lengths))] = np.inf
-                np.minimum(out, t, out=out)
+        for point, normal in self._planes32:
+            along = directions @ normal
+            t = np.full(len(origins), np.inf, dtype=np.float32)
+            np.divide((point - origins) @ normal, along, out=t, where=along != 0.0)  # parallel: no hit
+            t[(t < 0.0) | (t >= lengths)] = np.inf
+            np.minimum(out, t, out=out)
         return out
 
 
