@@ -279,6 +279,9 @@ def run_folder_status(env: Environment, result: dict[str, Any]) -> None:
             lines.append(f"  bag/{bag['file']}: {closed}; {bag['chunks']} complete chunks{upto}")
             if bag.get("repairable"):
                 lines.append(f"  bag can be repaired: mobot check {result['path']} --repair")
+        for name, extent in result.get("sensors", {}).items():
+            upto = f", up to t = {extent['last_t']:g} s" if extent["last_t"] is not None else ""
+            lines.append(f"  {name}: {extent['rows']} whole rows{upto}")
     env.stdout.write("\n".join(lines) + "\n")
 
 

@@ -105,6 +105,10 @@ class Client:
         """The robot's odometry, ground truth and command now."""
         return self.request("odom", name=name)
 
+    def scan(self, name: str, sensor: str | None = None) -> dict[str, Any]:
+        """The latest reading of a robot's sensor (default: its first lidar)."""
+        return self.request("scan", name=name, **({"sensor": sensor} if sensor else {}))
+
     def stop(self) -> dict[str, Any]:
         """Shut the world down cleanly (it writes its record first)."""
         return self.request("stop")

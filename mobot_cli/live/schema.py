@@ -48,6 +48,12 @@ class Odom(Request):
     name: Name
 
 
+class Scan(Request):
+    op: Literal["scan"]
+    name: Name
+    sensor: Optional[Name] = None  # default: the robot's first lidar, else its first sensor
+
+
 class Cmd(Request):
     op: Literal["cmd"]
     name: Name
@@ -72,7 +78,7 @@ class Spawn(Request):
     base_dir: Optional[str] = None  # the client's folder: relative paths resolve against it
 
 
-AnyRequest = Annotated[Union[Ping, ListRobots, Stop, Delete, Odom, Cmd, Spawn], Field(discriminator="op")]
+AnyRequest = Annotated[Union[Ping, ListRobots, Stop, Delete, Odom, Scan, Cmd, Spawn], Field(discriminator="op")]
 _ADAPTER: TypeAdapter = TypeAdapter(AnyRequest)
 
 

@@ -106,7 +106,7 @@ class LiveServer:
         self._loader = ThreadPoolExecutor(max_workers=1, thread_name_prefix="mobot-loader")
         self._handlers: dict[str, Callable] = {
             "ping": self._ping, "list": self._list, "spawn": self._spawn, "delete": self._delete,
-            "cmd": self._cmd, "odom": self._odom, "stop": self._stop}
+            "cmd": self._cmd, "odom": self._odom, "scan": self._scan, "stop": self._stop}
 
     def serve(self, ready: Callable[[str], None] | None = None) -> Served:
         """Run until `stop`, SIGINT/SIGTERM or ``stop_after`` steps; returns status and counts."""
@@ -254,6 +254,9 @@ class LiveServer:
 
     def _odom(self, envelope, request) -> dict[str, Any]:
         return self.session.odometry(request.id, request.name)
+
+    def _scan(self, envelope, request) -> dict[str, Any]:
+        return self.session.scan(request.id, request.name, request.sensor)
 
     def _delete(self, envelope, request) -> dict[str, Any]:
         self.session.remove(request.name)

@@ -15,6 +15,7 @@ from typing import Any
 from mobot_cli.errors import MobotError, SimulationFault, did_you_mean
 from mobot_cli.live import protocol, schema, spawning
 from mobot_cli.live.history import History
+from mobot_cli.live.readings import LatestReadings
 from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.run.record import LiveInfo, RunRecord, Status
 from mobot_cli.run.recording import Recording
@@ -34,6 +35,7 @@ class Session:
         self.timeline = Timeline(plan, world, on_refused=self._refused)
         self.recording = Recording(plan, out_dir, resolved_yaml) if out_dir is not None else None
         self.history_file = History(out_dir, self.rate_hz) if out_dir is not None else None
+        self.readings = LatestReadings()
         self.timeline.attach(self._record)
 
     @property
@@ -56,6 +58,7 @@ class Session:
     def _record(self, record: Record) -> None:
         if self.recording is not None:
             self.recording(record)
+        self.readings.take(record)
         if isinstance(record, Spawned):
             self.history(op="spawn", name=record.robot.name, by=record.by, result="OK",
                          namespace=record.robot.namespace, source=record.robot.source,
@@ -136,6 +139,11 @@ class Session:
             truth={"x": s.true_x, "y": s.true_y, "z": s.true_z, "roll": s.true_roll, "pitch": s.true_pitch,
                    "yaw": s.true_yaw, "vx": s.true_vx, "wz": s.true_wz},
             cmd={"linear": s.cmd_linear, "angular": s.cmd_angular})
+
+    def scan(self, request_id: Any, name: str, sensor: str | None) -> dict[str, Any]:
+        """A robot's latest reading of one sensor (default: its first lidar)."""
+        self.known(name)
+        return protocol.reply(request_id, **self.readings.reply_fields(self.robots[name], sensor, self.rate_hz))
 
     # -- checks and records -----------------------------------------------------------------
 

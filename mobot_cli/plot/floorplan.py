@@ -65,7 +65,7 @@ def _outline_points(kind: str, size: tuple[float, ...]) -> list[Vec]:
 def _mesh_shadow(path: str, scale: tuple[float, ...], xyz: Vec, quat: Quat) -> list[Polygon]:
     import numpy as np
 
-    from mobot_cli.plot.meshread import read_mesh
+    from mobot_cli.common.meshfile import read_mesh
 
     vertices, faces = read_mesh(path)
     if len(faces) == 0:

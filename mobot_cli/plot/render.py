@@ -35,6 +35,7 @@ class Track:
     label: str
     true: list[Point] = field(default_factory=list)
     odom: list[Point] = field(default_factory=list)
+    scan: list[Point] = field(default_factory=list)  # its lidar's last returns, world x, y
 
 
 def render(tracks: list[Track], floor: list[Polygon], out: Path, title: str, subtitle: str = "") -> None:
@@ -44,13 +45,16 @@ def render(tracks: list[Track], floor: list[Polygon], out: Path, title: str, sub
     canvas.floor(floor)  # over the grid: obstacles hide it, as furniture hides floor tiles
     canvas.grid_and_axes(grid=False)
     for i, track in enumerate(tracks):
+        if track.scan:
+            canvas.dots(track.scan, PALETTE[i % len(PALETTE)])
+    for i, track in enumerate(tracks):
         color = PALETTE[i % len(PALETTE)]
         if len(track.odom) > 1:
             canvas.dashed(track.odom, color)
         if track.true:
             canvas.solid(track.true, color)
             canvas.start_end(track.true, color)
-    canvas.legend(tracks, any(len(t.odom) > 1 for t in tracks), bool(floor))
+    canvas.legend(tracks, any(len(t.odom) > 1 for t in tracks), bool(floor), any(t.scan for t in tracks))
     canvas.text((MARGIN["left"], 14), title, size=20)
     if subtitle:
         canvas.text((MARGIN["left"], 36), subtitle, size=13, fill=(90, 90, 90))
@@ -61,8 +65,8 @@ def render(tracks: list[Track], floor: list[Polygon], out: Path, title: str, sub
 
 
 def _bounds(tracks: list[Track], floor: list[Polygon]) -> tuple[float, float, float, float]:
-    xs = [p[0] for t in tracks for p in (*t.true, *t.odom)] + [p[0] for poly in floor for p in poly]
-    ys = [p[1] for t in tracks for p in (*t.true, *t.odom)] + [p[1] for poly in floor for p in poly]
+    xs = [p[0] for t in tracks for p in (*t.true, *t.odom, *t.scan)] + [p[0] for poly in floor for p in poly]
+    ys = [p[1] for t in tracks for p in (*t.true, *t.odom, *t.scan)] + [p[1] for poly in floor for p in poly]
     if not xs:
         return -1.0, -1.0, 1.0, 1.0
     x0, x1, y0, y1 = min(xs), max(xs), min(ys), max(ys)
@@ -183,6 +187,12 @@ class _Canvas:
         for run in dash_runs([self.px(p) for p in points], dash * SS, gap * SS):
             self.draw.line(run, fill=color, width=int(1.5 * SS))
 
+    def dots(self, points: list[Point], color) -> None:
+        """Lidar returns: small filled squares."""
+        r = SS
+        for x, y in (self.px(p) for p in points):
+            self.draw.rectangle([x - r, y - r, x + r, y + r], fill=color)
+
     def start_end(self, points: list[Point], color) -> None:
         r = 5 * SS
         x, y = self.px(points[0])
@@ -190,11 +200,13 @@ class _Canvas:
         x, y = self.px(points[-1])
         self.draw.rectangle([x - r, y - r, x + r, y + r], fill=color, outline=INK, width=SS)
 
-    def legend(self, tracks: list[Track], odometry: bool, floor: bool) -> None:
+    def legend(self, tracks: list[Track], odometry: bool, floor: bool, scans: bool = False) -> None:
         x, y = WIDTH - MARGIN["right"] + 24, MARGIN["top"]
         rows: list[tuple[str, object]] = [("true path", "solid")]
         if odometry:
             rows.append(("odometry", "dashed"))
+        if scans:
+            rows.append(("last lidar scan", "dots"))
         rows += [("start", "start"), ("end", "end")]
         if floor:
             rows.append(("obstacles", "floor"))
@@ -229,6 +241,9 @@ class _Canvas:
                 for a in (0, 12, 24):
                     self.draw.line([((x + a) * s, y * s), ((x + min(a + 7, 28)) * s, y * s)], fill=color,
                                    width=int(1.5 * s))
+        elif kind == "dots":
+            for a in (2, 9, 16, 23):
+                self.draw.rectangle([(x + a) * s, (y - 1) * s, (x + a + 2) * s, (y + 1) * s], fill=color)
         elif kind == "floor":
             self.draw.rectangle([x * s, (y - 6) * s, (x + 28) * s, (y + 6) * s], fill=FLOOR, outline=FLOOR_EDGE)
         else:

@@ -11,7 +11,10 @@ message definition embedded. Topics, per sample at the log rate unless noted:
   robot's odometry starts from, so every robot shows in one view, and every fixed joint;
 * ``<ns>/odom`` (nav_msgs/Odometry), ``<ns>/cmd_vel`` (geometry_msgs/Twist),
   ``<ns>/joint_states`` (sensor_msgs/JointState) and, once, ``<ns>/robot_description``
-  (std_msgs/String, transient local; mesh paths as file:// URIs).
+  (std_msgs/String, transient local; mesh paths as file:// URIs);
+* per sensor, at its own rate: ``<ns>/scan`` (LaserScan), ``<ns>/points`` (PointCloud2),
+  ``<ns>/imu`` (Imu), ``<ns>/bumper`` (gazebo_msgs/ContactsState), named and framed as
+  run/sensor_topics.py says, each sensor frame on /tf_static.
 
 Message log times and header stamps are both sim time (nanoseconds from the start), so the
 same run gives the same bytes. Samples are recorded ``CHUNK_EVERY_SAMPLES`` at a time, each
@@ -28,14 +31,17 @@ from pathlib import Path
 from mobot_cli.run.cdr import Packer
 from mobot_cli.run.ros_messages import (CLOCK, CLOCK_PACKER, JOINT_STATE, ODOMETRY, STRING, TF, TWIST,
                                         RobotMessages, file_uris, stamp_of, tf_layout, tf_static)
+from mobot_cli.run import sensor_topics
 from mobot_cli.run.ros_msgs import MESSAGES
+from mobot_cli.run.ros_sensor_msgs import SENSOR_MESSAGES
 from mobot_cli.run.sinks import Sink, named
-from mobot_cli.run.timeline import Sample
+from mobot_cli.run.timeline import Reading, Sample
 from mobot_cli.sim.plan import Plan, RobotPlan
 from mobot_cli.sim.state import RobotState
 
 __all__ = ["BagSink", "file_uris"]
 CHUNK_EVERY_SAMPLES = 50  # as the CSV's flush: about one second at the default log rate
+CHUNK_BYTES = 8 << 20  # sensor data waiting before a chunk is closed anyway (3D lidars)
 
 
 def _latched_qos():
@@ -75,13 +81,15 @@ class BagSink(Sink):
         self.robots: dict[str, _RobotTopics] = {}  # by record name; kept after a delete for its topics
         self.arriving: dict[str, RobotPlan] = {}  # spawned, waiting for their first sample
         self.tf_packers: dict[tuple[str, ...], Packer] = {}  # the /tf shape for a set of robots
-        self.pending: list[Sample | tuple[str, RobotPlan]] = []  # samples, and arrivals between them
+        self.pending: list = []  # samples, arrivals (key, plan) and readings (key, Reading), in order
         self.waiting = 0  # samples in ``pending``
+        self.waiting_bytes = 0  # sensor data in ``pending``
+        self.sensor_topics: dict[str, object] = {}  # topic name -> connection, added once
         self.clock_step = -1  # the step of the last /clock message
 
     def topic(self, name: str, msgtype: str, latched: bool = False):
         """Add a connection, with its message definition and type hash embedded."""
-        msgdef, rihs01 = MESSAGES[msgtype]
+        msgdef, rihs01 = MESSAGES[msgtype] if msgtype in MESSAGES else SENSOR_MESSAGES[msgtype]
         return self.writer.add_connection(name, msgtype, msgdef=msgdef, rihs01=rihs01,
                                           offered_qos_profiles=_latched_qos() if latched else ())
 
@@ -96,17 +104,27 @@ class BagSink(Sink):
         if self.waiting >= CHUNK_EVERY_SAMPLES:
             self._record()
 
+    def reading(self, key: str, reading: Reading) -> None:
+        self.pending.append((key, reading))
+        ranges = getattr(reading.data, "ranges", None)
+        self.waiting_bytes += 64 if ranges is None else ranges.nbytes
+        if self.waiting_bytes >= CHUNK_BYTES:
+            self._record()
+
     def _record(self) -> None:
-        """Record the waiting samples and close their chunk."""
+        """Record the waiting samples and readings and close their chunk."""
         try:
             for item in self.pending:
                 if isinstance(item, Sample):
                     self._record_one(item)
+                elif isinstance(item[1], Reading):
+                    key, reading = item
+                    self.robots[key].write_reading(self.writer.write, reading, self.rate)
                 else:
                     key, robot = item
                     self.arriving[key] = robot
             self.pending.clear()
-            self.waiting = 0
+            self.waiting = self.waiting_bytes = 0
             self._flush()
         except OSError as exc:
             self.broken = True
@@ -192,6 +210,12 @@ class _RobotTopics:
             self.cmd_vel = sink.topic(f"{ns}/cmd_vel", TWIST)
             self.joint_states = sink.topic(f"{ns}/joint_states", JOINT_STATE)
             self.description = sink.topic(f"{ns}/robot_description", STRING, latched=True)
+        self.sensor_connections = {spec.name: _sensor_topic(sink, plan, spec) for spec in plan.sensors}
+
+    def write_reading(self, write, reading: Reading, rate: int) -> None:
+        """One sensor reading as its ROS message."""
+        ns, stamp = stamp_of(reading.step, rate)
+        write(self.sensor_connections[reading.sensor.name], ns, self.messages.reading(stamp, reading))
 
     def write(self, write, ns: int, stamp: tuple[int, int], state: RobotState, tf_values: list[float]) -> None:
         """This robot's messages of one sample; its /tf transforms go to ``tf_values``."""
@@ -200,3 +224,11 @@ class _RobotTopics:
         write(self.cmd_vel, ns, messages.cmd_vel(state))
         write(self.joint_states, ns, messages.joint_states(stamp, state))
         messages.tf_values(stamp, state, tf_values)
+
+
+def _sensor_topic(sink: BagSink, plan: RobotPlan, spec):
+    """A sensor's connection, added once per topic name."""
+    name = sensor_topics.topic(plan, spec)
+    if name not in sink.sensor_topics:
+        sink.sensor_topics[name] = sink.topic(name, sensor_topics.message_type(spec))
+    return sink.sensor_topics[name]

@@ -15,6 +15,7 @@ from typing import Any, Optional
 from mobot_cli.common.transforms import Planar
 from mobot_cli.run.sinks import Sink
 from mobot_cli.run.timeline import Sample
+from mobot_cli.sim.clearance import REACH_MARGIN
 from mobot_cli.sim.plan import Expectation, Plan, RobotPlan
 from mobot_cli.sim.state import RobotState
 
@@ -31,9 +32,12 @@ class Figures:
     tilt: tuple[float, int] = (0.0, 0)  # worst tilt (rad) and its step
     drift: tuple[float, int] = (0.0, 0)  # worst odometry position error (m) and its step
     yaw_drift: tuple[float, int] = (0.0, 0)  # worst odometry yaw error (rad) and its step
+    closest: tuple[float, int, str] = (math.inf, 0, "")  # smallest clearance (m), its step, to what
 
     def advance(self, step: int, state: RobotState) -> None:
         """Carry the figures on by one more sample."""
+        if state.clearance < self.closest[0]:
+            self.closest = (state.clearance, step, state.nearest)
         prev = self.state
         self.distance += math.hypot(state.true_x - prev.true_x, state.true_y - prev.true_y)
         position, yaw = odom_error(self.first, state)
@@ -100,7 +104,8 @@ class Checker(Sink):
         for name, state in sample.states.items():
             known = self.figures.get(name)
             if known is None:
-                self.figures[name] = Figures(sample.step, state, state, tilt=(tilt(state), sample.step))
+                self.figures[name] = Figures(sample.step, state, state, tilt=(tilt(state), sample.step),
+                                             closest=(state.clearance, sample.step, state.nearest))
             else:
                 known.advance(sample.step, state)
         self.last_step = sample.step
@@ -174,8 +179,16 @@ def _odom(exp: Expectation, fig: Figures, rate: int) -> tuple[bool, str]:
     return ok, ", ".join(parts)
 
 
+def _clearance(exp: Expectation, fig: Figures, rate: int) -> tuple[bool, str]:
+    closest, step, what = fig.closest
+    if not math.isfinite(closest):
+        return True, f"stayed more than {exp.limit('min') + REACH_MARGIN:g} m from everything"
+    near = "touched" if closest <= 0.0 else f"came within {closest:.3f} m of"
+    return closest >= exp.limit("min"), f"{near} {what}{_when(1.0, step, rate)}"
+
+
 CHECKS = {"within": _within, "collisions": _collisions, "distance": _distance, "upright": _upright,
-          "odom_error": _odom}
+          "odom_error": _odom, "clearance": _clearance}
 
 
 def describe(exp: Expectation, rate: int) -> str:
@@ -195,6 +208,8 @@ def describe(exp: Expectation, rate: int) -> str:
         span = f"{low:g}..{high:g} m" if low is not None and high is not None else \
             f"at least {low:g} m" if low is not None else f"at most {high:g} m"
         return f"travel {span} {by}"
+    if exp.kind == "clearance":
+        return f"keep at least {lim('min'):g} m from world geometry and other robots {until}"
     if exp.kind == "upright":
         return f"stay upright, tilting at most {_angle(lim('max_tilt'))}, {until}"
     parts = []

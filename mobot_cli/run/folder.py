@@ -37,7 +37,8 @@ def run_status(folder: Path) -> dict[str, Any]:
         raise UsageError(f"'{folder}' is not a run folder (it has no summary.json or scenario.yaml)",
                          hint="Give the folder that mobot run --out wrote.")
     result: dict[str, Any] = {"kind": "run", "path": str(folder), "problems": [],
-                              "csv": csv_extents(folder), "bag": bag_status(folder / "bag")}
+                              "csv": csv_extents(folder), "bag": bag_status(folder / "bag"),
+                              "sensors": sensor_extents(folder)}
     record = RunRecord.load(folder)
     if record is None:
         result["problems"].append("summary.json is not a record mobot wrote" if (folder / SUMMARY).exists()
@@ -73,6 +74,8 @@ def _missing(folder: Path, record: RunRecord, result: dict[str, Any]) -> list[st
     if (folder / "odom").is_dir():
         problems += [f"odom/{robot}.csv is missing" for robot in record.robots
                      if not (folder / "odom" / f"{robot}.csv").is_file()]
+    problems += [f"{sensor.file} is missing" for robot in record.robots.values() for sensor in robot.sensors
+                 if sensor.readings and not (folder / sensor.file).is_file()]
     bag = result["bag"]
     if bag is not None and not bag["complete"]:
         problems.append("bag/ has no metadata.yaml: it was not closed")
@@ -88,6 +91,28 @@ def csv_extents(folder: Path) -> dict[str, dict[str, Any]]:
         whole = [row for row in rows if len(row) == 16]
         out[path.stem] = {"rows": len(whole), "last_t": float(whole[-1][0]) if whole else None,
                           "partial_rows": len(rows) - len(whole)}
+    return out
+
+
+def sensor_extents(folder: Path) -> dict[str, dict[str, Any]]:
+    """Per sensor file (``sensors/<robot>/<sensor>.npy`` or ``.csv``): whole readings or rows in it,
+    and the time of the last one."""
+    out: dict[str, dict[str, Any]] = {}
+    for path in sorted((folder / "sensors").glob("*/*.npy")):
+        import numpy as np
+
+        try:
+            rows = np.load(path, mmap_mode="r")
+            out[path.relative_to(folder).as_posix()] = {
+                "rows": len(rows), "last_t": float(rows["t"][-1]) if len(rows) else None}
+        except (OSError, ValueError, KeyError):
+            out[path.relative_to(folder).as_posix()] = {"rows": 0, "last_t": None}
+    for path in sorted((folder / "sensors").glob("*/*.csv")):
+        with path.open(encoding="utf-8", newline="") as f:
+            rows = [row for row in csv.reader(f)][1:]
+        whole = [row for row in rows if len(row) > 1]
+        out[path.relative_to(folder).as_posix()] = {
+            "rows": len(whole), "last_t": float(whole[-1][0]) if whole else None}
     return out
 
 

@@ -57,6 +57,18 @@ class OdomError(_Model):
     yaw: float
 
 
+class SensorRecord(_Model):
+    """One sensor of a robot: what it is, where its readings went and how many there were."""
+
+    name: str
+    kind: str  # lidar | imu | contact
+    topic: str  # in the bag, namespace included
+    frame_id: str  # frame prefix included
+    rate_hz: float
+    readings: int
+    file: str  # relative to the run folder
+
+
 class RobotRecord(_Model):
     """One robot's life: where it came from, where it ended, how far it went."""
 
@@ -70,6 +82,7 @@ class RobotRecord(_Model):
     distance: float
     collisions: int
     odom_error: OdomError
+    sensors: list[SensorRecord] = []
 
 
 class ExpectationResult(_Model):

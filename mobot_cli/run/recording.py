@@ -2,6 +2,7 @@
 
     DIR/scenario.yaml      the resolved scenario (or world) the run started from
     DIR/odom/, DIR/bag/    per robot, however it entered the world (the sinks)
+    DIR/sensors/           per robot with sensors, opened at the first reading
     DIR/trajectory.png     drawn when the recording closes
     DIR/summary.json       the RunRecord, written last
 
@@ -13,7 +14,7 @@ from __future__ import annotations
 import math
 import platform
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
 from typing import Optional
@@ -23,9 +24,9 @@ from mobot_cli.common.files import write_text_atomic
 from mobot_cli.errors import OutputError, cannot_write
 from mobot_cli.run.expect import Checker, Result, odom_error
 from mobot_cli.run.record import (SUMMARY, ExpectationResult, Expectations, LiveInfo, OdomError, OdomPose, Pose,
-                                  RobotRecord, RunRecord, Status, Versions)
+                                  RobotRecord, RunRecord, SensorRecord, Status, Versions)
 from mobot_cli.run.sinks import CsvSink, Sink
-from mobot_cli.run.timeline import Deleted, Record, Sample, Spawned
+from mobot_cli.run.timeline import Deleted, Reading, Record, Sample, Spawned
 from mobot_cli.sim.plan import Plan, RobotPlan
 from mobot_cli.sim.state import RobotState
 
@@ -41,6 +42,7 @@ class _Life:
     first: Optional[RobotState] = None
     last: Optional[RobotState] = None
     distance: float = 0.0
+    readings: dict[str, int] = field(default_factory=dict)  # sensor name -> readings recorded
 
     def add(self, state: RobotState) -> None:
         if self.first is None:
@@ -49,7 +51,7 @@ class _Life:
             self.distance += math.hypot(state.true_x - self.last.true_x, state.true_y - self.last.true_y)
         self.last = state
 
-    def record(self) -> RobotRecord:
+    def record(self, rate_hz: int) -> RobotRecord:
         s = self.last
         position, yaw = odom_error(self.first, s)
         return RobotRecord(
@@ -59,7 +61,17 @@ class _Life:
                             pitch=_r(s.true_pitch), yaw=_r(s.true_yaw)),
             final_odom=OdomPose(x=_r(s.odom_x), y=_r(s.odom_y), yaw=_r(s.odom_yaw)),
             distance=_r(self.distance), collisions=s.collisions,
-            odom_error=OdomError(position=_r(position), yaw=_r(yaw)))
+            odom_error=OdomError(position=_r(position), yaw=_r(yaw)),
+            sensors=[self._sensor(spec, rate_hz) for spec in self.plan.sensors])
+
+    def _sensor(self, spec, rate_hz: int) -> SensorRecord:
+        from mobot_cli.run import sensor_topics
+        from mobot_cli.run.sensor_files import sensor_file
+
+        return SensorRecord(name=spec.name, kind=spec.kind, topic=sensor_topics.topic(self.plan, spec),
+                            frame_id=sensor_topics.sensor_frame(self.plan, spec).frame,
+                            rate_hz=_r(sensor_topics.rate_hz(spec, rate_hz)),
+                            readings=self.readings.get(spec.name, 0), file=sensor_file(self.name, spec))
 
 
 class Recording:
@@ -80,6 +92,7 @@ class Recording:
         self._keys: dict[str, str] = {}  # robot name -> its name in the record
         self._lives: dict[str, _Life] = {}  # record name -> life, in order of arrival
         self._renamed = False
+        self._sensor_files = False
         self._started = time.perf_counter()
         made = not out_dir.exists()
         try:
@@ -102,6 +115,8 @@ class Recording:
                 self._sample(record)
             elif isinstance(record, Spawned):
                 self._spawned(record)
+            elif isinstance(record, Reading):
+                self._reading(record)
             elif isinstance(record, Deleted):
                 key = self._keys.pop(record.name)
                 self._lives[key].deleted_at = record.step / self.plan.physics.rate_hz
@@ -128,6 +143,21 @@ class Recording:
         self._lives[key] = _Life(key, record.robot, record.step / self.plan.physics.rate_hz)
         for sink in self.sinks:
             sink.spawned(record.step, key, record.robot)
+
+    def _reading(self, record: Reading) -> None:
+        key = self._keys[record.robot]
+        life = self._lives[key]
+        life.readings[record.sensor.name] = life.readings.get(record.sensor.name, 0) + 1
+        if not self._sensor_files:  # a run without sensors never makes DIR/sensors/
+            from mobot_cli.run.sensor_files import SensorFilesSink
+
+            files = SensorFilesSink(self.plan, self.out_dir)
+            for known in self._lives.values():
+                files.spawned(0, known.name, known.plan)
+            self.sinks.insert(0, files)
+            self._sensor_files = True
+        for sink in self.sinks:
+            sink.reading(key, record)
 
     def _sample(self, sample: Sample) -> None:
         if self._renamed:
@@ -185,7 +215,8 @@ class Recording:
             real_time_factor=round(sim_time / wall, 2) if wall > 0 else None,
             physics_rate_hz=plan.physics.rate_hz, log_rate_hz=_r(plan.physics.rate_hz / plan.log_every),
             notices=list(plan.notices),
-            robots={key: life.record() for key, life in self._lives.items() if life.last is not None},
+            robots={key: life.record(plan.physics.rate_hz) for key, life in self._lives.items()
+                    if life.last is not None},
             expectations=expectations, live=live)
 
 

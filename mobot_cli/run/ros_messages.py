@@ -14,8 +14,10 @@ import re
 from typing import Sequence
 
 from mobot_cli.common.transforms import odom_origin, yaw_quat
+from mobot_cli.run import sensor_topics
 from mobot_cli.run.cdr import Layout, Packer
 from mobot_cli.run.tf import RobotFrames, Transform
+from mobot_cli.run.timeline import Reading
 from mobot_cli.sim.plan import RobotPlan
 from mobot_cli.sim.state import RobotState
 
@@ -59,6 +61,7 @@ class RobotMessages:
         else:
             joints.u32(0).u32(0)
         self.joint_packer = joints.u32(0).build()  # effort: none
+        self.sensor_frames = {spec.name: sensor_topics.sensor_frame(plan, spec) for spec in plan.sensors}
 
     def description(self) -> bytes:
         """std_msgs/String with the URDF, mesh paths as file:// URIs."""
@@ -93,11 +96,30 @@ class RobotMessages:
             out.extend((*stamp, *joint.transform(positions)))
 
     def statics(self, state: RobotState) -> list[Transform]:
-        """``world -> <prefix>odom`` where odometry (0, 0, 0) is (always first), then every fixed joint."""
+        """``world -> <prefix>odom`` where odometry (0, 0, 0) is (always first), then every fixed
+        joint, then every sensor's frame."""
         # The odom frame sits where odometry (0, 0, 0) is: the truth now, less the odometry so far.
         origin = odom_origin(state.true_x, state.true_y, state.true_yaw, state.odom_x, state.odom_y, state.odom_yaw)
         odom = Transform(WORLD_FRAME, self.frames.odom_frame, (origin.x, origin.y, state.true_z), yaw_quat(origin.yaw))
-        return [odom, *self.frames.static]
+        sensors = [Transform(f.parent, f.frame, f.xyz, f.quat) for f in self.sensor_frames.values() if f.parent]
+        return [odom, *self.frames.static, *sensors]
+
+    def reading(self, stamp: tuple[int, int], reading: Reading) -> bytes:
+        """One sensor reading as its ROS message (CDR)."""
+        from mobot_cli.run import sensor_cdr  # numpy: only when a robot has sensors
+
+        spec, data = reading.sensor, reading.data
+        frame = self.sensor_frames[spec.name].frame
+        if spec.kind == "lidar":
+            if sensor_topics.is_3d(spec):
+                return sensor_cdr.point_cloud2(stamp, frame, data.ranges, data.beams)
+            return sensor_cdr.laser_scan(stamp, frame, spec, sensor_cdr.scan_row(data.ranges))
+        if spec.kind == "imu":
+            return sensor_cdr.imu(stamp, frame, spec, data.orientation, data.angular_velocity,
+                                  data.linear_acceleration)
+        # in the world frame, as gazebo_ros_bumper without a <frame_name>
+        collision = f"{self.plan.name}::{spec.link}::{spec.collision or spec.link}"
+        return sensor_cdr.contacts_state(stamp, WORLD_FRAME, collision, data.contacts)
 
 
 def tf_layout(robots: Sequence[RobotFrames]) -> Packer:

@@ -1,8 +1,9 @@
 """Writers for the run folder. Each sink consumes the timeline's records; none drives it.
 
 A sink is told when a robot arrives (``spawned``, with its plan) and leaves (``deleted``),
-takes ``write(sample)`` for every sample, and finishes its files in ``close()``. Robots are
-named by their name in the record (``<name>__2`` for a name used again in a live world).
+takes ``write(sample)`` for every sample and ``reading(key, reading)`` for every sensor
+reading, and finishes its files in ``close()``. Robots are named by their name in the record
+(``<name>__2`` for a name used again in a live world).
 """
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from mobot_cli.run.timeline import Sample
+from mobot_cli.run.timeline import Reading, Sample
 from mobot_cli.sim.plan import Plan, RobotPlan
 from mobot_cli.sim.state import RobotState
 
@@ -29,6 +30,9 @@ class Sink:
 
     def write(self, sample: Sample) -> None:
         """Record one sample."""
+
+    def reading(self, key: str, reading: Reading) -> None:
+        """Record one sensor reading of robot ``key`` (after its first sample)."""
 
     def close(self) -> None:
         """Finish every file."""

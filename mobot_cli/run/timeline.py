@@ -1,12 +1,14 @@
 """The one timeline every door drives: `mobot run`, `mobot serve` and whatever steps a world.
 
 A Timeline owns the order of things within a physics step: scripted events, then the command
-scripts and the ends of timed commands, then the log row; requests of a live world enter
-between steps through the same ``spawn``, ``delete`` and ``command`` a scripted event uses.
-It never writes files: it hands records (``Spawned``, ``Deleted``, ``Sample``) to consumers,
-and the run folder's writers take them from there. Inputs from other threads (a ROS 2
-``/cmd_vel``) queue up and enter through an input polled at the start of every ``tick``, on
-the world's own thread, whichever loop drives it.
+scripts and the ends of timed commands, then the log row, then the sensor readings due;
+requests of a live world enter between steps through the same ``spawn``, ``delete`` and
+``command`` a scripted event uses. It never writes files: it hands records (``Spawned``,
+``Deleted``, ``Sample``, ``Reading``) to consumers, and the run folder's writers take them
+from there. A sensor reads at its own rate: at its robot's spawn step and every ``every``
+steps after it, all sensors due at one step computed together. Inputs from other threads (a
+ROS 2 ``/cmd_vel``) queue up and enter through an input polled at the start of every
+``tick``, on the world's own thread, whichever loop drives it.
 """
 
 from __future__ import annotations
@@ -16,7 +18,8 @@ from dataclasses import dataclass
 from typing import Callable, Iterator, Protocol, Union
 
 from mobot_cli.errors import MobotError, SpawnError
-from mobot_cli.sim.plan import Event, Plan, RobotPlan
+from mobot_cli.sim.clearance import REACH_MARGIN
+from mobot_cli.sim.plan import Event, Plan, RobotPlan, SensorSpec
 from mobot_cli.sim.state import RobotState
 from mobot_cli.sim.world import World
 
@@ -51,7 +54,18 @@ class Deleted:
     message: str | None = None
 
 
-Record = Union[Sample, Spawned, Deleted]
+@dataclass(frozen=True)
+class Reading:
+    """A sensor's reading after ``step`` physics steps (data: sim.sensors ScanData, ImuData or
+    ContactData)."""
+
+    step: int
+    robot: str
+    sensor: SensorSpec
+    data: object
+
+
+Record = Union[Sample, Spawned, Deleted, Reading]
 
 
 class Consumer(Protocol):
@@ -93,6 +107,15 @@ class Timeline:
         self._commands: dict[int, list[tuple[str, float, float]]] = defaultdict(list)
         self._stops: dict[str, int] = {}  # robot -> step at which its timed command ends
         self._logged = -1  # the step of the last complete sample
+        self._ticked = -1  # the step of the last tick
+        # step -> the sensors due then: (robot name, its plan, sensor); empty without sensors
+        self._due: dict[int, list[tuple[str, RobotPlan, SensorSpec]]] = {}
+        # robot name (or "all") -> how far its clearance is measured, for `clearance` expectations
+        self._clearance: dict[str, float] = {}
+        for exp in plan.expectations:
+            if exp.kind == "clearance":
+                reach = exp.limit("min") + REACH_MARGIN
+                self._clearance[exp.robot] = max(reach, self._clearance.get(exp.robot, 0.0))
         for event in plan.events:
             self._events[event.step].append(event)
         spawned = [event.spawn for event in plan.events if event.spawn is not None]
@@ -134,8 +157,8 @@ class Timeline:
             self.spawn(robot, "scenario")
 
     def tick(self) -> None:
-        """Everything due at the current step, in order: events, commands, ends of timed
-        commands, the log row."""
+        """Everything due at the current step, in order: inputs, events, commands, ends of timed
+        commands, the log row, sensor readings."""
         step = self.step
         for poll in self._inputs:
             poll()
@@ -151,6 +174,11 @@ class Timeline:
                     self.world.set_command(name, 0.0, 0.0)
         if step % self.plan.log_every == 0 or step == self.plan.total_steps:
             self.log()
+        if self._due:
+            due = self._due.pop(step, None)
+            if due:
+                self._read(step, due)
+        self._ticked = step
 
     def advance(self) -> None:
         """One physics step."""
@@ -162,6 +190,16 @@ class Timeline:
             self._logged = self.step
             self._consume(Sample(self.step, {name: self.world.read(name) for name in self.robots}))
 
+    def _read(self, step: int, due: list[tuple[str, RobotPlan, SensorSpec]]) -> None:
+        """Take the readings due now (of robots still in the world) and schedule the next ones."""
+        due = [entry for entry in due if self.robots.get(entry[0]) is entry[1]]
+        if not due:
+            return
+        data = self.world.sense([(name, sensor.name) for name, _, sensor in due])
+        for (name, robot, sensor), reading in zip(due, data):
+            self._consume(Reading(step, name, sensor, reading))
+            self._due.setdefault(step + max(1, sensor.every), []).append((name, robot, sensor))
+
     # -- what events and requests do --------------------------------------------------------
 
     def spawn(self, robot: RobotPlan, by: str) -> None:
@@ -172,10 +210,18 @@ class Timeline:
             raise NameTaken(f"robot '{robot.name}' or namespace '{robot.namespace}' is already in the world")
         self.world.spawn(robot)
         self.robots[robot.name] = robot
+        if self._clearance:
+            reach = max(self._clearance.get(robot.name, 0.0), self._clearance.get("all", 0.0))
+            if reach:
+                self.world.watch_clearance(robot.name, reach)
         state = self.world.read(robot.name)
         self._consume(Spawned(self.step, robot, by, state))
         if self._logged == self.step or self.step % self.plan.log_every:
             self._consume(Sample(self.step, {robot.name: state}, complete=False))
+        late = self._ticked == self.step  # a live spawn after this step's tick: one period on
+        for sensor in robot.sensors:
+            at = self.step + max(1, sensor.every) if late else self.step
+            self._due.setdefault(at, []).append((robot.name, robot, sensor))
 
     def delete(self, name: str, by: str, message: str | None = None, last_row: bool = True) -> None:
         """Take a robot out now; its state at this step is its last row (unless its state broke)."""

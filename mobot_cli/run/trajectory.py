@@ -1,4 +1,5 @@
-"""``DIR/trajectory.png``: every robot's true path and odometry over the floor plan, after every run.
+"""``DIR/trajectory.png``: every robot's true path and odometry over the floor plan, after every run,
+with each lidar robot's last scan as points.
 
 The sink only collects points while the run goes; the plotting code (Pillow, and trimesh for
 mesh worlds) is imported when the picture is drawn, at close.
@@ -10,9 +11,12 @@ from pathlib import Path
 
 from mobot_cli.common.transforms import Planar, odom_origin
 from mobot_cli.run.sinks import Sink, named
-from mobot_cli.run.timeline import Sample
+from mobot_cli.run.timeline import Reading, Sample
 from mobot_cli.sim.plan import Plan, WorldPlan
 from mobot_cli.sim.state import RobotState
+
+SCAN_BAND = (0.05, 2.0)  # m above the floor: a 3D lidar's returns drawn on the floor plan
+MAX_SCAN_POINTS = 20000
 
 
 def odom_to_world(state: RobotState) -> Planar:
@@ -50,6 +54,11 @@ class TrajectorySink(Sink):
             points.odom.append(to_world(state.odom_x, state.odom_y))
         self.last_step = sample.step
 
+    def reading(self, key: str, reading: Reading) -> None:
+        """Keep each robot's last lidar scan; its points are made when the picture is drawn."""
+        if reading.sensor.kind == "lidar" and key in self.open:
+            self.open[key][0].last_scan = reading.data
+
     def close(self) -> None:
         try:
             draw(self.tracks, self.world, self.path, self.title,
@@ -64,6 +73,17 @@ class _Points:
 
     def __init__(self, label: str):
         self.label, self.true, self.odom = label, [], []
+        self.last_scan = None  # sim.sensors.ScanData
+
+    @property
+    def scan(self) -> list[tuple[float, float]]:
+        """The last scan's returns in world x, y (a 3D lidar's within the floor plan's band)."""
+        if self.last_scan is None:
+            return []
+        points = self.last_scan.world_points()
+        if self.last_scan.ranges.shape[0] > 1:  # a 3D lidar: what a floor plan shows, not the floor
+            points = points[(points[:, 2] > SCAN_BAND[0]) & (points[:, 2] < SCAN_BAND[1])]
+        return [tuple(xy) for xy in points[::max(1, len(points) // MAX_SCAN_POINTS), :2].tolist()]
 
 
 def draw(tracks: list, world: WorldPlan | None, out: Path, title: str, subtitle: str) -> None:
@@ -72,7 +92,8 @@ def draw(tracks: list, world: WorldPlan | None, out: Path, title: str, subtitle:
     from mobot_cli.plot.render import Track, render
 
     labels = [t.label for t in tracks]
-    plot_tracks = [Track(_unique(t.label, labels[:i]), t.true, t.odom) for i, t in enumerate(tracks)]
+    plot_tracks = [Track(_unique(t.label, labels[:i]), t.true, t.odom, getattr(t, "scan", []))
+                   for i, t in enumerate(tracks)]
     render(plot_tracks, floor_plan(world) if world is not None else [], out, title, subtitle)
 
 

@@ -14,7 +14,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 
 from mobot_cli.scenario.limits import Float, Int, NonNegativeFloat, PositiveFloat, Seconds
 
-KINDS = ("within", "collisions", "distance", "upright", "odom_error")
+KINDS = ("within", "collisions", "distance", "upright", "odom_error", "clearance")
 # Tilt (angle between the robot's z axis and the world's) beyond which a robot has tipped over.
 DEFAULT_MAX_TILT = math.radians(45.0)
 
@@ -83,6 +83,12 @@ class OdomErrorSpec(_Strict):
         return self
 
 
+class ClearanceSpec(_Strict):
+    """The closest the robot's geometry may come to world geometry or other robots (metres)."""
+
+    min: PositiveFloat
+
+
 class ExpectSpec(_Strict):
     """One expectation: a robot (or ``all``), one check and when it applies."""
 
@@ -93,6 +99,7 @@ class ExpectSpec(_Strict):
     distance: Optional[RangeSpec] = None
     upright: Optional[Union[Literal[True], UprightSpec]] = None
     odom_error: Optional[Union[NonNegativeFloat, OdomErrorSpec]] = None
+    clearance: Optional[ClearanceSpec] = None
 
     @field_validator("at", mode="before")
     @classmethod

@@ -66,6 +66,8 @@ def _limits(spec: ExpectSpec) -> tuple[tuple[str, float], ...]:
         return (("max", float(spec.collisions)),)
     if kind == "distance":
         return tuple((k, float(v)) for k, v in spec.distance.model_dump(exclude_none=True).items())
+    if kind == "clearance":
+        return (("min", float(spec.clearance.min)),)
     if kind == "upright":
         upright = spec.upright if isinstance(spec.upright, UprightSpec) else UprightSpec()
         return (("max_tilt", float(upright.max_tilt)),)

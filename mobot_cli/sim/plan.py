@@ -168,7 +168,7 @@ class Expectation:
     """A check on a run's samples (see run/expect.py), from a scenario's ``expect:`` list."""
 
     robot: str  # a robot's name, or "all": every robot, each checked on its own
-    kind: str  # "within" | "collisions" | "distance" | "upright" | "odom_error"
+    kind: str  # "within" | "collisions" | "distance" | "upright" | "odom_error" | "clearance"
     limits: tuple[tuple[str, float], ...]  # e.g. (("x", 5.0), ("y", 1.0), ("radius", 0.3))
     step: int | None = None  # a log row's step; None is the end of the run
 

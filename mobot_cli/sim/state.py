@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import operator
 from dataclasses import dataclass, field
 
@@ -34,6 +35,10 @@ class RobotState:
     joint_positions: dict[str, float] = field(default_factory=dict, compare=True)
     collisions: int = 0  # collision events so far (sim/contacts.py); not a CSV column
     joint_velocities: dict[str, float] = field(default_factory=dict)  # rad/s or m/s; for joint_states
+    # Distance to the nearest world geometry or robot (sim/clearance.py) and what it is, for a
+    # robot whose clearance is watched; +inf otherwise or when nothing is that near. Not columns.
+    clearance: float = math.inf
+    nearest: str = ""
 
     # Column order of the odom CSV (DESIGN.md), without the leading time column.
     CSV_FIELDS = (

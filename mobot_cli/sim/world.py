@@ -8,15 +8,19 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 from mobot_cli.errors import SimulationFault, SpawnError, WorldError, did_you_mean
-from mobot_cli.sim import placement, static_shapes, surroundings
+from mobot_cli.sim import clearance, placement, static_shapes, surroundings
 from mobot_cli.sim.bullet import p
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, ContactCounter
 from mobot_cli.sim.plan import Physics, RobotPlan, WorldPlan
 from mobot_cli.sim.robot import SimRobot
 from mobot_cli.sim.state import RobotState
 from mobot_cli.sim.urdf_file import links_with_friction, quiet_stdout, urdf_path
+
+if TYPE_CHECKING:
+    from mobot_cli.sim.sensors import Sensing
 
 __all__ = ["World", "RobotState"]
 
@@ -74,6 +78,8 @@ class World:
         self._check_every = max(1, round(physics.rate_hz / HEALTH_RATE_HZ))
         self._contacts = ContactCounter()
         self._contact_every = max(1, round(physics.rate_hz / CONTACT_RATE_HZ))
+        self._sensing: Sensing | None = None  # made when the first robot with sensors arrives
+        self._clearance: dict[str, float] = {}  # robot -> how far its clearance is measured (m)
         try:
             self._build(world)
         except BaseException:
@@ -168,6 +174,8 @@ class World:
         try:
             self._settle_in(uid, robot)
             sim_robot = SimRobot(cid, uid, robot, self.physics.dt)
+            if robot.sensors:
+                self._sensors().add(robot.name, uid, sim_robot.links, robot.sensors)
         except BaseException:
             p.removeBody(uid, physicsClientId=cid)
             raise
@@ -217,6 +225,9 @@ class World:
         p.removeBody(robot.body, physicsClientId=self._cid)
         del self._robots[name]
         self._contacts.forget(name)
+        if self._sensing is not None:
+            self._sensing.forget(name)
+        self._clearance.pop(name, None)
         if robot in self._ramping:
             self._ramping.remove(robot)
 
@@ -261,9 +272,37 @@ class World:
                 f"at step {self._steps}",
                 hint="Is there a floor under its spawn pose?")
 
+    def sense(self, due: list[tuple[str, str]]) -> list[object]:
+        """Readings of the (robot, sensor name) pairs due now, computed together (sim/sensors.py)."""
+        return self._sensors().read(self._steps, due)
+
+    def _sensors(self) -> Sensing:
+        if self._sensing is None:
+            from mobot_cli.sim.sensors import Sensing  # worlds without sensors never load it
+
+            self._sensing = Sensing(self._cid, self.plan, self.seed, self.physics.dt, self.physics.gravity,
+                                    self.label, lambda: [r.body for r in self._robots.values()])
+        return self._sensing
+
+    def label(self, body: int) -> str:
+        """What messages call a body: "robot 'NAME'" or the static body's label."""
+        for name, robot in self._robots.items():
+            if robot.body == body:
+                return f"robot '{name}'"
+        return self._statics.get(body, f"body {body}")
+
     def read(self, name: str) -> RobotState:
-        """The robot's command, odometry and ground truth now."""
-        return self._robot(name).state(self._steps)
+        """The robot's command, odometry and ground truth now (and its clearance when watched)."""
+        robot = self._robot(name)
+        state = robot.state(self._steps)
+        if self._clearance and name in self._clearance:
+            state.clearance, state.nearest = clearance.nearest(
+                self._cid, robot.body, self._clearance[name], [r.body for r in self._robots.values()], self.label)
+        return state
+
+    def watch_clearance(self, name: str, reach: float) -> None:
+        """Measure the robot's clearance (up to ``reach`` m) whenever its state is read."""
+        self._clearance[name] = max(reach, self._clearance.get(name, 0.0))
 
     def _robot(self, name: str) -> SimRobot:
         try:

@@ -32,13 +32,13 @@ def sensor_notices(robot) -> list[str]:
     return [n.message for n in robot.notices if "sensor" in n.message]
 
 
-def test_bundled_mobot_has_an_imu_and_with_lidar_a_360_beam_scan():
-    assert [s.name for s in load_robot("mobot").sensors] == ["imu"]
-    imu, = load_robot("mobot").sensors
+def test_bundled_mobot_has_an_imu_and_a_360_beam_scan_when_asked():
+    assert load_robot("mobot").sensors == ()  # opt-in: a robot without sensors pays nothing for them
+    imu, = load_robot("mobot", {"imu": "true"}).sensors
     assert (imu.type, imu.link, imu.rate_hz, imu.topic, imu.frame_id) == \
         ("imu", "base_link", 120.0, "imu", "base_link")
     assert (imu.noise_stddev, imu.accel_noise_stddev) == (2e-4, 1.7e-2)
-    lidar, imu_again = load_robot("mobot", {"lidar": "true"}).sensors
+    lidar, imu_again = load_robot("mobot", {"lidar": "true", "imu": "true"}).sensors
     assert imu_again == imu
     assert (lidar.name, lidar.type, lidar.kind, lidar.link) == ("lidar", "ray", "lidar", "lidar_link")
     assert (lidar.samples, lidar.min_angle, lidar.max_angle) == (360, -3.14159, 3.14159)

@@ -23,7 +23,7 @@ def tree_links(node: dict) -> set[str]:
 
 
 def test_inspect_bundled_robot_json():
-    code, out, err = astuple(invoke(["inspect", "mobot", "lidar:=true", "--json"]))
+    code, out, err = astuple(invoke(["inspect", "mobot", "lidar:=true", "imu:=true", "--json"]))
     assert code == 0 and err == ""
     info = json.loads(out)
     assert info["root_link"] == "base_footprint"
@@ -51,7 +51,7 @@ def test_inspect_text_shows_tree_and_drive():
 
 
 def test_inspect_lists_sensors_in_80_columns():
-    code, out, err = astuple(invoke(["inspect", "mobot", "lidar:=true"]))
+    code, out, err = astuple(invoke(["inspect", "mobot", "lidar:=true", "imu:=true"]))
     assert code == 0 and err == ""
     listed = out.split("sensors:\n", 1)[1].splitlines()
     assert listed == ["  lidar (ray, 2D lidar) on lidar_link, topic scan, 10 Hz",
@@ -62,7 +62,7 @@ def test_inspect_lists_sensors_in_80_columns():
 
 
 def test_inspect_json_sensors_hold_their_kind_fields():
-    code, out, err = astuple(invoke(["inspect", "mobot", "lidar:=true", "--json"]))
+    code, out, err = astuple(invoke(["inspect", "mobot", "lidar:=true", "imu:=true", "--json"]))
     lidar, imu = json.loads(out)["sensors"]
     assert {k: lidar[k] for k in ("name", "type", "kind", "link", "topic", "frame_id", "rate_hz",
                                   "samples", "vertical_samples", "range_min", "range_max")} == \

@@ -38,7 +38,7 @@ def sensor_notices(plan) -> list[str]:
 def test_bundled_mobot_plan_sensors_in_steps(tmp_path):
     plan = prepare(scenario(tmp_path, """\
         robots:
-          - {name: mobot, args: {lidar: "true"}}
+          - {name: mobot, args: {lidar: "true", imu: "true"}}
         """)).plan
     lidar, imu = plan.robots[0].sensors
     assert (lidar.name, lidar.kind, lidar.link, lidar.every, lidar.topic, lidar.frame_id) == \
@@ -57,7 +57,7 @@ def test_bundled_scenarios_have_no_sensor_notices():
     for path in sorted((REPO / "scenarios").glob("*.yaml")):
         plan = prepare(path).plan
         assert sensor_notices(plan) == [], path.name
-        assert all(r.sensors and r.sensors[0].name == "imu" for r in plan.robots), path.name
+        assert all(not r.sensors for r in plan.robots), path.name  # the bundled robot's sensors are opt-in
 
 
 def test_the_design_example(tmp_path):
@@ -65,7 +65,7 @@ def test_the_design_example(tmp_path):
         robots:
           - name: mobot
             description: mobot
-            args: {lidar: "true"}
+            args: {lidar: "true", imu: "true"}
             sensors:
               scan: {rate_hz: 10, samples: 360, range_max: 8.0, noise_stddev: 0.01}
               imu: {type: imu, link: base_link, rate_hz: 100}
@@ -82,7 +82,7 @@ def test_every_field_changes(tmp_path):
     plan = prepare(scenario(tmp_path, """\
         robots:
           - name: mobot
-            args: {lidar: "true"}
+            args: {lidar: "true", imu: "true"}
             sensors:
               scan:
                 type: gpu_lidar
@@ -125,7 +125,7 @@ def test_adding_sensors(tmp_path):
               chassis_bump: {type: contact, link: base_link, collision: base_link}
         """)).plan
     found = sensors(plan)
-    assert list(found) == ["imu", "front_bumper", "side-scan", "chassis_bump"]
+    assert list(found) == ["front_bumper", "side-scan", "chassis_bump"]
     bumper = found["front_bumper"]
     assert (bumper.kind, bumper.topic, bumper.collision, bumper.every, bumper.source) == \
         ("contact", "front/bumper", "", 1, "scenario")
@@ -137,14 +137,14 @@ def test_adding_sensors(tmp_path):
 
 @pytest.mark.parametrize("off", ["false", "off", "{enabled: false}"])
 def test_turning_a_sensor_off(tmp_path, off):
-    plan = prepare(scenario(tmp_path, f"robots:\n  - {{name: mobot, sensors: {{imu: {off}}}}}\n")).plan
+    plan = prepare(scenario(tmp_path, f"robots:\n  - {{name: mobot, args: {{imu: 'true'}}, sensors: {{imu: {off}}}}}\n")).plan
     assert plan.robots[0].sensors == ()
 
 
 @pytest.mark.parametrize("on", ["true", "on", "{}", "{enabled: true}"])
 def test_on_keeps_a_sensor_as_described(tmp_path, on):
-    plan = prepare(scenario(tmp_path, f"robots:\n  - {{name: mobot, sensors: {{imu: {on}}}}}\n")).plan
-    assert plan.robots[0].sensors == prepare(scenario(tmp_path, "robots:\n  - {name: mobot}\n")).plan.robots[0].sensors
+    plan = prepare(scenario(tmp_path, f"robots:\n  - {{name: mobot, args: {{imu: 'true'}}, sensors: {{imu: {on}}}}}\n")).plan
+    assert plan.robots[0].sensors == prepare(scenario(tmp_path, "robots:\n  - {name: mobot, args: {imu: 'true'}}\n")).plan.robots[0].sensors
 
 
 def test_keys_by_name_topic_and_last_segment(corpus, tmp_path, monkeypatch):
@@ -202,7 +202,7 @@ def test_two_keys_for_one_sensor_is_an_error(tmp_path, two_lidars):
 
 
 def test_set_changes_and_adds_sensors(tmp_path):
-    path = scenario(tmp_path, "robots:\n  - {name: mobot, args: {lidar: 'true'}}\n")
+    path = scenario(tmp_path, "robots:\n  - {name: mobot, args: {lidar: 'true', imu: 'true'}}\n")
     plan = prepare(path, ["robots.mobot.sensors.scan.rate_hz=5",
                           "robots.mobot.sensors.bump={type: contact, link: base_link}",
                           "robots.mobot.sensors.imu=off"]).plan
@@ -215,11 +215,11 @@ def test_set_changes_and_adds_sensors(tmp_path):
 
 
 def test_description_rates_against_the_physics_rate(tmp_path):
-    slow = prepare(scenario(tmp_path, "robots:\n  - {name: mobot}\n", physics=100)).plan
+    slow = prepare(scenario(tmp_path, "robots:\n  - {name: mobot, args: {imu: 'true'}}\n", physics=100)).plan
     assert slow.robots[0].sensors[0].every == 1
     assert sensor_notices(slow) == ["robot 'mobot': sensor 'imu' of mobot.urdf.xacro at 120 Hz is above "
                                     "physics.rate_hz 100: it reads every step"]
-    fast = prepare(scenario(tmp_path, "robots:\n  - {name: mobot}\n", physics=1000)).plan
+    fast = prepare(scenario(tmp_path, "robots:\n  - {name: mobot, args: {imu: 'true'}}\n", physics=1000)).plan
     assert fast.robots[0].sensors[0].every == 8
     assert sensor_notices(fast) == ["robot 'mobot': sensor 'imu' of mobot.urdf.xacro at 120 Hz is not a "
                                     "whole number of physics steps at 1000 Hz: reading every 8 steps (125 Hz)"]
@@ -231,9 +231,10 @@ def test_fleets_and_spawned_robots_get_their_sensors(tmp_path):
           - name: m_{i}
             count: 2
             poses: [[0, 0, 0], [1, 0, 0]]
+            args: {imu: "true"}
             sensors: {imu: {rate_hz: 60}}
         events:
-          - {at: 1.0, spawn: {name: late, sensors: {imu: false}}}
+          - {at: 1.0, spawn: {name: late, args: {imu: "true"}, sensors: {imu: false}}}
         """)).plan
     assert [r.sensors[0].every for r in plan.robots] == [4, 4]
     assert plan.events[0].spawn.sensors == ()
@@ -241,7 +242,7 @@ def test_fleets_and_spawned_robots_get_their_sensors(tmp_path):
 
 def test_a_live_spawn_error_has_no_location(tmp_path):
     ctx = RobotResolver(240, 120, 2400, base_dir=tmp_path)
-    spec = RobotSpec.model_validate({"name": "r", "sensors": {"imu": {"rate_hz": 500}}})
+    spec = RobotSpec.model_validate({"name": "r", "args": {"imu": "true"}, "sensors": {"imu": {"rate_hz": 500}}})
     with pytest.raises(ScenarioError) as err:
         ctx.plans(spec, ("robots", 0))
     assert str(err.value) == "rate_hz 500 is above physics.rate_hz 240. A sensor reads at most once per physics step."
@@ -251,7 +252,7 @@ def test_resolved_scenario_writes_the_scenario_sensors_and_round_trips(tmp_path)
     first = prepare(scenario(tmp_path, """\
         robots:
           - name: mobot
-            args: {lidar: "true"}
+            args: {lidar: "true", imu: "true"}
             sensors:
               scan: {rate_hz: 7, samples: 180, pose: {xyz: [0, 0, 0.01], rpy: [0, 0, 0.5]}}
               imu: off
@@ -285,7 +286,7 @@ def test_any_rate_becomes_whole_steps_and_reloads_to_the_same(tmp_path, rate, ph
     if rate > physics:
         return
     os.makedirs(tmp_path, exist_ok=True)
-    path = scenario(tmp_path, f"robots:\n  - {{name: mobot, sensors: {{imu: {{rate_hz: {rate!r}}}}}}}\n",
+    path = scenario(tmp_path, f"robots:\n  - {{name: mobot, args: {{imu: 'true'}}, sensors: {{imu: {{rate_hz: {rate!r}}}}}}}\n",
                     physics=physics)
     first = prepare(path)
     every = first.plan.robots[0].sensors[0].every

@@ -1,0 +1,59 @@
+"""Vertices and triangles of OBJ and STL files, read with numpy alone.
+
+The floor plan and the lidar's world scene need only triangles; importing trimesh costs
+~0.8 s, more than drawing a whole house. World meshes reach the plan as OBJ (COLLADA is
+converted to OBJ by the world loader) or STL, which these readers cover; anything else goes
+to trimesh.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+_STL_TRIANGLE = np.dtype([("normal", "<f4", 3), ("v", "<f4", (3, 3)), ("attr", "<u2")])
+
+
+def read_mesh(path: str) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (n, 3) and triangle indices (m, 3); empty arrays when the file is unreadable."""
+    suffix = Path(path).suffix.lower()
+    try:
+        if suffix == ".obj":
+            return _obj(Path(path).read_text(encoding="utf-8", errors="replace"))
+        if suffix == ".stl":
+            return _stl(Path(path).read_bytes())
+        import trimesh
+
+        mesh = trimesh.load(path, force="mesh", process=False)
+        return np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces, dtype=int)
+    except Exception:  # noqa: BLE001 - the world loader already vetted it; the plan is drawn anyway
+        return np.zeros((0, 3)), np.zeros((0, 3), dtype=int)
+
+
+def _obj(text: str) -> tuple[np.ndarray, np.ndarray]:
+    vertices: list[list[float]] = []
+    faces: list[tuple[int, int, int]] = []
+    for line in text.splitlines():
+        if line.startswith("v "):
+            vertices.append([float(v) for v in line.split()[1:4]])
+        elif line.startswith("f "):
+            # "f 1 2 3", "f 1/1/1 2/2/2 3/3/3", negative = from the end; polygons become fans
+            idx = [int(part.split("/")[0]) for part in line.split()[1:]]
+            idx = [i - 1 if i > 0 else len(vertices) + i for i in idx]
+            faces.extend((idx[0], idx[k], idx[k + 1]) for k in range(1, len(idx) - 1))
+    v = np.array(vertices, dtype=float).reshape(-1, 3)
+    f = np.array(faces, dtype=int).reshape(-1, 3)
+    return v, f[(f >= 0).all(axis=1) & (f < len(v)).all(axis=1)]
+
+
+def _stl(data: bytes) -> tuple[np.ndarray, np.ndarray]:
+    count = int.from_bytes(data[80:84], "little") if len(data) >= 84 else -1
+    if count >= 0 and len(data) == 84 + 50 * count:  # binary
+        tri = np.frombuffer(data, dtype=_STL_TRIANGLE, count=count, offset=84)["v"].astype(float)
+    else:  # ASCII: "vertex x y z" lines, three per facet
+        rows = [line.split()[1:4] for line in data.decode("utf-8", "replace").splitlines()
+                if line.strip().startswith("vertex")]
+        tri = np.array(rows, dtype=float).reshape(-1, 3, 3)
+    vertices = tri.reshape(-1, 3)
+    return vertices, np.arange(len(vertices)).reshape(-1, 3)

@@ -1,0 +1,127 @@
+"""ROS 2 message definitions and type hashes of the sensor topics (generated).
+
+Generated once from rosbags' typestore (sensor_msgs as in Humble, Jazzy and Kilted;
+gazebo_msgs/ContactsState as gazebo_ros_bumper publishes it, registered from its .msg text),
+so that a run does not build a typestore. tests/run/test_sensor_records.py checks them.
+"""
+
+from __future__ import annotations
+
+LASER_SCAN, POINT_CLOUD2 = "sensor_msgs/msg/LaserScan", "sensor_msgs/msg/PointCloud2"
+IMU, CONTACTS_STATE = "sensor_msgs/msg/Imu", "gazebo_msgs/msg/ContactsState"
+
+# msgtype -> (message definition as rosbag2 embeds it, RIHS01 type description hash)
+SENSOR_MESSAGES: dict[str, tuple[str, str]] = {
+    "sensor_msgs/msg/LaserScan": (
+        "std_msgs/Header header\n"
+        "float32 angle_min\n"
+        "float32 angle_max\n"
+        "float32 angle_increment\n"
+        "float32 time_increment\n"
+        "float32 scan_time\n"
+        "float32 range_min\n"
+        "float32 range_max\n"
+        "float32[] ranges\n"
+        "float32[] intensities\n"
+        "================================================================================\n"
+        "MSG: std_msgs/Header\n"
+        "builtin_interfaces/Time stamp\n"
+        "string frame_id\n"
+        "================================================================================\n"
+        "MSG: builtin_interfaces/Time\n"
+        "int32 sec\n"
+        "uint32 nanosec\n",
+        "RIHS01_64c191398013af96509d518dac71d5164f9382553fce5c1f8cca5be7924bd828"),
+    "sensor_msgs/msg/PointCloud2": (
+        "std_msgs/Header header\n"
+        "uint32 height\n"
+        "uint32 width\n"
+        "sensor_msgs/PointField[] fields\n"
+        "bool is_bigendian\n"
+        "uint32 point_step\n"
+        "uint32 row_step\n"
+        "uint8[] data\n"
+        "bool is_dense\n"
+        "================================================================================\n"
+        "MSG: std_msgs/Header\n"
+        "builtin_interfaces/Time stamp\n"
+        "string frame_id\n"
+        "================================================================================\n"
+        "MSG: builtin_interfaces/Time\n"
+        "int32 sec\n"
+        "uint32 nanosec\n"
+        "================================================================================\n"
+        "MSG: sensor_msgs/PointField\n"
+        "uint8 INT8=1\n"
+        "uint8 UINT8=2\n"
+        "uint8 INT16=3\n"
+        "uint8 UINT16=4\n"
+        "uint8 INT32=5\n"
+        "uint8 UINT32=6\n"
+        "uint8 FLOAT32=7\n"
+        "uint8 FLOAT64=8\n"
+        "string name\n"
+        "uint32 offset\n"
+        "uint8 datatype\n"
+        "uint32 count\n",
+        "RIHS01_9198cabf7da3796ae6fe19c4cb3bdd3525492988c70522628af5daa124bae2b5"),
+    "sensor_msgs/msg/Imu": (
+        "std_msgs/Header header\n"
+        "geometry_msgs/Quaternion orientation\n"
+        "float64[9] orientation_covariance\n"
+        "geometry_msgs/Vector3 angular_velocity\n"
+        "float64[9] angular_velocity_covariance\n"
+        "geometry_msgs/Vector3 linear_acceleration\n"
+        "float64[9] linear_acceleration_covariance\n"
+        "================================================================================\n"
+        "MSG: std_msgs/Header\n"
+        "builtin_interfaces/Time stamp\n"
+        "string frame_id\n"
+        "================================================================================\n"
+        "MSG: builtin_interfaces/Time\n"
+        "int32 sec\n"
+        "uint32 nanosec\n"
+        "================================================================================\n"
+        "MSG: geometry_msgs/Quaternion\n"
+        "float64 x\n"
+        "float64 y\n"
+        "float64 z\n"
+        "float64 w\n"
+        "================================================================================\n"
+        "MSG: geometry_msgs/Vector3\n"
+        "float64 x\n"
+        "float64 y\n"
+        "float64 z\n",
+        "RIHS01_7d9a00ff131080897a5ec7e26e315954b8eae3353c3f995c55faf71574000b5b"),
+    "gazebo_msgs/msg/ContactsState": (
+        "std_msgs/Header header\n"
+        "gazebo_msgs/ContactState[] states\n"
+        "================================================================================\n"
+        "MSG: std_msgs/Header\n"
+        "builtin_interfaces/Time stamp\n"
+        "string frame_id\n"
+        "================================================================================\n"
+        "MSG: builtin_interfaces/Time\n"
+        "int32 sec\n"
+        "uint32 nanosec\n"
+        "================================================================================\n"
+        "MSG: gazebo_msgs/ContactState\n"
+        "string info\n"
+        "string collision1_name\n"
+        "string collision2_name\n"
+        "geometry_msgs/Wrench[] wrenches\n"
+        "geometry_msgs/Wrench total_wrench\n"
+        "geometry_msgs/Vector3[] contact_positions\n"
+        "geometry_msgs/Vector3[] contact_normals\n"
+        "float64[] depths\n"
+        "================================================================================\n"
+        "MSG: geometry_msgs/Wrench\n"
+        "geometry_msgs/Vector3 force\n"
+        "geometry_msgs/Vector3 torque\n"
+        "================================================================================\n"
+        "MSG: geometry_msgs/Vector3\n"
+        "float64 x\n"
+        "float64 y\n"
+        "float64 z\n",
+        "RIHS01_1dc585e627c16551e50102b983ec513212ef81bad3b9e9f2423f549df190a40c"),
+}

@@ -1,0 +1,39 @@
+"""Clearance: how close a robot's geometry comes to the world's geometry and to other robots.
+
+Measured from the collision shapes (PyBullet's closest points), not from any sensor, so it
+works for robots without sensors. What the robot stands on does not count: a closest point
+whose normal points steeply up into the robot (as sim/contacts.py tells support from
+collision) is a floor, a ramp or a mesh floor. Bodies further than ``reach`` are not looked
+at: the answer is then +inf ("further than reach").
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Callable, Iterable
+
+from mobot_cli.sim.bullet import p
+from mobot_cli.sim.contacts import SUPPORT_NORMAL_Z
+
+# How much further than the tightest clearance asked for the distances are measured.
+REACH_MARGIN = 0.5  # m
+
+
+def nearest(cid: int, body: int, reach: float, robots: Iterable[int], label: Callable[[int], str]) -> tuple[float, str]:
+    """The smallest distance (m, negative when overlapping) from ``body`` to anything within
+    ``reach`` but its floor, and what that is; (inf, "") when nothing is that close."""
+    links = range(-1, p.getNumJoints(body, physicsClientId=cid))
+    boxes = [p.getAABB(body, link, physicsClientId=cid) for link in links]
+    lo = [min(b[0][i] for b in boxes) - reach for i in range(3)]
+    hi = [max(b[1][i] for b in boxes) + reach for i in range(3)]
+    near = {uid for uid, _ in p.getOverlappingObjects(lo, hi, physicsClientId=cid) or ()} - {body}
+    robots = set(robots)
+    best, what = math.inf, ""
+    for other in sorted(near):
+        for point in p.getClosestPoints(body, other, reach, physicsClientId=cid):
+            distance, normal_up = point[8], point[7][2]  # contactNormalOnB: from the other body into ours
+            if other not in robots and normal_up > SUPPORT_NORMAL_Z:
+                continue  # what it stands on
+            if distance < best:
+                best, what = distance, label(other)
+    return best, what

@@ -1,0 +1,178 @@
+"""Lidar rays: beam directions as Gazebo lays them out, and one batched cast for every scan due.
+
+Every scan due at a step is cast together: all their rays against the static world in one
+Embree call (sim/raycast.py), then only the rays that pass through another robot's bounding
+box (in front of the static hit) go to PyBullet's ``rayTestBatch``, in batches as large as it
+allows, with its worker threads on. A robot never sees itself: a ray that meets its own
+links is cast on from just beyond the hit, so links in front of the sensor are transparent,
+as they are to a real sensor mounted clear of its robot.
+
+As Gazebo's ray sensor, rays start ``range_min`` from the sensor (nothing closer is seen) and
+end at ``range_max``; a ray with no return reads +inf (REP 117).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mobot_cli.sim.bullet import p
+from mobot_cli.sim.plan import RayAxis, SensorSpec
+from mobot_cli.sim.raycast import StaticScene
+
+# PyBullet refuses larger batches ("Number of rays exceed the maximum batch size").
+MAX_BATCH = 16384
+ROBOT_GROUP = 1  # PyBullet's collision filter group of dynamic bodies; static ones are 2
+# m: a ray that met its own robot goes on from this far beyond the hit. A ray starting within
+# a shape's collision margin is reported as hitting it at once (measured: up to ~4 mm inside
+# a cylinder, ~1 mm inside a box); from deeper inside, a convex shape is not reported.
+STEP_PAST = 0.005
+MAX_PASSES = 8  # own links a single ray may pass through
+BOX_MARGIN = 0.01  # m added around robots' bounding boxes (AABBs are tight to the shapes)
+
+
+def axis_angles(axis: RayAxis | None) -> np.ndarray:
+    """The beam angles of one axis, as Gazebo spaces them: ``min + i * (max - min) / (n - 1)``."""
+    if axis is None or axis.samples <= 1:
+        return np.array([axis.min_angle if axis is not None else 0.0])
+    step = (axis.max_angle - axis.min_angle) / (axis.samples - 1)
+    return axis.min_angle + step * np.arange(axis.samples)
+
+
+def angle_step(axis: RayAxis | None) -> float:
+    """Angle between two beams (0 for a single beam), as LaserScan's ``angle_increment``."""
+    if axis is None or axis.samples <= 1:
+        return 0.0
+    return (axis.max_angle - axis.min_angle) / (axis.samples - 1)
+
+
+@dataclass(frozen=True)
+class Beams:
+    """A lidar's beams in its own frame: (vertical, horizontal) grid, x forward, z up."""
+
+    horizontal: np.ndarray  # (H,) azimuths, rad
+    vertical: np.ndarray  # (V,) elevations, rad
+    directions: np.ndarray  # (V * H, 3) unit vectors, vertical-major
+    directions32: np.ndarray  # the same in float32, as the ray engine takes them
+    lengths32: np.ndarray  # (V * H,) float32: range_max - range_min, each ray's length
+
+    @classmethod
+    def of(cls, spec: SensorSpec) -> "Beams":
+        h, v = axis_angles(spec.horizontal), axis_angles(spec.vertical)
+        el, az = np.meshgrid(v, h, indexing="ij")
+        d = np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], axis=-1).reshape(-1, 3)
+        return cls(h, v, d, d.astype(np.float32), np.full(len(d), spec.range_max - spec.range_min, np.float32))
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return len(self.vertical), len(self.horizontal)
+
+
+@dataclass
+class ScanJob:
+    """One scan to cast: the sensor's world pose, its beams and whose robot it rides on."""
+
+    spec: SensorSpec
+    beams: Beams
+    position: np.ndarray  # (3,)
+    rotation: np.ndarray  # (3, 3) sensor frame -> world
+    own_body: int
+
+
+def cast(cid: int, scene: StaticScene | None, jobs: list[ScanJob],
+         robot_boxes: dict[int, tuple[np.ndarray, np.ndarray]]) -> list[np.ndarray]:
+    """Ranges (float32, (V, H), +inf for no return) of every job, cast in one batch."""
+    # float32 throughout, as the ray engine and LaserScan take them (10 um at 100 m): a 360-beam
+    # scan must cost far less than the physics between two scans.
+    dirs = _joined([job.beams.directions32 @ job.rotation.T.astype(np.float32) for job in jobs])
+    lengths = _joined([job.beams.lengths32 for job in jobs])
+    origins = _joined([job.position.astype(np.float32) + d * np.float32(job.spec.range_min)
+                       for job, d in zip(jobs, _split(dirs, jobs))])
+    if scene is not None and scene.complete:
+        t = scene.cast(origins, dirs, lengths)
+        candidates = _near_robots(origins, dirs, np.minimum(t, lengths), _owners(jobs), robot_boxes) \
+            if robot_boxes else ()
+        mask = ROBOT_GROUP
+    else:  # no Embree scene: PyBullet casts every ray at everything
+        t = np.full(len(dirs), np.inf, dtype=np.float32)
+        candidates, mask = np.arange(len(dirs)), -1
+    if len(candidates):
+        reach = np.minimum(t, lengths)
+        hit = _bullet(cid, origins[candidates].astype(float), dirs[candidates].astype(float),
+                      reach[candidates].astype(float), _owners(jobs)[candidates], mask)
+        t[candidates] = np.minimum(t[candidates], hit)
+    return [(part + np.float32(job.spec.range_min)).reshape(job.beams.shape) for job, part in zip(jobs, _split(t, jobs))]
+
+
+def _joined(parts: list[np.ndarray]) -> np.ndarray:
+    return parts[0] if len(parts) == 1 else np.concatenate(parts)
+
+
+def _split(values: np.ndarray, jobs: list[ScanJob]) -> list[np.ndarray]:
+    """``values`` cut back into each job's share."""
+    if len(jobs) == 1:
+        return [values]
+    return np.split(values, np.cumsum([len(job.beams.directions) for job in jobs])[:-1])
+
+
+def _owners(jobs: list[ScanJob]) -> np.ndarray:
+    return np.repeat([job.own_body for job in jobs], [len(job.beams.directions) for job in jobs])
+
+
+def _near_robots(origins: np.ndarray, dirs: np.ndarray, reach: np.ndarray, owners: np.ndarray,
+                 boxes: dict[int, tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+    """Indices of rays whose segment passes through another robot's bounding box."""
+    near = np.zeros(len(origins), dtype=bool)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inverse = 1.0 / dirs
+        for body, (lo, hi) in boxes.items():
+            a, b = (lo - BOX_MARGIN - origins) * inverse, (hi + BOX_MARGIN - origins) * inverse
+            enter = np.nanmax(np.minimum(a, b), axis=1)
+            leave = np.nanmin(np.maximum(a, b), axis=1)
+            near |= (enter <= leave) & (leave >= 0.0) & (enter <= reach) & (owners != body)
+    return np.flatnonzero(near)
+
+
+def _bullet(cid: int, origins: np.ndarray, dirs: np.ndarray, lengths: np.ndarray, owners: np.ndarray,
+            mask: int) -> np.ndarray:
+    """Distance to the first body (of the ``mask`` groups) not the ray's own robot; +inf if none."""
+    out = np.full(len(origins), np.inf)
+    done = np.zeros(len(origins))  # distance already travelled past own links
+    live = np.arange(len(origins))
+    start, left = origins.copy(), lengths.copy()
+    for _ in range(MAX_PASSES):
+        if not len(live):
+            break
+        ends = start[live] + dirs[live] * left[live, None]
+        found = _batch(cid, start[live], ends, mask)
+        body, fraction = found[:, 0].astype(int), found[:, 1]
+        hit = body >= 0
+        own = hit & (body == owners[live])
+        other = live[hit & ~own]
+        out[other] = done[other] + fraction[hit & ~own] * left[other]
+        again = live[own]
+        step = fraction[own] * left[again] + STEP_PAST
+        start[again] += dirs[again] * step[:, None]
+        done[again] += step
+        left[again] -= step
+        live = again[left[again] > 0.0]
+    return out
+
+
+def _batch(cid: int, starts: np.ndarray, ends: np.ndarray, mask: int) -> np.ndarray:
+    """(body, hit fraction) per ray from rayTestBatch, MAX_BATCH rays a call."""
+    rows = []
+    for i in range(0, len(starts), MAX_BATCH):
+        result = p.rayTestBatch(starts[i:i + MAX_BATCH], ends[i:i + MAX_BATCH], numThreads=0,
+                                collisionFilterMask=mask, physicsClientId=cid)
+        rows.extend((h[0], h[2]) for h in result)
+    return np.array(rows, dtype=float).reshape(-1, 2)
+
+
+def to_points(ranges: np.ndarray, beams: Beams) -> np.ndarray:
+    """Cartesian points (n, 3) in the sensor frame of every finite range, vertical-major, as
+    Gazebo's PointCloud2 conversion orders them."""
+    flat = ranges.reshape(-1)
+    keep = np.isfinite(flat)
+    return (beams.directions[keep] * flat[keep, None]).astype(np.float32)

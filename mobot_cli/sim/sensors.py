@@ -1,0 +1,247 @@
+"""Sensor readings: lidar scans, IMU and contact (bumper) readings, computed when they are due.
+
+The World owns one ``Sensing`` once a robot with sensors arrives; the timeline asks it for
+the readings due at a step (each sensor at its own rate), and every lidar due at that step
+is cast in one batch (sim/lidar.py). Noise comes from a generator per sensor, seeded by the
+run's seed and the robot's and sensor's names: the same seed gives the same readings.
+
+* lidar: ranges (m, float32) on Gazebo's beam grid, +inf for no return, with gaussian noise
+  and range quantisation as the ``<ray>`` block asks, clamped to [range_min, range_max];
+* imu: orientation of the sensor frame in the world (REP 145), angular velocity in the sensor
+  frame, and linear acceleration as a real IMU measures it (specific force: +9.81 m/s^2 up at
+  rest), averaged over the time since the previous reading;
+* contact: PyBullet's contact points of the sensor's link with anything but what the robot
+  stands on (a contact whose normal points steeply up into the link, as sim/contacts.py).
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from mobot_cli.common.transforms import quat_matrix
+from mobot_cli.errors import SpawnError
+from mobot_cli.sim import lidar
+from mobot_cli.sim.bullet import p
+from mobot_cli.sim.contacts import CONTACT_SLOP, SUPPORT_NORMAL_Z
+from mobot_cli.sim.plan import SensorSpec, WorldPlan
+
+KINDS = ("lidar", "imu", "contact")
+
+
+@dataclass(frozen=True)
+class ScanData:
+    """One lidar scan: ranges on the (vertical, horizontal) beam grid and where it was taken."""
+
+    ranges: np.ndarray  # float32 (V, H); +inf where a beam had no return
+    beams: lidar.Beams
+    position: tuple[float, float, float]  # the sensor's origin in the world
+    quat: tuple[float, float, float, float]  # the sensor frame's orientation in the world
+
+    def world_points(self) -> np.ndarray:
+        """Every return as a world-frame point (n, 3)."""
+        local = lidar.to_points(self.ranges, self.beams).astype(float)
+        return local @ np.array(quat_matrix(self.quat)).T + np.array(self.position)
+
+
+@dataclass(frozen=True)
+class ImuData:
+    """One IMU reading (SI units), as sensor_msgs/Imu carries it."""
+
+    orientation: tuple[float, float, float, float]  # sensor frame in the world, (x, y, z, w)
+    angular_velocity: tuple[float, float, float]  # rad/s, sensor frame
+    linear_acceleration: tuple[float, float, float]  # m/s^2, sensor frame, gravity included
+
+
+@dataclass(frozen=True)
+class Contact:
+    """One contact point of a contact sensor's link."""
+
+    other: str  # what it touches, e.g. "robot 'r2'" or "world model 'Wall_3' at (...)"
+    position: tuple[float, float, float]  # on the sensor's link, world frame
+    normal: tuple[float, float, float]  # world frame, from the other body into the link
+    depth: float  # m, >= 0
+    force: float  # normal force, N
+
+
+@dataclass(frozen=True)
+class ContactData:
+    """The contacts of one reading (empty: nothing touches)."""
+
+    contacts: tuple[Contact, ...] = ()
+
+
+@dataclass
+class _Rig:
+    """A sensor as mounted on one spawned robot."""
+
+    spec: SensorSpec
+    body: int
+    link: int  # PyBullet link index, -1 for the base
+    rng: np.random.Generator
+    beams: lidar.Beams | None = None
+    last: tuple[int, np.ndarray] | None = None  # imu: (step, world velocity) of the last reading
+    to_link: tuple | None = None  # on the base: PyBullet's base (inertial) frame -> the URDF link frame
+
+
+def noise_rng(seed: int, robot: str, sensor: str) -> np.random.Generator:
+    """The noise generator of one sensor: the run's seed and the names, nothing else."""
+    digest = hashlib.sha256(f"{robot}/{sensor}".encode()).digest()
+    return np.random.default_rng([seed & 0xFFFFFFFFFFFFFFFF, int.from_bytes(digest[:8], "little")])
+
+
+class Sensing:
+    """Every sensor of the robots in one world; ``read`` computes the readings due."""
+
+    def __init__(self, cid: int, world: WorldPlan, seed: int, dt: float, gravity: tuple[float, float, float],
+                 label: Callable[[int], str], robot_bodies: Callable[[], list[int]]):
+        self.cid, self.world, self.seed, self.dt = cid, world, seed, dt
+        self.gravity = np.array(gravity, dtype=float)
+        self.label = label  # body id -> what messages call it
+        self.robot_bodies = robot_bodies  # the bodies of every robot in the world, sensors or not
+        self.rigs: dict[str, dict[str, _Rig]] = {}  # robot name -> sensor name -> rig
+        self._scene = None
+        self._scene_built = False
+
+    def add(self, name: str, body: int, links: dict[str, int], sensors: tuple[SensorSpec, ...]) -> None:
+        """Mount a robot's sensors; SpawnError for a sensor on a link the robot lacks."""
+        rigs = {}
+        for spec in sensors:
+            if spec.link not in links:
+                raise SpawnError(f"robot '{name}': sensor '{spec.name}' is on link '{spec.link}', "
+                                 "which its URDF does not have", hint="Put the sensor on one of its links.")
+            if spec.kind not in KINDS:
+                raise SpawnError(f"robot '{name}': sensor '{spec.name}' has unknown kind '{spec.kind}'",
+                                 hint="Sensor kinds are " + ", ".join(KINDS) + ".")
+            rig = _Rig(spec, body, links[spec.link], noise_rng(self.seed, name, spec.name))
+            if rig.link < 0:
+                inertial = p.getDynamicsInfo(body, -1, physicsClientId=self.cid)
+                rig.to_link = p.invertTransform(inertial[3], inertial[4])
+            if spec.kind == "lidar":
+                rig.beams = lidar.Beams.of(spec)
+            rigs[spec.name] = rig
+        self.rigs[name] = rigs
+
+    def forget(self, name: str) -> None:
+        """A robot left the world."""
+        self.rigs.pop(name, None)
+
+    @property
+    def scene(self):
+        """The static world's ray scene, built at the first scan (None without embreex)."""
+        if not self._scene_built:
+            from mobot_cli.sim.raycast import StaticScene, embree_available
+
+            self._scene = StaticScene(self.world) if embree_available() else None
+            self._scene_built = True
+        return self._scene
+
+    def read(self, step: int, due: list[tuple[str, str]]) -> list[object]:
+        """The readings of ``(robot, sensor)`` pairs due at ``step``, in order."""
+        out: list[object] = [None] * len(due)
+        scans: list[tuple[int, _Rig, lidar.ScanJob]] = []
+        for i, (robot, sensor) in enumerate(due):
+            rig = self.rigs[robot][sensor]
+            position, quat = self._pose(rig)
+            if rig.spec.kind == "lidar":
+                rotation = np.array(p.getMatrixFromQuaternion(quat)).reshape(3, 3)
+                job = lidar.ScanJob(rig.spec, rig.beams, np.array(position), rotation, rig.body)
+                scans.append((i, rig, job))
+                out[i] = (position, quat)
+            elif rig.spec.kind == "imu":
+                out[i] = self._imu(step, rig, position, quat)
+            else:
+                out[i] = self._contacts(rig)
+        if scans:
+            bodies = self.robot_bodies()
+            boxes = {body: _aabb(self.cid, body) for body in bodies} if len(bodies) > 1 else {}
+            ranges = lidar.cast(self.cid, self.scene, [job for _, _, job in scans], boxes)
+            for (i, rig, _), values in zip(scans, ranges):
+                position, quat = out[i]
+                out[i] = ScanData(_lidar_noise(rig, values), rig.beams, position, quat)
+        return out
+
+    def _pose(self, rig: _Rig) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        """The sensor frame's world pose: its link's URDF frame composed with the sensor pose."""
+        pos, orn = self._link_frame(rig)
+        spec = rig.spec
+        if spec.xyz == (0.0, 0.0, 0.0) and spec.quat == (0.0, 0.0, 0.0, 1.0):
+            return tuple(pos), tuple(orn)
+        pos, orn = p.multiplyTransforms(pos, orn, spec.xyz, spec.quat)
+        return tuple(pos), tuple(orn)
+
+    def _link_frame(self, rig: _Rig):
+        if rig.link >= 0:
+            state = p.getLinkState(rig.body, rig.link, computeForwardKinematics=1, physicsClientId=self.cid)
+            return state[4], state[5]
+        com, orn = p.getBasePositionAndOrientation(rig.body, physicsClientId=self.cid)
+        return p.multiplyTransforms(com, orn, rig.to_link[0], rig.to_link[1])
+
+    def _velocity(self, rig: _Rig, position) -> tuple[np.ndarray, np.ndarray]:
+        """World linear velocity of the sensor's origin and the link's angular velocity."""
+        if rig.link >= 0:
+            state = p.getLinkState(rig.body, rig.link, computeLinkVelocity=1, computeForwardKinematics=1,
+                                   physicsClientId=self.cid)
+            com, lin, ang = state[0], state[6], state[7]
+        else:
+            com = p.getBasePositionAndOrientation(rig.body, physicsClientId=self.cid)[0]
+            lin, ang = p.getBaseVelocity(rig.body, physicsClientId=self.cid)
+        ang = np.array(ang)
+        return np.array(lin) + np.cross(ang, np.array(position) - np.array(com)), ang
+
+    def _imu(self, step: int, rig: _Rig, position, quat) -> ImuData:
+        velocity, omega = self._velocity(rig, position)
+        accel = np.zeros(3)
+        if rig.last is not None and step > rig.last[0]:
+            accel = (velocity - rig.last[1]) / ((step - rig.last[0]) * self.dt)
+        rig.last = (step, velocity)
+        to_sensor = np.array(quat_matrix(quat)).T
+        spec = rig.spec
+        w = to_sensor @ omega
+        f = to_sensor @ (accel - self.gravity)
+        if spec.noise_stddev > 0.0 or spec.noise_mean != 0.0:
+            w = w + rig.rng.normal(spec.noise_mean, spec.noise_stddev, 3)
+        if spec.accel_noise_stddev > 0.0:
+            f = f + rig.rng.normal(0.0, spec.accel_noise_stddev, 3)
+        return ImuData(_unit(quat), tuple(float(v) for v in w), tuple(float(v) for v in f))
+
+    def _contacts(self, rig: _Rig) -> ContactData:
+        found = []
+        for c in p.getContactPoints(bodyA=rig.body, linkIndexA=rig.link, physicsClientId=self.cid):
+            other, normal = c[2], c[7]  # contactNormalOnB points from the other body into ours
+            if other == rig.body or c[8] > CONTACT_SLOP:
+                continue
+            if normal[2] > SUPPORT_NORMAL_Z and other not in self.robot_bodies():
+                continue  # what it stands on
+            found.append(Contact(self.label(other), tuple(c[5]), tuple(normal), max(0.0, -c[8]), float(c[9])))
+        return ContactData(tuple(found))
+
+
+
+def _aabb(cid: int, body: int) -> tuple[np.ndarray, np.ndarray]:
+    """A robot's bounding box now: the union of its links' AABBs."""
+    boxes = [p.getAABB(body, link, physicsClientId=cid)
+             for link in range(-1, p.getNumJoints(body, physicsClientId=cid))]
+    lo = np.min([b[0] for b in boxes], axis=0)
+    hi = np.max([b[1] for b in boxes], axis=0)
+    return lo, hi
+
+
+def _lidar_noise(rig: _Rig, ranges: np.ndarray) -> np.ndarray:
+    """Noise, quantisation and clamping as the sensor's <ray> block asks (float32, +inf kept)."""
+    spec = rig.spec
+    if spec.noise_stddev > 0.0 or spec.noise_mean != 0.0:
+        returns = np.isfinite(ranges)
+        noisy = ranges + rig.rng.normal(spec.noise_mean, spec.noise_stddev, ranges.shape).astype(np.float32)
+        ranges = np.where(returns, np.clip(noisy, spec.range_min, spec.range_max), ranges)
+    if spec.range_resolution > 0.0:  # +inf stays +inf
+        ranges = np.round(ranges / np.float32(spec.range_resolution)) * np.float32(spec.range_resolution)
+    return ranges.astype(np.float32, copy=False)
+
+
+def _unit(q) -> tuple[float, float, float, float]:
+    n = float(np.sqrt(sum(v * v for v in q)))
+    return tuple(float(v) / n for v in q)

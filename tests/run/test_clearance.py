@@ -1,0 +1,78 @@
+"""`clearance` expectations: measured from geometry (no sensors needed), floors excluded."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import astuple
+
+import pytest
+
+from mobot_cli.cli import invoke
+from tests.sim.sensor_world import room_scenario
+
+# mobot's chassis front is 0.10 m ahead of its axle; its wheels reach 0.05 m either way.
+FRONT = 0.10
+
+DRIVE_TO_WALL = """  - name: mobot
+    description: mobot
+    pose: {x: 2.0, y: 0.0, yaw: 0.0}
+    commands:
+      - {at: 0.0, linear: 0.25, for: 2.0}
+"""
+
+
+def _run(tmp_path, robots: str, expect: str, extra: str = ""):
+    path = room_scenario(tmp_path, robots, duration=3.0, extra=extra)
+    path.write_text(path.read_text() + f"expect:\n{expect}")
+    code, out, err = astuple(invoke(["run", path, "--out", tmp_path / "out", "--quiet"]))
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    return code, err, summary
+
+
+def test_clearance_to_a_wall_is_the_geometric_gap(tmp_path):
+    code, err, summary = _run(tmp_path, DRIVE_TO_WALL, "  - {robot: mobot, clearance: {min: 0.25}}\n"
+                                                       "  - {robot: mobot, clearance: {min: 0.5}}\n")
+    assert code == 1, err
+    final_x = summary["robots"]["mobot"]["final_pose"]["x"]
+    gap = 3.0 - (final_x + FRONT)  # the east wall's inner face is at x = 3
+    assert 0.3 < gap < 0.5
+    passed, failed = summary["expectations"]["results"]
+    assert passed["passed"] and passed["expected"] == \
+        "keep at least 0.25 m from world geometry and other robots until the end"
+    assert not failed["passed"]
+    closest = float(failed["happened"].split("came within ")[1].split(" m")[0])
+    assert closest == pytest.approx(gap, abs=0.01)
+    assert "of world model 'walls'" in failed["happened"] and "(at 3 s)" in failed["happened"]
+    assert err.startswith("mobot: expectation failed: robot 'mobot' was expected to keep at least 0.5 m")
+
+
+def test_clearance_to_another_robot_and_at_a_time(tmp_path):
+    robots = DRIVE_TO_WALL + "  - name: other\n    description: mobot\n    pose: {x: 2.0, y: 0.6, yaw: 0.0}\n"
+    code, err, summary = _run(tmp_path, robots, "  - {robot: all, clearance: {min: 0.1}, at: 1.0}\n")
+    assert code == 0, err
+    results = {r["robot"]: r for r in summary["expectations"]["results"]}
+    # side by side, 0.6 m apart between axles: wheel to wheel 0.6 - 2 * 0.1725 m
+    for name in ("mobot", "other"):
+        happened = results[name]["happened"]
+        assert happened.startswith("came within 0.25") or happened.startswith("came within 0.26"), happened
+        assert "robot '" in happened
+        assert results[name]["expected"].endswith("until 1 s")
+
+
+def test_clearance_far_from_everything_and_in_an_empty_world(tmp_path):
+    robots = "  - name: mobot\n    description: mobot\n    pose: {x: 0.0, y: 0.0}\n"
+    code, err, summary = _run(tmp_path, robots, "  - {robot: mobot, clearance: {min: 0.5}}\n")
+    assert code == 0, err
+    assert summary["expectations"]["results"][0]["happened"] == "stayed more than 1 m from everything"
+
+
+@pytest.mark.parametrize("item, message", [
+    ("{robot: mobot, clearance: {min: 0}}", "greater than 0"),
+    ("{robot: mobot, clearance: {}}", "min"),
+    ("{robot: mobot, clearance: 0.3}", "clearance"),
+])
+def test_bad_clearance_items_are_located_errors(tmp_path, item, message):
+    path = room_scenario(tmp_path, DRIVE_TO_WALL)
+    path.write_text(path.read_text() + f"expect:\n  - {item}\n")
+    code, out, err = astuple(invoke(["check", path]))
+    assert code == 2 and message in err and "scenario.yaml:" in err and "Traceback" not in err
