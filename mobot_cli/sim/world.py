@@ -240,6 +240,8 @@ class World:
                 if robot.drive is not None:
                     robot.drive.integrate()
                     robot.drive.integrated_at = self._steps
+                    if robot.drive.trim is not None:
+                        robot.drive.trim_step(self._odom_every * self.physics.dt)
         if self._steps % self._check_every == 0:
             for robot in self._robots.values():
                 self._check(robot)
