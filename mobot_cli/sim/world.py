@@ -191,10 +191,11 @@ class World:
         others = dict(self._statics)
         others.update({r.body: f"robot '{n}'" for n, r in self._robots.items()})
         placement.check_clear(cid, uid, others, robot.name, xyz, z_auto=pose.z_auto)
-        surroundings.check_not_inside(cid, uid, {b: self._statics[b] for b in self._solids},
-                                      robot.name, xyz)
+        box = placement.body_bounds(cid, uid)
+        surroundings.check_not_inside(cid, {b: self._statics[b] for b in self._solids},
+                                      robot.name, xyz, box)
         if not pose.z_auto:
-            surroundings.check_above_floor(cid, uid, self._statics, robot.name, xyz)
+            surroundings.check_above_floor(cid, self._statics, robot.name, xyz, box)
         bottom = min(lowest.values(), default=0.0)
         wheels = _wheel_links(cid, uid, robot)
         casters = {link for link, h in lowest.items()

@@ -25,6 +25,9 @@ from mobot_cli.common import cache
 from mobot_cli.errors import Location, Notice
 from mobot_cli.sim.plan import DriveSpec
 
+# The notice for a robot without detected wheels; a scenario that names them drops it.
+NO_DRIVE = "no drive wheels found: the robot will not move on commands"
+
 
 @dataclass(frozen=True)
 class LinkInfo:
@@ -106,8 +109,7 @@ def _build(source: Path, expansion: Expansion,
     bounds = collision_bounds(LinkTree(robot), source, notices)
     drive = detect_drive(robot, notices=notices, source=source)
     if drive is None:
-        notices.append(Notice("no drive wheels found: the robot will not move on commands",
-                              Location(file=source)))
+        notices.append(Notice(NO_DRIVE, Location(file=source)))
     urdf = '<?xml version="1.0"?>\n' + ET.tostring(robot, encoding="unicode")
     description = RobotDescription(
         source=source, name=robot.get("name", ""), urdf=urdf, root_link=root_link,
