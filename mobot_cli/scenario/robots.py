@@ -31,9 +31,11 @@ class RobotResolver:
     """
 
     def __init__(self, rate_hz: int, settle: int, total: int, *, base_dir: Path,
-                 source: Source | None = None, world: LoadedWorld | None = None):
+                 source: Source | None = None, world: LoadedWorld | None = None,
+                 skip_missing: bool = False):
         self.rate_hz, self.settle, self.total = rate_hz, settle, total
         self.base_dir = base_dir
+        self.skip_missing = skip_missing  # missing meshes: left out with a warning, not an error
         self.source = source
         self.world = world  # its robot models are robots when listed by name
         self.names: dict[str, tuple] = {}
@@ -105,7 +107,7 @@ class RobotResolver:
         key = (spec.description, tuple(sorted(args.items())))
         if key not in self.loaded:
             try:
-                self.loaded[key] = load_robot(spec.description, args, self.base_dir)
+                self.loaded[key] = load_robot(spec.description, args, self.base_dir, self.skip_missing)
             except MobotError as exc:
                 raise type(exc)(f"robot '{spec.name}': {exc}",
                                 location=self.locate_key(path + ("description",))) from None
