@@ -150,8 +150,9 @@ class _Drive:
 
     def command(self, linear: float, angular: float) -> None:
         """Wheel speed targets for a body twist; ramped later when acceleration is limited."""
+        if (linear, angular) != self.twist:
+            self.trim_from = None  # the period that saw the change measures nothing
         self.twist = (linear, angular)
-        self.trim_from = None  # the period that saw the change measures nothing
         self._set_goal()
         if self.max_step <= 0.0:
             self.rates = list(self.goal)
@@ -175,7 +176,7 @@ class _Drive:
         mid = yaw0 + turn / 2.0
         forward = (pos[0] - x0) * math.cos(mid) + (pos[1] - y0) * math.sin(mid)
         if self.trim.update(self.twist, (forward / dt, turn / dt), dt):
-            # A gain moves by at most GAIN * dt * BAND (1.2 % at 50 Hz) per period: within
+            # A gain moves by at most GAIN * dt * BAND (2.4 % at 50 Hz) per period: within
             # any acceleration limit, so the new targets apply at once.
             self._set_goal()
             self.rates = list(self.goal)
