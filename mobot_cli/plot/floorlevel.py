@@ -27,32 +27,39 @@ def floor_level(world: WorldPlan, starts: list[Start], shapes_of) -> float:
     """
     if not starts:
         return 0.0
-    posed = [(shape, *compose_poses((body.xyz, body.quat), (shape.xyz, shape.quat)))
-             for body in world.bodies for shape in shapes_of(body)]
-    floors = []
-    for x, y, z in starts:
-        top = z + ABOVE_ROOT
-        heights = [0.0] if world.ground_plane and top >= 0.0 else []
-        for shape, xyz, quat in posed:
-            heights.extend(h for h in _surfaces(shape, xyz, quat, x, y) if h <= top)
-        if heights:
-            floors.append(max(heights))
+    found: list[list[float]] = [[0.0] if world.ground_plane and z + ABOVE_ROOT >= 0.0 else []
+                                for _, _, z in starts]
+    for body in world.bodies:
+        for shape in shapes_of(body):
+            xyz, quat = compose_poses((body.xyz, body.quat), (shape.xyz, shape.quat))
+            surfaces = _surfaces(shape, xyz, quat)  # one mesh read per shape, for every start
+            for heights, (x, y, z) in zip(found, starts):
+                heights.extend(h for h in surfaces(x, y) if h <= z + ABOVE_ROOT)
+    floors = [max(heights) for heights in found if heights]
     return min(floors) if floors else 0.0
 
 
-def _surfaces(shape: StaticShape, xyz, quat, x: float, y: float) -> list[float]:
-    """Heights where the vertical line through (x, y) meets the shape's upper surfaces."""
+def _surfaces(shape: StaticShape, xyz, quat):
+    """A function (x, y) -> heights where the vertical line through (x, y) meets the shape."""
     rot = np.array(quat_matrix(quat))
     if shape.kind == "box":
-        return _box_top(np.array(shape.size[:3]) / 2.0, rot, np.array(xyz), x, y)
+        half, centre = np.array(shape.size[:3]) / 2.0, np.array(xyz)
+        return lambda x, y: _box_top(half, rot, centre, x, y)
     if shape.kind == "plane":
         normal = rot @ np.array(shape.size[:3])
         if abs(normal[2]) < 1e-9:
-            return []
-        return [float(xyz[2] - (normal[0] * (x - xyz[0]) + normal[1] * (y - xyz[1])) / normal[2])]
+            return lambda x, y: []
+        return lambda x, y: [float(xyz[2] - (normal[0] * (x - xyz[0])
+                                             + normal[1] * (y - xyz[1])) / normal[2])]
     if shape.kind == "mesh":
-        return _mesh_heights(shape, rot, np.array(xyz), x, y)
-    return []
+        from mobot_cli.plot.meshread import read_mesh
+
+        vertices, faces = read_mesh(shape.mesh)
+        if len(faces) == 0:
+            return lambda x, y: []
+        tri = ((vertices * np.array(shape.size[:3])) @ rot.T + np.array(xyz))[faces]
+        return lambda x, y: _mesh_heights(tri, x, y)
+    return lambda x, y: []
 
 
 def _box_top(half: np.ndarray, rot: np.ndarray, centre: np.ndarray, x: float, y: float) -> list[float]:
@@ -71,15 +78,8 @@ def _box_top(half: np.ndarray, rot: np.ndarray, centre: np.ndarray, x: float, y:
     return [float(high)] if low <= high else []
 
 
-def _mesh_heights(shape: StaticShape, rot: np.ndarray, centre: np.ndarray,
-                  x: float, y: float) -> list[float]:
-    """Heights of the mesh's triangles straight above or below (x, y)."""
-    from mobot_cli.plot.meshread import read_mesh
-
-    vertices, faces = read_mesh(shape.mesh)
-    if len(faces) == 0:
-        return []
-    tri = ((vertices * np.array(shape.size[:3])) @ rot.T + centre)[faces]
+def _mesh_heights(tri: np.ndarray, x: float, y: float) -> list[float]:
+    """Heights of the triangles (n, 3 corners, xyz) straight above or below (x, y)."""
     a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
     # Barycentric coordinates of (x, y) in each triangle's shadow.
     det = (b[:, 1] - c[:, 1]) * (a[:, 0] - c[:, 0]) + (c[:, 0] - b[:, 0]) * (a[:, 1] - c[:, 1])
