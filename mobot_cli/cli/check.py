@@ -14,7 +14,8 @@ from mobot_cli.errors import ExitCode, UsageError
 SCENARIO_SUFFIXES = (".yaml", ".yml")
 ROBOT_SUFFIXES = (".urdf", ".xacro")
 WORLD_SUFFIXES = (".world", ".sdf")  # an .sdf holding a <model> is a robot
-SKIP_HELP = "Leave out world models whose files are missing (Fuel includes, meshes), with a warning."
+SKIP_HELP = ("Leave out world models and robot visuals/collisions whose files are missing (Fuel includes, "
+             "meshes), with a warning.")
 
 
 def check(
@@ -26,6 +27,8 @@ def check(
     skip_missing: bool = typer.Option(False, "--skip-missing", help=SKIP_HELP),
     repair: bool = typer.Option(False, "--repair", help="For a run folder: make a killed run's bag readable "
                                                         "(its complete chunks, with an index and metadata.yaml)."),
+    set_: list[str] = typer.Option([], "--set", help="Override a scenario key, e.g. robots.mobot.pose.x=2.0 "
+                                                     "(repeatable)."),
 ) -> int:
     """Validate a scenario, robot description or world; exit 0 when it is usable, 2 when not.
 
@@ -38,10 +41,13 @@ def check(
         return _check_run_folder(env, path, json_, repair)
     if repair:
         raise UsageError("--repair is for run folders", hint="Give the folder that mobot run --out wrote.")
+    if set_ and path.suffix not in SCENARIO_SUFFIXES:
+        raise UsageError("--set overrides keys of a scenario; it does not apply to a robot or world",
+                         hint="Give xacro arguments to a robot as NAME:=VALUE.")
     if path.suffix in SCENARIO_SUFFIXES:
-        result = _check_scenario(path, skip_missing)
+        result = _check_scenario(path, skip_missing, set_)
     elif path.suffix in ROBOT_SUFFIXES or model_folder or (path.suffix == ".sdf" and not _is_world(path)):
-        result = _check_robot(path, parse_mappings(mappings or []))
+        result = _check_robot(path, parse_mappings(mappings or []), skip_missing)
     elif path.suffix in WORLD_SUFFIXES or _bundled_world(path):
         result = _check_world(path, skip_missing)
     else:
@@ -56,22 +62,22 @@ def check(
     return ExitCode.OK
 
 
-def _check_scenario(path: Path, skip_missing: bool) -> dict:
+def _check_scenario(path: Path, skip_missing: bool, overrides: list[str]) -> dict:
     from mobot_cli.run.preflight import check_spawns
     from mobot_cli.run.prepare import prepare
 
-    plan = prepare(path, ["skip_missing=true"] if skip_missing else []).plan
+    plan = prepare(path, [*overrides, *(["skip_missing=true"] if skip_missing else [])]).plan
     check_spawns(plan)  # robots inside furniture or below the floor are bad input too
     return {"ok": True, "kind": "scenario", "path": str(path), "name": plan.name,
             "robots": [robot.name for robot in plan.robots], "steps": plan.total_steps,
             "duration": plan.total_steps / plan.physics.rate_hz, "notices": list(plan.notices)}
 
 
-def _check_robot(path: Path, args: dict[str, str]) -> dict:
+def _check_robot(path: Path, args: dict[str, str], skip_missing: bool) -> dict:
     from mobot_cli.assets.description.load import load_robot
     from mobot_cli.assets.description.robot import inspect_summary
 
-    desc = load_robot(str(path), args, Path.cwd())
+    desc = load_robot(str(path), args, Path.cwd(), skip_missing)
     return {"ok": True, "kind": "robot", "path": str(path), **inspect_summary(desc),
             "notices": [str(n) for n in desc.notices]}
 

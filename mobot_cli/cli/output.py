@@ -41,11 +41,11 @@ def _console(env: Environment, stderr: bool, **options: Any):
     from rich.console import Console
 
     stream, tty = (env.stderr, env.stderr_isatty) if stderr else (env.stdout, env.stdout_isatty)
+    options.setdefault("width", env.width)
     if env.color is None:
         # A terminal we know of, or else Rich's own look (FORCE_COLOR, the stream's isatty()).
-        return Console(file=stream, force_terminal=True if tty else None, width=env.width, **options)
-    return Console(file=stream, force_terminal=tty or env.color, no_color=not env.color, width=env.width,
-                   **options)
+        return Console(file=stream, force_terminal=True if tty else None, **options)
+    return Console(file=stream, force_terminal=tty or env.color, no_color=not env.color, **options)
 
 
 def progress_bar(env: Environment, total: int, label: str):
@@ -93,6 +93,9 @@ def check_result(env: Environment, result: dict[str, Any]) -> None:
     env.stdout.write(line + "\n")
 
 
+_TREE_WIDTH = 100_000  # columns: wide enough that no tree line is cut
+
+
 def inspect_tree(env: Environment, summary: dict[str, Any]) -> None:
     """The link/joint tree, mass, footprint and drive of a robot, as a Rich tree."""
     from rich.tree import Tree
@@ -107,7 +110,10 @@ def inspect_tree(env: Environment, summary: dict[str, Any]) -> None:
     add(tree, root)
     console = stdout_console(env)
     console.print(f"[bold]{summary['name']}[/]  {summary['source']}")
-    console.print(tree)
+    # A terminal wraps long labels; a pipe or file gets whole lines (Rich would crop them).
+    wide = console if env.stdout_isatty else _console(env, stderr=False, highlight=False,
+                                                      soft_wrap=True, width=_TREE_WIDTH)
+    wide.print(tree)
     fp = summary["footprint"]
     console.print(f"total mass {summary['total_mass']:.3f} kg; footprint {fp['length']:.3f} x {fp['width']:.3f} m "
                   f"(x {fp['xmin']:.3f}..{fp['xmax']:.3f}, y {fp['ymin']:.3f}..{fp['ymax']:.3f})")

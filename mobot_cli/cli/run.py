@@ -24,7 +24,8 @@ def run(
     json_: bool = typer.Option(False, "--json", help="Print summary.json on stdout."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),
     skip_missing: bool = typer.Option(False, "--skip-missing",
-                                      help="Leave out world models whose files are missing, with a warning."),
+                                      help="Leave out world models and robot visuals/collisions whose files "
+                                           "are missing, with a warning."),
     ros2_: bool = ros2.OPTION,
 ) -> int:
     """Run a scenario to its end and write odometry, a summary and the resolved scenario."""

@@ -1,7 +1,7 @@
 """A world's floor plan: its static collision geometry projected from above, as polygons.
 
 Only what a wheeled robot can meet is kept: geometry reaching into ``BAND`` (above the floor,
-below a ceiling). Boxes, cylinders, capsules and spheres become the outline of their shadow;
+below a ceiling), measured from the floor under the robots (floorlevel.py), not from z = 0. Boxes, cylinders, capsules and spheres become the outline of their shadow;
 meshes become their triangles' shadows, and upright faces (seen edge-on) become segments, so a
 wall taller than the band still shows as its outline. Bodies come
 as StaticShape lists (SDF worlds) or, failing that, as URDF text with <collision> elements.
@@ -20,26 +20,36 @@ from mobot_cli.sim.plan import StaticShape, WorldPlan
 Point = tuple[float, float]
 Polygon = list[Point]
 
-BAND = (0.02, 2.0)  # metres above z = 0: lower is floor, higher is ceiling
+BAND = (0.02, 2.0)  # metres above the floor: lower is floor, higher is ceiling
 ROUND = 24  # points on a projected circle
 
 
-def floor_plan(world: WorldPlan) -> list[Polygon]:
-    """Every static body's shadow in the band, in world x, y."""
+def floor_plan(world: WorldPlan, starts: list[tuple[float, float, float]] = ()) -> list[Polygon]:
+    """Every static body's shadow in the band above the floor under ``starts`` (each robot's
+    root link x, y, z where it started; the band is measured from z = 0 without them)."""
+    from mobot_cli.plot.floorlevel import floor_level
+
+    floor = floor_level(world, list(starts), _shapes) if starts else 0.0
+    band = (floor + BAND[0], floor + BAND[1])
     polygons: list[Polygon] = []
     for body in world.bodies:
-        for shape in body.shapes or _urdf_shapes(body.urdf):
+        for shape in _shapes(body):
             xyz, quat = compose_poses((body.xyz, body.quat), (shape.xyz, shape.quat))
-            polygons.extend(shape_shadow(shape, xyz, quat))
+            polygons.extend(shape_shadow(shape, xyz, quat, band))
     return polygons
 
 
-def shape_shadow(shape: StaticShape, xyz: Vec, quat: Quat) -> list[Polygon]:
+def _shapes(body) -> list[StaticShape]:
+    return list(body.shapes) or _urdf_shapes(body.urdf)
+
+
+def shape_shadow(shape: StaticShape, xyz: Vec, quat: Quat,
+                 band: tuple[float, float] = BAND) -> list[Polygon]:
     """The shadow of one shape posed in the world (none when it lies outside the band)."""
     if shape.kind == "mesh":
-        return _mesh_shadow(shape.mesh, shape.size, xyz, quat)
+        return _mesh_shadow(shape.mesh, shape.size, xyz, quat, band)
     points = [pose_point(xyz, quat, p) for p in _outline_points(shape.kind, shape.size)]
-    if not points or not _in_band(min(p[2] for p in points), max(p[2] for p in points)):
+    if not points or not _in_band(min(p[2] for p in points), max(p[2] for p in points), band):
         return []
     hull = convex_hull([(p[0], p[1]) for p in points])
     return [hull] if len(hull) >= 3 else []
@@ -62,7 +72,8 @@ def _outline_points(kind: str, size: tuple[float, ...]) -> list[Vec]:
     return []  # a plane is a floor or a wall of infinite extent: not drawn
 
 
-def _mesh_shadow(path: str, scale: tuple[float, ...], xyz: Vec, quat: Quat) -> list[Polygon]:
+def _mesh_shadow(path: str, scale: tuple[float, ...], xyz: Vec, quat: Quat,
+                 band: tuple[float, float]) -> list[Polygon]:
     import numpy as np
 
     from mobot_cli.common.meshfile import read_mesh
@@ -74,7 +85,7 @@ def _mesh_shadow(path: str, scale: tuple[float, ...], xyz: Vec, quat: Quat) -> l
     world = (vertices * np.array(scale[:3])) @ rot.T + np.array(xyz)
     tri = world[faces]  # (n, 3 corners, xyz)
     z = tri[:, :, 2]
-    keep = (z.max(axis=1) >= BAND[0]) & (z.min(axis=1) <= BAND[1])
+    keep = (z.max(axis=1) >= band[0]) & (z.min(axis=1) <= band[1])
     tri = tri[keep][:, :, :2]
     a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
     area = np.abs((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
@@ -147,6 +158,6 @@ def _cross(o: Point, a: Point, b: Point) -> float:
     return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
 
 
-def _in_band(zmin: float, zmax: float) -> bool:
-    return zmax >= BAND[0] and zmin <= BAND[1]
+def _in_band(zmin: float, zmax: float, band: tuple[float, float]) -> bool:
+    return zmax >= band[0] and zmin <= band[1]
 

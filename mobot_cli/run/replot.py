@@ -30,6 +30,7 @@ class _Points:
     label: str
     true: list[tuple[float, float]] = field(default_factory=list)
     odom: list[tuple[float, float]] = field(default_factory=list)
+    start_z: float | None = None  # the root link's height at the first row (the floor plan's band)
 
 
 def replot(folder: Path, out: Path | None = None) -> PlotResult:
@@ -83,7 +84,8 @@ def read_tracks(run: Path) -> list[_Points]:
                     state = _State(*(float(row[k]) for k in _State.FIELDS))
                 except (KeyError, TypeError, ValueError):
                     continue  # a row cut short by a killed run
-                to_world = to_world or odom_to_world(state)
+                if to_world is None:
+                    to_world, track.start_z = odom_to_world(state), state.true_z
                 track.true.append((state.true_x, state.true_y))
                 track.odom.append(to_world(state.odom_x, state.odom_y))
         if track.true:
@@ -95,13 +97,14 @@ def read_tracks(run: Path) -> list[_Points]:
 class _State:
     """The CSV columns odom_to_world and the plot use."""
 
-    FIELDS = ("true_x", "true_y", "true_yaw", "odom_x", "odom_y", "odom_yaw")
+    FIELDS = ("true_x", "true_y", "true_yaw", "odom_x", "odom_y", "odom_yaw", "true_z")
     true_x: float
     true_y: float
     true_yaw: float
     odom_x: float
     odom_y: float
     odom_yaw: float
+    true_z: float
 
 
 def _swept_values(folder: Path) -> dict[str, str]:

@@ -48,6 +48,7 @@ class TrajectorySink(Sink):
             entry = self.open.get(name)
             if entry is None:
                 entry = self.open[name] = (_Points(name), odom_to_world(state))
+                entry[0].start_z = state.true_z
                 self.tracks.append(entry[0])
             points, to_world = entry
             points.true.append((state.true_x, state.true_y))
@@ -74,6 +75,7 @@ class _Points:
     def __init__(self, label: str):
         self.label, self.true, self.odom = label, [], []
         self.last_scan = None  # sim.sensors.ScanData
+        self.start_z: float | None = None  # the root link's height where the path starts
 
     @property
     def scan(self) -> list[tuple[float, float]]:
@@ -87,14 +89,16 @@ class _Points:
 
 
 def draw(tracks: list, world: WorldPlan | None, out: Path, title: str, subtitle: str) -> None:
-    """Render ``tracks`` (objects with label, true, odom) over ``world``'s floor plan to ``out``."""
+    """Render ``tracks`` (objects with label, true, odom, start_z) over ``world``'s floor plan to
+    ``out``; the plan's height band is measured from the floor where the tracks start."""
     from mobot_cli.plot.floorplan import floor_plan
     from mobot_cli.plot.render import Track, render
 
     labels = [t.label for t in tracks]
     plot_tracks = [Track(_unique(t.label, labels[:i]), t.true, t.odom, getattr(t, "scan", []))
                    for i, t in enumerate(tracks)]
-    render(plot_tracks, floor_plan(world) if world is not None else [], out, title, subtitle)
+    starts = [(*t.true[0], t.start_z) for t in tracks if t.true and t.start_z is not None]
+    render(plot_tracks, floor_plan(world, starts) if world is not None else [], out, title, subtitle)
 
 
 def _unique(label: str, before: list[str]) -> str:

@@ -21,7 +21,7 @@ from mobot_cli.sim.plan import DriveSpec, Plan, RobotPlan
 
 DRIVE_KEYS = ("odometry", "left_joints", "right_joints", "wheel_radius", "wheel_separation",
               "wheel_separation_multiplier", "wheel_radius_multiplier", "max_wheel_torque",
-              "max_wheel_acceleration")
+              "max_wheel_acceleration", "twist_feedback")
 
 
 def resolved_document(scenario: Scenario, plan: Plan, base_dir: Path) -> dict[str, Any]:

@@ -79,6 +79,7 @@ class DriveOverrides(Strict):
     wheel_radius_multiplier: Optional[PositiveFloat] = None
     max_wheel_torque: Optional[PositiveFloat] = None
     max_wheel_acceleration: Optional[PositiveFloat] = None
+    twist_feedback: Optional[bool] = None
 
 
 class CommandSpec(Strict):

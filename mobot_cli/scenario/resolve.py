@@ -41,7 +41,7 @@ def resolve(scenario: Scenario, source: Source) -> Plan:
     world = _world(scenario, source, base_dir)
     notices.extend(world.notices)
     ctx = RobotResolver(rate, steps(scenario.settle, rate), total, base_dir=base_dir, source=source,
-                        world=world)
+                        world=world, skip_missing=scenario.skip_missing)
     robots = tuple(robot for index, spec in enumerate(scenario.robots)
                    for robot in ctx.plans(spec, ("robots", index)))
     robots, events = resolve_events(scenario.events, robots, ctx)

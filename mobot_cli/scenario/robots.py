@@ -11,8 +11,9 @@ import dataclasses
 from pathlib import Path
 from typing import Any
 
+from mobot_cli.assets.description.drive import drive_from_joints
 from mobot_cli.assets.description.load import load_robot
-from mobot_cli.assets.description.robot import RobotDescription
+from mobot_cli.assets.description.robot import NO_DRIVE, RobotDescription
 from mobot_cli.assets.world.loaded import LoadedWorld, WorldRobot
 from mobot_cli.common.transforms import quat_from_rpy
 from mobot_cli.errors import Location, MobotError, ScenarioError
@@ -31,9 +32,11 @@ class RobotResolver:
     """
 
     def __init__(self, rate_hz: int, settle: int, total: int, *, base_dir: Path,
-                 source: Source | None = None, world: LoadedWorld | None = None):
+                 source: Source | None = None, world: LoadedWorld | None = None,
+                 skip_missing: bool = False):
         self.rate_hz, self.settle, self.total = rate_hz, settle, total
         self.base_dir = base_dir
+        self.skip_missing = skip_missing  # missing meshes: left out with a warning, not an error
         self.source = source
         self.world = world  # its robot models are robots when listed by name
         self.names: dict[str, tuple] = {}
@@ -51,6 +54,8 @@ class RobotResolver:
         drive = self.drive(spec, desc, path)
         sensors = resolve_sensors(spec, desc, path, self)
         commands = self.commands(spec, path, spawn_step)
+        if drive is None:  # said here, not by describe(): a drive: naming the wheels silences it
+            self.notices.extend(str(n) for n in desc.notices if n.message == NO_DRIVE)
         if commands and drive is None:
             raise ScenarioError(f"robot '{spec.name}' has commands but no drive wheels were detected in "
                                 f"'{spec.description}'", location=self.locate_key(path + ("commands",)),
@@ -99,17 +104,17 @@ class RobotResolver:
                 from mobot_cli.assets.description.sdf import describe_world_robot
 
                 self.loaded[key] = describe_world_robot(in_world, self.base_dir)
-                self.notices.extend(str(n) for n in self.loaded[key].notices)
+                self.notices.extend(_shown(self.loaded[key]))
             return self.loaded[key]
         args = {k: arg_text(v) for k, v in spec.args.items()}
         key = (spec.description, tuple(sorted(args.items())))
         if key not in self.loaded:
             try:
-                self.loaded[key] = load_robot(spec.description, args, self.base_dir)
+                self.loaded[key] = load_robot(spec.description, args, self.base_dir, self.skip_missing)
             except MobotError as exc:
                 raise type(exc)(f"robot '{spec.name}': {exc}",
                                 location=self.locate_key(path + ("description",))) from None
-            self.notices.extend(str(n) for n in self.loaded[key].notices)
+            self.notices.extend(_shown(self.loaded[key]))
         return self.loaded[key]
 
     def world_robot(self, spec: RobotSpec) -> WorldRobot | None:
@@ -127,15 +132,37 @@ class RobotResolver:
         for key in ("left_joints", "right_joints"):
             if key in fields:
                 fields[key] = tuple(fields[key])
-        if desc.drive is not None:
-            return dataclasses.replace(desc.drive, source=_source(desc.drive, fields), **fields)
+        base = self.named_wheels(desc, fields, path)
+        if base is not None:
+            return dataclasses.replace(base, source=_source(base, fields), **fields)
         needed = ["left_joints", "right_joints", "wheel_radius", "wheel_separation"]
         missing = [k for k in needed if k not in fields]
         if missing:
+            named = "left_joints" in fields and "right_joints" in fields
             raise ScenarioError(f"no drive wheels were detected in '{spec.description}' and drive: lacks "
                                 + ", ".join(missing), location=self.locate_key(path + ("drive",)),
-                                hint="Name the wheel joints and give their radius and separation.")
+                                hint="The named joints' links have no cylinder, sphere or mesh collision to "
+                                     "measure: give wheel_radius." if named else
+                                "Name the wheel joints (left_joints, right_joints); radius and separation "
+                                "come from their geometry.")
         return DriveSpec(source="scenario", **fields)
+
+    def named_wheels(self, desc: RobotDescription, fields: dict[str, Any], path: tuple) -> DriveSpec | None:
+        """The detected drive, or the one on the joints drive: names, measured from their geometry."""
+        detected = desc.drive
+        left = fields.get("left_joints", detected.left_joints if detected else None)
+        right = fields.get("right_joints", detected.right_joints if detected else None)
+        if left is None or right is None:
+            return detected
+        if detected is not None and (left, right) == (detected.left_joints, detected.right_joints):
+            return detected
+        try:
+            return drive_from_joints(desc.urdf, tuple(left), tuple(right), source=desc.source,
+                                     radius=fields.get("wheel_radius"),
+                                     separation=fields.get("wheel_separation"))
+        except MobotError as exc:
+            raise ScenarioError(exc.message, location=self.locate_key(path + ("drive",)),
+                                hint=exc.hint) from None
 
     def commands(self, spec: RobotSpec, path: tuple, spawn_step: int = 0) -> tuple[CommandStep, ...]:
         """The command script in whole steps; each robot holds still for ``settle`` after its spawn."""
@@ -164,6 +191,11 @@ class RobotResolver:
                 if free_from < self.total:
                     out.append(CommandStep(step=free_from, linear=0.0, angular=0.0))
         return tuple(out)
+
+
+def _shown(desc: RobotDescription) -> list[str]:
+    """The description's notices but the missing drive, which plans() says when it applies."""
+    return [str(n) for n in desc.notices if n.message != NO_DRIVE]
 
 
 def unlisted_robots(world: LoadedWorld, robots) -> list[str]:

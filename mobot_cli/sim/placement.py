@@ -24,6 +24,10 @@ PROBE_Z = -1000.0  # m
 RAY_REACH = 1000.0  # m
 MAX_CROSSINGS = 64
 RAY_STEP = 1e-4  # m a ray moves past each surface it crosses before looking on
+# Half-spaces that measure a robot's bounds stand this far from its base on each side.
+BOUNDS_REACH = 100.0  # m
+# PyBullet's AABBs carry a 1 mm margin; more slack than this on any side means they are loose.
+LOOSE_AABB = 0.005  # m
 
 
 def lowest_points(cid: int, body: int, probe: int, probe_z: float = 0.0) -> dict[int, float]:
@@ -38,19 +42,46 @@ def lowest_points(cid: int, body: int, probe: int, probe_z: float = 0.0) -> dict
     return lowest
 
 
-def floor_height(cid: int, body: int, floors: set[int], top: float, name: str) -> float:
-    """Height of the highest floor (ground or static body) under the robot, probed from ``top``."""
-    (x0, y0, _), (x1, y1, _) = p.getAABB(body, -1, physicsClientId=cid)
-    for link in range(p.getNumJoints(body, physicsClientId=cid)):
-        (a, b, _), (c, d, _) = p.getAABB(body, link, physicsClientId=cid)
-        x0, y0, x1, y1 = min(x0, a), min(y0, b), max(x1, c), max(y1, d)
+Bounds = tuple[tuple[float, float, float], tuple[float, float, float]]
+
+
+def body_bounds(cid: int, body: int) -> Bounds:
+    """Exact world bounds (lo, hi) of a body's collision shapes.
+
+    PyBullet's AABBs are loose for a link whose inertial frame is rotated (an <inertial>
+    <origin rpy>, or off-diagonal inertia that PyBullet diagonalises): the link's shapes sit in
+    that frame and their box is turned with it. Half-spaces on each side, with PyBullet's
+    closest points, give the true extremes whatever the frames.
+    """
+    pos = p.getBasePositionAndOrientation(body, physicsClientId=cid)[0]
+    lo, hi = list(pos), list(pos)
+    for axis in range(3):
+        for side, out in ((-1.0, lo), (1.0, hi)):
+            normal = [0.0, 0.0, 0.0]
+            normal[axis] = -side  # the half-space's surface faces the robot
+            at = list(pos)
+            at[axis] += side * BOUNDS_REACH
+            shape = p.createCollisionShape(p.GEOM_PLANE, planeNormal=normal, physicsClientId=cid)
+            plane = p.createMultiBody(0.0, shape, basePosition=at, physicsClientId=cid)
+            try:
+                points = p.getClosestPoints(body, plane, 2.0 * BOUNDS_REACH, physicsClientId=cid)
+            finally:
+                p.removeBody(plane, physicsClientId=cid)
+            if points:
+                out[axis] = at[axis] - side * min(pt[8] for pt in points)
+    return (lo[0], lo[1], lo[2]), (hi[0], hi[1], hi[2])
+
+
+def floor_height(cid: int, box: Bounds, floors: set[int], top: float, name: str) -> float:
+    """Height of the highest floor (ground or static body) under ``box``, probed from ``top``."""
+    (x0, y0, _), (x1, y1, _) = box
     xs, ys = (x0, (x0 + x1) / 2, x1), (y0, (y0 + y1) / 2, y1)
     starts = [(x, y, top) for x in xs for y in ys]
     ends = [(x, y, -FLOOR_PROBE_DEPTH) for x, y, _ in starts]
     rays = p.rayTestBatch(starts, ends, physicsClientId=cid)
     hits = [r[3][2] for r in rays if r[0] in floors]  # another robot is not a floor
     if not hits and top < HIGH_PROBE:  # no floor near z = 0 (a raised stage): the highest surface
-        return floor_height(cid, body, floors, HIGH_PROBE, name)
+        return floor_height(cid, box, floors, HIGH_PROBE, name)
     if not hits:
         x, y = (x0 + x1) / 2, (y0 + y1) / 2
         raise SpawnError(
@@ -61,23 +92,19 @@ def floor_height(cid: int, body: int, floors: set[int], top: float, name: str) -
 
 def rest_on_floor(cid: int, body: int, probe: int, floors: set[int], xyz, quat,
                   name: str, probe_z: float = 0.0) -> tuple[float, float, float]:
-    """Move the robot so its lowest collision point touches the floor below (x, y); return xyz."""
-    p.resetBasePositionAndOrientation(body, (xyz[0], xyz[1], PARKING_HEIGHT), quat,
-                                      physicsClientId=cid)
+    """Move the robot so its lowest collision point touches the floor below (x, y); return xyz.
+
+    The robot is parked high above with its URDF link frame (not its inertial frame, which may
+    be rotated) at the asked orientation, and measured there.
+    """
+    _place(cid, body, (xyz[0], xyz[1], PARKING_HEIGHT), quat)
     base_z = link_frame_z(cid, body)
     lowest = min(lowest_points(cid, body, probe, probe_z).values())  # its world z, parked
-    height = _top(cid, body) - lowest
-    floor = floor_height(cid, body, floors, height + FLOOR_PROBE_CLEARANCE, name)
+    box = _probe_box(cid, body)
+    floor = floor_height(cid, box, floors, box[1][2] - lowest + FLOOR_PROBE_CLEARANCE, name)
     z = floor + (base_z - lowest)
     _place(cid, body, (xyz[0], xyz[1], z), quat)
     return xyz[0], xyz[1], z
-
-
-def _top(cid: int, body: int) -> float:
-    top = p.getAABB(body, -1, physicsClientId=cid)[1][2]
-    for link in range(p.getNumJoints(body, physicsClientId=cid)):
-        top = max(top, p.getAABB(body, link, physicsClientId=cid)[1][2])
-    return top
 
 
 def link_frame_z(cid: int, body: int) -> float:
@@ -115,3 +142,21 @@ def check_clear(cid: int, body: int, others: dict[int, str], name: str, xyz, z_a
             raise SpawnError(
                 f"robot '{name}' spawned at {_at(xyz)} reaches {depth * 100:.1f} cm into {label}",
                 hint=hint)
+
+
+
+def _probe_box(cid: int, body: int) -> Bounds:
+    """The box floor rays start from: PyBullet's link AABBs where they are tight, else exact.
+
+    Rays started from the AABBs before exact bounds existed; where those are tight (within
+    LOOSE_AABB on every side) they still do, so earlier runs reproduce to the last bit (a ray
+    started a few nanometres higher hits a mesh floor a few attometres apart, and contacts
+    amplify that). Where they are loose (a rotated inertial frame) the exact bounds are used.
+    """
+    exact = body_bounds(cid, body)
+    lo, hi = p.getAABB(body, -1, physicsClientId=cid)
+    for link in range(p.getNumJoints(body, physicsClientId=cid)):
+        a, b = p.getAABB(body, link, physicsClientId=cid)
+        lo, hi = tuple(map(min, lo, a)), tuple(map(max, hi, b))
+    slack = max(*(e - a for a, e in zip(lo, exact[0])), *(a - e for a, e in zip(hi, exact[1])))
+    return (tuple(lo), tuple(hi)) if slack <= LOOSE_AABB else exact  # type: ignore[return-value]

@@ -44,6 +44,9 @@ class DriveSpec:
     max_wheel_torque: float = 20.0  # N*m per wheel
     max_wheel_acceleration: float | None = None  # rad/s^2 at the wheel; None = unlimited
     odometry: str = "encoder"  # "encoder" | "ground_truth": what odom_* reports
+    # Trim wheel speeds until the measured body twist matches the command (sim/twist_trim.py);
+    # None: on for skid steer (more than one wheel per side), off for two wheels.
+    twist_feedback: bool | None = None
     # Where the wheel layout came from ("urdf" | "plugin" | "scenario"): a note, not a setting.
     source: str = field(default="urdf", compare=False)
     # joint name -> +1.0 / -1.0: a positive joint velocity times the sign rolls that wheel

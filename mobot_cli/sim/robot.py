@@ -9,6 +9,7 @@ from mobot_cli.sim.bullet import p
 from mobot_cli.sim.drive import Odometry, body_twist, ramp, wheel_speeds, wrap_angle
 from mobot_cli.sim.plan import DriveSpec, RobotPlan
 from mobot_cli.sim.state import RobotState
+from mobot_cli.sim.twist_trim import TwistTrim
 
 
 class SimRobot:
@@ -138,6 +139,9 @@ class _Drive:
         self.goal = list(self.rates)  # where ramping is heading (acceleration limit)
         self.max_step = (spec.max_wheel_acceleration or 0.0) * robot.dt
         self.forces = [spec.max_wheel_torque] * len(self.wheels)
+        self.twist = (0.0, 0.0)  # the commanded body twist
+        self.trim = TwistTrim() if _twist_feedback(spec) else None
+        self.trim_from: tuple | None = None  # link pose at the start of the control period
         self._apply()
 
     def _positions(self) -> list[float]:
@@ -146,10 +150,35 @@ class _Drive:
 
     def command(self, linear: float, angular: float) -> None:
         """Wheel speed targets for a body twist; ramped later when acceleration is limited."""
+        if (linear, angular) != self.twist:
+            self.trim_from = None  # the period that saw the change measures nothing
+        self.twist = (linear, angular)
+        self._set_goal()
+        if self.max_step <= 0.0:
+            self.rates = list(self.goal)
+            self._apply()
+
+    def _set_goal(self) -> None:
+        linear, angular = self.twist if self.trim is None else self.trim.apply(*self.twist)
         left, right = wheel_speeds(linear, angular, self.separation, self.radius, self.radius)
         n_left = len(self.left)
         self.goal = [(left if i < n_left else right) * sign for i, sign in enumerate(self.signs)]
-        if self.max_step <= 0.0:
+
+    def trim_step(self, dt: float) -> None:
+        """Compare the last ``dt`` seconds of body motion with the command; retrim the wheels."""
+        pos, orn = self.robot.link_pose()
+        start, self.trim_from = self.trim_from, (pos, orn)
+        if start is None or self.ramping or self.trim is None:
+            return
+        (x0, y0, _), yaw0 = start[0], p.getEulerFromQuaternion(start[1])[2]
+        yaw1 = p.getEulerFromQuaternion(orn)[2]
+        turn = wrap_angle(yaw1 - yaw0)
+        mid = yaw0 + turn / 2.0
+        forward = (pos[0] - x0) * math.cos(mid) + (pos[1] - y0) * math.sin(mid)
+        if self.trim.update(self.twist, (forward / dt, turn / dt), dt):
+            # A gain moves by at most GAIN * dt * BAND (2.4 % at 50 Hz) per period: within
+            # any acceleration limit, so the new targets apply at once.
+            self._set_goal()
             self.rates = list(self.goal)
             self._apply()
 
@@ -195,6 +224,13 @@ class _Drive:
                             self.separation)
         odo = self.odometry
         return odo.x, odo.y, wrap_angle(odo.yaw), vx, wz
+
+
+def _twist_feedback(spec: DriveSpec) -> bool:
+    """Whether the twist loop runs: as set, else for skid steer (several wheels per side)."""
+    if spec.twist_feedback is not None:
+        return spec.twist_feedback
+    return max(len(spec.left_joints), len(spec.right_joints)) > 1
 
 
 def _forward_sign(robot: SimRobot, joint: int) -> float:

@@ -11,7 +11,7 @@ from __future__ import annotations
 from mobot_cli.errors import SpawnError
 from mobot_cli.sim.bullet import p
 from mobot_cli.sim.placement import MAX_CROSSINGS, MAX_SPAWN_PENETRATION, RAY_REACH, RAY_STEP, \
-    _at
+    Bounds, _at
 
 # Up and the four horizontal directions; down is left out: below a robot is its floor, and a
 # ground plane (a half space) is "crossed" once by any ray going down.
@@ -45,21 +45,16 @@ def surfaces_along(cid: int, origins, directions) -> list[list[tuple[int, float]
     return found
 
 
-def _centre(cid: int, body: int) -> tuple[float, float, float]:
-    lo, hi = p.getAABB(body, -1, physicsClientId=cid)
-    lo, hi = list(lo), list(hi)
-    for link in range(p.getNumJoints(body, physicsClientId=cid)):
-        a, b = p.getAABB(body, link, physicsClientId=cid)
-        lo = [min(u, v) for u, v in zip(lo, a)]
-        hi = [max(u, v) for u, v in zip(hi, b)]
+def _centre(box: Bounds) -> tuple[float, float, float]:
+    lo, hi = box
     return ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2)
 
 
-def check_not_inside(cid: int, body: int, solids: dict[int, str], name: str, xyz) -> None:
-    """Refuse a robot whose centre lies inside a static body's closed surface."""
+def check_not_inside(cid: int, solids: dict[int, str], name: str, xyz, box: Bounds) -> None:
+    """Refuse a robot (bounds ``box``) whose centre lies inside a static body's closed surface."""
     if not solids:
         return
-    centre = _centre(cid, body)
+    centre = _centre(box)
     up = surfaces_along(cid, [centre], [DIRECTIONS[0]])[0]
     first = next((b for b, _ in up if b in solids), None)
     if first is None:
@@ -70,14 +65,12 @@ def check_not_inside(cid: int, body: int, solids: dict[int, str], name: str, xyz
                          hint="Move the robot clear of it.")
 
 
-def check_above_floor(cid: int, body: int, floors: dict[int, str], name: str, xyz) -> None:
-    """Refuse a robot with no floor below it but a floor surface above its lowest point."""
+def check_above_floor(cid: int, floors: dict[int, str], name: str, xyz, box: Bounds) -> None:
+    """Refuse a robot (bounds ``box``) with no floor below it but a floor above its lowest point."""
     if not floors:
         return
-    lo = list(p.getAABB(body, -1, physicsClientId=cid)[0])
-    for link in range(p.getNumJoints(body, physicsClientId=cid)):
-        lo = [min(u, v) for u, v in zip(lo, p.getAABB(body, link, physicsClientId=cid)[0])]
-    x, y, _ = _centre(cid, body)
+    lo = box[0]
+    x, y, _ = _centre(box)
     start = (x, y, lo[2] + MAX_SPAWN_PENETRATION)  # a few millimetres into the floor is fine
     down, up = surfaces_along(cid, [start, start], [(0.0, 0.0, -1.0), (0.0, 0.0, 1.0)])
     if any(b in floors for b, _ in down):

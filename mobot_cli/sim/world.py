@@ -199,10 +199,11 @@ class World:
         others = dict(self._statics)
         others.update({r.body: f"robot '{n}'" for n, r in self._robots.items()})
         placement.check_clear(cid, uid, others, robot.name, xyz, z_auto=pose.z_auto)
-        surroundings.check_not_inside(cid, uid, {b: self._statics[b] for b in self._solids},
-                                      robot.name, xyz)
+        box = placement.body_bounds(cid, uid)
+        surroundings.check_not_inside(cid, {b: self._statics[b] for b in self._solids},
+                                      robot.name, xyz, box)
         if not pose.z_auto:
-            surroundings.check_above_floor(cid, uid, self._statics, robot.name, xyz)
+            surroundings.check_above_floor(cid, self._statics, robot.name, xyz, box)
         bottom = min(lowest.values(), default=0.0)
         wheels = _wheel_links(cid, uid, robot)
         casters = {link for link, h in lowest.items()
@@ -251,6 +252,8 @@ class World:
                 if robot.drive is not None:
                     robot.drive.integrate()
                     robot.drive.integrated_at = self._steps
+                    if robot.drive.trim is not None:
+                        robot.drive.trim_step(self._odom_every * self.physics.dt)
         if self._steps % self._check_every == 0:
             for robot in self._robots.values():
                 self._check(robot)

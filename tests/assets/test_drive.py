@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from mobot_cli.assets.description.drive import detect_drive
+from mobot_cli.assets.description.drive import detect_drive, drive_from_joints
 from mobot_cli.errors import DescriptionError, Notice
 from mobot_cli.sim.drive import default_separation_multiplier
 
@@ -164,5 +164,75 @@ def test_plugin_with_swapped_sides_gets_a_notice():
     spec = detect_drive(robot(wheel("l", "0 0.2 0"), wheel("r", "0 -0.2 0"), plugin),
                         notices=notices)
     assert spec.left_joints == ("r",)
-    assert len(notices) == 2 and "drives 'r' as a left wheel but it sits at y = -0.200 m" \
-        in notices[0].message
+    sides = [n.message for n in notices if " as a " in n.message]
+    assert len(sides) == 2 and "drives 'r' as a left wheel but it sits at y = -0.200 m" in sides[0]
+
+
+def suspended(name: str, y: float, kind: str = "prismatic", axis: str = "0 0 1") -> str:
+    """A wheel below a suspension link: chassis -> {kind} joint -> suspension -> wheel."""
+    return (f'<link name="{name}_arm">{INERTIAL}</link>'
+            f'<joint name="{name}_suspension" type="{kind}"><parent link="base"/>'
+            f'<child link="{name}_arm"/><origin xyz="0.05 {y} 0"/><axis xyz="{axis}"/>'
+            '<limit lower="-0.02" upper="0" effort="10" velocity="1"/></joint>'
+            + wheel(name, "0 0 -0.03", parent=f"{name}_arm"))
+
+
+@pytest.mark.parametrize("kind, axis", [("prismatic", "0 0 1"),  # a wheel drop
+                                        ("revolute", "1 0 0"),  # a swing arm
+                                        ("revolute", "0 1 0")])  # a trailing arm
+def test_wheels_below_suspension_joints_are_found(kind, axis):
+    spec = detect_drive(robot(suspended("l", 0.2, kind, axis), suspended("r", -0.2, kind, axis)))
+    assert (spec.left_joints, spec.right_joints) == (("l",), ("r",))
+    assert spec.wheel_radius == pytest.approx(0.1)
+    assert spec.wheel_separation == pytest.approx(0.4)
+
+
+def test_wheels_below_a_vertical_pivot_are_steered_not_driven():
+    parts = (suspended("l", 0.2, "revolute", "0 0 1"), suspended("r", -0.2, "revolute", "0 0 1"))
+    assert detect_drive(robot(*parts)) is None
+
+
+def test_plugin_that_disagrees_with_geometry_says_so_once():
+    plugin = ROS1_PLUGIN.replace("<wheelSeparation>0.5<", "<wheelSeparation>0.4<").replace(
+        "<wheelDiameter>0.3<", "<wheelDiameter>0.22<")
+    notices: list[Notice] = []
+    spec = detect_drive(robot(wheel("l", "0 0.18 0"), wheel("r", "0 -0.18 0"), plugin),
+                        notices=notices)
+    assert (spec.wheel_separation, spec.wheel_radius) == (0.4, 0.11)  # Gazebo's values
+    assert [n.message for n in notices] == [
+        "the libgazebo_ros_diff_drive.so plugin says wheel_separation 0.400 m, but its wheel "
+        "joints are 0.360 m apart; and wheel_radius 0.110 m, but its wheels' collisions have "
+        "radius 0.100 m: mobot uses the plugin's values, as Gazebo does, so the robot turns "
+        "11 % more than commanded and drives 9 % less than commanded (set drive: wheel_radius / "
+        "wheel_separation to use the geometry)"]
+
+
+def test_plugin_within_two_percent_of_geometry_is_quiet():
+    plugin = ROS1_PLUGIN.replace("<wheelSeparation>0.5<", "<wheelSeparation>0.407<").replace(
+        "<wheelDiameter>0.3<", "<wheelDiameter>0.198<")
+    notices: list[Notice] = []
+    detect_drive(robot(wheel("l", "0 0.2 0"), wheel("r", "0 -0.2 0"), plugin), notices=notices)
+    assert notices == []
+
+
+def test_named_joints_take_radius_from_a_mesh_and_separation_from_joints(tmp_path):
+    trimesh = pytest.importorskip("trimesh")
+    stl = tmp_path / "tyre.stl"
+    trimesh.creation.cylinder(radius=0.08, height=0.03, sections=64).export(stl)
+
+    def mesh_wheel(name: str, y: float) -> str:
+        return (f'<link name="{name}_link">{INERTIAL}<collision><origin rpy="1.5707963 0 0"/>'
+                f'<geometry><mesh filename="{stl}"/></geometry></collision></link>'
+                f'<joint name="{name}" type="continuous"><parent link="base"/>'
+                f'<child link="{name}_link"/><origin xyz="0 {y} 0"/><axis xyz="0 1 0"/></joint>')
+
+    urdf = robot(mesh_wheel("l", 0.21), mesh_wheel("r", -0.21))
+    assert detect_drive(urdf) is None  # a mesh is no proof of a wheel
+    spec = drive_from_joints(urdf, ("l",), ("r",))
+    assert spec.wheel_radius == pytest.approx(0.08, abs=1e-6)
+    assert spec.wheel_separation == pytest.approx(0.42)
+    assert spec.source == "scenario"
+    with pytest.raises(DescriptionError) as err:
+        drive_from_joints(urdf, ("left",), ("r",))
+    assert err.value.message == "drive names left wheel joint 'left', which is not in the description"
+    assert "'l'" in err.value.hint

@@ -354,3 +354,76 @@ def test_sdf_robot_joint_axes_end_up_in_the_joint_frame(tmp_path, axis, expected
     assert joint.find("axis").get("xyz") == expected
     assert joint.find("origin").get("xyz") == "0 0.15 0"
     assert any("has no <inertial>" in str(n) for n in expansion.notices)
+
+
+# --- what Gazebo accepts ------------------------------------------------------------------
+
+def test_a_comment_before_the_declaration_is_read_as_gazebo_reads_it(tmp_path):
+    """Gazebo's cafe.world starts with a comment; libxml2 refuses that, tinyxml2 reads on."""
+    path = tmp_path / "cafe.world"
+    text = sdf("<world name='w'>\n" + box_model("table") + "\n</world>")
+    path.write_text("<!-- Gazebo's cafe world -->\n\n" + text)
+    world = load_world(str(path), tmp_path)
+    assert [b.name for b in world.plan.bodies] == ["table"]
+    path.write_text("\ufeff  <!-- a\nlong comment -->\n" + text.replace("</world>", "<bad>\n</world>"))
+    with pytest.raises(WorldError, match="malformed XML: Opening and ending tag mismatch: bad line 7 ") as info:
+        load_world(str(path), tmp_path)
+    assert info.value.location.line == 8  # lines count as in the file: </world> closes <bad>
+
+
+def test_a_zero_in_a_mesh_scale_leaves_that_collision_out(tmp_path):
+    path = world_file(tmp_path, "<model name='decal'><static>1</static><link name='l'><collision name='c'>"
+                                "<geometry><mesh><uri>meshes/gone.stl</uri><scale>1 0 1</scale></mesh>"
+                                "</geometry></collision></link></model>" + box_model("crate"))
+    world = load_world(str(path), tmp_path)  # not even --skip-missing is needed
+    assert [b.name for b in world.plan.bodies] == ["crate"]
+    assert [n.split(": ", 1)[1] for n in world.notices if "scale" in n] == [
+        "collision 'c': mesh 'meshes/gone.stl' has a zero in its <scale> (1 0 1), which flattens it: "
+        "left out"]
+
+
+def test_a_plane_with_a_size_is_a_thin_box_of_that_size(tmp_path):
+    """A poster on a wall (facing -x at x = 2) and a finite platform; a plane without a size,
+    and the ground plane (size 100 x 100 at z = 0), stay infinite."""
+    path = world_file(tmp_path, """
+      <include><uri>model://ground_plane</uri></include>
+      <model name='poster'><static>true</static><pose>2 0 0.4 0 0 0</pose><link name='l'>
+        <collision name='c'><geometry><plane><normal>-1 0 0</normal><size>1.5 0.8</size></plane>
+        </geometry></collision></link></model>
+      <model name='platform'><static>true</static><pose>5 5 0.19 0 0 0.5</pose><link name='l'>
+        <collision name='c'><geometry><plane><normal>0 0 1</normal><size>3 2</size></plane>
+        </geometry></collision></link></model>
+      <model name='wall'><static>true</static><pose>-4 0 0 0 0 0</pose><link name='l'>
+        <collision name='c'><geometry><plane><normal>1 0 0</normal></plane></geometry></collision>
+      </link></model>""")
+    world = load_world(str(path), tmp_path)
+    assert world.plan.ground_plane
+    poster, platform, wall = (body(world, n) for n in ("poster", "platform", "wall"))
+    (shape,) = poster.shapes
+    assert (shape.kind, shape.size) == ("box", (1.5, 0.8, world_build.THIN_PLANE))
+    # its face on the plane, the box behind it; 1.5 m wide (y), 0.8 m tall (z)
+    assert world.summary["bounds"]["min"] == pytest.approx([2.0, -0.75, 0.0])
+    assert platform.shapes[0].kind == "box" and platform.shapes[0].size[:2] == (3.0, 2.0)
+    assert platform.shapes[0].xyz == pytest.approx((0.0, 0.0, -world_build.THIN_PLANE / 2))
+    assert [s.kind for s in wall.shapes] == ["plane"]
+
+
+def test_many_missing_includes_make_one_warning(tmp_path, monkeypatch):
+    """Models named once, folders listed once; three or fewer keep a warning each."""
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    fuel = "https://fuel.gazebosim.org/1.0/OpenRobotics/models/{}"
+    includes = ([f"<include><name>t{i}</name><uri>{fuel.format('Table')}</uri></include>" for i in range(5)]
+                + [f"<include><name>c{i}</name><uri>{fuel.format('Chair')}/2</uri></include>" for i in range(3)]
+                + [f"<include><name>s{i}</name><uri>model://shelf</uri></include>" for i in range(2)])
+    path = world_file(tmp_path, "".join(includes) + box_model("crate"))
+    world = load_world(str(path), tmp_path, skip_missing=True)
+    (notice,) = [n for n in world.notices if "left out" in n]
+    folders = notice.split("Folders searched: ")[1]
+    assert notice.startswith(f"{path}: 10 includes and meshes left out (skip_missing): 8 from Gazebo Fuel "
+                             "without a local copy (mobot never downloads; `gz fuel download -u URL` fills "
+                             "~/.gz/fuel): Chair x3, Table x5; 2 models not found: shelf x2. Folders searched: ")
+    assert folders.split("; ")[:2] == [str(tmp_path / "worlds"), str(tmp_path)]
+    assert notice.count(f"{tmp_path}; ") == 1  # each folder once
+    few = world_file(tmp_path, "\n".join(includes[:2]) + box_model("crate"), name="few.world")
+    notices = load_world(str(few), tmp_path, skip_missing=True).notices
+    assert sum("include left out" in n for n in notices) == 2

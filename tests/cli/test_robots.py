@@ -111,6 +111,12 @@ def test_check_robot_with_missing_meshes_fails(corpus, monkeypatch):
     code, out, err = astuple(invoke(["check", path]))
     assert code == 2 and out == ""
     assert "burger_base.stl" in err and "cannot be found" in err
+    code, out, err = astuple(invoke(["inspect", path, "--skip-missing", "--json"]))
+    assert code == 0
+    info = json.loads(out)
+    assert info["drive"]["wheel_radius"] == pytest.approx(0.033)  # its collisions are cylinders
+    assert any("meshes cannot be found and are left out (skip_missing): visual 'package://turtlebot3_"
+               "description/meshes/bases/burger_base.stl' of link 'base_link'" in n for n in info["notices"])
 
 
 def test_corpus_burger_drives_through_mobot_run(corpus, tmp_path, monkeypatch):
@@ -135,3 +141,82 @@ def test_corpus_burger_drives_through_mobot_run(corpus, tmp_path, monkeypatch):
     assert reversing and all(r["odom_vx"] < 0 and r["true_vx"] < 0 for r in reversing)
     assert rows[-1]["odom_x"] == pytest.approx(0.91, abs=0.03)  # odom frame: +x is the spawn heading
     assert math.degrees(rows[-1]["true_yaw"]) == pytest.approx(90.0, abs=3.0)
+
+
+@pytest.fixture()
+def package(tmp_path, monkeypatch):
+    """A package 'pkg' with one mesh, found through MOBOT_RESOURCE_PATH."""
+    trimesh = pytest.importorskip("trimesh")
+    root = tmp_path / "pkg"
+    (root / "meshes").mkdir(parents=True)
+    (root / "package.xml").write_text("<package><name>pkg</name></package>")
+    trimesh.creation.box((0.3, 0.2, 0.1)).export(root / "meshes" / "body.stl")
+    monkeypatch.setenv("MOBOT_RESOURCE_PATH", str(tmp_path))
+    return root
+
+
+def test_xacro_leaves_a_mesh_in_a_comment_alone(package):
+    robot = package / "commented.urdf"
+    robot.write_text('<robot name="c"><link name="base"><visual><geometry>\n'
+                     '<!-- <mesh filename="package://pkg/meshes/old_lidar.stl"/> -->\n'
+                     '<mesh filename="package://pkg/meshes/body.stl"/></geometry></visual>'
+                     '<collision><geometry><box size="0.2 0.2 0.1"/></geometry></collision></link></robot>')
+    done = invoke(["xacro", robot])
+    assert (done.exit_code, done.stderr) == (0, "")
+    assert '<!-- <mesh filename="package://pkg/meshes/old_lidar.stl"/> -->' in done.stdout
+    assert f'<mesh filename="{package / "meshes" / "body.stl"}"/>' in done.stdout
+    assert invoke(["inspect", robot]).exit_code == 0
+
+
+def many_links(package, missing: str = "") -> Path:
+    """A chain of a base and 12 long-named frames without <inertial>; a lidar whose mesh is gone."""
+    frames = "".join(f'<link name="a_frame_with_a_long_descriptive_name_{i}"/>'
+                     f'<joint name="a_joint_with_a_long_descriptive_name_{i}" type="fixed">'
+                     f'<parent link="{"base" if i == 0 else f"a_frame_with_a_long_descriptive_name_{i - 1}"}"/>'
+                     f'<child link="a_frame_with_a_long_descriptive_name_{i}"/></joint>' for i in range(12))
+    lidar = ('<link name="lidar"><inertial><mass value="0.2"/><inertia ixx="1e-4" ixy="0" ixz="0" iyy="1e-4" '
+             'iyz="0" izz="1e-4"/></inertial><visual><geometry><mesh filename="package://pkg/meshes/'
+             f'{missing or "body.stl"}"/></geometry></visual><collision><geometry><mesh filename='
+             f'"package://pkg/meshes/{missing or "body.stl"}"/></geometry></collision></link>'
+             '<joint name="lidar_joint" type="fixed"><parent link="base"/><child link="lidar"/></joint>')
+    path = package / "many.urdf"
+    path.write_text('<robot name="many"><link name="base"><inertial><mass value="2"/><inertia ixx="0.1" ixy="0" '
+                    'ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial><collision><geometry><mesh filename='
+                    f'"package://pkg/meshes/body.stl"/></geometry></collision></link>{frames}{lidar}</robot>')
+    return path
+
+
+def test_links_without_inertial_make_one_warning_and_piped_tree_lines_are_whole(package):
+    done = invoke(["inspect", many_links(package)])
+    assert done.exit_code == 0
+    inertial = [line for line in done.stderr.splitlines() if "<inertial>" in line]
+    assert len(inertial) == 1 and inertial[0].endswith(
+        ": 12 links (" + ", ".join(f"a_frame_with_a_long_descriptive_name_{i}" for i in range(12))
+        + ") have no usable <inertial> (none, or a near-zero mass): PyBullet would give each 1 kg, so mobot "
+        "gives each 1 g and 1e-06 kg*m^2 (Gazebo lumps such links into their parent through fixed joints, "
+        "or drops them)")
+    deepest = "a_frame_with_a_long_descriptive_name_11  (fixed joint a_joint_with_a_long_descriptive_name_11, 0 kg)"
+    assert any(line.endswith(deepest) for line in done.stdout.splitlines())  # 100+ columns, not cut at 80
+
+
+def test_a_missing_robot_mesh_is_left_out_with_skip_missing(package):
+    path = many_links(package, missing="lidar.stl")
+    refused = invoke(["check", path])
+    assert refused.exit_code == 2 and "lidar.stl' of link 'lidar' cannot be found" in refused.stderr
+    assert "--skip-missing" in refused.stderr
+    done = invoke(["check", path, "--skip-missing"])
+    assert done.exit_code == 0 and done.stdout.startswith("ok: robot 'many'")
+    (left_out,) = [line for line in done.stderr.splitlines() if "left out" in line]
+    assert ("2 meshes cannot be found and are left out (skip_missing): collision "
+            "'package://pkg/meshes/lidar.stl' of link 'lidar'; visual 'package://pkg/meshes/lidar.stl' of link "
+            "'lidar'. The first: ") in left_out
+    scenario = package / "s.yaml"
+    scenario.write_text(f"version: 1\nduration: 1\nrobots:\n  - name: r\n    description: {path}\n"
+                        "    pose: {x: 0, y: 0, z: 0.2}\n")
+    assert invoke(["check", scenario]).exit_code == 2
+    assert invoke(["check", scenario, "--skip-missing"]).exit_code == 0
+    assert invoke(["check", scenario, "--set", "skip_missing=true"]).exit_code == 0
+    longer = invoke(["check", scenario, "--skip-missing", "--set", "duration=2.5", "--json"])
+    assert longer.exit_code == 0 and json.loads(longer.stdout)["duration"] == 2.5
+    wrong = invoke(["check", path, "--set", "x=1"])
+    assert wrong.exit_code == 2 and "--set overrides keys of a scenario" in wrong.stderr

@@ -181,6 +181,15 @@ def test_spawn_from_text_with_args_quaternion_and_reference_frame(mobot):
     assert rel["pose"]["yaw"] == pytest.approx(math.pi / 2 + 0.5, abs=1e-3)
 
 
+def test_a_rotated_inertial_frame_spawns_on_its_wheels(mobot):
+    """z omitted rests the robot on its wheels, not on its side (its base's inertia is rotated)."""
+    robot = REPO / "tests" / "sim" / "robots" / "wheeldrop.urdf.xacro"
+    reply = spawn_json(mobot, "tilted_inertia", "--file", str(robot), "inertial_rpy:=0.3 0.7 1.2",
+                       "-x", "22", "-y", "-3", "-Y", "0.6")
+    assert reply["pose"]["z"] == pytest.approx(0.035, abs=1e-3)
+    assert reply["pose"]["yaw"] == pytest.approx(0.6, abs=1e-3)
+
+
 def test_spawn_from_stdin(live, tmp_path):
     urdf = subprocess.run([sys.executable, "-m", "mobot_cli", "xacro", "mobot"], capture_output=True,
                           text=True, check=True, cwd=REPO).stdout

@@ -177,3 +177,45 @@ def test_csv_only_run_imports_neither_rosbags_nor_matplotlib_nor_rich(plot_run, 
             "print(sorted(m for m in ('rosbags', 'matplotlib', 'PIL', 'rich') if m in sys.modules))")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert done.stdout.strip() == "['PIL']"  # Pillow draws trajectory.png; nothing else is loaded
+
+
+@pytest.mark.parametrize("kind", ["box", "mesh", "plane"])
+@pytest.mark.parametrize("height", [0.034, 0.059, 0.19])
+def test_the_band_is_measured_from_the_floor_under_the_robots(tmp_path, kind, height):
+    """A floor above z = 0 is not an obstacle; a 10 cm step on it is; a shelf 2.1 m above it is not."""
+    if kind == "mesh":  # a 10 x 10 m floor tile as two triangles, as a COLLADA floor becomes
+        tile = tmp_path / "floor.obj"
+        tile.write_text(f"v -5 -5 {height}\nv 5 -5 {height}\nv 5 5 {height}\nv -5 5 {height}\n"
+                        "f 1 2 3\nf 1 3 4\n")
+        floor = StaticShape("mesh", (1.0, 1.0, 1.0), mesh=str(tile))
+    elif kind == "plane":
+        floor = StaticShape("plane", (0.0, 0.0, 1.0), xyz=(0, 0, height))
+    else:
+        floor = StaticShape("box", (10.0, 10.0, 0.1), xyz=(0, 0, height - 0.05))
+    world = WorldPlan(ground_plane=False, bodies=(
+        StaticBody(name="floor", shapes=(floor,)),
+        StaticBody(name="step", shapes=(StaticShape("box", (1.0, 1.0, 0.1), xyz=(2, 0, height + 0.05)),)),
+        StaticBody(name="shelf", shapes=(StaticShape("box", (1.0, 1.0, 0.1), xyz=(-2, 0, height + 2.1)),)),
+        StaticBody(name="table", shapes=(StaticShape("box", (1.0, 1.0, 0.05), xyz=(0, 2, height + 0.7)),)),
+    ))
+    robot_root = height + 0.033  # a base_link at wheel height, not on the floor itself
+    areas = sorted(round(area(p), 6) for p in floor_plan(world, [(0.0, 0.0, robot_root)]) if len(p) > 2)
+    assert areas == [1.0, 1.0]  # the step and the table top; not the floor, not the shelf
+    from_zero = [p for p in floor_plan(world) if len(p) > 2]  # the old way: the floor is "in the band"
+    assert kind == "plane" or max(area(p) for p in from_zero) >= 50  # a triangle of the tile, or the box
+
+
+def test_trajectory_png_of_a_raised_floor_leaves_the_floor_white(tmp_path):
+    world = WorldPlan(ground_plane=False, bodies=(
+        StaticBody(name="stage", shapes=(StaticShape("box", (6.0, 6.0, 0.19), xyz=(0, 0, 0.095)),)),))
+    from mobot_cli.run.trajectory import draw
+
+    class Points:
+        label, true, odom, start_z = "r", [(0.0, 0.0), (1.0, 0.0)], [(0.0, 0.0), (1.0, 0.0)], 0.19
+    draw([Points()], WorldPlan(ground_plane=False), tmp_path / "empty.png", "stage", "")
+    nothing = color_pixels(Image.open(tmp_path / "empty.png").convert("RGB"), FLOOR, tol=2)  # text edges
+    draw([Points()], world, tmp_path / "t.png", "stage", "")
+    assert color_pixels(Image.open(tmp_path / "t.png").convert("RGB"), FLOOR, tol=2) == nothing
+    Points.start_z = None  # a recording without heights: the band from z = 0, the stage drawn
+    draw([Points()], world, tmp_path / "t.png", "stage", "")
+    assert color_pixels(Image.open(tmp_path / "t.png").convert("RGB"), FLOOR, tol=2) > 5000

@@ -176,3 +176,28 @@ def test_skip_missing_flag_for_run_and_check(corpus, tmp_path):
     assert done.exit_code == 0 and done.stdout.endswith(f"run folder: {out} (trajectory.png)\n")
     assert "skip_missing: true" in (out / "scenario.yaml").read_text()  # the rerun skips too
     assert "differs only in case" in done.stderr and "BookE_01_009" in done.stderr
+
+
+POSTER_WORLD = """<?xml version="1.0"?>
+<sdf version="1.6"><world name="posters">
+  <include><uri>model://ground_plane</uri></include>
+  <model name="poster"><static>true</static><pose>2 0 0.4 0 0 0</pose><link name="l">
+    <collision name="c"><geometry><plane><normal>-1 0 0</normal><size>1.5 0.8</size></plane></geometry>
+    </collision></link></model>
+</world></sdf>
+"""
+
+
+@pytest.mark.parametrize("y, blocked", [(2.0, False), (0.0, True)])
+def test_a_finite_plane_blocks_only_where_it_is(tmp_path, mobot_desc, y, blocked):
+    """A plane with a <size> is a poster, not an endless wall across the world."""
+    (tmp_path / "posters.world").write_text(POSTER_WORLD)
+    world_plan = load_world(str(tmp_path / "posters.world")).plan
+    with World(Physics(), world_plan) as world:
+        world.spawn(robot(mobot_desc, xyz=(0.0, y, 0.0)))
+        world.set_command("mobot", 0.3, 0.0)
+        for _ in range(10 * 240):
+            world.step()
+        end = world.read("mobot")
+    assert (end.true_x < 2.0) is blocked
+    assert not blocked or end.true_x > 1.6  # it drove up to the poster

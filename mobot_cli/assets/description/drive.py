@@ -2,38 +2,26 @@
 
 A ``<gazebo><plugin>`` diff-drive or skid-steer block wins (source "plugin"); values it
 leaves out, and robots without one, are detected from the URDF (source "urdf"): wheels are
-continuous joints fixed to the root whose axes lie along the root's y axis and whose child
-link has a cylinder (along that axis) or sphere collision.
+continuous joints whose axes lie along the root's y axis, whose child link has a cylinder
+(along that axis) or sphere collision, and which move with the body (wheels.py: under fixed,
+prismatic or suspension joints, anywhere in the tree). A plugin whose radius or separation
+disagrees with that geometry is followed, as Gazebo follows it, with a warning.
 """
 
 from __future__ import annotations
 
-import math
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
 from pathlib import Path
 
-from mobot_cli.assets.description.frames import LinkTree, floats, origin_frame
-from mobot_cli.common.transforms import mat_vec
+from mobot_cli.assets.description.frames import LinkTree
+from mobot_cli.assets.description.wheels import Wheel, wheel
 from mobot_cli.errors import DescriptionError, Location, Notice, did_you_mean
 from mobot_cli.sim.plan import DriveSpec
 
-# |cos| above this counts as parallel: turtlebot3 rotates its wheels by -1.57, not -pi/2.
-_PARALLEL = 0.99
-
 _LEFT_TAGS = ("leftJoint", "left_joint", "leftFrontJoint", "leftRearJoint")
 _RIGHT_TAGS = ("rightJoint", "right_joint", "rightFrontJoint", "rightRearJoint")
-
-
-@dataclass(frozen=True)
-class Wheel:
-    """A wheel joint as seen from the root link at zero joint positions."""
-
-    joint: str
-    x: float
-    y: float
-    radius: float | None
-    sign: float  # +1 when the joint axis points along +y of the root frame
+# Plugin values farther than this from the wheel geometry get a warning.
+DISAGREEMENT = 0.02
 
 
 def detect_drive(urdf: ET.Element | str, *, notices: list[Notice] | None = None,
@@ -49,50 +37,39 @@ def detect_drive(urdf: ET.Element | str, *, notices: list[Notice] | None = None,
         spec = _from_plugin(plugin, tree, notices, source)
         if spec is not None:
             return spec
-    wheels = [w for j in tree.joints if (w := _wheel(tree, j.name, strict=True)) is not None]
+    wheels = [w for j in tree.joints if (w := wheel(tree, j.name, strict=True)) is not None]
     return _spec(wheels, source="urdf", notices=notices, file=source)
 
 
-def _wheel(tree: LinkTree, joint_name: str, strict: bool) -> Wheel | None:
-    """The wheel on ``joint_name``; with ``strict``, None unless it looks like a drive wheel."""
-    joint = next((j for j in tree.joints if j.name == joint_name), None)
-    if joint is None:
-        return None
-    frame = tree.frame(joint.child)
-    axis_root = mat_vec(frame.rot, joint.axis)
-    axis = axis_root[1]  # how much the spin axis points along +y of the root
-    if strict:
-        spins = joint.type == "continuous" or (
-            joint.type == "revolute" and joint.lower is not None and joint.upper is not None
-            and joint.upper - joint.lower >= 2 * math.pi)
-        if not spins or abs(axis) < _PARALLEL or not tree.fixed_to_root(joint.parent):
-            return None
-    radius = _wheel_radius(tree, joint.child, axis_root)
-    if strict and radius is None:
-        return None
-    return Wheel(joint=joint.name, x=frame.pos[0], y=frame.pos[1], radius=radius,
-                 sign=1.0 if axis >= 0 else -1.0)
+def drive_from_joints(urdf: ET.Element | str, left: tuple[str, ...], right: tuple[str, ...], *,
+                      notices: list[Notice] | None = None, source: Path | None = None,
+                      radius: float | None = None,
+                      separation: float | None = None) -> DriveSpec | None:
+    """The drive on the named wheel joints, radius and separation from their geometry.
 
-
-def _wheel_radius(tree: LinkTree, link: str, axis_root) -> float | None:
-    """Radius of the first sphere, or cylinder along the spin axis, in the link's collisions."""
-    element = tree.links.get(link)
-    if element is None:
-        return None
-    link_frame = tree.frame(link)
-    for collision in element.findall("collision"):
-        geometry = collision.find("geometry")
-        if geometry is None:
-            continue
-        sphere, cylinder = geometry.find("sphere"), geometry.find("cylinder")
-        if sphere is not None:
-            return floats(sphere.get("radius"), 1, (0.0,))[0] or None
-        if cylinder is not None:
-            rot = link_frame.compose(origin_frame(collision)).rot
-            along = mat_vec(rot, (0.0, 0.0, 1.0))  # a URDF cylinder's axis is its local z
-            if abs(sum(a * b for a, b in zip(along, axis_root))) >= _PARALLEL:
-                return floats(cylinder.get("radius"), 1, (0.0,))[0] or None
-    return None
+    For a `drive:` that names the joints: anything that spins counts, wherever it hangs, and
+    a mesh wheel gives its radius too. ``radius`` and ``separation``, when given, win. None
+    when no radius can be measured (the caller asks for one). A name that is not a movable
+    joint is a DescriptionError.
+    """
+    robot = ET.fromstring(urdf) if isinstance(urdf, str) else urdf
+    tree = LinkTree(robot)
+    notices = notices if notices is not None else []
+    joint_types = {j.name: j.type for j in tree.joints}
+    wheels = []
+    for side, names in (("left", left), ("right", right)):
+        for name in names:
+            if joint_types.get(name) in (None, "fixed"):
+                problem = "is fixed" if name in joint_types else "is not in the description"
+                raise DescriptionError(
+                    f"drive names {side} wheel joint '{name}', which {problem}",
+                    location=Location(file=source, key=f"drive.{side}_joints"),
+                    hint=did_you_mean(name, [n for n, t in joint_types.items() if t != "fixed"])
+                    or "Name continuous wheel joints.")
+            wheels.append(wheel(tree, name, strict=False))
+    sides = {**{n: "left" for n in left}, **{n: "right" for n in right}}
+    return _spec(wheels, source="scenario", notices=notices, file=source,  # type: ignore[arg-type]
+                 sides=sides, radius=radius, separation=separation)
 
 
 def _drive_plugin(robot: ET.Element) -> ET.Element | None:
@@ -144,11 +121,11 @@ def _from_plugin(plugin: ET.Element, tree: LinkTree, notices: list[Notice],
                     location=Location(file=file, key=f"gazebo.plugin.{side}_joint"),
                     hint=did_you_mean(name, [n for n, t in joint_types.items() if t != "fixed"])
                     or "Name a continuous wheel joint.")
-            wheels.append((side, _wheel(tree, name, strict=False)))  # type: ignore[arg-type]
-    for side, wheel in wheels:
-        if (side == "left") != (wheel.y > 0):
-            notices.append(Notice(f"the {label} plugin drives '{wheel.joint}' as a {side} wheel "
-                                  f"but it sits at y = {wheel.y:+.3f} m in the root frame",
+            wheels.append((side, wheel(tree, name, strict=False)))  # type: ignore[arg-type]
+    for side, found in wheels:
+        if (side == "left") != (found.y > 0):
+            notices.append(Notice(f"the {label} plugin drives '{found.joint}' as a {side} wheel "
+                                  f"but it sits at y = {found.y:+.3f} m in the root frame",
                                   Location(file=file)))
     radius = _number(plugin, "wheel_radius")
     diameter = _number(plugin, "wheelDiameter", "wheel_diameter")
@@ -156,10 +133,42 @@ def _from_plugin(plugin: ET.Element, tree: LinkTree, notices: list[Notice],
         radius = diameter / 2.0
     torque = _number(plugin, "wheelTorque", "max_wheel_torque", "torque")
     accel = _number(plugin, "wheelAcceleration", "max_wheel_acceleration")
+    separation = _number(plugin, "wheelSeparation", "wheel_separation")
+    _disagreement(label, wheels, radius, separation, notices, file)
     return _spec([w for _, w in wheels], source="plugin", notices=notices, file=file,
                  sides={w.joint: s for s, w in wheels}, radius=radius,
-                 separation=_number(plugin, "wheelSeparation", "wheel_separation"),
-                 torque=torque, rim_accel=accel)
+                 separation=separation, torque=torque, rim_accel=accel)
+
+
+def _disagreement(label: str, wheels: list[tuple[str, Wheel]], radius: float | None,
+                  separation: float | None, notices: list[Notice], file: Path | None) -> None:
+    """One warning when the plugin's radius or separation is > 2 % off the wheel geometry."""
+    parts, effects = [], []
+    left = [w.y for side, w in wheels if side == "left"]
+    right = [w.y for side, w in wheels if side == "right"]
+    if separation and left and right:
+        apart = abs(sum(left) / len(left) - sum(right) / len(right))
+        if apart > 0 and abs(separation - apart) > DISAGREEMENT * apart:
+            parts.append(f"wheel_separation {separation:.3f} m, but its wheel joints are "
+                         f"{apart:.3f} m apart")
+            effects.append(f"turns {_percent(separation / apart)} than commanded")
+    radii = [w.radius for _, w in wheels if w.radius]
+    if radius and radii:
+        measured = sum(radii) / len(radii)
+        if abs(radius - measured) > DISAGREEMENT * measured:
+            parts.append(f"wheel_radius {radius:.3f} m, but its wheels' collisions have radius "
+                         f"{measured:.3f} m")
+            effects.append(f"drives {_percent(measured / radius)} than commanded")
+    if parts:
+        notices.append(Notice(
+            f"the {label} plugin says {'; and '.join(parts)}: mobot uses the plugin's values, "
+            f"as Gazebo does, so the robot {' and '.join(effects)} (set drive: wheel_radius / "
+            "wheel_separation to use the geometry)", Location(file=file)))
+
+
+def _percent(ratio: float) -> str:
+    """'11 % more' or '9 % less' for a ratio of achieved to commanded motion."""
+    return f"{abs(ratio - 1) * 100:.0f} % {'more' if ratio > 1 else 'less'}"
 
 
 def _spec(wheels: list[Wheel], *, source: str, notices: list[Notice], file: Path | None,

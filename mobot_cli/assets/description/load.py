@@ -19,7 +19,8 @@ from mobot_cli.assets.resources import ResourceResolver, bundled_dir, model_sdf
 from mobot_cli.errors import Location, ResourceError, did_you_mean
 
 _SUFFIXES = (".urdf", ".xacro", ".sdf")
-_MESH_ATTR = re.compile(r"(<mesh\b[^>]*?\bfilename\s*=\s*)([\"'])(.*?)\2", re.DOTALL)
+# A comment is matched first and left as it is: a mesh named in a comment is not loaded.
+_MESH_ATTR = re.compile(r"<!--.*?-->|(<mesh\b[^>]*?\bfilename\s*=\s*)([\"'])(.*?)\2", re.DOTALL)
 
 
 def bundled_robot_names() -> tuple[str, ...]:
@@ -64,15 +65,19 @@ def resolve_description(description: str, base_dir: Path | None,
 
 
 def load_robot(description: str, args: Mapping[str, str] | None = None,
-               base_dir: Path | None = None) -> RobotDescription:
-    """Load, check and cache a robot description for the simulation."""
+               base_dir: Path | None = None, skip_missing: bool = False) -> RobotDescription:
+    """Load, check and cache a robot description for the simulation.
+
+    With ``skip_missing``, visuals and collisions whose meshes are missing are left out with a
+    warning instead of being an error.
+    """
     resolver = ResourceResolver(base_dir)
     source = resolve_description(description, base_dir, resolver)
     if source.suffix == ".sdf":  # a Gazebo model: converted to URDF, then the same path
-        expansion = expand_sdf(source, resolver)
+        expansion = expand_sdf(source, resolver, skip_missing)
     else:
         expansion = expand_file(source, args or {}, resolver)
-    return describe_expansion(source, expansion, resolver)
+    return describe_expansion(source, expansion, resolver, skip_missing)
 
 
 def _model_file(path: Path) -> Path:
@@ -90,6 +95,8 @@ def expand_to_text(description: str, args: Mapping[str, str] | None = None,
     text = expand_file(source, args or {}, resolver).text
 
     def absolute(match: re.Match) -> str:
+        if match.group(1) is None:  # a comment
+            return match.group(0)
         path = resolver.resolve_uri(match.group(3), source)
         return f"{match.group(1)}{match.group(2)}{path}{match.group(2)}"
 

@@ -3,7 +3,8 @@
 * Mesh filenames become absolute paths. A mesh that cannot be found or read is an error,
   visual meshes included: DESIGN.md makes every missing resource an error, and a missing
   visual mesh nearly always means a wrong or incomplete package that the user should know
-  about before trusting the run.
+  about before trusting the run. With skip_missing (--skip-missing, as for worlds) the visual
+  or collision that names it is left out instead, with one warning for all of them.
 * Links without <inertial>, or with (near) zero mass or inertia, get 1 g and 1e-6 kg*m^2:
   PyBullet would silently give them 1 kg, which doubles a turtlebot's mass. Each one is
   reported as a notice.
@@ -30,11 +31,20 @@ TINY_MASS = 0.001  # kg, given to links without a usable <inertial>
 TINY_INERTIA = 1e-6  # kg*m^2
 MIN_MASS = 1e-6
 MIN_INERTIA = 1e-9
+# More links than this with the same problem get one notice listing them, not one each.
+GROUP_NOTICES = 3
+SKIP_HINT = "Or pass --skip-missing (or set skip_missing: true) to leave it out with a warning."
 
 
-def resolve_meshes(robot: ET.Element, resolver: ResourceResolver, source: Path) -> list[str]:
-    """Rewrite every <mesh filename> to an absolute path; return the paths."""
-    paths = []
+def resolve_meshes(robot: ET.Element, resolver: ResourceResolver, source: Path,
+                   skip_missing: bool = False, notices: list[Notice] | None = None) -> list[str]:
+    """Rewrite every <mesh filename> to an absolute path; return the paths.
+
+    With ``skip_missing`` a visual or collision whose mesh cannot be found is removed and
+    named in one notice (added to ``notices``); otherwise it is a DescriptionError.
+    """
+    paths: list[str] = []
+    left_out: list[tuple[str, DescriptionError]] = []
     for link in robot.findall("link"):
         for kind in ("collision", "visual"):
             for element in link.findall(kind):
@@ -42,9 +52,22 @@ def resolve_meshes(robot: ET.Element, resolver: ResourceResolver, source: Path) 
                 if mesh is None:
                     continue
                 uri = mesh.get("filename", "")
-                path = _mesh_path(uri, resolver, source, link.get("name", ""), kind)
+                try:
+                    path = _mesh_path(uri, resolver, source, link.get("name", ""), kind)
+                except DescriptionError as exc:
+                    if not skip_missing or not uri:
+                        raise
+                    link.remove(element)
+                    left_out.append((f"{kind} '{uri}' of link '{link.get('name', '')}'", exc))
+                    continue
                 mesh.set("filename", path)
                 paths.append(path)
+    if left_out and notices is not None:
+        named = "; ".join(what for what, _ in left_out)
+        notices.append(Notice(
+            f"{len(left_out)} mesh{'es' if len(left_out) > 1 else ''} cannot be found and "
+            f"{'are' if len(left_out) > 1 else 'is'} left out (skip_missing): {named}. "
+            f"The first: {left_out[0][1].message}", Location(file=source)))
     return paths
 
 
@@ -60,45 +83,56 @@ def _mesh_path(uri: str, resolver: ResourceResolver, source: Path, link: str, ki
         detail = exc.message.removeprefix(f"'{uri}' ")
         raise DescriptionError(f"{where} cannot be found: {detail}",
                                location=Location(file=source, key=f"link.{link}"),
-                               hint=exc.hint) from None
+                               hint=f"{exc.hint} {SKIP_HINT}".strip()) from None
     if not path.is_file() or not os.access(path, os.R_OK):
         raise DescriptionError(f"{where} resolves to {path}, which is not a readable file",
                                location=Location(file=source, key=f"link.{link}"),
-                               hint="Check the file's permissions.")
+                               hint=f"Check the file's permissions. {SKIP_HINT}")
     return str(path)
 
 
 def fix_inertials(robot: ET.Element, source: Path) -> list[Notice]:
-    """Give links without a usable <inertial> a tiny one; one notice per link."""
-    notices = []
+    """Give links without a usable <inertial> a tiny one; a notice per link, or one for many."""
+    light: list[tuple[str, str]] = []  # (link, problem): given TINY_MASS
+    stiff: list[tuple[str, str]] = []  # (link, diagonal): inertia raised
     for link in robot.findall("link"):
         name = link.get("name", "")
         inertial = link.find("inertial")
         mass, diagonal = inertial_values(inertial)
         if inertial is None:
-            problem = "has no <inertial>"
+            light.append((name, "has no <inertial>"))
         elif mass < MIN_MASS:
-            problem = f"has a near-zero mass ({mass:g} kg)"
+            light.append((name, f"has a near-zero mass ({mass:g} kg)"))
         elif min(diagonal) < MIN_INERTIA:
             # The mass is real; only the singular inertia would make the solver unstable.
             _raise_diagonal(inertial)
-            shown = " ".join(f"{d:g}" for d in diagonal)
-            notices.append(Notice(
-                f"link '{name}' has a near-zero inertia (diagonal {shown}): mobot raises it to "
-                f"{TINY_INERTIA:g} kg*m^2 so PyBullet stays stable",
-                Location(file=source, key=f"link.{name}")))
+            stiff.append((name, " ".join(f"{d:g}" for d in diagonal)))
             continue
         else:
             continue
         if inertial is not None:
             link.remove(inertial)
         link.insert(0, _tiny_inertial(inertial))
-        notices.append(Notice(
-            f"link '{name}' {problem}: PyBullet would give it 1 kg, so mobot gives it "
-            f"{TINY_MASS * 1000:g} g and {TINY_INERTIA:g} kg*m^2 (Gazebo lumps such links into "
-            "their parent through fixed joints, or drops them)",
-            Location(file=source, key=f"link.{name}")))
-    return notices
+    tiny = (f"{TINY_MASS * 1000:g} g and {TINY_INERTIA:g} kg*m^2 (Gazebo lumps such links into "
+            "their parent through fixed joints, or drops them)")
+    raised = f"{TINY_INERTIA:g} kg*m^2 so PyBullet stays stable"
+    return [*_grouped(light, source, lambda name, problem: f"link '{name}' {problem}: PyBullet "
+                      f"would give it 1 kg, so mobot gives it {tiny}",
+                      lambda names: f"{names} have no usable <inertial> (none, or a near-zero "
+                      f"mass): PyBullet would give each 1 kg, so mobot gives each {tiny}"),
+            *_grouped(stiff, source, lambda name, shown: f"link '{name}' has a near-zero inertia "
+                      f"(diagonal {shown}): mobot raises it to {raised}",
+                      lambda names: f"{names} have a near-zero inertia: mobot raises it to "
+                      f"{raised}")]
+
+
+def _grouped(links: list[tuple[str, str]], source: Path, one, many) -> list[Notice]:
+    """A notice per link, or one listing them all when there are more than GROUP_NOTICES."""
+    if len(links) <= GROUP_NOTICES:
+        return [Notice(one(name, detail), Location(file=source, key=f"link.{name}"))
+                for name, detail in links]
+    names = f"{len(links)} links ({', '.join(name for name, _ in links)})"
+    return [Notice(many(names), Location(file=source))]
 
 
 def _raise_diagonal(inertial: ET.Element) -> None:

@@ -28,6 +28,9 @@ from mobot_cli.common import cache
 from mobot_cli.errors import Location, Notice
 from mobot_cli.sim.plan import DriveSpec
 
+# The notice for a robot without detected wheels; a scenario that names them drops it.
+NO_DRIVE = "no drive wheels found: the robot will not move on commands"
+
 
 @dataclass(frozen=True)
 class LinkInfo:
@@ -85,39 +88,40 @@ class RobotDescription:
         return node(self.root_link, frozenset())
 
 
-def describe_expansion(source: Path, expansion: Expansion,
-                       resolver: ResourceResolver) -> RobotDescription:
+def describe_expansion(source: Path, expansion: Expansion, resolver: ResourceResolver,
+                       skip_missing: bool = False) -> RobotDescription:
     """Check, cache and describe an expanded URDF text (from xacro or converted from SDF)."""
-    key = cache.digest("robot", expansion.text, resolver.fingerprint(), str(source))
+    key = cache.digest("robot", expansion.text, resolver.fingerprint(), str(source),
+                       *(["skip_missing"] if skip_missing else []))
     loaded = _from_document(cache.load("robot", key))
     if loaded is None:
-        loaded, meshes = _build(source, expansion, resolver)
+        loaded, meshes = _build(source, expansion, resolver, skip_missing)
         cache.store("robot", key, _to_document(loaded, meshes))
     return RobotDescription(**{**_fields(loaded), "notices": expansion.notices + loaded.notices,
                                "files": expansion.files})
 
 
-def _build(source: Path, expansion: Expansion,
-           resolver: ResourceResolver) -> tuple[RobotDescription, list[str]]:
+def _build(source: Path, expansion: Expansion, resolver: ResourceResolver,
+           skip_missing: bool = False) -> tuple[RobotDescription, list[str]]:
     robot = parse_urdf(expansion.text, source)
     root_link = check_tree(robot, source)
     check_geometry(robot, source)
     check_with_yourdfpy(expansion.text, source)
     check_sanity(robot, source)
-    meshes = resolve_meshes(robot, resolver, source)
+    notices: list[Notice] = []
+    meshes = resolve_meshes(robot, resolver, source, skip_missing, notices)
     for link in robot.findall("link"):
         for mesh in link.findall("collision/geometry/mesh"):
             check_mesh_file(Path(mesh.get("filename", "")), link.get("name", ""), source)
     links = tuple(_link_info(link) for link in robot.findall("link"))
     joints = tuple(_joint_info(joint) for joint in robot.findall("joint"))
-    notices = fix_inertials(robot, source)
+    notices += fix_inertials(robot, source)
     sensors = read_sensors(robot, source, notices)
     apply_friction(robot)
     bounds = collision_bounds(LinkTree(robot), source, notices)
     drive = detect_drive(robot, notices=notices, source=source)
     if drive is None:
-        notices.append(Notice("no drive wheels found: the robot will not move on commands",
-                              Location(file=source)))
+        notices.append(Notice(NO_DRIVE, Location(file=source)))
     urdf = '<?xml version="1.0"?>\n' + ET.tostring(robot, encoding="unicode")
     description = RobotDescription(
         source=source, name=robot.get("name", ""), urdf=urdf, root_link=root_link,

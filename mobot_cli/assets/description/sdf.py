@@ -14,14 +14,14 @@ from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.errors import DescriptionError, Location, Notice, WorldError
 
 
-def expand_sdf(source: Path, resolver: ResourceResolver) -> Expansion:
+def expand_sdf(source: Path, resolver: ResourceResolver, skip_missing: bool = False) -> Expansion:
     """The URDF text of the first <model> in an SDF file, with what changed as notices."""
     from mobot_cli.assets.world.paths import SdfPaths
     from mobot_cli.assets.world.reader import SdfReader
     from mobot_cli.assets.world.to_urdf import model_to_urdf
 
     paths = SdfPaths(source, resolver)
-    reader = SdfReader(source, paths)
+    reader = SdfReader(source, paths, skip_missing)
     try:
         model = reader.model_file()
         if model.static:

@@ -21,6 +21,9 @@ from mobot_cli.sim.plan import StaticBody, StaticShape, WorldPlan
 # A model placed farther than this from the origin is a typo (the AWS bookstore has a book
 # at z = 343 km): it is left out with a warning rather than stretching the world.
 ABSURD_DISTANCE = 10_000.0  # m
+# A plane with a <size> is a box this thick behind its surface: Gazebo's physics makes every
+# plane infinite, which turns a poster on a wall into an endless wall across the world.
+THIN_PLANE = 0.01  # m
 
 
 class _Builder:
@@ -74,40 +77,67 @@ class _Builder:
                 if shape.friction is not None:
                     frictions.append(min(1.0, shape.friction))
                 if shape.kind == "plane":
-                    self.plane(model, local, shape.size, label)
-                    continue
+                    local = self.plane(model, local, shape.size, shape.extent, label)
+                    if local is None:
+                        continue
+                    shape_kind, size = "box", (*shape.extent, THIN_PLANE)  # type: ignore[misc]
+                else:
+                    shape_kind, size = shape.kind, shape.size
                 path = str(shape.mesh or "")
                 if shape.kind == "mesh":
                     mesh = meshes.collision_mesh(shape.mesh, shape.location)
                     self.meshes[mesh.source] = mesh
                     path = mesh.path
-                    self.extend(model.pose @ local, _box_corners(mesh.bounds, shape.size))
+                    self.extend(model.pose @ local, _box_corners(mesh.bounds, size))
                 else:
-                    self.extend(model.pose @ local, _corners(shape.kind, shape.size))
+                    self.extend(model.pose @ local, _corners(shape_kind, size))
                 s_xyz, s_quat = xyz_quat(local)
-                shapes.append(StaticShape(kind=shape.kind, size=tuple(float(v) for v in shape.size),
+                shapes.append(StaticShape(kind=shape_kind, size=tuple(float(v) for v in size),
                                           mesh=path, xyz=s_xyz, quat=s_quat))
         if shapes:
             self.bodies.append(StaticBody(name=model.name, xyz=xyz, quat=quat, shapes=tuple(shapes),
                                           friction=min(frictions) if frictions else None,
                                           label=label))
 
-    def plane(self, model: Model, local, normal, label: str) -> None:
+    def plane(self, model: Model, local, normal, extent, label: str):
+        """Place a plane: the ground plane, an infinite plane body, or (with a <size>) the pose
+        of the thin box that stands for it, returned for the model's own body."""
         world = model.pose @ local
         n = world[:3, :3] @ (np.array(normal) / np.linalg.norm(normal))
         offset = float(n @ world[:3, 3])
         if not self.ground and n[2] > 1.0 - 1e-9 and abs(offset) < 1e-9:
             self.ground = True  # Gazebo's ground_plane: the simulation's own ground plane
-            return
+            return None
+        if extent is not None:
+            return local @ _plane_box(np.array(normal, dtype=float))
         xyz, quat = xyz_quat(world)
         self.bodies.append(StaticBody(
             name=model.name, xyz=xyz, quat=quat, label=label,
             shapes=(StaticShape(kind="plane", size=tuple(float(v) for v in normal)),)))
+        return None
 
     def extend(self, pose, corners: np.ndarray) -> None:
         points = corners @ pose[:3, :3].T + pose[:3, 3]
         self.lo = np.minimum(self.lo, points.min(axis=0))
         self.hi = np.maximum(self.hi, points.max(axis=0))
+
+
+def _plane_box(normal: np.ndarray) -> np.ndarray:
+    """Where the box of a finite plane sits in the plane's pose: its top face on the plane.
+
+    The plane's own axes are Gazebo's (common::MeshManager::CreatePlane): y = normal x X (or
+    normal x Y when the normal is along X), x = y x normal. An upward plane keeps the pose's
+    axes; on an upright plane <size>'s first value is its horizontal width.
+    """
+    z = normal / np.linalg.norm(normal)
+    y = np.cross(z, [1.0, 0.0, 0.0])
+    if np.linalg.norm(y) < 1e-6:
+        y = np.cross(z, [0.0, 1.0, 0.0])
+    y /= np.linalg.norm(y)
+    frame = np.eye(4)
+    frame[:3, :3] = np.column_stack([np.cross(y, z), y, z])
+    frame[:3, 3] = -z * THIN_PLANE / 2.0
+    return frame
 
 
 def _box_corners(bounds, scale) -> np.ndarray:

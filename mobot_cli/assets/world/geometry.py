@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from mobot_cli.assets.world import paths as sdf_paths
 from mobot_cli.assets.world.frames import key_of
 from mobot_cli.assets.world.pose import IDENTITY, Matrix
 from mobot_cli.errors import Location, MobotError, WorldError
@@ -26,6 +27,7 @@ class Shape:
     uri: str = ""
     pose: Matrix = field(default_factory=lambda: IDENTITY.copy())
     friction: float | None = None  # min(mu, mu2) when the surface gives them
+    extent: tuple[float, float] | None = None  # a plane's <size>: it is finite (build.py)
 
 
 def parse_shape(reader, element, file: Path, collision: bool) -> Shape | None:
@@ -54,6 +56,9 @@ def parse_shape(reader, element, file: Path, collision: bool) -> Shape | None:
         shape.size = (reader.number(kind_el, "radius", file, 1.0),)
     elif kind == "plane":
         shape.size = reader.vector(kind_el, "normal", file, (0.0, 0.0, 1.0))
+        extent = reader.vector(kind_el, "size", file, (0.0, 0.0))
+        if min(extent) > 0.0:
+            shape.extent = extent  # type: ignore[assignment]
     else:
         if not _mesh(reader, shape, kind_el, file, collision, what):
             return None
@@ -77,6 +82,12 @@ def _mesh(reader, shape: Shape, mesh, file: Path, collision: bool, what: str) ->
                          hint="Add <uri>model://NAME/meshes/FILE</uri>.")
     shape.uri = uri
     shape.size = reader.vector(mesh, "scale", file, (1.0, 1.0, 1.0))
+    if 0.0 in shape.size:  # Gazebo loads it flat; nothing can collide with a flat mesh
+        if collision:
+            scale = " ".join(f"{v:g}" for v in shape.size)
+            reader.warn(f"{what}: mesh '{uri}' has a zero in its <scale> ({scale}), which "
+                        "flattens it: left out", key_of(mesh.find("scale"), file))
+        return False
     if mesh.find("submesh") is not None and collision:
         reader.warn(f"{what} selects a <submesh>: mobot collides with the whole mesh", where)
     try:
@@ -85,7 +96,7 @@ def _mesh(reader, shape: Shape, mesh, file: Path, collision: bool, what: str) ->
         if collision and not reader.skip_missing:
             raise
         if collision:
-            reader.warn(f"{what} left out: {exc.message}", where)
+            reader.left_out.append(sdf_paths.LeftOut(uri, f"{what} left out: {exc.message}", where))
         else:
             reader.missing_visuals.append((uri, where))
         return False

@@ -11,16 +11,62 @@ in Fuel's local cache (``gz fuel download``) is used, anything else is an error 
 from __future__ import annotations
 
 import os
+import re
+from collections import Counter
+from dataclasses import dataclass
 from pathlib import Path
 from urllib.parse import unquote, urlparse
 
 from lxml import etree
 
 from mobot_cli.assets.resources import ResourceResolver, model_sdf
-from mobot_cli.errors import Location, MobotError, WorldError
+from mobot_cli.errors import Location, MobotError, Notice, WorldError
 
 FUEL_CACHES = ("~/.gz/fuel", "~/.ignition/fuel")
 SKIP_HINT = "Pass --skip-missing (or set skip_missing: true) to leave it out with a warning."
+# More includes or meshes left out than this are reported in one notice, not one each.
+GROUP_LEFT_OUT = 3
+
+
+@dataclass(frozen=True)
+class LeftOut:
+    """An include or mesh left out under --skip-missing."""
+
+    uri: str
+    message: str  # the notice it gets on its own
+    where: Location
+
+
+def left_out_notices(items: list[LeftOut], roots: list[Path], file: Path) -> list[Notice]:
+    """A notice per item, or, for many, one naming each model or file once and the folders once."""
+    if len(items) <= GROUP_LEFT_OUT:
+        return [Notice(item.message, item.where) for item in items]
+    fuel: Counter = Counter()
+    models: Counter = Counter()
+    files: Counter = Counter()
+    for item in items:
+        if item.uri.startswith(("http://", "https://")):
+            parts = [unquote(p) for p in urlparse(item.uri).path.split("/") if p]
+            fuel[parts[-2] if len(parts) > 1 and parts[-1].isdigit() else parts[-1]] += 1
+        elif item.uri.startswith("model://") and "not found. Folders searched" in item.message:
+            models[unquote(item.uri[len("model://"):].partition("/")[0])] += 1
+        else:
+            files[item.uri] += 1
+
+    def named(counter: Counter) -> str:
+        return ", ".join(f"{k} x{n}" if n > 1 else k for k, n in sorted(counter.items()))
+
+    parts = []
+    if fuel:
+        parts.append(f"{sum(fuel.values())} from Gazebo Fuel without a local copy (mobot never "
+                     f"downloads; `gz fuel download -u URL` fills ~/.gz/fuel): {named(fuel)}")
+    if models:
+        parts.append(f"{sum(models.values())} models not found: {named(models)}. Folders searched: "
+                     + "; ".join(str(r) for r in roots))
+    if files:
+        parts.append(f"{sum(files.values())} files not found: {named(files)}")
+    return [Notice(f"{len(items)} includes and meshes left out (skip_missing): "
+                   + "; ".join(parts), Location(file=file))]
 
 
 class SdfPaths:
@@ -52,7 +98,8 @@ class SdfPaths:
             return self._trees[path]
         parser = etree.XMLParser(remove_comments=True, remove_pis=True, resolve_entities=False)
         try:
-            root = etree.parse(str(path), parser).getroot()
+            data = declaration_first(path.read_bytes())
+            root = etree.fromstring(data, parser, base_url=str(path))
         except OSError as exc:
             raise WorldError(f"cannot read {path}: {exc}", location=Location(file=path),
                              hint="Check the path and the file's permissions.") from None
@@ -102,7 +149,7 @@ class SdfPaths:
                 if isinstance(exc, WorldError):
                     raise
                 raise WorldError(exc.message, location=where, hint=exc.hint) from None
-            reader.warn(f"include left out: {exc.message}", where)
+            reader.left_out.append(LeftOut(uri, f"include left out: {exc.message}", where))
             return None
         if folder.is_dir() and (folder / "model.config").is_file():
             self.files[(folder / "model.config").resolve()] = None
@@ -168,6 +215,23 @@ class SdfPaths:
         except WorldError as exc:
             hint = exc.hint if SKIP_HINT in (exc.hint or "") else f"{exc.hint} {SKIP_HINT}"
             raise WorldError(f"mesh {exc.message}", location=exc.location, hint=hint) from None
+
+
+# Comments, whitespace or a byte-order mark before the <?xml ...?> declaration. XML forbids them
+# (libxml2 refuses the file); Gazebo's parser, tinyxml2, reads on, and Gazebo's own cafe.world
+# starts with a comment.
+_LATE_DECLARATION = re.compile(rb"^((?:\xef\xbb\xbf)?(?:\s|<!--.*?-->)+)(<\?xml\b[^>]*\?>)", re.DOTALL)
+
+
+def declaration_first(data: bytes) -> bytes:
+    """The file's bytes with a late <?xml?> declaration moved to the front, lines kept."""
+    match = _LATE_DECLARATION.match(data)
+    if match is None:
+        return data
+    declaration = match.group(2)
+    newlines = b"\n" * declaration.count(b"\n")  # every element keeps its line number
+    return declaration.replace(b"\n", b" ") + match.group(1).replace(b"\xef\xbb\xbf", b"") \
+        + newlines + data[match.end():]
 
 
 def case_variant(path: Path) -> Path | None:

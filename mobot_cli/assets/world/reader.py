@@ -34,6 +34,7 @@ class SdfReader:
         self.notices: list[Notice] = []
         self.ignored: Counter = Counter()
         self.missing_visuals: list[tuple[str, Location]] = []
+        self.left_out: list[sdf_paths.LeftOut] = []  # includes and meshes skipped as missing
         self._stack: list[Path] = []
 
     def warn(self, message: str, location: Location) -> None:
@@ -77,6 +78,7 @@ class SdfReader:
         result = World(name=world.get("name", self.top.stem), models=models, ignored=self.ignored,
                        max_step_size=float(step) if is_number(step) else None)
         result.state_poses = self._apply_state(world, models)
+        self.notices.extend(sdf_paths.left_out_notices(self.left_out, self.paths.roots, self.top))
         return result
 
     def _world_include(self, include) -> Model | None:
@@ -119,6 +121,7 @@ class SdfReader:
         self._stack = [self.top]
         model = self.model(element, self.top, world_level=True)
         model.pose = IDENTITY.copy()  # a spawned model goes where the scenario puts it
+        self.notices.extend(sdf_paths.left_out_notices(self.left_out, self.paths.roots, self.top))
         return model
 
     def model(self, element, file: Path, world_level: bool, top: Model | None = None,

@@ -1,0 +1,123 @@
+"""Wheels as drive detection sees them: a spinning joint, where it sits, how big its wheel is.
+
+A drive wheel may hang anywhere in the tree, as long as what carries it moves with the body:
+fixed joints, prismatic suspension or wheel-drop joints, and suspension arms that pivot about a
+horizontal axis (a rocker). A joint that turns about a vertical axis (a caster's swivel, a
+steering knuckle) above a wheel makes it a caster or a steered wheel, not a drive wheel.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+
+from mobot_cli.assets.description.frames import LinkTree, floats, origin_frame
+from mobot_cli.common.transforms import Vec, mat_vec
+
+# |cos| above this counts as parallel: turtlebot3 rotates its wheels by -1.57, not -pi/2.
+PARALLEL = 0.99
+
+
+@dataclass(frozen=True)
+class Wheel:
+    """A wheel joint as seen from the root link at zero joint positions."""
+
+    joint: str
+    x: float
+    y: float
+    radius: float | None
+    sign: float  # +1 when the joint axis points along +y of the root frame
+
+
+def wheel(tree: LinkTree, joint_name: str, strict: bool) -> Wheel | None:
+    """The wheel on ``joint_name``; with ``strict``, None unless it looks like a drive wheel."""
+    joint = next((j for j in tree.joints if j.name == joint_name), None)
+    if joint is None:
+        return None
+    frame = tree.frame(joint.child)
+    axis_root = mat_vec(frame.rot, joint.axis)
+    axis = axis_root[1]  # how much the spin axis points along +y of the root
+    if strict:
+        spins = joint.type == "continuous" or (
+            joint.type == "revolute" and joint.lower is not None and joint.upper is not None
+            and joint.upper - joint.lower >= 2 * math.pi)
+        if not spins or abs(axis) < PARALLEL or not carried_by_body(tree, joint.parent):
+            return None
+    radius = wheel_radius(tree, joint.child, frame.pos, axis_root, meshes=not strict)
+    if strict and radius is None:
+        return None
+    return Wheel(joint=joint.name, x=frame.pos[0], y=frame.pos[1], radius=radius,
+                 sign=1.0 if axis >= 0 else -1.0)
+
+
+def carried_by_body(tree: LinkTree, link: str) -> bool:
+    """True when every joint between the root and ``link`` keeps it moving with the body.
+
+    Fixed and prismatic joints do, and so do pivots about a horizontal axis (suspension arms);
+    a pivot about a vertical axis (a swivel or steering joint) does not, nor does a floating or
+    planar joint.
+    """
+    current, seen = link, set()
+    while current in tree.parent_joint and current not in seen:
+        seen.add(current)
+        joint = tree.parent_joint[current]
+        if joint.type in ("revolute", "continuous"):
+            axis = mat_vec(tree.frame(joint.child).rot, joint.axis)
+            if abs(axis[2]) >= PARALLEL:
+                return False
+        elif joint.type not in ("fixed", "prismatic"):
+            return False
+        current = joint.parent
+    return True
+
+
+def wheel_radius(tree: LinkTree, link: str, centre: Vec, axis_root: Vec,
+                 meshes: bool = False) -> float | None:
+    """Radius of the first sphere, or cylinder along the spin axis, in the link's collisions.
+
+    With ``meshes``, a collision mesh counts too: its radius is the farthest vertex from the
+    spin axis through ``centre`` (exact for a meshed cylinder or tyre).
+    """
+    element = tree.links.get(link)
+    if element is None:
+        return None
+    link_frame = tree.frame(link)
+    for collision in element.findall("collision"):
+        geometry = collision.find("geometry")
+        if geometry is None:
+            continue
+        sphere, cylinder = geometry.find("sphere"), geometry.find("cylinder")
+        if sphere is not None:
+            return floats(sphere.get("radius"), 1, (0.0,))[0] or None
+        frame = link_frame.compose(origin_frame(collision))
+        if cylinder is not None:
+            along = mat_vec(frame.rot, (0.0, 0.0, 1.0))  # a URDF cylinder's axis is its local z
+            if abs(sum(a * b for a, b in zip(along, axis_root))) >= PARALLEL:
+                return floats(cylinder.get("radius"), 1, (0.0,))[0] or None
+        mesh = geometry.find("mesh")
+        if meshes and mesh is not None:
+            radius = _mesh_radius(mesh, frame, centre, axis_root)
+            if radius:
+                return radius
+    return None
+
+
+def _mesh_radius(mesh: ET.Element, frame, centre: Vec, axis: Vec) -> float | None:
+    """The farthest vertex of a mesh from the axis through ``centre`` (None when unreadable)."""
+    import numpy as np
+    import trimesh  # the cold load path only, for a wheel named in drive: with a mesh collision
+
+    try:
+        loaded = trimesh.load(mesh.get("filename", ""), force="mesh")
+        vertices = np.asarray(loaded.vertices, dtype=float)
+    except Exception:  # noqa: BLE001 - an unreadable mesh simply gives no radius
+        return None
+    if len(vertices) == 0:
+        return None
+    scale = np.array(floats(mesh.get("scale"), 3, (1.0, 1.0, 1.0)))
+    points = (vertices * scale) @ np.array(frame.rot).T + np.array(frame.pos) - np.array(centre)
+    direction = np.array(axis) / (np.linalg.norm(axis) or 1.0)
+    off_axis = points - np.outer(points @ direction, direction)
+    radius = float(np.linalg.norm(off_axis, axis=1).max())
+    return round(radius, 9) or None
