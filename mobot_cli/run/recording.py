@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 import platform
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
 from typing import Optional
@@ -21,8 +21,9 @@ from typing import Optional
 from mobot_cli import __version__
 from mobot_cli.common.files import write_text_atomic
 from mobot_cli.run.expect import Checker, Result, odom_error
-from mobot_cli.run.record import (SUMMARY, ExpectationResult, Expectations, LiveInfo, OdomError, OdomPose, Pose,
-                                  RobotRecord, RunRecord, Status, Versions)
+from mobot_cli.run.goals import GoalEnded, GoalStarted
+from mobot_cli.run.record import (SUMMARY, ExpectationResult, Expectations, GoalRecord, LiveInfo, OdomError,
+                                  OdomPose, Pose, RobotRecord, RunRecord, Status, Versions)
 from mobot_cli.run.sinks import CsvSink, Sink
 from mobot_cli.run.timeline import Deleted, Record, Sample, Spawned
 from mobot_cli.sim.plan import Plan, RobotPlan
@@ -40,6 +41,7 @@ class _Life:
     first: Optional[RobotState] = None
     last: Optional[RobotState] = None
     distance: float = 0.0
+    goals: list[dict] = field(default_factory=list)  # GoalRecord fields, and the distance at the start
 
     def add(self, state: RobotState) -> None:
         if self.first is None:
@@ -48,7 +50,20 @@ class _Life:
             self.distance += math.hypot(state.true_x - self.last.true_x, state.true_y - self.last.true_y)
         self.last = state
 
-    def record(self) -> RobotRecord:
+    def started(self, record: GoalStarted, rate: int) -> None:
+        self.goals.append({"command": record.index, "kind": record.kind, "status": "unfinished",
+                           "started_at": record.step / rate, "from": self.distance})
+
+    def ended(self, record: GoalEnded, rate: int) -> None:
+        goal = next(g for g in reversed(self.goals) if g["command"] == record.index)
+        goal.update(status=record.status, ended_at=record.step / rate, error=_r(record.error), laps=record.laps,
+                    path_length=_r(self.distance - goal["from"]))
+
+    def record(self, end: float) -> RobotRecord:
+        goals = [GoalRecord(**{k: v for k, v in g.items() if k != "from"},
+                            time=_r(g.get("ended_at", end) - g["started_at"]),
+                            **({} if "path_length" in g else {"path_length": _r(self.distance - g["from"])}))
+                 for g in self.goals]
         s = self.last
         position, yaw = odom_error(self.first, s)
         return RobotRecord(
@@ -58,7 +73,7 @@ class _Life:
                             pitch=_r(s.true_pitch), yaw=_r(s.true_yaw)),
             final_odom=OdomPose(x=_r(s.odom_x), y=_r(s.odom_y), yaw=_r(s.odom_yaw)),
             distance=_r(self.distance), collisions=s.collisions,
-            odom_error=OdomError(position=_r(position), yaw=_r(yaw)))
+            odom_error=OdomError(position=_r(position), yaw=_r(yaw)), goals=goals)
 
 
 class Recording:
@@ -69,8 +84,8 @@ class Recording:
         out_dir.mkdir(parents=True, exist_ok=True)
         (out_dir / SUMMARY).unlink(missing_ok=True)  # a reused folder must not look finished early
         write_text_atomic(out_dir / "scenario.yaml", resolved_yaml)
-        self.sinks = make_sinks(plan, out_dir)
         self.checker = Checker(plan)
+        self.sinks = make_sinks(plan, out_dir, self.checker.sweeps)
         self.sinks.append(self.checker)
         self.results: list[Result] = []
         self.last_step = 0
@@ -90,6 +105,12 @@ class Recording:
             self._lives[key].deleted_at = record.step / self.plan.physics.rate_hz
             for sink in self.sinks:
                 sink.deleted(record.step, key)
+        elif isinstance(record, GoalStarted):
+            self._lives[self._keys[record.robot]].started(record, self.plan.physics.rate_hz)
+        elif isinstance(record, GoalEnded):
+            key = self._keys[record.robot]
+            self._lives[key].ended(record, self.plan.physics.rate_hz)
+            self.checker.goal_ended(key, record)
 
     def _spawned(self, record: Spawned) -> None:
         name, lives = record.robot.name, 1
@@ -141,12 +162,13 @@ class Recording:
             real_time_factor=round(sim_time / wall, 2) if wall > 0 else None,
             physics_rate_hz=plan.physics.rate_hz, log_rate_hz=_r(plan.physics.rate_hz / plan.log_every),
             notices=list(plan.notices),
-            robots={key: life.record() for key, life in self._lives.items() if life.last is not None},
+            robots={key: life.record(life.deleted_at if life.deleted_at is not None else sim_time)
+                    for key, life in self._lives.items() if life.last is not None},
             expectations=expectations, live=live)
 
 
-def make_sinks(plan: Plan, out_dir: Path) -> list[Sink]:
-    """The sinks a plan's ``formats`` ask for."""
+def make_sinks(plan: Plan, out_dir: Path, sweeps: dict | None = None) -> list[Sink]:
+    """The sinks a plan's ``formats`` ask for; trajectory.png draws ``sweeps`` (the checker's)."""
     sinks: list[Sink] = []
     if "csv" in plan.formats:
         sinks.append(CsvSink(plan, out_dir))
@@ -156,7 +178,7 @@ def make_sinks(plan: Plan, out_dir: Path) -> list[Sink]:
         sinks.append(BagSink(plan, out_dir))
     from mobot_cli.run.trajectory import TrajectorySink
 
-    sinks.append(TrajectorySink(plan, out_dir))  # every run; last, as it draws when closed
+    sinks.append(TrajectorySink(plan, out_dir, sweeps))  # every run; last, as it draws when closed
     return sinks
 
 

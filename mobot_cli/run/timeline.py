@@ -1,20 +1,23 @@
 """The one timeline every door drives: `mobot run`, `mobot serve` and whatever steps a world.
 
 A Timeline owns the order of things within a physics step: scripted events, then the command
-scripts and the ends of timed commands, then the log row; requests of a live world enter
-between steps through the same ``spawn``, ``delete`` and ``command`` a scripted event uses.
-It never writes files: it hands records (``Spawned``, ``Deleted``, ``Sample``) to a consumer,
-and the run folder's writers take them from there.
+scripts and the ends of timed commands, then the goal drivers (run/goals.py), then the log row;
+requests of a live world enter between steps through the same ``spawn``, ``delete``,
+``command`` and ``goto`` a script uses. It never writes files: it hands records (``Spawned``,
+``Deleted``, ``Sample``, ``GoalStarted``, ``GoalEnded``) to a consumer, and the run folder's
+writers take them from there.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections import defaultdict
 from dataclasses import dataclass
 from typing import Callable, Iterator, Protocol, Union
 
 from mobot_cli.errors import MobotError, SpawnError
-from mobot_cli.sim.plan import Event, Plan, RobotPlan
+from mobot_cli.run.goals import Driver, GoalEnded, GoalStarted
+from mobot_cli.sim.plan import CommandStep, Event, GoalStep, Plan, RobotPlan
 from mobot_cli.sim.state import RobotState
 from mobot_cli.sim.world import World
 
@@ -49,7 +52,7 @@ class Deleted:
     message: str | None = None
 
 
-Record = Union[Sample, Spawned, Deleted]
+Record = Union[Sample, Spawned, Deleted, GoalStarted, GoalEnded]
 
 
 class Consumer(Protocol):
@@ -80,13 +83,15 @@ class Timeline:
         self._events: dict[int, list[Event]] = defaultdict(list)
         self._commands: dict[int, list[tuple[str, float, float]]] = defaultdict(list)
         self._stops: dict[str, int] = {}  # robot -> step at which its timed command ends
+        self._drivers: dict[str, Driver] = {}  # robot -> the driver of its goals (and what follows them)
         self._logged = -1  # the step of the last complete sample
         for event in plan.events:
             self._events[event.step].append(event)
         spawned = [event.spawn for event in plan.events if event.spawn is not None]
         for robot in (*plan.robots, *spawned):
             for cmd in robot.commands:
-                self._commands[cmd.step].append((robot.name, cmd.linear, cmd.angular))
+                if isinstance(cmd, CommandStep):  # goals and what follows them: a Driver's
+                    self._commands[cmd.step].append((robot.name, cmd.linear, cmd.angular))
 
     @property
     def step(self) -> int:
@@ -130,8 +135,17 @@ class Timeline:
                 if step >= until:
                     del self._stops[name]
                     self.world.set_command(name, 0.0, 0.0)
+        if self._drivers:
+            self._drive(step)
         if step % self.plan.log_every == 0 or step == self.plan.total_steps:
             self.log()
+
+    def _drive(self, step: int) -> None:
+        for name, driver in list(self._drivers.items()):
+            if 0 <= driver.wake <= step:
+                driver.tick(step)
+            if driver.finished:
+                del self._drivers[name]
 
     def advance(self) -> None:
         """One physics step."""
@@ -155,6 +169,9 @@ class Timeline:
         self.robots[robot.name] = robot
         state = self.world.read(robot.name)
         self._consume(Spawned(self.step, robot, by, state))
+        script = [cmd for cmd in robot.commands if not isinstance(cmd, CommandStep)]
+        if script:
+            self._drivers[robot.name] = self._driver(robot.name, script)
         if self._logged == self.step or self.step % self.plan.log_every:
             self._consume(Sample(self.step, {robot.name: state}, complete=False))
 
@@ -162,19 +179,38 @@ class Timeline:
         """Take a robot out now; its state at this step is its last row (unless its state broke)."""
         if last_row and self._logged != self.step:
             self._consume(Sample(self.step, {name: self.world.read(name)}, complete=False))
+        self._cancel(name)
         self.world.remove(name)
         del self.robots[name]
         self._stops.pop(name, None)
         self._consume(Deleted(self.step, name, by, message))
 
     def command(self, name: str, linear: float, angular: float, steps: int | None = None) -> int | None:
-        """Hold a twist; with ``steps``, stop after that many steps. Returns the stop step."""
+        """Hold a twist; with ``steps``, stop after that many steps. Returns the stop step.
+        A goal the robot is driving to ends ``cancelled``."""
+        self._cancel(name)
         self.world.set_command(name, linear, angular)
         self._stops.pop(name, None)
         if steps is None:
             return None
         until = self._stops[name] = self.step + max(1, steps)
         return until
+
+    def goto(self, name: str, goal: GoalStep) -> None:
+        """Start driving to ``goal`` now (a goal already running ends ``cancelled``)."""
+        self._cancel(name)
+        self._stops.pop(name, None)
+        driver = self._drivers[name] = self._driver(name, [dataclasses.replace(goal, step=self.step)])
+        driver.tick(self.step)
+
+    def _driver(self, name: str, script: list) -> Driver:
+        # Records go through self._consume as it is when they are made (a consumer may attach later).
+        return Driver(name, script, self.world, self.rate_hz, lambda record: self._consume(record))
+
+    def _cancel(self, name: str) -> None:
+        driver = self._drivers.pop(name, None)
+        if driver is not None:
+            driver.cancel(self.step)
 
     def apply(self, event: Event, by: str) -> None:
         """One spawn or delete event: the path scenario events and live requests share."""

@@ -27,8 +27,9 @@ def odom_to_world(state: RobotState) -> Planar:
 class TrajectorySink(Sink):
     """Collects each robot's path; close() draws ``trajectory.png``."""
 
-    def __init__(self, plan: Plan, out_dir: Path):
+    def __init__(self, plan: Plan, out_dir: Path, sweeps: dict | None = None):
         self.path = out_dir / "trajectory.png"
+        self.sweeps = sweeps if sweeps is not None else {}  # (robot, area) -> run.sweep.Sweep, filled meanwhile
         self.world = plan.world
         self.title = plan.name
         self.rate = plan.physics.rate_hz
@@ -51,6 +52,8 @@ class TrajectorySink(Sink):
         self.last_step = sample.step
 
     def close(self) -> None:
+        for track in self.tracks:
+            track.swept = [sweep for (name, _), sweep in self.sweeps.items() if name == track.label]
         draw(self.tracks, self.world, self.path, self.title,
              f"{self.last_step / self.rate:g} s simulated; {_robots(len(self.tracks))}")
 
@@ -60,15 +63,20 @@ class _Points:
 
     def __init__(self, label: str):
         self.label, self.true, self.odom = label, [], []
+        self.swept: list = []  # run.sweep.Sweep
 
 
 def draw(tracks: list, world: WorldPlan | None, out: Path, title: str, subtitle: str) -> None:
-    """Render ``tracks`` (objects with label, true, odom) over ``world``'s floor plan to ``out``."""
-    from mobot_cli.plot.floorplan import floor_plan
-    from mobot_cli.plot.render import Track, render
+    """Render ``tracks`` (objects with label, true, odom, and maybe swept: run.sweep.Sweep) over
+    ``world``'s floor plan to ``out``."""
+    from mobot_cli.assets.world.floorplan import floor_plan
+    from mobot_cli.plot.render import Swept, Track, render
 
     labels = [t.label for t in tracks]
-    plot_tracks = [Track(_unique(t.label, labels[:i]), t.true, t.odom) for i, t in enumerate(tracks)]
+    plot_tracks = [Track(_unique(t.label, labels[:i]), t.true, t.odom,
+                         [Swept(s.grid.x0, s.grid.y0, s.grid.cell, s.covered, list(s.area))
+                          for s in getattr(t, "swept", ())])
+                   for i, t in enumerate(tracks)]
     render(plot_tracks, floor_plan(world) if world is not None else [], out, title, subtitle)
 
 

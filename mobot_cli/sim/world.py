@@ -261,6 +261,10 @@ class World:
                 f"at step {self._steps}",
                 hint="Is there a floor under its spawn pose?")
 
+    def odom_origin(self, name: str) -> tuple[float, float, float]:
+        """Where the robot's odometry started: its odom frame's x, y, yaw in the world."""
+        return self._robot(name).spawn_xy_yaw
+
     def read(self, name: str) -> RobotState:
         """The robot's command, odometry and ground truth now."""
         return self._robot(name).state(self._steps)

@@ -9,6 +9,7 @@ as StaticShape lists (SDF worlds) or, failing that, as URDF text with <collision
 
 from __future__ import annotations
 
+import functools
 import math
 import xml.etree.ElementTree as ET
 
@@ -26,12 +27,23 @@ ROUND = 24  # points on a projected circle
 
 def floor_plan(world: WorldPlan) -> list[Polygon]:
     """Every static body's shadow in the band, in world x, y."""
-    polygons: list[Polygon] = []
+    return [polygon for _, polygons in body_shadows(world) for polygon in polygons]
+
+
+@functools.lru_cache(maxsize=4)  # a run plans its goals, checks coverage and draws the same world
+def body_shadows(world: WorldPlan) -> tuple[tuple[str, tuple[Polygon, ...]], ...]:
+    """Each static body that reaches into the band: how messages name it, and its shadow.
+
+    Cached: treat the polygons as read-only."""
+    out = []
     for body in world.bodies:
+        polygons: list[Polygon] = []
         for shape in body.shapes or _urdf_shapes(body.urdf):
             xyz, quat = compose_poses((body.xyz, body.quat), (shape.xyz, shape.quat))
             polygons.extend(shape_shadow(shape, xyz, quat))
-    return polygons
+        if polygons:
+            out.append((body.label or f"static body '{body.name}'", tuple(polygons)))
+    return tuple(out)
 
 
 def shape_shadow(shape: StaticShape, xyz: Vec, quat: Quat) -> list[Polygon]:
@@ -65,7 +77,7 @@ def _outline_points(kind: str, size: tuple[float, ...]) -> list[Vec]:
 def _mesh_shadow(path: str, scale: tuple[float, ...], xyz: Vec, quat: Quat) -> list[Polygon]:
     import numpy as np
 
-    from mobot_cli.plot.meshread import read_mesh
+    from mobot_cli.common.meshfile import read_mesh
 
     vertices, faces = read_mesh(path)
     if len(faces) == 0:
