@@ -99,12 +99,13 @@ class Checker(Sink):
 
     def spawned(self, step: int, key: str, robot: RobotPlan) -> None:
         self.present.add(key)
-        for area in [*self._areas.get(robot.name, ()), *self._areas.get("all", ())]:
+        name, footprint = (robot.name, robot.footprint) if robot is not None else (key, None)
+        for area in [*self._areas.get(name, ()), *self._areas.get("all", ())]:
             if (key, area) not in self.sweeps:
-                sweep = self.sweeps[(key, area)] = Sweep(area, self.plan.world, robot.footprint)
+                sweep = self.sweeps[(key, area)] = Sweep(area, self.plan.world, footprint)
                 self._robot_sweeps.setdefault(key, []).append(sweep)
         for i, exp in self._tracked:
-            if exp.robot in (robot.name, "all") and (i, key) not in self.trackers:
+            if exp.robot in (name, "all") and (i, key) not in self.trackers:
                 self.trackers[(i, key)] = tracker(exp, self.rate, self.sweeps.get((key, exp.points)))
 
     def goal_ended(self, key: str, record: GoalEnded) -> None:

@@ -60,7 +60,7 @@ class OdomError(_Model):
 class GoalRecord(_Model):
     """How one goal command went: status, when, how long and how far the robot drove."""
 
-    command: int  # its index in the robot's commands list
+    command: Optional[int]  # its index in the robot's commands list; None: a live goto request
     kind: str  # goto | path | patrol | coverage
     status: str  # reached | timed_out | blocked | cancelled | unfinished (the run ended first)
     started_at: float

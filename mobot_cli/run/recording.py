@@ -51,11 +51,11 @@ class _Life:
         self.last = state
 
     def started(self, record: GoalStarted, rate: int) -> None:
-        self.goals.append({"command": record.index, "kind": record.kind, "status": "unfinished",
+        self.goals.append({"command": _command(record.index), "kind": record.kind, "status": "unfinished",
                            "started_at": record.step / rate, "from": self.distance})
 
     def ended(self, record: GoalEnded, rate: int) -> None:
-        goal = next(g for g in reversed(self.goals) if g["command"] == record.index)
+        goal = next(g for g in reversed(self.goals) if g["command"] == _command(record.index))
         goal.update(status=record.status, ended_at=record.step / rate, error=_r(record.error), laps=record.laps,
                     path_length=_r(self.distance - goal["from"]))
 
@@ -180,6 +180,11 @@ def make_sinks(plan: Plan, out_dir: Path, sweeps: dict | None = None) -> list[Si
 
     sinks.append(TrajectorySink(plan, out_dir, sweeps))  # every run; last, as it draws when closed
     return sinks
+
+
+def _command(index: int) -> int | None:
+    """A goal's command index in the record; None for a goal a live request gave (index < 0)."""
+    return index if index >= 0 else None
 
 
 def _version(package: str) -> str | None:
