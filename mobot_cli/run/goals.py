@@ -120,9 +120,8 @@ class Driver:
             route.append(goal.points[0])
             self.lap_ends = [len(route) - 1]
         self.pursuit = Pursuit(route, goal.control, self.dt, yaw=goal.yaw)
-        if goal.kind == "patrol":  # every lap ahead, or two at a time when it never ends
-            for _ in range(1 if goal.laps is None else goal.laps - 1):
-                self._add_lap(goal)
+        if goal.kind == "patrol" and goal.laps != 1:
+            self._add_lap(goal)  # the route holds two laps ahead: one more each time one begins
         self.anchor = (step, state.true_x, state.true_y, state.true_yaw)
         self.emit(GoalStarted(step, self.name, goal.index, goal.kind))
         self._control(step, state)
@@ -137,7 +136,8 @@ class Driver:
         goal = self.current
         state = state or self.world.read(self.name)
         pursuit = self.pursuit
-        if goal.kind == "patrol" and goal.laps is None and pursuit.passed >= self.lap_ends[-2]:
+        if goal.kind == "patrol" and len(self.lap_ends) > 1 and pursuit.passed >= self.lap_ends[-2] and \
+                (goal.laps is None or len(self.lap_ends) < goal.laps):
             self._add_lap(goal)  # on its last lap ahead: one more
         linear, angular = pursuit.update(self._pose(state, goal))
         if pursuit.done:

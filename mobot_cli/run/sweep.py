@@ -19,7 +19,8 @@ from mobot_cli.assets.world.floorplan import convex_hull
 from mobot_cli.common.raster import Grid, fill_polygon
 from mobot_cli.sim.plan import GoalStep, Plan, WorldPlan
 
-CELL = 0.02  # m
+CELL = 0.02  # m, or coarser for large areas:
+MAX_CELLS = 1000  # cells along the area's longer side at most
 TURN_STEP = 0.05  # rad
 DEFAULT_FOOTPRINT = (-0.2, 0.2, -0.2, 0.2)  # a robot whose extent is not known
 Area = tuple[tuple[float, float], ...]
@@ -31,7 +32,8 @@ class Sweep:
     def __init__(self, area: Area, world: WorldPlan | None, footprint=None):
         xs, ys = [p[0] for p in area], [p[1] for p in area]
         self.area = area
-        self.grid = Grid.covering(min(xs), max(xs), min(ys), max(ys), CELL)
+        cell = max(CELL, max(max(xs) - min(xs), max(ys) - min(ys)) / MAX_CELLS)
+        self.grid = Grid.covering(min(xs), max(xs), min(ys), max(ys), cell)
         inside = self.grid.empty()
         fill_polygon(inside, self.grid, area)
         self.free = inside & ~obstacle_mask(world, self.grid) if world is not None else inside
@@ -44,7 +46,7 @@ class Sweep:
     def add(self, x: float, y: float, yaw: float) -> None:
         """The robot is at (x, y, yaw): sweep from its last pose, once it has moved enough."""
         last = self.last
-        if last is not None and math.hypot(x - last[0], y - last[1]) < CELL / 2 and \
+        if last is not None and math.hypot(x - last[0], y - last[1]) < self.grid.cell / 2 and \
                 abs(math.remainder(yaw - last[2], math.tau)) < TURN_STEP:
             return
         points = self._footprint(x, y, yaw) + (self._footprint(*last) if last is not None else [])
@@ -68,7 +70,7 @@ class Sweep:
     @property
     def free_area(self) -> float:
         """m^2 of free space in the area."""
-        return self.free_cells * CELL * CELL
+        return self.free_cells * self.grid.cell ** 2
 
 
 def coverage_areas(plan: Plan) -> dict[str, list[Area]]:

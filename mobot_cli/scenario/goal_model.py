@@ -19,6 +19,7 @@ GOAL_SETTINGS = ("timeout", "tolerance", "localization", "max_linear", "max_angu
                  "angular_acceleration", "laps")
 MAX_WAYPOINTS = 10_000
 MIN_AREA = 1e-6  # m^2: a polygon enclosing less is empty
+MAX_AREA_SIDE = 200.0  # m: the largest side of an area's bounding box (its grids stay small)
 
 Point2 = tuple[Coordinate, Coordinate]
 
@@ -68,12 +69,16 @@ def check_area(value) -> None:
         xmin, xmax, ymin, ymax = value
         if not (xmin < xmax and ymin < ymax):
             raise ValueError(f"area [xmin, xmax, ymin, ymax] = {list(value)} needs xmin < xmax and ymin < ymax")
-        return
-    if len(value) < 3:
-        raise ValueError(f"area polygon has {len(value)} point{'s' if len(value) != 1 else ''}: "
-                         "it needs at least 3 ([[x, y], ...])")
-    if area(value) < MIN_AREA:
-        raise ValueError("area polygon encloses no area (its points lie on one line)")
+        side = max(xmax - xmin, ymax - ymin)
+    else:
+        if len(value) < 3:
+            raise ValueError(f"area polygon has {len(value)} point{'s' if len(value) != 1 else ''}: "
+                             "it needs at least 3 ([[x, y], ...])")
+        if area(value) < MIN_AREA:
+            raise ValueError("area polygon encloses no area (its points lie on one line)")
+        side = max(max(p[i] for p in value) - min(p[i] for p in value) for i in (0, 1))
+    if side > MAX_AREA_SIDE:
+        raise ValueError(f"area is {side:g} m across, more than the limit of {MAX_AREA_SIDE:g} m")
 
 
 Waypoints = Annotated[list[Point2], Field(min_length=1, max_length=MAX_WAYPOINTS)]

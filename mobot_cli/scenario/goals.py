@@ -20,6 +20,7 @@ from mobot_cli.sim.plan import GoalControl, GoalStep, WorldPlan
 
 DEFAULT = GoalControl()
 PLAN_CELL = 0.05  # m: the grid coverage lanes are planned on (finer for spacings under 0.15 m)
+PLAN_CELLS = 2000  # ... but never more cells than this along the area's longer side
 PLAN_MARGIN = 1.0  # m around the area where the route between lane pieces may run
 # A robot whose footprint is unknown (a description without collision geometry) is taken as this.
 DEFAULT_FOOTPRINT = (-0.2, 0.2, -0.2, 0.2)
@@ -94,8 +95,8 @@ def plan_coverage(world: WorldPlan | None, polygon, spacing: float,
     xmin, xmax, ymin, ymax = footprint
     half_width = max(abs(ymin), abs(ymax))
     radius = max(math.hypot(x, y) for x in (xmin, xmax) for y in (ymin, ymax))
-    cell = min(PLAN_CELL, spacing / 3.0)
     xs, ys = [p[0] for p in polygon], [p[1] for p in polygon]
+    cell = max(min(PLAN_CELL, spacing / 3.0), max(max(xs) - min(xs), max(ys) - min(ys)) / PLAN_CELLS)
     pad = radius + PLAN_MARGIN
     grid = Grid.covering(min(xs) - pad, max(xs) + pad, min(ys) - pad, max(ys) + pad, cell)
     obstacles = obstacle_mask(world, grid) if world is not None else grid.empty()
