@@ -100,10 +100,11 @@ def _join(a: Cell, b: Cell, passable: np.ndarray) -> list[Cell]:
 
 
 def _clear(a: Cell, b: Cell, passable: np.ndarray) -> bool:
-    """Whether every cell on the straight line from ``a`` to ``b`` is passable."""
-    n = 2 * max(abs(b[0] - a[0]), abs(b[1] - a[1])) + 1
-    rows = np.rint(np.linspace(a[0], b[0], n)).astype(int)
-    cols = np.rint(np.linspace(a[1], b[1], n)).astype(int)
+    """Whether every cell the straight line from ``a``'s centre to ``b``'s meets (sampled every
+    quarter cell) is passable."""
+    n = 4 * max(abs(b[0] - a[0]), abs(b[1] - a[1])) + 1
+    rows = np.floor(np.linspace(a[0], b[0], n) + 0.5).astype(int)
+    cols = np.floor(np.linspace(a[1], b[1], n) + 0.5).astype(int)
     return bool(passable[rows, cols].all())
 
 

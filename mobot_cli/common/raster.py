@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-Point = tuple[float, float]
+from mobot_cli.common.polygon import Point, area, box_polygon, contains  # noqa: F401 - one place for shapes
 
 
 @dataclass(frozen=True)
@@ -99,25 +99,6 @@ def fill_shape(mask: np.ndarray, grid: Grid, shape) -> None:
         fill_segment(mask, grid, shape[0], shape[1])
 
 
-def contains(polygon, x: float, y: float) -> bool:
-    """Whether (x, y) lies inside ``polygon`` (even-odd rule)."""
-    inside = False
-    n = len(polygon)
-    for i in range(n):
-        (xa, ya), (xb, yb) = polygon[i], polygon[(i + 1) % n]
-        if (ya > y) != (yb > y) and x < xa + (y - ya) * (xb - xa) / (yb - ya):
-            inside = not inside
-    return inside
-
-
-def area(polygon) -> float:
-    """The area enclosed by a simple polygon (shoelace formula), whatever its winding."""
-    n = len(polygon)
-    twice = sum(polygon[i][0] * polygon[(i + 1) % n][1] - polygon[(i + 1) % n][0] * polygon[i][1]
-                for i in range(n))
-    return abs(twice) / 2.0
-
-
 def dilate(mask: np.ndarray, cells: float) -> np.ndarray:
     """``mask`` grown by a disc of radius ``cells`` (in cells): every cell within that distance
     of a set cell is set."""
@@ -130,8 +111,3 @@ def dilate(mask: np.ndarray, cells: float) -> np.ndarray:
                 src = mask[max(0, -dy):ny - max(0, dy), max(0, -dx):nx - max(0, dx)]
                 out[max(0, dy):ny - max(0, -dy), max(0, dx):nx - max(0, -dx)] |= src
     return out
-
-
-def box_polygon(xmin: float, xmax: float, ymin: float, ymax: float) -> list[Point]:
-    """A box as a counter-clockwise polygon."""
-    return [(xmin, ymin), (xmax, ymin), (xmax, ymax), (xmin, ymax)]

@@ -15,10 +15,9 @@ from dataclasses import dataclass, replace
 from typing import Any, Optional
 
 from mobot_cli.common.transforms import Planar
-from mobot_cli.run.expect_time import Tracker, tracker
+from mobot_cli.run.expect_time import Tracker, coverage_areas, tracker
 from mobot_cli.run.goals import GoalEnded
 from mobot_cli.run.sinks import Sink
-from mobot_cli.run.sweep import Sweep, coverage_areas
 from mobot_cli.run.timeline import Sample
 from mobot_cli.sim.plan import Expectation, Plan, RobotPlan
 from mobot_cli.sim.state import RobotState
@@ -102,6 +101,8 @@ class Checker(Sink):
         name, footprint = (robot.name, robot.footprint) if robot is not None else (key, None)
         for area in [*self._areas.get(name, ()), *self._areas.get("all", ())]:
             if (key, area) not in self.sweeps:
+                from mobot_cli.run.sweep import Sweep  # numpy and the floor plan: only for coverage
+
                 sweep = self.sweeps[(key, area)] = Sweep(area, self.plan.world, footprint)
                 self._robot_sweeps.setdefault(key, []).append(sweep)
         for i, exp in self._tracked:

@@ -9,11 +9,16 @@ but what happened later is still told ("1.3 s after the deadline").
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 from mobot_cli.run.goals import GoalEnded
-from mobot_cli.run.sweep import Sweep
-from mobot_cli.sim.plan import Expectation
+from mobot_cli.sim.plan import Expectation, GoalStep, Plan
 from mobot_cli.sim.state import RobotState
+
+if TYPE_CHECKING:
+    from mobot_cli.run.sweep import Sweep
+
+Area = tuple[tuple[float, float], ...]
 
 
 def _t(step: int, rate: int) -> str:
@@ -115,7 +120,7 @@ class Visits(Tracker):
 class Coverage(Tracker):
     """The robot's footprint swept over the area, the fraction read at the deadline."""
 
-    def __init__(self, exp: Expectation, rate: int, sweep: Sweep):
+    def __init__(self, exp: Expectation, rate: int, sweep: "Sweep"):
         super().__init__(exp, rate)
         self.sweep = sweep
         self.frozen: tuple[float, int] | None = None  # the fraction at the last row before the deadline
@@ -155,8 +160,22 @@ class GoalOutcome(Tracker):
                                              f"{e.error:.3f} m from its goal")
 
 
-def tracker(exp: Expectation, rate: int, sweep: Sweep | None = None) -> Tracker:
+def tracker(exp: Expectation, rate: int, sweep: "Sweep | None" = None) -> Tracker:
     """The tracker of one expectation over time (``sweep``: coverage's, for that robot and area)."""
     if exp.kind == "coverage":
         return Coverage(exp, rate, sweep)
     return {"reaches": Reaches, "visits": Visits, "goal": GoalOutcome}[exp.kind](exp, rate)
+
+
+def coverage_areas(plan: Plan) -> dict[str, list[Area]]:
+    """Robot name (or "all") -> the areas its coverage goals and coverage expectations name."""
+    out: dict[str, list[Area]] = {}
+    robots = [*plan.robots, *(event.spawn for event in plan.events if event.spawn is not None)]
+    for robot in robots:
+        for cmd in robot.commands:
+            if isinstance(cmd, GoalStep) and cmd.kind == "coverage" and cmd.area not in out.get(robot.name, []):
+                out.setdefault(robot.name, []).append(cmd.area)
+    for exp in plan.expectations:
+        if exp.kind == "coverage" and exp.points not in out.get(exp.robot, []):
+            out.setdefault(exp.robot, []).append(exp.points)
+    return out

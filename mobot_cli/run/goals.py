@@ -23,7 +23,7 @@ from mobot_cli.sim.state import RobotState
 from mobot_cli.sim.world import World
 
 CONTROL_RATE_HZ = 20  # nav2's controller_frequency default
-BLOCKED_SECONDS = 3.0
+BLOCKED_SECONDS = 1.0
 BLOCKED_DISTANCE = 0.02  # m
 BLOCKED_TURN = 0.05  # rad
 STATUSES = ("reached", "timed_out", "blocked", "cancelled")

@@ -125,7 +125,8 @@ def _swept_values(folder: Path) -> dict[str, str]:
 
 def _sweep(plan, tracks: list[_Points]) -> None:
     """Sweep each robot's footprint over the areas of its coverage goals and checks, as the run did."""
-    from mobot_cli.run.sweep import Sweep, coverage_areas
+    from mobot_cli.run.expect_time import coverage_areas
+    from mobot_cli.run.sweep import Sweep
 
     areas = coverage_areas(plan)
     footprints = {r.name: r.footprint for r in (*plan.robots, *(e.spawn for e in plan.events if e.spawn))}

@@ -17,19 +17,18 @@ import numpy as np
 from mobot_cli.assets.world.freespace import obstacle_mask
 from mobot_cli.assets.world.floorplan import convex_hull
 from mobot_cli.common.raster import Grid, fill_polygon
-from mobot_cli.sim.plan import GoalStep, Plan, WorldPlan
+from mobot_cli.sim.plan import WorldPlan
 
 CELL = 0.02  # m, or coarser for large areas:
 MAX_CELLS = 1000  # cells along the area's longer side at most
 TURN_STEP = 0.05  # rad
 DEFAULT_FOOTPRINT = (-0.2, 0.2, -0.2, 0.2)  # a robot whose extent is not known
-Area = tuple[tuple[float, float], ...]
 
 
 class Sweep:
     """One robot's footprint swept over one area."""
 
-    def __init__(self, area: Area, world: WorldPlan | None, footprint=None):
+    def __init__(self, area: tuple[tuple[float, float], ...], world: WorldPlan | None, footprint=None):
         xs, ys = [p[0] for p in area], [p[1] for p in area]
         self.area = area
         cell = max(CELL, max(max(xs) - min(xs), max(ys) - min(ys)) / MAX_CELLS)
@@ -71,17 +70,3 @@ class Sweep:
     def free_area(self) -> float:
         """m^2 of free space in the area."""
         return self.free_cells * self.grid.cell ** 2
-
-
-def coverage_areas(plan: Plan) -> dict[str, list[Area]]:
-    """Robot name (or "all") -> the areas its coverage goals and coverage expectations name."""
-    out: dict[str, list[Area]] = {}
-    robots = [*plan.robots, *(event.spawn for event in plan.events if event.spawn is not None)]
-    for robot in robots:
-        for cmd in robot.commands:
-            if isinstance(cmd, GoalStep) and cmd.kind == "coverage" and cmd.area not in out.get(robot.name, []):
-                out.setdefault(robot.name, []).append(cmd.area)
-    for exp in plan.expectations:
-        if exp.kind == "coverage" and exp.points not in out.get(exp.robot, []):
-            out.setdefault(exp.robot, []).append(exp.points)
-    return out

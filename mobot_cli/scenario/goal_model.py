@@ -10,7 +10,7 @@ from typing import Annotated, Any, Literal, Optional, Union
 
 from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, model_validator
 
-from mobot_cli.common.raster import area
+from mobot_cli.common.polygon import area
 from mobot_cli.scenario.limits import Coordinate, Float, Int, PositiveFloat
 
 GOALS = ("goto", "path", "patrol", "coverage")

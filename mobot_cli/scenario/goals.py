@@ -10,9 +10,7 @@ from __future__ import annotations
 import math
 from typing import Callable
 
-from mobot_cli.assets.world.freespace import obstacle_at, obstacle_mask
-from mobot_cli.common.boustrophedon import lawnmower
-from mobot_cli.common.raster import Grid, box_polygon, dilate, fill_polygon
+from mobot_cli.common.polygon import box_polygon
 from mobot_cli.errors import Location, ScenarioError
 from mobot_cli.scenario.goal_model import GoalFields
 from mobot_cli.scenario.units import steps
@@ -75,6 +73,8 @@ def _free(world: WorldPlan | None, point: tuple[float, float], what: str, where:
     """A located error when ``point`` lies inside a static body of the world."""
     if world is None:
         return
+    from mobot_cli.assets.world.freespace import obstacle_at  # the floor plan: only for goals
+
     inside = obstacle_at(world, *point)
     if inside is not None:
         raise ScenarioError(f"{what} ({point[0]:g}, {point[1]:g}) is inside {inside}", location=where, hint=HINT)
@@ -92,6 +92,10 @@ def plan_coverage(world: WorldPlan | None, polygon, spacing: float,
     reaches the area's edges) and its footprint's circumscribed radius away from obstacles
     (so it can turn in place anywhere on the route). ValueError when no lane fits.
     """
+    from mobot_cli.assets.world.freespace import obstacle_mask
+    from mobot_cli.common.boustrophedon import lawnmower
+    from mobot_cli.common.raster import Grid, dilate, fill_polygon
+
     xmin, xmax, ymin, ymax = footprint
     half_width = max(abs(ymin), abs(ymax))
     radius = max(math.hypot(x, y) for x in (xmin, xmax) for y in (ymin, ymax))
