@@ -1,7 +1,7 @@
 """Polygons on a square grid: which cells a shape covers, judged at each cell's centre.
 
-Coverage planning (free space for lanes), the coverage expectation (the footprint's swept
-area) and the goal checks (is a point inside an obstacle) share these. A cell counts as
+Coverage planning (free space for lanes) and the coverage expectation (the footprint's swept
+area) share these. A cell counts as
 covered when its centre lies inside the polygon (even-odd rule), so a shape's cell count
 times the cell area converges on its true area as the cells shrink; segments (walls seen
 edge-on in a floor plan) mark every cell they pass through.
@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mobot_cli.common.polygon import Point, area, box_polygon, contains  # noqa: F401 - one place for shapes
+from mobot_cli.common.polygon import Point
 
 
 @dataclass(frozen=True)

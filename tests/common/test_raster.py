@@ -11,7 +11,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mobot_cli.common.boustrophedon import lawnmower
-from mobot_cli.common.raster import Grid, area, box_polygon, contains, dilate, fill_polygon, fill_segment
+from mobot_cli.common.polygon import area, box_polygon, contains
+from mobot_cli.common.raster import Grid, dilate, fill_polygon, fill_segment
 
 CELL = 0.01
 

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mobot_cli.common.raster import box_polygon
+from mobot_cli.common.polygon import box_polygon
 from mobot_cli.run.sweep import Sweep
 from mobot_cli.sim.plan import StaticBody, StaticShape, WorldPlan
 

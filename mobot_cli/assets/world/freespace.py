@@ -10,7 +10,8 @@ from __future__ import annotations
 import numpy as np
 
 from mobot_cli.assets.world.floorplan import body_shadows
-from mobot_cli.common.raster import Grid, contains, fill_shape
+from mobot_cli.common.polygon import contains
+from mobot_cli.common.raster import Grid, fill_shape
 from mobot_cli.sim.plan import WorldPlan
 
 
