@@ -54,8 +54,9 @@ def goto(
         return ExitCode.OK
     if not json_:
         pose = live_common.pose_text(reply["pose"]) if reply.get("pose") else "deleted"
+        error = f"{reply['error']:.3f} m" if reply.get("error") is not None else "unknown distance"
         live_common.say(env, f"t={reply['t']:.3f} {name}: {reply['status']} after {reply['time']:.3f} s, "
-                        f"{reply['error']:.3f} m from the goal; {pose}")
+                        f"{error} from the goal; {pose}")
     return ExitCode.OK if reply["status"] == "reached" else ExitCode.EXPECTATION_FAILED
 
 

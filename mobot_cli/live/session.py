@@ -147,7 +147,8 @@ class Session:
         state = self.world.read(ended.robot) if ended.robot in self.robots else None
         return protocol.reply(request_id, name=ended.robot, step=ended.step, t=ended.step / self.rate_hz,
                               status=ended.status,
-                              time=(ended.step - ended.started) / self.rate_hz, error=ended.error,
+                              time=(ended.step - ended.started) / self.rate_hz,
+                              error=ended.error if math.isfinite(ended.error) else None,
                               pose=spawning.pose_fields(state) if state is not None else None)
 
     def fault(self, exc: SimulationFault) -> bool:

@@ -155,9 +155,9 @@ class GoalOutcome(Tracker):
         if e is None:
             return self.exp.status == "unfinished", "was still on it when the run ended"
         laps = f", {e.laps} lap{'s' if e.laps != 1 else ''} done" if e.laps is not None else ""
+        where = f", {e.error:.3f} m from its goal" if math.isfinite(e.error) else ""
         return e.status == self.exp.status, (f"ended '{e.status}' at {_t(e.step, rate)}, "
-                                             f"{_t(e.step - e.started, rate)} after it started{laps}, "
-                                             f"{e.error:.3f} m from its goal")
+                                             f"{_t(e.step - e.started, rate)} after it started{laps}{where}")
 
 
 def tracker(exp: Expectation, rate: int, sweep: "Sweep | None" = None) -> Tracker:

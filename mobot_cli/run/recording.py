@@ -56,7 +56,8 @@ class _Life:
 
     def ended(self, record: GoalEnded, rate: int) -> None:
         goal = next(g for g in reversed(self.goals) if g["command"] == _command(record.index))
-        goal.update(status=record.status, ended_at=record.step / rate, error=_r(record.error), laps=record.laps,
+        error = _r(record.error) if math.isfinite(record.error) else None  # a robot whose state broke
+        goal.update(status=record.status, ended_at=record.step / rate, error=error, laps=record.laps,
                     path_length=_r(self.distance - goal["from"]))
 
     def record(self, end: float) -> RobotRecord:

@@ -177,3 +177,14 @@ def test_expectations_over_time_say_what_happened_and_when(tmp_path):
     # Straight along y = 0 through the area: the footprint (0.34 m wide) sweeps 0.34 of its 2 m^2.
     assert not results[6]["passed"] and results[6]["happened"].endswith(" % of 2.00 m^2 of free space")
     assert float(results[6]["happened"].split()[1]) == pytest.approx(17.0, abs=0.6)
+
+
+def test_a_robot_deleted_on_its_way_records_its_goal_cancelled(tmp_path):
+    commands = [{"at": 0.5, "goto": {"x": 3.0, "y": 0.0}}]
+    out = run(tmp_path, {"world": "empty", "duration": 5,
+                         "robots": [robot_entry(None, "mobot", (0.0, 0.0, 0.0), commands)],
+                         "events": [{"at": 3.0, "delete": "r"}],
+                         "expect": [{"robot": "r", "goal": {"command": 0, "status": "cancelled"}}]})
+    (goal,) = summary(out)["robots"]["r"]["goals"]
+    assert (goal["status"], goal["ended_at"], goal["time"]) == ("cancelled", 3.0, 2.5)
+    assert 0.3 < goal["path_length"] < 0.8 and 2.2 < goal["error"] < 2.7
