@@ -188,3 +188,31 @@ def test_a_robot_deleted_on_its_way_records_its_goal_cancelled(tmp_path):
     (goal,) = summary(out)["robots"]["r"]["goals"]
     assert (goal["status"], goal["ended_at"], goal["time"]) == ("cancelled", 3.0, 2.5)
     assert 0.3 < goal["path_length"] < 0.8 and 2.2 < goal["error"] < 2.7
+
+
+def test_every_kind_of_command_round_trips_through_the_resolved_scenario(tmp_path):
+    from mobot_cli.run.prepare import prepare
+    from mobot_cli.sim.plan import CommandStep, GoalStep, TwistStep
+
+    commands = [{"at": 0.5, "linear": 0.2, "for": 1.0},
+                {"goto": {"x": 1.0, "y": 1.0, "yaw": 1.57}, "timeout": 25},  # starts as the twist ends
+                {"linear": 0.1, "for": 1.0},
+                {"path": [[1, 2], [0, 2]], "localization": "ground_truth"},
+                {"at": 30, "patrol": [[0, 0], [1, 0], [1, 1]], "laps": 2, "max_linear": 0.4},
+                {"coverage": {"area": [-2, -1, -2, -1], "spacing": 0.3}},
+                {"coverage": {"area": [[0, -2], [1, -2], [0.5, -1]], "spacing": 0.3}, "tolerance": 0.1}]
+    path = tmp_path / "all.yaml"
+    path.write_text(yaml.safe_dump({"version": 1, "name": "all", "duration": 60,
+                                    "robots": [{"name": "r", "commands": commands}]}))
+    first = prepare(path)
+    kinds = [(type(c).__name__, c.step, getattr(c, "kind", "")) for c in first.plan.robots[0].commands]
+    assert kinds == [("CommandStep", 120, ""), ("GoalStep", 360, "goto"), ("TwistStep", 360, ""),
+                     ("GoalStep", 360, "path"), ("GoalStep", 7200, "patrol"), ("GoalStep", 7200, "coverage"),
+                     ("GoalStep", 7200, "coverage")]
+    assert isinstance(first.plan.robots[0].commands[0], CommandStep)  # no stop: the goal starts then
+    assert all(isinstance(c, (GoalStep, TwistStep)) for c in first.plan.robots[0].commands[1:])
+    resolved = tmp_path / "resolved.yaml"
+    resolved.write_text(first.resolved_yaml)
+    again = prepare(resolved)
+    assert again.plan == first.plan and again.resolved_yaml == first.resolved_yaml
+    assert "area: [-2.0, -1.0, -2.0, -1.0]" in first.resolved_yaml  # a box stays a box
