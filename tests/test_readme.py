@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import re
 import subprocess
 import sys
@@ -59,3 +60,15 @@ def test_the_python_api_example_runs(tmp_path, monkeypatch):
     final = sim.record.robots["r1"].final_pose
     assert abs(final.x - 1.5) < 0.1 and abs(final.y - 0.5) < 0.1
     assert (tmp_path / "runs" / "goal" / "odom" / "r1.csv").is_file()
+
+
+def test_the_goals_example_runs_and_passes(tmp_path):
+    """The Goals section's scenario: every goal reached, every check over time passed."""
+    section = README[README.index("## Goals, patrols and coverage"):]
+    example = re.search(r"```yaml\n(.*?)```", section, re.S).group(1)
+    path = tmp_path / "goals.yaml"
+    path.write_text(example)
+    assert invoke(["run", str(path), "--out", str(tmp_path / "r"), "--quiet"]) == Outcome(0, "", "")
+    record = json.loads((tmp_path / "r" / "summary.json").read_text())
+    assert [g["status"] for g in record["robots"]["mobot"]["goals"]] == ["reached"] * 4
+    assert record["expectations"]["failed"] == 0

@@ -19,7 +19,10 @@ from mobot_cli.errors import MobotError, UsageError, did_you_mean
 from mobot_cli.run.prepare import Prepared, prepare_target
 from mobot_cli.run.record import RunRecord, Status
 from mobot_cli.run.recording import Recording
+from mobot_cli.run.goals import GoalEnded, GoalStarted
 from mobot_cli.run.timeline import Timeline
+from mobot_cli.scenario.goal_model import GoalFields, GotoSpec
+from mobot_cli.scenario.goals import goal_step
 from mobot_cli.scenario.model import RobotSpec
 from mobot_cli.scenario.robots import RobotResolver
 from mobot_cli.scenario.units import steps
@@ -45,6 +48,8 @@ class Simulation:
                 self._timeline.attach(self._recording)
             else:
                 self._timeline.attach(lambda record: None)
+            self._goals: dict[str, GoalStarted | GoalEnded] = {}  # robot -> its last goal's record
+            self._timeline.attach(self._goal_record)
         except BaseException:
             self._world.close()
             raise
@@ -113,6 +118,35 @@ class Simulation:
             raise UsageError(f"robot '{name}' has no drive wheels: it does not take velocity commands")
         span = None if duration is None else steps(duration, self.rate_hz)
         self._timeline.command(name, float(linear), float(angular), span)
+
+    def goto(self, name: str, x: float, y: float, yaw: float | None = None, **settings) -> None:
+        """Drive to (x, y) (then turn to ``yaw``) with the goal controller of a scenario's
+        ``goto`` command, from this step on; ``settings``: tolerance, timeout (s), localization,
+        max_linear, max_angular, acceleration, angular_acceleration. A running goal is cancelled."""
+        self._known(name)
+        if not self._world.has_drive(name):
+            raise UsageError(f"robot '{name}' has no drive wheels: it cannot drive to a goal")
+        tolerance = settings.pop("tolerance", None)
+        try:
+            fields = GoalFields(goto=GotoSpec(x=x, y=y, yaw=yaw, tolerance=tolerance), **settings)
+            goal = goal_step(fields, self.step_count, -1, self.rate_hz, self.plan.world,
+                             self._timeline.robots[name].footprint, lambda key: None, [])
+        except ValidationError as exc:
+            first = exc.errors()[0]
+            raise UsageError(f"goto '{name}': {'.'.join(str(p) for p in first['loc'])}: {first['msg']}") from None
+        except MobotError as exc:
+            raise UsageError(f"goto '{name}': {exc.message}", hint=exc.hint) from None
+        self._timeline.goto(name, goal)
+
+    def goal_status(self, name: str) -> str | None:
+        """How the robot's last goal stands: 'running', 'reached', 'timed_out', 'blocked',
+        'cancelled'; None when it was never given one."""
+        record = self._goals.get(name)
+        return None if record is None else "running" if isinstance(record, GoalStarted) else record.status
+
+    def _goal_record(self, record) -> None:
+        if isinstance(record, (GoalStarted, GoalEnded)):
+            self._goals[record.robot] = record
 
     def spawn(self, name: str, description: str, *, x: float = 0.0, y: float = 0.0, z: float | None = None,
               yaw: float = 0.0, args: Mapping[str, str] | None = None, namespace: str | None = None) -> None:

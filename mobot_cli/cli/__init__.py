@@ -21,7 +21,7 @@ from mobot_cli import __version__
 from mobot_cli.cli import check, inspect, run, xacro
 from mobot_cli.cli import plot as plot_command
 from mobot_cli.cli import sweep as sweep_command
-from mobot_cli.cli import cmd, delete, odom, scan, serve, spawn, stop
+from mobot_cli.cli import cmd, delete, goto, odom, scan, serve, spawn, stop
 from mobot_cli.cli import list as list_command  # not `list`: that would shadow the builtin here
 from mobot_cli.cli.environment import Environment
 from mobot_cli.cli.output import report_error
@@ -65,6 +65,7 @@ app.command("spawn")(spawn.spawn)
 app.command("delete")(delete.delete)
 app.command("list")(list_command.list_)
 app.command("cmd")(cmd.cmd)
+app.command("goto", context_settings={"ignore_unknown_options": True})(goto.goto)  # X, Y may be negative
 app.command("odom")(odom.odom)
 app.command("scan")(scan.scan)
 app.command("stop")(stop.stop)

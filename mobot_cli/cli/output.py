@@ -76,8 +76,26 @@ def run_table(env: Environment, record, out_dir) -> None:
                       f"{pose.yaw:.3f}", f"{robot.odom_error.position:.3f}", str(robot.collisions))
     console = stdout_console(env)
     console.print(table)
+    goals = [(name, goal) for name, robot in record.robots.items() for goal in robot.goals]
+    if goals:
+        console.print(_goal_table(goals))
     written = [name for name in ("trajectory.png", "bag/") if (Path(out_dir) / name.rstrip("/")).exists()]
     console.print(f"run folder: {out_dir}" + (f" ({', '.join(written)})" if written else ""))
+
+
+def _goal_table(goals: list) -> Any:
+    """One row per goal command: how it ended, how long it took, how far the robot drove."""
+    from rich.table import Table
+
+    table = Table(title="goals", caption="time in s; path driven and final distance from the goal in m")
+    for column in ("robot", "command", "status", "time", "path", "error"):
+        table.add_column(column, justify="left" if column in ("robot", "command", "status") else "right")
+    for name, goal in goals:
+        which = f"{goal.command} {goal.kind}" if goal.command is not None else f"live {goal.kind}"
+        laps = f" ({goal.laps} lap{'s' if goal.laps != 1 else ''})" if goal.laps is not None else ""
+        table.add_row(name, which, goal.status + laps, f"{goal.time:.2f}", f"{goal.path_length:.2f}",
+                      "-" if goal.error is None else f"{goal.error:.3f}")
+    return table
 
 
 def check_result(env: Environment, result: dict[str, Any]) -> None:

@@ -101,6 +101,14 @@ class Client:
             fields["wait"] = wait
         return self.request("cmd", timeout=timeout, **fields)
 
+    def goto(self, name: str, x: float, y: float, yaw: float | None = None, wait: bool = False,
+             timeout: float | None = None, **settings: Any) -> dict[str, Any]:
+        """Drive to (x, y) (then ``yaw``); ``settings``: tolerance, timeout_s, localization,
+        max_linear, max_angular. With ``wait`` the reply says how the goal ended."""
+        fields = {"name": name, "x": x, "y": y, "yaw": yaw, "wait": wait,
+                  **{("timeout" if k == "timeout_s" else k): v for k, v in settings.items()}}
+        return self.request("goto", timeout=timeout, **{k: v for k, v in fields.items() if v is not None})
+
     def odom(self, name: str) -> dict[str, Any]:
         """The robot's odometry, ground truth and command now."""
         return self.request("odom", name=name)

@@ -22,7 +22,7 @@ MAX_REQUEST_BYTES = 4 * 1024 * 1024
 # Larger frames are dropped by ZeroMQ itself before they reach Python (memory safety).
 HARD_LIMIT_BYTES = 64 * 1024 * 1024
 
-OPS = ("ping", "spawn", "delete", "list", "cmd", "odom", "scan", "stop")
+OPS = ("ping", "spawn", "delete", "list", "cmd", "odom", "scan", "stop", "goto")
 
 
 class Result(IntEnum):

@@ -65,6 +65,20 @@ class Cmd(Request):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True, populate_by_name=True)
 
 
+class Goto(Request):
+    op: Literal["goto"]
+    name: Name
+    x: float  # the goal, in the world frame
+    y: float
+    yaw: Optional[float] = None  # turn to this heading once there
+    tolerance: Optional[Annotated[float, Field(gt=0)]] = None  # m
+    timeout: Optional[Annotated[float, Field(gt=0, le=1e6)]] = None  # simulated s
+    localization: Optional[Literal["odometry", "ground_truth"]] = None
+    max_linear: Optional[Annotated[float, Field(gt=0)]] = None
+    max_angular: Optional[Annotated[float, Field(gt=0)]] = None
+    wait: bool = False  # reply when the goal has ended
+
+
 class Spawn(Request):
     op: Literal["spawn"]
     name: str
@@ -78,7 +92,7 @@ class Spawn(Request):
     base_dir: Optional[str] = None  # the client's folder: relative paths resolve against it
 
 
-AnyRequest = Annotated[Union[Ping, ListRobots, Stop, Delete, Odom, Scan, Cmd, Spawn], Field(discriminator="op")]
+AnyRequest = Annotated[Union[Ping, ListRobots, Stop, Delete, Odom, Scan, Cmd, Goto, Spawn], Field(discriminator="op")]
 _ADAPTER: TypeAdapter = TypeAdapter(AnyRequest)
 
 

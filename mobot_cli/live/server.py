@@ -106,7 +106,7 @@ class LiveServer:
         self._loader = ThreadPoolExecutor(max_workers=1, thread_name_prefix="mobot-loader")
         self._handlers: dict[str, Callable] = {
             "ping": self._ping, "list": self._list, "spawn": self._spawn, "delete": self._delete,
-            "cmd": self._cmd, "odom": self._odom, "scan": self._scan, "stop": self._stop}
+            "cmd": self._cmd, "odom": self._odom, "scan": self._scan, "stop": self._stop, "goto": self._goto}
 
     def serve(self, ready: Callable[[str], None] | None = None) -> Served:
         """Run until `stop`, SIGINT/SIGTERM or ``stop_after`` steps; returns status and counts."""
@@ -268,6 +268,12 @@ class LiveServer:
             self._waits.append(_Pending(envelope, request, until=until))
             return None
         return protocol.reply(request.id, name=request.name, step=self._step(), t=self._t(), until_step=until)
+
+    def _goto(self, envelope, request: schema.Goto) -> dict[str, Any] | None:
+        """Start a goal; with ``wait`` the reply comes when it ends (reached, blocked, ...)."""
+        done = (lambda answer: self._send(envelope, answer)) if request.wait else None
+        answer = self.session.goto(request, done)
+        return None if request.wait else answer
 
     def _stop(self, envelope, request) -> dict[str, Any]:
         self.stopping = True

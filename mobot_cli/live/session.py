@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 from mobot_cli.errors import MobotError, SimulationFault, did_you_mean
 from mobot_cli.live import protocol, schema, spawning
@@ -19,10 +19,16 @@ from mobot_cli.live.readings import LatestReadings
 from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.run.record import LiveInfo, RunRecord, Status
 from mobot_cli.run.recording import Recording
+from mobot_cli.run.goals import GoalEnded, GoalStarted
 from mobot_cli.run.timeline import Deleted, Record, Spawned, Timeline
+from mobot_cli.scenario.goal_model import GoalFields, GotoSpec
+from mobot_cli.scenario.goals import goal_step
 from mobot_cli.scenario.units import steps
 from mobot_cli.sim.plan import Event, Plan, RobotPlan
 from mobot_cli.sim.world import FLOOR_OF_THE_WORLD, World
+
+
+LIVE_GOAL = -1  # the command index of a goal a live request gave (not one of the scenario's)
 
 
 class Session:
@@ -37,6 +43,9 @@ class Session:
         self.history_file = History(out_dir, self.rate_hz) if out_dir is not None else None
         self.readings = LatestReadings()
         self.timeline.attach(self._record)
+        # goto --wait: robot -> what to call when its goal ends (armed once that goal started)
+        self._goal_waits: dict[str, tuple[Any, Callable[[dict[str, Any]], None]]] = {}
+        self._armed: dict[str, tuple[Any, Callable[[dict[str, Any]], None]]] = {}
 
     @property
     def robots(self) -> dict[str, RobotPlan]:
@@ -66,6 +75,11 @@ class Session:
         elif isinstance(record, Deleted):
             self.history(op="delete", name=record.name, by=record.by, result="OK",
                          **({"message": record.message} if record.message else {}))
+        elif isinstance(record, GoalStarted) and record.robot in self._goal_waits:
+            self._armed[record.robot] = self._goal_waits.pop(record.robot)
+        elif isinstance(record, GoalEnded) and record.robot in self._armed:
+            request_id, done = self._armed.pop(record.robot)
+            done(self._goal_reply(request_id, record))
 
     def _refused(self, event: Event, exc: MobotError) -> None:
         """A scenario event that a live request made impossible is skipped and recorded."""
@@ -108,6 +122,37 @@ class Session:
         self.history(op="cmd", name=request.name, result="OK", linear=request.linear, angular=request.angular,
                      **{"for": request.for_})
         return until
+
+    def goto(self, request: schema.Goto, done: Callable[[dict[str, Any]], None] | None = None) -> dict[str, Any]:
+        """Start driving to a goal now (a goal already running ends 'cancelled'); ``done`` gets
+        the reply when it ends. Refused for a goal inside an obstacle."""
+        self.known(request.name)
+        if not self.world.has_drive(request.name):
+            raise Refusal(Result.OPERATION_FAILED, f"robot '{request.name}' has no drive wheels: it cannot drive to a goal")
+        try:
+            fields = GoalFields(goto=GotoSpec(x=request.x, y=request.y, yaw=request.yaw, tolerance=request.tolerance),
+                                timeout=request.timeout, localization=request.localization,
+                                max_linear=request.max_linear, max_angular=request.max_angular)
+            goal = goal_step(fields, self.step, LIVE_GOAL, self.rate_hz, self.plan.world,
+                             self.robots[request.name].footprint, lambda key: None, [])
+        except (MobotError, ValueError) as exc:
+            message = exc.message if isinstance(exc, MobotError) else str(exc).splitlines()[-1].strip()
+            raise Refusal(Result.INVALID_REQUEST, f"goto request: {message}") from None
+        if done is not None:
+            self._goal_waits[request.name] = (request.id, done)
+        self.timeline.goto(request.name, goal)
+        self.history(op="goto", name=request.name, result="OK", x=request.x, y=request.y, yaw=request.yaw)
+        return protocol.reply(request.id, name=request.name, step=self.step, t=self.step / self.rate_hz,
+                              x=request.x, y=request.y, yaw=request.yaw)
+
+    def _goal_reply(self, request_id: Any, ended: GoalEnded) -> dict[str, Any]:
+        """How a goal ended, and where the robot is."""
+        state = self.world.read(ended.robot) if ended.robot in self.robots else None
+        return protocol.reply(request_id, name=ended.robot, step=ended.step, t=ended.step / self.rate_hz,
+                              status=ended.status,
+                              time=(ended.step - ended.started) / self.rate_hz,
+                              error=ended.error if math.isfinite(ended.error) else None,
+                              pose=spawning.pose_fields(state) if state is not None else None)
 
     def fault(self, exc: SimulationFault) -> bool:
         """Remove robots whose state went bad; False when none can be blamed."""

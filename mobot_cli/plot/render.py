@@ -16,7 +16,7 @@ from pathlib import Path
 from PIL import Image, ImageDraw, ImageFont
 
 from mobot_cli.common.files import write_bytes_atomic
-from mobot_cli.plot.floorplan import Polygon
+from mobot_cli.assets.world.floorplan import Polygon
 
 Point = tuple[float, float]
 WIDTH, HEIGHT = 1200, 900  # pixels of the saved image
@@ -25,7 +25,20 @@ MARGIN = {"left": 80, "right": 250, "top": 56, "bottom": 64}
 PALETTE = ((31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189),
            (140, 86, 75), (227, 119, 194), (127, 127, 127), (188, 189, 34), (23, 190, 207))
 INK, GRID, FLOOR, FLOOR_EDGE = (40, 40, 40), (226, 226, 226), (178, 178, 178), (120, 120, 120)
+SWEPT_ALPHA = 80  # of 255: how strongly swept cells are tinted
 LEGEND_ROWS = 22  # more tracks than this (a large sweep) are summed up in one row
+
+
+@dataclass
+class Swept:
+    """Cells a robot's footprint swept over an area: ``mask`` [iy, ix] of ``cell``-metre squares
+    from (x0, y0), and the area's outline."""
+
+    x0: float
+    y0: float
+    cell: float
+    mask: object  # a numpy bool array
+    area: list[Point]
 
 
 @dataclass
@@ -36,6 +49,7 @@ class Track:
     true: list[Point] = field(default_factory=list)
     odom: list[Point] = field(default_factory=list)
     scan: list[Point] = field(default_factory=list)  # its lidar's last returns, world x, y
+    swept: list[Swept] = field(default_factory=list)  # coverage: what its footprint swept
 
 
 def render(tracks: list[Track], floor: list[Polygon], out: Path, title: str, subtitle: str = "") -> None:
@@ -43,6 +57,9 @@ def render(tracks: list[Track], floor: list[Polygon], out: Path, title: str, sub
     canvas = _Canvas(_bounds(tracks, floor))
     canvas.grid_and_axes(grid=True)
     canvas.floor(floor)  # over the grid: obstacles hide it, as furniture hides floor tiles
+    for i, track in enumerate(tracks):
+        for swept in track.swept:
+            canvas.swept(swept, PALETTE[i % len(PALETTE)])
     canvas.grid_and_axes(grid=False)
     for i, track in enumerate(tracks):
         if track.scan:
@@ -54,7 +71,8 @@ def render(tracks: list[Track], floor: list[Polygon], out: Path, title: str, sub
         if track.true:
             canvas.solid(track.true, color)
             canvas.start_end(track.true, color)
-    canvas.legend(tracks, any(len(t.odom) > 1 for t in tracks), bool(floor), any(t.scan for t in tracks))
+    canvas.legend(tracks, any(len(t.odom) > 1 for t in tracks), bool(floor), any(t.scan for t in tracks),
+                  any(t.swept for t in tracks))
     canvas.text((MARGIN["left"], 14), title, size=20)
     if subtitle:
         canvas.text((MARGIN["left"], 36), subtitle, size=13, fill=(90, 90, 90))
@@ -65,8 +83,9 @@ def render(tracks: list[Track], floor: list[Polygon], out: Path, title: str, sub
 
 
 def _bounds(tracks: list[Track], floor: list[Polygon]) -> tuple[float, float, float, float]:
-    xs = [p[0] for t in tracks for p in (*t.true, *t.odom, *t.scan)] + [p[0] for poly in floor for p in poly]
-    ys = [p[1] for t in tracks for p in (*t.true, *t.odom, *t.scan)] + [p[1] for poly in floor for p in poly]
+    areas = [p for t in tracks for s in t.swept for p in s.area]
+    xs = [p[0] for t in tracks for p in (*t.true, *t.odom, *t.scan)] + [p[0] for poly in floor for p in poly] + [p[0] for p in areas]
+    ys = [p[1] for t in tracks for p in (*t.true, *t.odom, *t.scan)] + [p[1] for poly in floor for p in poly] + [p[1] for p in areas]
     if not xs:
         return -1.0, -1.0, 1.0, 1.0
     x0, x1, y0, y1 = min(xs), max(xs), min(ys), max(ys)
@@ -156,6 +175,19 @@ class _Canvas:
                 self.draw.polygon(points, fill=FLOOR, outline=FLOOR_EDGE if outline else None,
                                   width=SS if outline else 0)
 
+    def swept(self, swept: Swept, color) -> None:
+        """The swept cells, tinted in the robot's colour, and the area's outline."""
+        import numpy as np
+
+        ny, nx = swept.mask.shape
+        left, top = self.px((swept.x0, swept.y0 + ny * swept.cell))
+        right, bottom = self.px((swept.x0 + nx * swept.cell, swept.y0))
+        size = (max(1, round(right - left)), max(1, round(bottom - top)))
+        tile = Image.fromarray(np.flipud(swept.mask).astype(np.uint8) * SWEPT_ALPHA, mode="L")
+        self.image.paste(color, (round(left), round(top)), tile.resize(size, Image.NEAREST))
+        outline = [self.px(p) for p in swept.area]
+        self.draw.line(outline + outline[:1], fill=color, width=SS)
+
     def grid_and_axes(self, grid: bool) -> None:
         """Grid lines at the ticks (``grid``), else the frame, tick labels and axis names."""
         step = nice_step(max(self.x1 - self.x0, self.y1 - self.y0))
@@ -200,7 +232,8 @@ class _Canvas:
         x, y = self.px(points[-1])
         self.draw.rectangle([x - r, y - r, x + r, y + r], fill=color, outline=INK, width=SS)
 
-    def legend(self, tracks: list[Track], odometry: bool, floor: bool, scans: bool = False) -> None:
+    def legend(self, tracks: list[Track], odometry: bool, floor: bool, scans: bool = False,
+               swept: bool = False) -> None:
         x, y = WIDTH - MARGIN["right"] + 24, MARGIN["top"]
         rows: list[tuple[str, object]] = [("true path", "solid")]
         if odometry:
@@ -210,6 +243,8 @@ class _Canvas:
         rows += [("start", "start"), ("end", "end")]
         if floor:
             rows.append(("obstacles", "floor"))
+        if swept:
+            rows.append(("swept (coverage)", "swept"))
         for label, kind in rows:
             self._key(x, y, kind, INK)
             self.text((x + 38, y), label, anchor="lm")
@@ -246,6 +281,9 @@ class _Canvas:
                 self.draw.rectangle([(x + a) * s, (y - 1) * s, (x + a + 2) * s, (y + 1) * s], fill=color)
         elif kind == "floor":
             self.draw.rectangle([x * s, (y - 6) * s, (x + 28) * s, (y + 6) * s], fill=FLOOR, outline=FLOOR_EDGE)
+        elif kind == "swept":
+            tint = tuple(round(255 + (c - 255) * SWEPT_ALPHA / 255) for c in PALETTE[0])
+            self.draw.rectangle([x * s, (y - 6) * s, (x + 28) * s, (y + 6) * s], fill=tint, outline=PALETTE[0])
         else:
             r, cx = 5 * s, (x + 14) * s
             box = [cx - r, y * s - r, cx + r, y * s + r]

@@ -3,7 +3,9 @@
 Every robot keeps running figures (distance, worst tilt, worst odometry drift, collisions);
 an expectation at a time reads a snapshot taken on that log row, one at the end reads the
 last figures. ``robot: all`` checks every robot on its own: ``within`` the robots in the
-world at that moment, the other checks every robot seen until then.
+world at that moment, the other checks every robot seen until then. Checks over time
+(reaches, visits, coverage, goal) follow each robot in trackers (run/expect_time.py); the
+footprint sweeps that coverage needs (run/sweep.py) are kept here for trajectory.png too.
 """
 
 from __future__ import annotations
@@ -13,6 +15,8 @@ from dataclasses import dataclass, replace
 from typing import Any, Optional
 
 from mobot_cli.common.transforms import Planar
+from mobot_cli.run.expect_time import Tracker, coverage_areas, tracker
+from mobot_cli.run.goals import GoalEnded
 from mobot_cli.run.sinks import Sink
 from mobot_cli.run.timeline import Sample
 from mobot_cli.sim.clearance import REACH_MARGIN
@@ -88,17 +92,40 @@ class Checker(Sink):
         self.figures: dict[str, Figures] = {}
         self.present: set[str] = set()
         self.last_step = 0
-        self._wanted = {e.step for e in plan.expectations if e.step is not None}
+        self._wanted = {e.step for e in plan.expectations if e.step is not None and e.kind not in TRACKED}
         self._snapshots: dict[int, tuple[dict[str, Figures], frozenset[str]]] = {}
+        self._tracked = [(i, e) for i, e in enumerate(plan.expectations) if e.kind in TRACKED]
+        self.trackers: dict[tuple[int, str], Tracker] = {}  # (expectation index, robot) ->
+        self._areas = coverage_areas(plan)
+        self.sweeps: dict[tuple[str, tuple], Sweep] = {}  # (robot, area) -> its footprint's sweep
+        self._robot_sweeps: dict[str, list[Sweep]] = {}
 
     def spawned(self, step: int, key: str, robot: RobotPlan) -> None:
         self.present.add(key)
+        name, footprint = (robot.name, robot.footprint) if robot is not None else (key, None)
+        for area in [*self._areas.get(name, ()), *self._areas.get("all", ())]:
+            if (key, area) not in self.sweeps:
+                from mobot_cli.run.sweep import Sweep  # numpy and the floor plan: only for coverage
+
+                sweep = self.sweeps[(key, area)] = Sweep(area, self.plan.world, footprint)
+                self._robot_sweeps.setdefault(key, []).append(sweep)
+        for i, exp in self._tracked:
+            if exp.robot in (name, "all") and (i, key) not in self.trackers:
+                self.trackers[(i, key)] = tracker(exp, self.rate, self.sweeps.get((key, exp.points)))
+
+    def goal_ended(self, key: str, record: GoalEnded) -> None:
+        """A goal command of robot ``key`` ended (its outcome for ``goal:`` checks)."""
+        for (_, name), track in self.trackers.items():
+            if name == key:
+                track.goal(record)
 
     def deleted(self, step: int, key: str) -> None:
         self.present.discard(key)
 
     def write(self, sample: Sample) -> None:
         """Take one sample (the sink interface, so it can sit beside the writers)."""
+        if self.trackers or self.sweeps:
+            self._track(sample)
         if not self.plan.expectations:
             return
         for name, state in sample.states.items():
@@ -113,10 +140,26 @@ class Checker(Sink):
             self._snapshots[sample.step] = ({n: replace(f) for n, f in self.figures.items()},
                                             frozenset(self.present))
 
+    def _track(self, sample: Sample) -> None:
+        """Feed the checks over time, then the sweeps (a coverage check reads its sweep as it
+        was before a row past its deadline)."""
+        for (_, name), track in self.trackers.items():
+            state = sample.states.get(name)
+            if state is not None:
+                track.sample(sample.step, state)
+        for name, sweeps in self._robot_sweeps.items():
+            state = sample.states.get(name)
+            if state is not None:
+                for sweep in sweeps:
+                    sweep.add(state.true_x, state.true_y, state.true_yaw)
+
     def results(self) -> list[Result]:
         """Every expectation, for every robot it names, in the scenario's order."""
         out = []
-        for exp in self.plan.expectations:
+        for index, exp in enumerate(self.plan.expectations):
+            if exp.kind in TRACKED:
+                out.extend(self._tracked_results(index, exp))
+                continue
             if exp.step is not None and exp.step not in self._snapshots:
                 ended = f"was not checked: the run ended at {self.last_step / self.rate:g} s"
                 names = list(self.figures) if exp.robot == "all" else [exp.robot]
@@ -127,6 +170,19 @@ class Checker(Sink):
             names = [exp.robot] if exp.robot != "all" else \
                 [n for n in figures if exp.kind != "within" or n in present]
             out.extend(self._check(exp, name, figures.get(name), name in present) for name in names)
+        return out
+
+    def _tracked_results(self, index: int, exp: Expectation) -> list[Result]:
+        expected = describe(exp, self.rate)
+        names = [exp.robot] if exp.robot != "all" else [n for (i, n) in self.trackers if i == index]
+        out = []
+        for name in names:
+            track = self.trackers.get((index, name))
+            if track is None:
+                out.append(Result(name, exp.kind, expected, "was not in the world", False))
+            else:
+                passed, happened = track.result()
+                out.append(Result(name, exp.kind, expected, happened, passed))
         return out
 
     def _check(self, exp: Expectation, name: str, fig: Optional[Figures], present: bool) -> Result:
@@ -187,6 +243,7 @@ def _clearance(exp: Expectation, fig: Figures, rate: int) -> tuple[bool, str]:
     return closest >= exp.limit("min"), f"{near} {what}{_when(1.0, step, rate)}"
 
 
+TRACKED = ("reaches", "visits", "coverage", "goal")
 CHECKS = {"within": _within, "collisions": _collisions, "distance": _distance, "upright": _upright,
           "odom_error": _odom, "clearance": _clearance}
 
@@ -197,6 +254,8 @@ def describe(exp: Expectation, rate: int) -> str:
     until = "until the end" if exp.step is None else f"until {exp.step / rate:g} s"
     by = "by the end" if exp.step is None else f"by {exp.step / rate:g} s"
     lim = exp.limit
+    if exp.kind in TRACKED:
+        return _describe_tracked(exp)
     if exp.kind == "within":
         if lim("radius") is not None:
             return f"be within {lim('radius'):g} m of ({lim('x'):g}, {lim('y'):g}) {when}"
@@ -218,6 +277,19 @@ def describe(exp: Expectation, rate: int) -> str:
     if lim("yaw") is not None:
         parts.append(f"{lim('yaw'):g} rad in yaw")
     return f"keep its odometry within {' and '.join(parts)} of the truth {until}"
+
+
+def _describe_tracked(exp: Expectation) -> str:
+    lim = exp.limit
+    by = "by the end" if lim("within") is None else f"by {lim('within'):g} s"
+    if exp.kind == "reaches":
+        return f"come within {lim('radius'):g} m of ({lim('x'):g}, {lim('y'):g}) {by}"
+    if exp.kind == "visits":
+        points = ", ".join(f"({x:g}, {y:g})" for x, y in exp.points)
+        return f"visit {points} in order, within {lim('radius'):g} m of each, {by}"
+    if exp.kind == "coverage":
+        return f"cover at least {100 * lim('min'):g} % of the area's free space {by}"
+    return f"end goal command {int(lim('command'))} '{exp.status}'"
 
 
 def _angle(rad: float) -> str:

@@ -69,6 +69,20 @@ class SensorRecord(_Model):
     file: str  # relative to the run folder
 
 
+class GoalRecord(_Model):
+    """How one goal command went: status, when, how long and how far the robot drove."""
+
+    command: Optional[int]  # its index in the robot's commands list; None: a live goto request
+    kind: str  # goto | path | patrol | coverage
+    status: str  # reached | timed_out | blocked | cancelled | unfinished (the run ended first)
+    started_at: float
+    ended_at: Optional[float] = None
+    time: float  # s from start to end (or to the end of the record)
+    path_length: float  # m the robot truly drove meanwhile (from the log rows)
+    error: Optional[float] = None  # m from the goal's last point (a patrol's first) when it ended
+    laps: Optional[int] = None  # patrol: rounds completed
+
+
 class RobotRecord(_Model):
     """One robot's life: where it came from, where it ended, how far it went."""
 
@@ -83,6 +97,7 @@ class RobotRecord(_Model):
     collisions: int
     odom_error: OdomError
     sensors: list[SensorRecord] = []
+    goals: list[GoalRecord] = []
 
 
 class ExpectationResult(_Model):

@@ -23,8 +23,9 @@ from mobot_cli import __version__
 from mobot_cli.common.files import write_text_atomic
 from mobot_cli.errors import OutputError, cannot_write
 from mobot_cli.run.expect import Checker, Result, odom_error
-from mobot_cli.run.record import (SUMMARY, ExpectationResult, Expectations, LiveInfo, OdomError, OdomPose, Pose,
-                                  RobotRecord, RunRecord, SensorRecord, Status, Versions)
+from mobot_cli.run.goals import GoalEnded, GoalStarted
+from mobot_cli.run.record import (SUMMARY, ExpectationResult, Expectations, GoalRecord, LiveInfo, OdomError,
+                                  OdomPose, Pose, RobotRecord, RunRecord, SensorRecord, Status, Versions)
 from mobot_cli.run.sinks import CsvSink, Sink
 from mobot_cli.run.timeline import Deleted, Reading, Record, Sample, Spawned
 from mobot_cli.sim.plan import Plan, RobotPlan
@@ -43,6 +44,7 @@ class _Life:
     last: Optional[RobotState] = None
     distance: float = 0.0
     readings: dict[str, int] = field(default_factory=dict)  # sensor name -> readings recorded
+    goals: list[dict] = field(default_factory=list)  # GoalRecord fields, and the distance at the start
 
     def add(self, state: RobotState) -> None:
         if self.first is None:
@@ -51,7 +53,21 @@ class _Life:
             self.distance += math.hypot(state.true_x - self.last.true_x, state.true_y - self.last.true_y)
         self.last = state
 
-    def record(self, rate_hz: int) -> RobotRecord:
+    def started(self, record: GoalStarted, rate: int) -> None:
+        self.goals.append({"command": _command(record.index), "kind": record.kind, "status": "unfinished",
+                           "started_at": record.step / rate, "from": self.distance})
+
+    def ended(self, record: GoalEnded, rate: int) -> None:
+        goal = next(g for g in reversed(self.goals) if g["command"] == _command(record.index))
+        error = _r(record.error) if math.isfinite(record.error) else None  # a robot whose state broke
+        goal.update(status=record.status, ended_at=record.step / rate, error=error, laps=record.laps,
+                    path_length=_r(self.distance - goal["from"]))
+
+    def record(self, end: float, rate_hz: int) -> RobotRecord:
+        goals = [GoalRecord(**{k: v for k, v in g.items() if k != "from"},
+                            time=_r(g.get("ended_at", end) - g["started_at"]),
+                            **({} if "path_length" in g else {"path_length": _r(self.distance - g["from"])}))
+                 for g in self.goals]
         s = self.last
         position, yaw = odom_error(self.first, s)
         return RobotRecord(
@@ -61,7 +77,7 @@ class _Life:
                             pitch=_r(s.true_pitch), yaw=_r(s.true_yaw)),
             final_odom=OdomPose(x=_r(s.odom_x), y=_r(s.odom_y), yaw=_r(s.odom_yaw)),
             distance=_r(self.distance), collisions=s.collisions,
-            odom_error=OdomError(position=_r(position), yaw=_r(yaw)),
+            odom_error=OdomError(position=_r(position), yaw=_r(yaw)), goals=goals,
             sensors=[self._sensor(spec, rate_hz) for spec in self.plan.sensors])
 
     def _sensor(self, spec, rate_hz: int) -> SensorRecord:
@@ -99,7 +115,7 @@ class Recording:
             out_dir.mkdir(parents=True, exist_ok=True)
             (out_dir / SUMMARY).unlink(missing_ok=True)  # a reused folder must not look finished early
             write_text_atomic(out_dir / "scenario.yaml", resolved_yaml)
-            self.sinks = make_sinks(plan, out_dir)
+            self.sinks = make_sinks(plan, out_dir, self.checker.sweeps)
         except OSError as exc:
             failure = self._failed(exc)
             self._save(self._record(Status.ERROR, str(failure), 0, None))
@@ -115,6 +131,12 @@ class Recording:
                 self._sample(record)
             elif isinstance(record, Spawned):
                 self._spawned(record)
+            elif isinstance(record, GoalStarted):
+                self._lives[self._keys[record.robot]].started(record, self.plan.physics.rate_hz)
+            elif isinstance(record, GoalEnded):
+                key = self._keys[record.robot]
+                self._lives[key].ended(record, self.plan.physics.rate_hz)
+                self.checker.goal_ended(key, record)
             elif isinstance(record, Reading):
                 self._reading(record)
             elif isinstance(record, Deleted):
@@ -215,13 +237,14 @@ class Recording:
             real_time_factor=round(sim_time / wall, 2) if wall > 0 else None,
             physics_rate_hz=plan.physics.rate_hz, log_rate_hz=_r(plan.physics.rate_hz / plan.log_every),
             notices=list(plan.notices),
-            robots={key: life.record(plan.physics.rate_hz) for key, life in self._lives.items()
-                    if life.last is not None},
+            robots={key: life.record(life.deleted_at if life.deleted_at is not None else sim_time,
+                                     plan.physics.rate_hz)
+                    for key, life in self._lives.items() if life.last is not None},
             expectations=expectations, live=live)
 
 
-def make_sinks(plan: Plan, out_dir: Path) -> list[Sink]:
-    """The sinks a plan's ``formats`` ask for."""
+def make_sinks(plan: Plan, out_dir: Path, sweeps: dict | None = None) -> list[Sink]:
+    """The sinks a plan's ``formats`` ask for; trajectory.png draws ``sweeps`` (the checker's)."""
     sinks: list[Sink] = []
     if "csv" in plan.formats:
         sinks.append(CsvSink(plan, out_dir))
@@ -231,7 +254,7 @@ def make_sinks(plan: Plan, out_dir: Path) -> list[Sink]:
         sinks.append(BagSink(plan, out_dir))
     from mobot_cli.run.trajectory import TrajectorySink
 
-    sinks.append(TrajectorySink(plan, out_dir))  # every run; last, as it draws when closed
+    sinks.append(TrajectorySink(plan, out_dir, sweeps))  # every run; last, as it draws when closed
     return sinks
 
 
@@ -240,6 +263,11 @@ def _remove_if_empty(folder: Path) -> None:
         folder.rmdir()
     except OSError:
         pass
+
+
+def _command(index: int) -> int | None:
+    """A goal's command index in the record; None for a goal a live request gave (index < 0)."""
+    return index if index >= 0 else None
 
 
 def _version(package: str) -> str | None:

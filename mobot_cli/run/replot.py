@@ -31,6 +31,8 @@ class _Points:
     true: list[tuple[float, float]] = field(default_factory=list)
     odom: list[tuple[float, float]] = field(default_factory=list)
     start_z: float | None = None  # the root link's height at the first row (the floor plan's band)
+    yaw: list[float] = field(default_factory=list)  # true heading, for coverage sweeps
+    swept: list = field(default_factory=list)  # run.sweep.Sweep
 
 
 def replot(folder: Path, out: Path | None = None) -> PlotResult:
@@ -58,7 +60,10 @@ def replot(folder: Path, out: Path | None = None) -> PlotResult:
         for track in tracks:
             track.odom = []
         result.notices.append(f"{len(tracks)} paths: odometry (dashed) is left out above {MAX_ODOMETRY_TRACKS}")
-    world = _world(runs[0] / "scenario.yaml", result.notices)
+    plan = _plan(runs[0] / "scenario.yaml", result.notices)
+    world = plan.world if plan is not None else None
+    if plan is not None and not prefix:
+        _sweep(plan, tracks)
     record = RunRecord.load(runs[0])
     title = record.scenario if record else folder.name
     if prefix:
@@ -88,6 +93,7 @@ def read_tracks(run: Path) -> list[_Points]:
                     to_world, track.start_z = odom_to_world(state), state.true_z
                 track.true.append((state.true_x, state.true_y))
                 track.odom.append(to_world(state.odom_x, state.odom_y))
+                track.yaw.append(state.true_yaw)
         if track.true:
             tracks.append(track)
     return tracks
@@ -120,15 +126,31 @@ def _swept_values(folder: Path) -> dict[str, str]:
     return values
 
 
-def _world(scenario: Path, notices: list[str]):
-    """The run's world, resolved again from its scenario.yaml; None (no floor plan) if that fails."""
+def _sweep(plan, tracks: list[_Points]) -> None:
+    """Sweep each robot's footprint over the areas of its coverage goals and checks, as the run did."""
+    from mobot_cli.run.expect_time import coverage_areas
+    from mobot_cli.run.sweep import Sweep
+
+    areas = coverage_areas(plan)
+    footprints = {r.name: r.footprint for r in (*plan.robots, *(e.spawn for e in plan.events if e.spawn))}
+    for track in tracks:
+        name = track.label.split("__")[0]  # a name used again in a live world: <name>__2
+        for area in [*areas.get(name, ()), *areas.get("all", ())]:
+            sweep = Sweep(area, plan.world, footprints.get(name))
+            for (x, y), yaw in zip(track.true, track.yaw):
+                sweep.add(x, y, yaw)
+            track.swept.append(sweep)
+
+
+def _plan(scenario: Path, notices: list[str]):
+    """The run's plan, resolved again from its scenario.yaml; None (no floor plan) if that fails."""
     from mobot_cli.run.prepare import prepare
 
     if not scenario.is_file():
         notices.append(f"{scenario} is missing: drawn without the floor plan")
         return None
     try:
-        return prepare(scenario).plan.world
+        return prepare(scenario).plan
     except MobotError as exc:
         notices.append(f"drawn without the floor plan: {exc}")
         return None

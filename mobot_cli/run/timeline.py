@@ -1,25 +1,27 @@
 """The one timeline every door drives: `mobot run`, `mobot serve` and whatever steps a world.
 
 A Timeline owns the order of things within a physics step: scripted events, then the command
-scripts and the ends of timed commands, then the log row, then the sensor readings due;
-requests of a live world enter between steps through the same ``spawn``, ``delete`` and
-``command`` a scripted event uses. It never writes files: it hands records (``Spawned``,
-``Deleted``, ``Sample``, ``Reading``) to consumers, and the run folder's writers take them
-from there. A sensor reads at its own rate: at its robot's spawn step and every ``every``
-steps after it, all sensors due at one step computed together. Inputs from other threads (a
-ROS 2 ``/cmd_vel``) queue up and enter through an input polled at the start of every
-``tick``, on the world's own thread, whichever loop drives it.
+scripts and the ends of timed commands, then the goal drivers (run/goals.py), then the log row,
+then the sensor readings due; requests of a live world enter between steps through the same
+``spawn``, ``delete``, ``command`` and ``goto`` a script uses. It never writes files: it hands
+records (``Spawned``, ``Deleted``, ``Sample``, ``Reading``, ``GoalStarted``, ``GoalEnded``) to
+consumers, and the run folder's writers take them from there. A sensor reads at its own rate:
+at its robot's spawn step and every ``every`` steps after it, all sensors due at one step
+computed together. Inputs from other threads (a ROS 2 ``/cmd_vel``) queue up and enter through
+an input polled at the start of every ``tick``, on the world's own thread, whichever loop drives it.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections import defaultdict
 from dataclasses import dataclass
 from typing import Callable, Iterator, Protocol, Union
 
 from mobot_cli.errors import MobotError, SpawnError
+from mobot_cli.run.goals import Driver, GoalEnded, GoalStarted
 from mobot_cli.sim.clearance import REACH_MARGIN
-from mobot_cli.sim.plan import Event, Plan, RobotPlan, SensorSpec
+from mobot_cli.sim.plan import CommandStep, Event, GoalStep, Plan, RobotPlan, SensorSpec
 from mobot_cli.sim.state import RobotState
 from mobot_cli.sim.world import World
 
@@ -65,7 +67,7 @@ class Reading:
     data: object
 
 
-Record = Union[Sample, Spawned, Deleted, Reading]
+Record = Union[Sample, Spawned, Deleted, Reading, GoalStarted, GoalEnded]
 
 
 class Consumer(Protocol):
@@ -106,6 +108,7 @@ class Timeline:
         self._events: dict[int, list[Event]] = defaultdict(list)
         self._commands: dict[int, list[tuple[str, float, float]]] = defaultdict(list)
         self._stops: dict[str, int] = {}  # robot -> step at which its timed command ends
+        self._drivers: dict[str, Driver] = {}  # robot -> the driver of its goals (and what follows them)
         self._logged = -1  # the step of the last complete sample
         self._ticked = -1  # the step of the last tick
         # step -> the sensors due then: (robot name, its plan, sensor); empty without sensors
@@ -121,7 +124,8 @@ class Timeline:
         spawned = [event.spawn for event in plan.events if event.spawn is not None]
         for robot in (*plan.robots, *spawned):
             for cmd in robot.commands:
-                self._commands[cmd.step].append((robot.name, cmd.linear, cmd.angular))
+                if isinstance(cmd, CommandStep):  # goals and what follows them: a Driver's
+                    self._commands[cmd.step].append((robot.name, cmd.linear, cmd.angular))
 
     @property
     def step(self) -> int:
@@ -172,6 +176,8 @@ class Timeline:
                 if step >= until:
                     del self._stops[name]
                     self.world.set_command(name, 0.0, 0.0)
+        if self._drivers:
+            self._drive(step)
         if step % self.plan.log_every == 0 or step == self.plan.total_steps:
             self.log()
         if self._due:
@@ -179,6 +185,13 @@ class Timeline:
             if due:
                 self._read(step, due)
         self._ticked = step
+
+    def _drive(self, step: int) -> None:
+        for name, driver in list(self._drivers.items()):
+            if 0 <= driver.wake <= step:
+                driver.tick(step)
+            if driver.finished:
+                del self._drivers[name]
 
     def advance(self) -> None:
         """One physics step."""
@@ -216,6 +229,9 @@ class Timeline:
                 self.world.watch_clearance(robot.name, reach)
         state = self.world.read(robot.name)
         self._consume(Spawned(self.step, robot, by, state))
+        script = [cmd for cmd in robot.commands if not isinstance(cmd, CommandStep)]
+        if script:
+            self._drivers[robot.name] = self._driver(robot.name, script)
         if self._logged == self.step or self.step % self.plan.log_every:
             self._consume(Sample(self.step, {robot.name: state}, complete=False))
         late = self._ticked == self.step  # a live spawn after this step's tick: one period on
@@ -227,19 +243,38 @@ class Timeline:
         """Take a robot out now; its state at this step is its last row (unless its state broke)."""
         if last_row and self._logged != self.step:
             self._consume(Sample(self.step, {name: self.world.read(name)}, complete=False))
+        self._cancel(name)
         self.world.remove(name)
         del self.robots[name]
         self._stops.pop(name, None)
         self._consume(Deleted(self.step, name, by, message))
 
     def command(self, name: str, linear: float, angular: float, steps: int | None = None) -> int | None:
-        """Hold a twist; with ``steps``, stop after that many steps. Returns the stop step."""
+        """Hold a twist; with ``steps``, stop after that many steps. Returns the stop step.
+        A goal the robot is driving to ends ``cancelled``."""
+        self._cancel(name)
         self.world.set_command(name, linear, angular)
         self._stops.pop(name, None)
         if steps is None:
             return None
         until = self._stops[name] = self.step + max(1, steps)
         return until
+
+    def goto(self, name: str, goal: GoalStep) -> None:
+        """Start driving to ``goal`` now (a goal already running ends ``cancelled``)."""
+        self._cancel(name)
+        self._stops.pop(name, None)
+        driver = self._drivers[name] = self._driver(name, [dataclasses.replace(goal, step=self.step)])
+        driver.tick(self.step)
+
+    def _driver(self, name: str, script: list) -> Driver:
+        # Records go through self._consume as it is when they are made (a consumer may attach later).
+        return Driver(name, script, self.world, self.rate_hz, lambda record: self._consume(record))
+
+    def _cancel(self, name: str) -> None:
+        driver = self._drivers.pop(name, None)
+        if driver is not None:
+            driver.cancel(self.step)
 
     def apply(self, event: Event, by: str) -> None:
         """One spawn or delete event: the path scenario events and live requests share."""

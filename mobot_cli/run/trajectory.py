@@ -31,8 +31,9 @@ def odom_to_world(state: RobotState) -> Planar:
 class TrajectorySink(Sink):
     """Collects each robot's path; close() draws ``trajectory.png``."""
 
-    def __init__(self, plan: Plan, out_dir: Path):
+    def __init__(self, plan: Plan, out_dir: Path, sweeps: dict | None = None):
         self.path = out_dir / "trajectory.png"
+        self.sweeps = sweeps if sweeps is not None else {}  # (robot, area) -> run.sweep.Sweep, filled meanwhile
         self.world = plan.world
         self.title = plan.name
         self.rate = plan.physics.rate_hz
@@ -61,6 +62,8 @@ class TrajectorySink(Sink):
             self.open[key][0].last_scan = reading.data
 
     def close(self) -> None:
+        for track in self.tracks:
+            track.swept = [sweep for (name, _), sweep in self.sweeps.items() if name == track.label]
         try:
             draw(self.tracks, self.world, self.path, self.title,
                  f"{self.last_step / self.rate:g} s simulated; {_robots(len(self.tracks))}")
@@ -76,6 +79,7 @@ class _Points:
         self.label, self.true, self.odom = label, [], []
         self.last_scan = None  # sim.sensors.ScanData
         self.start_z: float | None = None  # the root link's height where the path starts
+        self.swept: list = []  # run.sweep.Sweep
 
     @property
     def scan(self) -> list[tuple[float, float]]:
@@ -89,13 +93,16 @@ class _Points:
 
 
 def draw(tracks: list, world: WorldPlan | None, out: Path, title: str, subtitle: str) -> None:
-    """Render ``tracks`` (objects with label, true, odom, start_z) over ``world``'s floor plan to
-    ``out``; the plan's height band is measured from the floor where the tracks start."""
-    from mobot_cli.plot.floorplan import floor_plan
-    from mobot_cli.plot.render import Track, render
+    """Render ``tracks`` (objects with label, true, odom, start_z, and maybe scan and swept:
+    run.sweep.Sweep) over ``world``'s floor plan to ``out``; the plan's height band is measured
+    from the floor where the tracks start."""
+    from mobot_cli.assets.world.floorplan import floor_plan
+    from mobot_cli.plot.render import Swept, Track, render
 
     labels = [t.label for t in tracks]
-    plot_tracks = [Track(_unique(t.label, labels[:i]), t.true, t.odom, getattr(t, "scan", []))
+    plot_tracks = [Track(_unique(t.label, labels[:i]), t.true, t.odom, getattr(t, "scan", []),
+                         [Swept(s.grid.x0, s.grid.y0, s.grid.cell, s.covered, list(s.area))
+                          for s in getattr(t, "swept", ())])
                    for i, t in enumerate(tracks)]
     starts = [(*t.true[0], t.start_z) for t in tracks if t.true and t.start_z is not None]
     render(plot_tracks, floor_plan(world, starts) if world is not None else [], out, title, subtitle)

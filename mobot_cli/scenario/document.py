@@ -15,9 +15,10 @@ from typing import Any
 import yaml
 
 from mobot_cli.scenario.expect_resolve import expect_document
+from mobot_cli.scenario.goals import area_form
 from mobot_cli.scenario.model import RobotSpec, Scenario
 from mobot_cli.scenario.units import steps
-from mobot_cli.sim.plan import DriveSpec, Plan, RobotPlan
+from mobot_cli.sim.plan import CommandStep, DriveSpec, GoalStep, Plan, RobotPlan, TwistStep
 
 DRIVE_KEYS = ("odometry", "left_joints", "right_joints", "wheel_radius", "wheel_separation",
               "wheel_separation_multiplier", "wheel_radius_multiplier", "max_wheel_torque",
@@ -137,7 +138,7 @@ def _plain(value: Any) -> Any:
 def _commands(robot: RobotPlan, rate: int) -> list[dict[str, Any]]:
     """Commands as written: a stop that ends a command becomes that command's ``for``."""
     out: list[dict[str, Any]] = []
-    cmds = robot.commands
+    cmds = [c for c in robot.commands if isinstance(c, CommandStep)]
     i = 0
     while i < len(cmds):
         cmd = cmds[i]
@@ -148,7 +149,38 @@ def _commands(robot: RobotPlan, rate: int) -> list[dict[str, Any]]:
             i += 1
         out.append(entry)
         i += 1
-    return out
+    return out + [_goal(c, rate) if isinstance(c, GoalStep) else _twist(c, rate)
+                  for c in robot.commands if not isinstance(c, CommandStep)]
+
+
+def _goal(goal: GoalStep, rate: int) -> dict[str, Any]:
+    """A goal command with every setting written out."""
+    c = goal.control
+    entry: dict[str, Any] = {"at": goal.step / rate}
+    if goal.kind == "goto":
+        (x, y), = goal.points
+        entry["goto"] = {"x": x, "y": y, **({"yaw": goal.yaw} if goal.yaw is not None else {}),
+                         "tolerance": c.tolerance}
+    elif goal.kind == "coverage":
+        entry["coverage"] = {"area": area_form(goal.area), "spacing": goal.spacing}
+    else:
+        entry[goal.kind] = [list(point) for point in goal.points]
+    if goal.kind != "goto":
+        entry["tolerance"] = c.tolerance
+    if goal.laps is not None:
+        entry["laps"] = goal.laps
+    if c.timeout is not None:
+        entry["timeout"] = c.timeout / rate
+    entry.update(localization=c.localization, max_linear=c.max_linear, max_angular=c.max_angular,
+                 acceleration=c.linear_acceleration, angular_acceleration=c.angular_acceleration)
+    return entry
+
+
+def _twist(cmd: TwistStep, rate: int) -> dict[str, Any]:
+    entry: dict[str, Any] = {"at": cmd.step / rate, "linear": cmd.linear, "angular": cmd.angular}
+    if cmd.hold is not None:
+        entry["for"] = cmd.hold / rate
+    return entry
 
 
 def _text(value: Any) -> str:

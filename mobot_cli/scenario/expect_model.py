@@ -2,7 +2,9 @@
 
 Each item names a robot (or ``all``) and exactly one check. ``at`` is when: for ``within``
 the moment the robot must be inside the area, for the other checks the end of the span
-they cover (default: the end of the run).
+they cover (default: the end of the run). The checks over time (``reaches``, ``visits``,
+``coverage``) take a deadline instead, ``within: SECONDS`` (default: the end of the run);
+``goal`` checks how a goal command ended.
 """
 
 from __future__ import annotations
@@ -12,9 +14,13 @@ from typing import Annotated, Literal, Optional, Union
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-from mobot_cli.scenario.limits import Float, Int, NonNegativeFloat, PositiveFloat, Seconds
+from mobot_cli.scenario.goal_model import Area, Waypoints, check_area
+from mobot_cli.scenario.limits import Coordinate, Float, Int, NonNegativeFloat, PositiveFloat, Seconds
 
-KINDS = ("within", "collisions", "distance", "upright", "odom_error", "clearance")
+KINDS = ("within", "collisions", "distance", "upright", "odom_error", "reaches", "visits", "coverage", "goal", "clearance")
+OVER_TIME = ("reaches", "visits", "coverage")  # deadline: within: SECONDS
+GOAL_STATUSES = ("reached", "timed_out", "blocked", "cancelled", "unfinished")
+DEFAULT_VISIT_RADIUS = 0.3  # m
 # Tilt (angle between the robot's z axis and the world's) beyond which a robot has tipped over.
 DEFAULT_MAX_TILT = math.radians(45.0)
 
@@ -89,17 +95,49 @@ class ClearanceSpec(_Strict):
     min: PositiveFloat
 
 
+class ReachesSpec(_Strict):
+    """A circle the robot must enter, in the world frame (metres)."""
+
+    x: Coordinate
+    y: Coordinate
+    radius: PositiveFloat
+
+
+class CoverageCheck(_Strict):
+    """The fraction (0..1) of an area's free space the robot's footprint must sweep."""
+
+    area: Area  # [xmin, xmax, ymin, ymax] or [[x, y], ...]
+    min: Annotated[Float, Field(gt=0, le=1)]
+
+    @model_validator(mode="after")
+    def _not_empty(self) -> "CoverageCheck":
+        check_area(self.area)
+        return self
+
+
+class GoalCheck(_Strict):
+    """How goal command ``command`` (its index in the robot's commands list) must end."""
+
+    command: Annotated[Int, Field(ge=0)]
+    status: Literal[GOAL_STATUSES] = "reached"
+
+
 class ExpectSpec(_Strict):
     """One expectation: a robot (or ``all``), one check and when it applies."""
 
     robot: str
     at: Union[Seconds, Literal["end"]] = "end"  # Seconds first: its error is the one shown
-    within: Optional[WithinSpec] = None
+    within: Optional[Union[WithinSpec, Seconds]] = None  # an area, or the deadline of a check over time
     collisions: Optional[Annotated[Int, Field(ge=0)]] = None
     distance: Optional[RangeSpec] = None
     upright: Optional[Union[Literal[True], UprightSpec]] = None
     odom_error: Optional[Union[NonNegativeFloat, OdomErrorSpec]] = None
     clearance: Optional[ClearanceSpec] = None
+    reaches: Optional[ReachesSpec] = None
+    visits: Optional[Waypoints] = None
+    radius: Optional[PositiveFloat] = None  # visits: how close counts as a visit
+    coverage: Optional[CoverageCheck] = None
+    goal: Optional[GoalCheck] = None
 
     @field_validator("at", mode="before")
     @classmethod
@@ -117,13 +155,36 @@ class ExpectSpec(_Strict):
 
     @model_validator(mode="after")
     def _one_check(self) -> "ExpectSpec":
-        given = [k for k in KINDS if getattr(self, k) is not None]
+        given = self._given()
+        if not given and self.within is not None:
+            raise ValueError(f"'within: {self.within:g}' is a deadline, for " + ", ".join(OVER_TIME)
+                             + "; an area is within: {x, y, radius} or {xmin, xmax, ymin, ymax}")
         if len(given) != 1:
             raise ValueError(("gives " + " and ".join(f"'{k}'" for k in given) + ": one check per item")
                              if given else "needs one check: " + ", ".join(KINDS))
+        kind = given[0]
+        if isinstance(self.within, (int, float)) and kind not in OVER_TIME:
+            raise ValueError(f"'within: {self.within:g}' is a deadline, for " + ", ".join(OVER_TIME)
+                             + "; an area is within: {x, y, radius} or {xmin, xmax, ymin, ymax}")
+        if (kind in OVER_TIME or kind == "goal") and "at" in self.model_fields_set:
+            raise ValueError(f"'{kind}' takes no 'at': " + ("it checks how the command ended" if kind == "goal"
+                             else "give its deadline as within: SECONDS"))
+        if self.radius is not None and kind != "visits":
+            raise ValueError("'radius' goes with 'visits' (reaches takes {x, y, radius})")
+        if kind == "goal" and self.robot == "all":
+            raise ValueError("a goal check names one robot: goal commands are a robot's own")
         return self
+
+    def _given(self) -> list[str]:
+        return [k for k in KINDS if getattr(self, k) is not None and not
+                (k == "within" and isinstance(self.within, (int, float)))]
 
     @property
     def kind(self) -> str:
         """The name of the one check this item makes."""
-        return next(k for k in KINDS if getattr(self, k) is not None)
+        return self._given()[0]
+
+    @property
+    def deadline(self) -> Optional[float]:
+        """Seconds by which a check over time must pass (None: the end of the run)."""
+        return float(self.within) if isinstance(self.within, (int, float)) else None

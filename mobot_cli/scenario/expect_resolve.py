@@ -5,11 +5,12 @@ from __future__ import annotations
 from typing import Sequence
 
 from mobot_cli.errors import ScenarioError, did_you_mean, shown
-from mobot_cli.scenario.expect_model import ExpectSpec, OdomErrorSpec, UprightSpec
+from mobot_cli.scenario.expect_model import DEFAULT_VISIT_RADIUS, OVER_TIME, ExpectSpec, OdomErrorSpec, UprightSpec
+from mobot_cli.scenario.goals import area_form, area_polygon
 from mobot_cli.scenario.model import Scenario
 from mobot_cli.scenario.units import steps
 from mobot_cli.scenario.yamlsource import Source
-from mobot_cli.sim.plan import Event, Expectation, RobotPlan
+from mobot_cli.sim.plan import Event, Expectation, GoalStep, RobotPlan
 
 ALL = "all"
 
@@ -19,7 +20,8 @@ def resolve_expectations(scenario: Scenario, source: Source, robots: Sequence[Ro
                          total: int) -> tuple[tuple[Expectation, ...], list[str]]:
     """Expectations in file order (a fleet's name gives one per member) and notices."""
     rate = scenario.physics.rate_hz
-    names = [r.name for r in robots] + [e.spawn.name for e in events if e.spawn is not None]
+    plans = [*robots, *(e.spawn for e in events if e.spawn is not None)]
+    names = [r.name for r in plans]
     fleets = {spec.name: [spec.name.replace("{i}", str(i)) for i in range(spec.count)]
               for spec in scenario.robots if spec.count is not None}
     out: list[Expectation] = []
@@ -39,8 +41,14 @@ def resolve_expectations(scenario: Scenario, source: Source, robots: Sequence[Ro
             raise ScenarioError(f"expectation names robot {shown(spec.robot)}, which is not in the scenario",
                                 location=source.locate_key(path + ("robot",)),
                                 hint=did_you_mean(spec.robot, [*names, *fleets, ALL]))
+        if spec.kind == "goal":
+            _goal_command(spec, {r.name: r for r in plans}[members[0]], source.locate_key(path + ("goal", "command")))
         limits = _limits(spec)
-        out.extend(Expectation(robot=name, kind=spec.kind, limits=limits, step=step) for name in members)
+        points = area_polygon(spec.coverage.area) if spec.kind == "coverage" else \
+            tuple((float(x), float(y)) for x, y in spec.visits) if spec.kind == "visits" else ()
+        status = spec.goal.status if spec.kind == "goal" else ""
+        out.extend(Expectation(robot=name, kind=spec.kind, limits=limits, step=step, points=points, status=status)
+                   for name in members)
     return tuple(out), notices
 
 
@@ -55,9 +63,30 @@ def _log_row(at: float, rate: int, log_every: int, total: int) -> tuple[int, str
     return row, f"expectation at {at:g} s is checked on the nearest log row, {row / rate:g} s"
 
 
+def _goal_command(spec: ExpectSpec, robot: RobotPlan, where) -> None:
+    """A located error unless the robot's command at that index is a goal."""
+    goals = {c.index: c.kind for c in robot.commands if isinstance(c, GoalStep)}
+    index = spec.goal.command
+    if index not in goals:
+        listed = ", ".join(f"{i} ({kind})" for i, kind in goals.items()) or "none"
+        raise ScenarioError(f"robot '{robot.name}' has no goal command at index {index} of its commands "
+                            f"(its goal commands: {listed})", location=where,
+                            hint="Count the robot's commands from 0; goto, path, patrol and coverage are goals.")
+
+
 def _limits(spec: ExpectSpec) -> tuple[tuple[str, float], ...]:
     """The check's numbers, defaults filled, in a fixed order."""
     kind = spec.kind
+    deadline = (("within", spec.deadline),) if spec.deadline is not None else ()
+    if kind == "reaches":
+        return (("x", float(spec.reaches.x)), ("y", float(spec.reaches.y)), ("radius", float(spec.reaches.radius)),
+                *deadline)
+    if kind == "visits":
+        return (("radius", float(spec.radius or DEFAULT_VISIT_RADIUS)), *deadline)
+    if kind == "coverage":
+        return (("min", float(spec.coverage.min)), *deadline)
+    if kind == "goal":
+        return (("command", float(spec.goal.command)),)
     if kind == "within":
         shape = spec.within.model_dump(exclude_none=True)
         order = ("x", "y", "radius") if "radius" in shape else ("xmin", "xmax", "ymin", "ymax")
@@ -83,9 +112,28 @@ def expect_document(expectations: Sequence[Expectation], rate: int) -> dict[str,
     items = []
     for e in expectations:
         limits = dict(e.limits)
+        if e.kind in OVER_TIME or e.kind == "goal":
+            items.append(_over_time(e, limits))
+            continue
         if e.kind == "collisions":
             check = int(limits["max"])
         else:
             check = limits
         items.append({"robot": e.robot, e.kind: check, "at": "end" if e.step is None else e.step / rate})
     return {"expect": items}
+
+
+def _over_time(e: Expectation, limits: dict[str, float]) -> dict:
+    """A check over time (or a goal check) as the scenario writes it."""
+    item: dict = {"robot": e.robot}
+    if e.kind == "reaches":
+        item["reaches"] = {k: limits[k] for k in ("x", "y", "radius")}
+    elif e.kind == "visits":
+        item.update(visits=[list(p) for p in e.points], radius=limits["radius"])
+    elif e.kind == "coverage":
+        item["coverage"] = {"area": area_form(e.points), "min": limits["min"]}
+    else:
+        item["goal"] = {"command": int(limits["command"]), "status": e.status}
+    if "within" in limits:
+        item["within"] = limits["within"]
+    return item

@@ -15,6 +15,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, field_validat
 from mobot_cli.errors import shown
 from mobot_cli.scenario.expect_model import ExpectSpec
 from mobot_cli.scenario.sensor_model import SensorEntry, SensorKey
+from mobot_cli.scenario.goal_model import GoalFields
 from mobot_cli.scenario.limits import NAME_RE  # noqa: F401 - live/schema.py imports the name rule from here
 from mobot_cli.scenario.limits import (FLEET_NAME_RE, MAX_NAMESPACE_LENGTH, MAX_RATE_HZ, MIN_LOG_RATE_HZ,
                                        NAMESPACE_RE, SCENARIO_NAME_RE, Coordinate, Duration, Float, Int, PositiveFloat, Reference, Seconds, Vector3,
@@ -82,15 +83,25 @@ class DriveOverrides(Strict):
     twist_feedback: Optional[bool] = None
 
 
-class CommandSpec(Strict):
-    """From ``at`` on, drive with this twist; ``for`` ends it with a stop."""
+class CommandSpec(GoalFields):
+    """From ``at`` on, drive with this twist (``for`` ends it with a stop) or toward one goal.
 
-    at: Seconds
+    Without ``at`` a command starts when the one before it ends (a goal, or a twist's ``for``);
+    a command after a goal starts at ``at`` or when the goal ends, whichever is later.
+    """
+
+    at: Optional[Seconds] = None
     linear: Float = 0.0
     angular: Float = 0.0
     for_: Optional[Duration] = Field(default=None, alias="for")
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True, populate_by_name=True)
+
+    @model_validator(mode="after")
+    def _twist_or_goal(self) -> "CommandSpec":
+        given = self.model_fields_set
+        self.check_goal([k.rstrip("_") for k in ("linear", "angular", "for_") if k in given])
+        return self
 
 
 class RobotSpec(Strict):

@@ -21,7 +21,8 @@ from mobot_cli.scenario.model import RobotSpec
 from mobot_cli.scenario.sensors import resolve_sensors
 from mobot_cli.scenario.units import spawn_pose, steps
 from mobot_cli.scenario.yamlsource import Source
-from mobot_cli.sim.plan import CommandStep, DriveSpec, RobotPlan, SpawnPose
+from mobot_cli.scenario.goals import goal_step
+from mobot_cli.sim.plan import CommandStep, DriveSpec, RobotPlan, SpawnPose, TwistStep
 
 
 class RobotResolver:
@@ -53,7 +54,7 @@ class RobotResolver:
         desc = self.describe(spec, path)
         drive = self.drive(spec, desc, path)
         sensors = resolve_sensors(spec, desc, path, self)
-        commands = self.commands(spec, path, spawn_step)
+        commands = self.commands(spec, path, spawn_step, desc.footprint)
         if drive is None:  # said here, not by describe(): a drive: naming the wheels silences it
             self.notices.extend(str(n) for n in desc.notices if n.message == NO_DRIVE)
         if commands and drive is None:
@@ -76,7 +77,7 @@ class RobotResolver:
             out.append(RobotPlan(name=name, namespace=namespace, frame_prefix=namespace.lstrip("/") + "/",
                                  urdf=desc.urdf, root_link=desc.root_link, pose=pose, drive=drive,
                                  commands=commands, spawn_step=spawn_step, source=str(desc.source),
-                                 sensors=sensors))
+                                 sensors=sensors, footprint=tuple(desc.footprint)))
         return out
 
     def claim(self, name: str, namespace: str, path: tuple) -> None:
@@ -164,32 +165,55 @@ class RobotResolver:
             raise ScenarioError(exc.message, location=self.locate_key(path + ("drive",)),
                                 hint=exc.hint) from None
 
-    def commands(self, spec: RobotSpec, path: tuple, spawn_step: int = 0) -> tuple[CommandStep, ...]:
-        """The command script in whole steps; each robot holds still for ``settle`` after its spawn."""
+    def commands(self, spec: RobotSpec, path: tuple, spawn_step: int = 0,
+                 footprint: tuple[float, float, float, float] | None = None) -> tuple:
+        """The command script in whole steps; each robot holds still for ``settle`` after its spawn.
+
+        Twists before the first goal are CommandSteps at fixed steps (a ``for`` adds a stop);
+        from the first goal on, GoalSteps and TwistSteps start at their step or when the goal
+        before them ends, whichever is later.
+        """
         rate, out = self.rate_hz, []
         settled = spawn_step + self.settle
-        free_from = settled
+        free_from = settled  # the earliest step the next command may start at
+        held = goal_seen = False  # held: the last twist holds until the next command
         for i, cmd in enumerate(spec.commands):
-            where = self.locate_key(path + ("commands", i, "at"))
-            at = steps(cmd.at, rate)
+            key = path + ("commands", i)
+            where = self.locate_key(key + ("at",) if cmd.at is not None else key)
+            if cmd.at is None and held and not goal_seen:
+                raise ScenarioError("command has no 'at' and the command before it holds until the next one",
+                                    location=where, hint="Give it an 'at', or end the one before with 'for'.")
+            at = free_from if cmd.at is None else steps(cmd.at, rate)
             if at < settled:
                 window = (f"the first {self.settle / rate:g} s" if spawn_step == 0 else
                           f"{self.settle / rate:g} s from its spawn at {spawn_step / rate:g} s")
                 raise ScenarioError(f"command at {cmd.at:g} s falls inside the settle window ({window})",
                                     location=where, hint="Robots hold still while they settle; start commands at or after 'settle'.")
             if at >= self.total:  # e.g. a run shortened with --duration: say so, don't refuse
-                self.notices.append(f"{where}: command at {cmd.at:g} s is at or after the end of the run "
+                self.notices.append(f"{where}: command at {at / rate:g} s is at or after the end of the run "
                                     f"({self.total / rate:g} s) and is never sent")
                 break
-            if at < free_from or (out and at <= out[-1].step):
+            if not goal_seen and out and at == free_from == out[-1].step and not held:
+                out.pop()  # it starts as the one before ends: no stop between the two
+            early = at < out[-1].step if goal_seen else at < free_from or (out and at <= out[-1].step)
+            if cmd.at is not None and early:
                 raise ScenarioError(f"command at {cmd.at:g} s starts before the previous one ends",
                                     location=where, hint="List commands in time order, each after the last 'for' ends.")
-            out.append(CommandStep(step=at, linear=cmd.linear, angular=cmd.angular))
-            free_from = at
-            if cmd.for_ is not None:
-                free_from = at + max(1, steps(cmd.for_, rate))
-                if free_from < self.total:
-                    out.append(CommandStep(step=free_from, linear=0.0, angular=0.0))
+            free_from, held = at, cmd.for_ is None
+            if cmd.goal is not None:
+                world = self.world.plan if self.world is not None else None
+                out.append(goal_step(cmd, at, i, rate, world, footprint,
+                                     lambda k, key=key: self.locate_key(key + k), self.notices))
+                goal_seen = True
+            elif goal_seen:
+                hold = None if cmd.for_ is None else max(1, steps(cmd.for_, rate))
+                out.append(TwistStep(step=at, index=i, linear=cmd.linear, angular=cmd.angular, hold=hold))
+            else:
+                out.append(CommandStep(step=at, linear=cmd.linear, angular=cmd.angular))
+                if cmd.for_ is not None:
+                    free_from = at + max(1, steps(cmd.for_, rate))
+                    if free_from < self.total:
+                        out.append(CommandStep(step=free_from, linear=0.0, angular=0.0))
         return tuple(out)
 
 

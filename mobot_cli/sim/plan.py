@@ -65,6 +65,48 @@ class CommandStep:
 
 
 @dataclass(frozen=True)
+class GoalControl:
+    """How a goal command drives (see run/pursuit.py): limits, tolerances, what pose it trusts."""
+
+    max_linear: float = 0.3  # m/s
+    max_angular: float = 1.0  # rad/s
+    linear_acceleration: float = 0.5  # m/s^2
+    angular_acceleration: float = 2.0  # rad/s^2
+    tolerance: float = 0.05  # m: how close counts as there (the last point; sharp corners on the way)
+    yaw_tolerance: float = 0.05  # rad, for a goal's final heading
+    localization: str = "odometry"  # "odometry" (the robot's own odom_*) | "ground_truth"
+    timeout: int | None = None  # physics steps from the start; None: no limit
+
+
+@dataclass(frozen=True)
+class GoalStep:
+    """A goal command: from ``step`` on (or when the goal before it ends, if later), drive along
+    ``points`` (world x, y) with a pursuit controller until the last one is reached."""
+
+    step: int
+    index: int  # its place in the robot's ``commands:`` list: records and ``goal:`` checks name it
+    kind: str  # "goto" | "path" | "patrol" | "coverage"
+    points: tuple[tuple[float, float], ...]  # goto: the goal; coverage: the planned lanes
+    yaw: float | None = None  # goto: the heading to turn to once there
+    laps: int | None = None  # patrol: rounds of points[0] .. points[-1] and back; None: until the end
+    area: tuple[tuple[float, float], ...] = ()  # coverage: the area as a polygon
+    spacing: float = 0.0  # coverage: the largest distance between lanes
+    control: GoalControl = GoalControl()
+
+
+@dataclass(frozen=True)
+class TwistStep:
+    """A twist command that follows a goal: from ``step`` on, or when that goal ends if later;
+    a stop after ``hold`` steps (None: it holds until the next command)."""
+
+    step: int
+    index: int
+    linear: float
+    angular: float
+    hold: int | None = None
+
+
+@dataclass(frozen=True)
 class RayAxis:
     """One axis of a ray sensor's scan, as Gazebo's ``<horizontal>`` or ``<vertical>``."""
 
@@ -114,10 +156,12 @@ class RobotPlan:
     root_link: str
     pose: SpawnPose
     drive: DriveSpec | None
-    commands: tuple[CommandStep, ...] = ()
+    # CommandSteps first; from the first goal on, GoalSteps and the TwistSteps that wait for them
+    commands: tuple[CommandStep | GoalStep | TwistStep, ...] = ()
     spawn_step: int = 0
     source: str = ""  # the description file, for messages
     sensors: tuple[SensorSpec, ...] = ()
+    footprint: tuple[float, float, float, float] | None = None  # xmin, xmax, ymin, ymax in its root frame
 
 
 @dataclass(frozen=True)
@@ -171,9 +215,13 @@ class Expectation:
     """A check on a run's samples (see run/expect.py), from a scenario's ``expect:`` list."""
 
     robot: str  # a robot's name, or "all": every robot, each checked on its own
-    kind: str  # "within" | "collisions" | "distance" | "upright" | "odom_error" | "clearance"
+    # "within" | "collisions" | "distance" | "upright" | "odom_error" | "clearance" | "reaches"
+    # | "visits" | "coverage" | "goal"
+    kind: str
     limits: tuple[tuple[str, float], ...]  # e.g. (("x", 5.0), ("y", 1.0), ("radius", 0.3))
     step: int | None = None  # a log row's step; None is the end of the run
+    points: tuple[tuple[float, float], ...] = ()  # visits: the checkpoints; coverage: the area
+    status: str = ""  # goal: the outcome expected
 
     def limit(self, name: str) -> float | None:
         """One limit by name, or None when the scenario did not give it."""

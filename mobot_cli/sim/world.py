@@ -293,6 +293,9 @@ class World:
             if robot.body == body:
                 return f"robot '{name}'"
         return self._statics.get(body, f"body {body}")
+    def odom_origin(self, name: str) -> tuple[float, float, float]:
+        """Where the robot's odometry started: its odom frame's x, y, yaw in the world."""
+        return self._robot(name).spawn_xy_yaw
 
     def read(self, name: str) -> RobotState:
         """The robot's command, odometry and ground truth now (and its clearance when watched)."""

@@ -98,3 +98,24 @@ def test_an_exception_in_your_loop_is_recorded(tmp_path):
             sim.step(10)
             raise RuntimeError("my controller broke")
     assert sim.record.status is Status.ERROR and sim.record.error == "my controller broke"
+
+
+def test_goto_drives_with_the_goal_controller_and_reports_how_it_ended():
+    with Simulation.open("house") as sim:
+        sim.spawn("r", "mobot", x=-3.0, y=-2.5)
+        assert sim.goal_status("r") is None
+        sim.run_for(0.5)
+        sim.goto("r", -1.5, -3.5, yaw=1.57, localization="ground_truth")
+        while sim.goal_status("r") == "running" and sim.t < 30:
+            sim.run_for(0.5)
+        assert sim.goal_status("r") == "reached"
+        s = sim.state("r")
+        assert math.hypot(s.true_x + 1.5, s.true_y + 3.5) < 0.05 and abs(s.true_yaw - 1.57) < 0.06
+        with pytest.raises(UsageError, match=r"goto 'r': goto \(0, 0\) is inside world model 'coffee_table'"):
+            sim.goto("r", 0.0, 0.0)
+        with pytest.raises(UsageError, match=r"goto 'r': bogus: Extra inputs are not permitted"):
+            sim.goto("r", 1.0, 0.0, bogus=1)
+        sim.goto("r", -3.0, -2.5)
+        sim.run_for(1.0)
+        sim.command("r", 0.0, 0.0)  # a command takes over
+        assert sim.goal_status("r") == "cancelled"

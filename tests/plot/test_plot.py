@@ -13,7 +13,7 @@ import pytest
 from PIL import Image
 
 from mobot_cli.cli import Outcome, invoke
-from mobot_cli.plot.floorplan import BAND, convex_hull, floor_plan
+from mobot_cli.assets.world.floorplan import BAND, convex_hull, floor_plan
 from mobot_cli.plot.render import FLOOR, PALETTE, Track, dash_runs, nice_step, render
 from mobot_cli.sim.plan import StaticBody, StaticShape, WorldPlan
 

@@ -136,10 +136,11 @@ def test_set_and_seed_override(tmp_path):
     assert rows(out / "odom" / "mobot.csv")[0]["true_x"] == pytest.approx(2.0, abs=1e-3)
 
 
-def test_resolved_quickstart_matches_golden_file():
+@pytest.mark.parametrize("name", ["quickstart", "patrol", "coverage"])
+def test_resolved_scenario_matches_golden_file(name):
     """The resolved format is a contract: a change here must be deliberate (regenerate and review)."""
-    golden = REPO / "tests" / "golden" / "quickstart.resolved.yaml"
-    assert prepare(REPO / "scenarios" / "quickstart.yaml").resolved_yaml == golden.read_text()
+    golden = REPO / "tests" / "golden" / f"{name}.resolved.yaml"
+    assert prepare(REPO / "scenarios" / f"{name}.yaml").resolved_yaml == golden.read_text()
 
 
 def test_a_warm_headless_run_imports_no_plotting_viewer_or_mesh_code(tmp_path):

@@ -52,7 +52,7 @@ def _surfaces(shape: StaticShape, xyz, quat):
         return lambda x, y: [float(xyz[2] - (normal[0] * (x - xyz[0])
                                              + normal[1] * (y - xyz[1])) / normal[2])]
     if shape.kind == "mesh":
-        from mobot_cli.plot.meshread import read_mesh
+        from mobot_cli.common.meshfile import read_mesh
 
         vertices, faces = read_mesh(shape.mesh)
         if len(faces) == 0:

@@ -1,14 +1,16 @@
 """A world's floor plan: its static collision geometry projected from above, as polygons.
 
 Only what a wheeled robot can meet is kept: geometry reaching into ``BAND`` (above the floor,
-below a ceiling), measured from the floor under the robots (floorlevel.py), not from z = 0. Boxes, cylinders, capsules and spheres become the outline of their shadow;
-meshes become their triangles' shadows, and upright faces (seen edge-on) become segments, so a
-wall taller than the band still shows as its outline. Bodies come
+below a ceiling), measured from the floor under the robots (floorlevel.py), not from z = 0.
+Boxes, cylinders, capsules and spheres become the outline of their shadow; meshes become their
+triangles' shadows, and upright faces (seen edge-on) become segments, so a wall taller than the
+band still shows as its outline. Bodies come
 as StaticShape lists (SDF worlds) or, failing that, as URDF text with <collision> elements.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import xml.etree.ElementTree as ET
 
@@ -27,16 +29,27 @@ ROUND = 24  # points on a projected circle
 def floor_plan(world: WorldPlan, starts: list[tuple[float, float, float]] = ()) -> list[Polygon]:
     """Every static body's shadow in the band above the floor under ``starts`` (each robot's
     root link x, y, z where it started; the band is measured from z = 0 without them)."""
-    from mobot_cli.plot.floorlevel import floor_level
+    from mobot_cli.assets.world.floorlevel import floor_level
 
     floor = floor_level(world, list(starts), _shapes) if starts else 0.0
     band = (floor + BAND[0], floor + BAND[1])
-    polygons: list[Polygon] = []
+    return [polygon for _, polygons in body_shadows(world, band) for polygon in polygons]
+
+
+@functools.lru_cache(maxsize=4)  # a run plans its goals, checks coverage and draws the same world
+def body_shadows(world: WorldPlan, band: tuple[float, float] = BAND) -> tuple[tuple[str, tuple[Polygon, ...]], ...]:
+    """Each static body that reaches into the band: how messages name it, and its shadow.
+
+    Cached: treat the polygons as read-only."""
+    out = []
     for body in world.bodies:
+        polygons: list[Polygon] = []
         for shape in _shapes(body):
             xyz, quat = compose_poses((body.xyz, body.quat), (shape.xyz, shape.quat))
             polygons.extend(shape_shadow(shape, xyz, quat, band))
-    return polygons
+        if polygons:
+            out.append((body.label or f"static body '{body.name}'", tuple(polygons)))
+    return tuple(out)
 
 
 def _shapes(body) -> list[StaticShape]:

@@ -1,0 +1,42 @@
+"""Where a wheeled robot may be: the world's floor plan (floorplan.py) on a grid, and by name.
+
+Goal commands ask which obstacle a point lies in; coverage planning and the coverage
+expectation ask which cells of an area are free. Both read the same shadows as the floor
+plan in trajectory.png: static geometry reaching into the band above the floor.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mobot_cli.assets.world.floorplan import body_shadows
+from mobot_cli.common.polygon import contains
+from mobot_cli.common.raster import Grid, fill_shape
+from mobot_cli.sim.plan import WorldPlan
+
+
+def obstacle_at(world: WorldPlan, x: float, y: float) -> str | None:
+    """How messages name the static body whose shadow holds (x, y), or None in free space."""
+    for label, polygons in body_shadows(world):
+        for polygon in polygons:
+            if len(polygon) >= 3 and _near_box(polygon, x, y) and contains(polygon, x, y):
+                return label
+    return None
+
+
+def obstacle_mask(world: WorldPlan, grid: Grid) -> np.ndarray:
+    """The cells of ``grid`` that some static body's shadow covers."""
+    mask = grid.empty()
+    xmax, ymax = grid.x0 + grid.nx * grid.cell, grid.y0 + grid.ny * grid.cell
+    for _, polygons in body_shadows(world):
+        for shape in polygons:
+            xs, ys = [p[0] for p in shape], [p[1] for p in shape]
+            if max(xs) >= grid.x0 and min(xs) <= xmax and max(ys) >= grid.y0 and min(ys) <= ymax:
+                fill_shape(mask, grid, shape)
+    return mask
+
+
+def _near_box(polygon, x: float, y: float) -> bool:
+    """A cheap test first: (x, y) within the polygon's bounding box."""
+    xs, ys = [p[0] for p in polygon], [p[1] for p in polygon]
+    return min(xs) <= x <= max(xs) and min(ys) <= y <= max(ys)

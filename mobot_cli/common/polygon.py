@@ -1,0 +1,30 @@
+"""Plain polygons in the plane (lists of (x, y)): inside, area, boxes. No numpy: scenario
+checks use these at load time, before anything heavy is imported."""
+
+from __future__ import annotations
+
+Point = tuple[float, float]
+
+
+def contains(polygon, x: float, y: float) -> bool:
+    """Whether (x, y) lies inside ``polygon`` (even-odd rule)."""
+    inside = False
+    n = len(polygon)
+    for i in range(n):
+        (xa, ya), (xb, yb) = polygon[i], polygon[(i + 1) % n]
+        if (ya > y) != (yb > y) and x < xa + (y - ya) * (xb - xa) / (yb - ya):
+            inside = not inside
+    return inside
+
+
+def area(polygon) -> float:
+    """The area enclosed by a simple polygon (shoelace formula), whatever its winding."""
+    n = len(polygon)
+    twice = sum(polygon[i][0] * polygon[(i + 1) % n][1] - polygon[(i + 1) % n][0] * polygon[i][1]
+                for i in range(n))
+    return abs(twice) / 2.0
+
+
+def box_polygon(xmin: float, xmax: float, ymin: float, ymax: float) -> list[Point]:
+    """A box as a counter-clockwise polygon."""
+    return [(xmin, ymin), (xmax, ymin), (xmax, ymax), (xmin, ymax)]

@@ -1,0 +1,113 @@
+"""Polygons on a square grid: which cells a shape covers, judged at each cell's centre.
+
+Coverage planning (free space for lanes) and the coverage expectation (the footprint's swept
+area) share these. A cell counts as
+covered when its centre lies inside the polygon (even-odd rule), so a shape's cell count
+times the cell area converges on its true area as the cells shrink; segments (walls seen
+edge-on in a floor plan) mark every cell they pass through.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from mobot_cli.common.polygon import Point
+
+
+@dataclass(frozen=True)
+class Grid:
+    """``nx`` by ``ny`` square cells of side ``cell`` from (x0, y0); arrays are indexed [iy, ix]."""
+
+    x0: float
+    y0: float
+    cell: float
+    nx: int
+    ny: int
+
+    @classmethod
+    def covering(cls, xmin: float, xmax: float, ymin: float, ymax: float, cell: float) -> "Grid":
+        """The grid of whole cells covering a box, anchored on multiples of ``cell`` (so that
+        two grids of one cell size share their cell edges)."""
+        x0, y0 = math.floor(xmin / cell) * cell, math.floor(ymin / cell) * cell
+        nx = max(1, math.ceil((xmax - x0) / cell - 1e-9))
+        ny = max(1, math.ceil((ymax - y0) / cell - 1e-9))
+        return cls(x0, y0, cell, nx, ny)
+
+    def empty(self) -> np.ndarray:
+        """An all-False mask of this grid."""
+        return np.zeros((self.ny, self.nx), dtype=bool)
+
+    def centre(self, ix: int, iy: int) -> Point:
+        """The centre of cell (ix, iy)."""
+        return self.x0 + (ix + 0.5) * self.cell, self.y0 + (iy + 0.5) * self.cell
+
+    def cell_of(self, x: float, y: float) -> tuple[int, int] | None:
+        """The (ix, iy) of the cell holding (x, y), or None outside the grid."""
+        ix, iy = math.floor((x - self.x0) / self.cell), math.floor((y - self.y0) / self.cell)
+        return (ix, iy) if 0 <= ix < self.nx and 0 <= iy < self.ny else None
+
+    def _span(self, low: float, high: float, origin: float, n: int) -> tuple[int, int]:
+        """Indices whose centres may lie in [low, high], clipped to the grid."""
+        first = max(0, math.floor((low - origin) / self.cell - 0.5))
+        last = min(n, math.ceil((high - origin) / self.cell + 0.5))
+        return first, last
+
+
+def fill_polygon(mask: np.ndarray, grid: Grid, polygon) -> None:
+    """Set the cells of ``mask`` whose centres lie inside ``polygon`` (even-odd; any winding)."""
+    pts = np.asarray(polygon, dtype=float)
+    if len(pts) < 3:
+        return
+    x0, x1 = grid._span(pts[:, 0].min(), pts[:, 0].max(), grid.x0, grid.nx)
+    y0, y1 = grid._span(pts[:, 1].min(), pts[:, 1].max(), grid.y0, grid.ny)
+    if x0 >= x1 or y0 >= y1:
+        return
+    xs = grid.x0 + (np.arange(x0, x1) + 0.5) * grid.cell
+    ys = grid.y0 + (np.arange(y0, y1) + 0.5) * grid.cell
+    a, b = pts, np.roll(pts, -1, axis=0)
+    crosses = (a[:, None, 1] > ys[None, :]) != (b[:, None, 1] > ys[None, :])  # (edges, rows)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (ys[None, :] - a[:, None, 1]) / (b[:, None, 1] - a[:, None, 1])
+        xi = a[:, None, 0] + t * (b[:, None, 0] - a[:, None, 0])
+    xi = np.where(crosses, xi, -np.inf)  # an edge that does not cross a row lies left of it all
+    inside = (xi[:, :, None] > xs[None, None, :]).sum(axis=0) % 2 == 1  # crossings to the right
+    mask[y0:y1, x0:x1] |= inside
+
+
+def fill_segment(mask: np.ndarray, grid: Grid, a: Point, b: Point) -> None:
+    """Set every cell the segment from ``a`` to ``b`` passes through (sampled at a fifth of a cell)."""
+    n = max(2, math.ceil(math.hypot(b[0] - a[0], b[1] - a[1]) / (grid.cell / 5)) + 1)
+    t = np.linspace(0.0, 1.0, n)
+    ix = np.floor((a[0] + t * (b[0] - a[0]) - grid.x0) / grid.cell).astype(int)
+    iy = np.floor((a[1] + t * (b[1] - a[1]) - grid.y0) / grid.cell).astype(int)
+    keep = (ix >= 0) & (ix < grid.nx) & (iy >= 0) & (iy < grid.ny)
+    mask[iy[keep], ix[keep]] = True
+
+
+def fill_shape(mask: np.ndarray, grid: Grid, shape) -> None:
+    """A floor-plan shape: a polygon (3 points or more) or a segment (2 points)."""
+    if len(shape) >= 3:
+        fill_polygon(mask, grid, shape)
+        for point in shape:  # a sliver thinner than a cell still blocks the cell it is in
+            cell = grid.cell_of(*point)
+            if cell is not None:
+                mask[cell[1], cell[0]] = True
+    elif len(shape) == 2:
+        fill_segment(mask, grid, shape[0], shape[1])
+
+
+def dilate(mask: np.ndarray, cells: float) -> np.ndarray:
+    """``mask`` grown by a disc of radius ``cells`` (in cells): every cell within that distance
+    of a set cell is set."""
+    reach = int(math.floor(cells))
+    out = mask.copy()
+    ny, nx = mask.shape
+    for dy in range(-reach, reach + 1):
+        for dx in range(-reach, reach + 1):
+            if (dx or dy) and dx * dx + dy * dy <= cells * cells:
+                src = mask[max(0, -dy):ny - max(0, dy), max(0, -dx):nx - max(0, dx)]
+                out[max(0, dy):ny - max(0, -dy), max(0, dx):nx - max(0, -dx)] |= src
+    return out
