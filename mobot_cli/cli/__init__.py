@@ -22,6 +22,7 @@ from mobot_cli.cli import check, inspect, run, xacro
 from mobot_cli.cli import plot as plot_command
 from mobot_cli.cli import sweep as sweep_command
 from mobot_cli.cli import cmd, delete, odom, serve, spawn, stop
+from mobot_cli.cli import view as view_command
 from mobot_cli.cli import list as list_command  # not `list`: that would shadow the builtin here
 from mobot_cli.cli.environment import Environment
 from mobot_cli.cli.output import interrupted, report_error
@@ -67,6 +68,7 @@ app.command("list")(list_command.list_)
 app.command("cmd")(cmd.cmd)
 app.command("odom")(odom.odom)
 app.command("stop")(stop.stop)
+app.command("view")(view_command.view)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,69 @@
+"""Small pose maths for the view: ROS quaternions (x, y, z, w) and roll-pitch-yaw to viser's wxyz."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+Quat = tuple[float, float, float, float]
+
+
+def wxyz(quat: Quat) -> tuple[float, float, float, float]:
+    """A ROS (x, y, z, w) quaternion in viser's order."""
+    x, y, z, w = quat
+    return (w, x, y, z)
+
+
+def rpy_wxyz(roll: float, pitch: float, yaw: float) -> tuple[float, float, float, float]:
+    """URDF's fixed-axis roll, pitch, yaw as a (w, x, y, z) quaternion."""
+    cr, sr = math.cos(roll / 2), math.sin(roll / 2)
+    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
+    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
+    return (cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
+            cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy)
+
+
+def axis_angle_wxyz(axis: np.ndarray, angle: float) -> tuple[float, float, float, float]:
+    """The rotation by ``angle`` about the unit ``axis``."""
+    s = math.sin(angle / 2)
+    return (math.cos(angle / 2), axis[0] * s, axis[1] * s, axis[2] * s)
+
+
+def quat_mul(a: tuple[float, ...], b: tuple[float, ...]) -> tuple[float, float, float, float]:
+    """The product a * b of two (w, x, y, z) quaternions."""
+    aw, ax, ay, az = a
+    bw, bx, by, bz = b
+    return (aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw)
+
+
+def matrix(xyz: tuple[float, ...], quat: Quat) -> np.ndarray:
+    """The 4x4 transform of a position and a ROS (x, y, z, w) quaternion."""
+    x, y, z, w = quat
+    n = math.sqrt(x * x + y * y + z * z + w * w) or 1.0
+    x, y, z, w = x / n, y / n, z / n, w / n
+    m = np.eye(4)
+    m[:3, :3] = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                 [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                 [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
+    m[:3, 3] = xyz[:3]
+    return m
+
+
+def matrix_wxyz(m: np.ndarray) -> tuple[float, float, float, float]:
+    """The (w, x, y, z) quaternion of a rotation matrix (its upper-left 3x3)."""
+    r = m[:3, :3]
+    t = r[0, 0] + r[1, 1] + r[2, 2]
+    if t > 0:
+        s = math.sqrt(t + 1.0) * 2
+        return (0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s)
+    i = int(np.argmax([r[0, 0], r[1, 1], r[2, 2]]))
+    j, k = (i + 1) % 3, (i + 2) % 3
+    s = math.sqrt(1.0 + r[i, i] - r[j, j] - r[k, k]) * 2
+    q = [0.0, 0.0, 0.0, 0.0]
+    q[0] = (r[k, j] - r[j, k]) / s
+    q[1 + i] = 0.25 * s
+    q[1 + j] = (r[j, i] + r[i, j]) / s
+    q[1 + k] = (r[k, i] + r[i, k]) / s
+    return (q[0], q[1], q[2], q[3])
