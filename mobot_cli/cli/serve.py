@@ -24,6 +24,9 @@ def serve(
     set_: list[str] = typer.Option([], "--set", help="Override a key, e.g. physics.rate_hz=480 (repeatable)."),
     duration: Optional[float] = typer.Option(None, "--duration", help="Stop after this many simulated seconds."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),
+    view: bool = typer.Option(False, "--view", help="Watch and drive the world in a local 3D web page "
+                              "(extra 'view'): pause, resume, step, a teleop pad."),
+    view_port: int = typer.Option(8080, "--view-port", help="Port of the --view page on 127.0.0.1 (0: any)."),
 ) -> int:
     """Keep a headless world running; spawn, delete, drive and read robots with the other commands."""
     from mobot_cli.live.endpoint import default_endpoint
@@ -36,12 +39,20 @@ def serve(
     pace = _pace(realtime, fast, rtf)
     if duration is not None and not duration > 0:
         raise UsageError(f"--duration {duration:g} must be above zero")
+    if view:
+        from mobot_cli.view.page import require_viser
+
+        require_viser()
     prepared = prepare_target(target, set_)
     plan = prepared.plan
     output.notices(env, plan.notices, quiet=quiet)
     stop_after = steps(duration, plan.physics.rate_hz) if duration is not None else None
+    page = _Page(env, plan, view_port) if view else None
     server = LiveServer(plan, endpoint or default_endpoint(), rtf=pace, bind_any=bind_any,
-                        out_dir=out, resolved_yaml=prepared.resolved_yaml, stop_after=stop_after)
+                        out_dir=out, resolved_yaml=prepared.resolved_yaml, stop_after=stop_after,
+                        watch=page.watch if page else None, hold=page.gate.hold if page else None)
+    if page:
+        page.connect(server)
 
     def ready(where: str) -> None:
         if not quiet:
@@ -49,7 +60,11 @@ def serve(
                                f"at {where}, {pace_text(pace)}, {plan.physics.rate_hz} Hz. "
                                "Stop with Ctrl-C or `mobot stop`.")
 
-    result = server.serve(ready)
+    try:
+        result = server.serve(ready)
+    finally:
+        if page:
+            page.close()
     if not quiet:
         t = result.steps / plan.physics.rate_hz
         where = f"; record in {out}" if out is not None else ""
@@ -68,3 +83,43 @@ def _pace(realtime: bool, fast: bool, rtf: Optional[float]) -> Optional[float]:
     if rtf is not None and not 0 < rtf <= 1000:
         raise UsageError(f"--rtf {rtf:g} must be above 0 and at most 1000", hint="Use --fast for no pacing.")
     return None if fast else (rtf or 1.0)
+
+
+class _Page:
+    """--view: the live page, its World buttons on the server's hold gate, its pad sending `cmd`."""
+
+    def __init__(self, env, plan, port: int):
+        from mobot_cli.view.controls import Gate, GateControl, add_controls
+        from mobot_cli.view.live import LiveView
+        from mobot_cli.view.page import open_page, url
+
+        self.server = open_page(port, label=f"mobot serve: {plan.name}")
+        self.gate, self.live_server = Gate(), None
+        self.live = LiveView(self.server, plan)
+        add_controls(self.server, GateControl(self.gate, self._cmd), lambda: self.live.robot_list.selected,
+                     plan.physics.rate_hz)
+        output.view_live(env, url(self.server))
+
+    def watch(self, timeline) -> None:
+        self.live.watch(timeline)
+
+    def connect(self, server) -> None:
+        """The live server whose endpoint the pad sends `cmd` requests to."""
+        self.live_server = server
+
+    def _cmd(self, name: str, linear: float, angular: float, seconds: float) -> Optional[str]:
+        from mobot_cli.errors import MobotError
+        from mobot_cli.live.client import Client
+
+        try:
+            with Client(self.live_server.endpoint, timeout=2.0) as client:
+                reply = client.cmd(name, linear, angular, for_=seconds)
+        except MobotError as exc:
+            return str(exc)
+        return None if reply.get("ok") else f"{reply.get('result')}: {reply.get('message')}"
+
+    def close(self) -> None:
+        from mobot_cli.view.page import close_page
+
+        self.live.close()
+        close_page(self.server)

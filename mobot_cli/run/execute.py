@@ -26,8 +26,12 @@ class RunResult:
     expectations: list[Result] = field(default_factory=list)  # empty when the run did not finish
 
 
-def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | None = None) -> RunResult:
-    """Run a plan and write its run folder; summary.json is written last and says how it ended."""
+def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | None = None,
+            watch: Callable[[Timeline], None] | None = None) -> RunResult:
+    """Run a plan and write its run folder; summary.json is written last and says how it ended.
+
+    ``watch`` is called with the timeline once its robots are spawned, to attach more consumers
+    (a live view)."""
     with World(plan.physics, plan.world, seed=plan.seed) as world:
         # The robots are spawned and checked before the folder is made: a spawn refused
         # (inside furniture, below the floor) leaves no run folder behind.
@@ -35,6 +39,8 @@ def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | 
         timeline.start()
         recording = Recording(plan, out_dir, resolved_yaml)
         timeline.attach(recording)
+        if watch is not None:
+            watch(timeline)
         status, error = Status.OK, None
         try:
             _play(timeline, progress)

@@ -41,7 +41,7 @@ def open_page(port: int = DEFAULT_PORT, label: str = "mobot") -> Any:
     with contextlib.redirect_stdout(io.StringIO()):
         server = viser.ViserServer(host=HOST, port=port, label=label, verbose=False)
     server.request_share_url = lambda *args, **kwargs: None  # never tunnel out (see above)
-    server.gui.configure_theme(show_share_button=False, control_width="medium", brand_color=(38, 89, 191))
+    server.gui.configure_theme(show_share_button=False, control_width="large", brand_color=(38, 89, 191))
     server.scene.set_up_direction("+z")  # ROS: z up
     server.scene.world_axes.visible = False
     return server

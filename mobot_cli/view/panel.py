@@ -40,7 +40,7 @@ class Row:
 class RobotList:
     """A table of robots and a dropdown that selects one (for teleop and the camera)."""
 
-    def __init__(self, server: Any, every: float = 0.25, collisions_note: str = ""):
+    def __init__(self, server: Any, every: float = 0.25):
         self.server, self.every = server, every
         self._last_sent, self._text = 0.0, ""
         folder = server.gui.add_folder("Robots")
@@ -48,7 +48,7 @@ class RobotList:
             self.select = server.gui.add_dropdown("selected", (NONE,), initial_value=NONE)
             self.follow = server.gui.add_checkbox("camera follows", False)
             self.table = server.gui.add_html("<p>no robots yet</p>")
-        self.note = collisions_note
+        self.note = ""  # a line under the table
         self.colors: dict[str, tuple[int, int, int]] = {}
 
     @property
@@ -58,10 +58,11 @@ class RobotList:
         return None if value == NONE else value
 
     def names(self, names: list[str]) -> None:
-        """Offer these robots in the dropdown, keeping the selection while it is still there."""
+        """Offer these robots in the dropdown, keeping the selection while it is still there (the
+        first robot when none is)."""
         options = tuple([NONE, *names])
         if tuple(self.select.options) != options:
-            keep = self.select.value if self.select.value in options else (names[0] if names else NONE)
+            keep = self.select.value if self.select.value in names else (names[0] if names else NONE)
             self.select.options = options
             self.select.value = keep
 

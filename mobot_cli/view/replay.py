@@ -28,7 +28,7 @@ class Replay:
     """The page of one run folder (or of the chosen run of a sweep) and its player thread."""
 
     def __init__(self, server: Any, runs: list[Path], first: RunView,
-                 on_notice: Callable[[str], None] = lambda _: None):
+                 on_notice: Callable[[str], None] = lambda _: None, robot_list: RobotList | None = None):
         self.server, self.runs, self.on_notice = server, runs, on_notice
         self.view: RunView | None = None
         self.models: dict[str, RobotModel] = {}
@@ -36,7 +36,7 @@ class Replay:
         self._drawn: dict[tuple[str, str], int] = {}  # (robot, sensor) -> id of the cloud on the page
         self._lock = threading.Lock()
         self._stop = threading.Event()
-        self._build_gui()
+        self._build_gui(robot_list)
         self.load(first)
         self._thread = threading.Thread(target=self._play, name="mobot-view-player", daemon=True)
         self._thread.start()
@@ -69,7 +69,7 @@ class Replay:
 
     # -- the page ---------------------------------------------------------------------------
 
-    def _build_gui(self) -> None:
+    def _build_gui(self, robot_list: RobotList | None) -> None:
         gui = self.server.gui
         with gui.add_folder("Timeline"):
             if len(self.runs) > 1:
@@ -81,8 +81,11 @@ class Replay:
             self.slider = gui.add_slider("t (s)", min=0.0, max=1.0, step=0.02, initial_value=0.0)
         self.play.on_click(lambda _: self._toggle())
         self.slider.on_update(self._scrub)
+        # GUI elements are reused, never removed: viser would replay their updates to a page that
+        # connects later, for elements it no longer has.
         note = "collisions: the run's total per robot (summary.json)"
-        self.robot_list = RobotList(self.server, collisions_note=note)
+        self.robot_list = robot_list or RobotList(self.server)
+        self.robot_list.note = note
 
     def _toggle(self) -> None:
         with self._lock:
