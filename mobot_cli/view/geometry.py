@@ -67,3 +67,32 @@ def matrix_wxyz(m: np.ndarray) -> tuple[float, float, float, float]:
     q[1 + j] = (r[j, i] + r[i, j]) / s
     q[1 + k] = (r[k, i] + r[i, k]) / s
     return (q[0], q[1], q[2], q[3])
+
+
+def rpy_matrices(rpy: np.ndarray) -> np.ndarray:
+    """(n, 3) roll, pitch, yaw (URDF's fixed axes) as (n, 3, 3) rotation matrices."""
+    cr, sr = np.cos(rpy[:, 0]), np.sin(rpy[:, 0])
+    cp, sp = np.cos(rpy[:, 1]), np.sin(rpy[:, 1])
+    cy, sy = np.cos(rpy[:, 2]), np.sin(rpy[:, 2])
+    return np.stack([np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], -1),
+                     np.stack([sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], -1),
+                     np.stack([-sp, cp * sr, cp * cr], -1)], axis=1)
+
+
+def axis_rotations(axis: np.ndarray, angles: np.ndarray) -> np.ndarray:
+    """(n, 3, 3) rotations by ``angles`` about one unit ``axis`` (Rodrigues)."""
+    x, y, z = axis
+    k = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+    s, c = np.sin(angles)[:, None, None], np.cos(angles)[:, None, None]
+    return np.eye(3) + s * k + (1 - c) * (k @ k)
+
+
+def matrices_wxyz(r: np.ndarray) -> np.ndarray:
+    """(n, 3, 3) rotation matrices as (n, 4) unit (w, x, y, z) quaternions."""
+    m00, m11, m22 = r[:, 0, 0], r[:, 1, 1], r[:, 2, 2]
+    q = np.stack([1 + m00 + m11 + m22, 1 + m00 - m11 - m22, 1 - m00 + m11 - m22, 1 - m00 - m11 + m22], -1)
+    q = np.sqrt(np.maximum(q, 0.0)) / 2  # magnitudes; signs from the off-diagonal terms
+    q[:, 1] = np.copysign(q[:, 1], r[:, 2, 1] - r[:, 1, 2])
+    q[:, 2] = np.copysign(q[:, 2], r[:, 0, 2] - r[:, 2, 0])
+    q[:, 3] = np.copysign(q[:, 3], r[:, 1, 0] - r[:, 0, 1])
+    return q / np.linalg.norm(q, axis=1, keepdims=True)

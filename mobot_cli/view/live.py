@@ -22,24 +22,24 @@ from mobot_cli.sim.state import RobotState
 from mobot_cli.view import readings
 from mobot_cli.view.panel import RobotList, Row, aim_camera, color_of, follow
 from mobot_cli.view.paths import LivePath, lighter
-from mobot_cli.view.robot import RobotModel
+from mobot_cli.view.robot import Robots, template_of
 from mobot_cli.view.world import draw_world
 
 DEFAULT_RATE_HZ = 20.0
 
 
 class _Robot:
-    """A robot on the page: its model, its two paths and its first state (odometry's origin)."""
+    """A robot's two paths and where its odometry starts."""
 
     def __init__(self, server: Any, plan: RobotPlan, color: tuple[int, int, int]):
-        self.model = RobotModel(server, plan.name, plan.urdf, color)
+        self.name = plan.name
         self.true = LivePath(server, f"/paths/{plan.name}/true", color)
         self.odom = LivePath(server, f"/paths/{plan.name}/odom", lighter(color))
         self.to_world: OdomToWorld | None = None  # its odom frame in the world, from its first state seen
 
     def remove(self, server: Any) -> None:
-        self.model.remove()
-        server.scene.remove_by_name(f"/paths/{self.model.name}")
+        server.scene.remove_by_name(f"/paths/{self.name}")
+        server.scene.remove_by_name(f"/readings/{self.name}")
 
 
 class LiveView:
@@ -58,6 +58,9 @@ class LiveView:
         self.clock = server.gui.add_markdown("**t** = 0.000 s")
         self.robot_list = RobotList(server)
         self.robots: dict[str, _Robot] = {}
+        self.models = Robots(server)
+        for robot in plan.robots:  # load each URDF now, before the clock runs, not at its spawn
+            template_of(robot.urdf)
         self.step = 0
         self.frames = 0  # pages drawn: for tests and the benchmark
         self._latest: dict[str, RobotState] = {}
@@ -111,14 +114,23 @@ class LiveView:
             self._stop.wait(wait)
 
     def draw(self, force: bool = False) -> None:
-        """Draw what was filed since the last frame."""
+        """Draw what was filed since the last frame, as one batch of messages."""
+        # atomic(): viser wakes its event loop once per batch instead of once per message, and
+        # each wake-up costs this thread a round trip for the GIL while the simulation runs.
+        with self.server.atomic():
+            self._draw(force)
+        self.frames += 1
+
+    def _draw(self, force: bool) -> None:
         while self._events:
             kind, what = self._events.popleft()
             if kind == "spawned" and what.name not in self.robots:
                 self.robots[what.name] = _Robot(self.server, what, color_of(len(self.robot_list.colors)))
                 self.robot_list.colors[what.name] = color_of(len(self.robot_list.colors))
+                self.models.add(what.name, what.urdf)
             elif kind == "deleted" and what in self.robots:
                 self.robots.pop(what).remove(self.server)
+                self.models.remove(what)
                 with self._lock:
                     self._latest.pop(what, None)
             self.robot_list.names(list(self.robots))
@@ -127,10 +139,10 @@ class LiveView:
         watched = force or bool(self.server.get_clients())
         rows = [self._robot(name, state, watched) for name, state in latest.items() if name in self.robots]
         if watched:
+            self.models.flush()
             self.clock.content = f"**t** = {step / self.rate:.3f} s"
             self.robot_list.show(rows, force=force)
             self._draw_readings()
-        self.frames += 1
 
     def _robot(self, name: str, state: RobotState, watched: bool) -> Row:
         robot = self.robots[name]
@@ -140,8 +152,8 @@ class LiveView:
         robot.true.add(state.true_x, state.true_y, state.true_z)
         robot.odom.add(x, y, state.true_z)
         if watched:
-            robot.model.show(state.true_x, state.true_y, state.true_z, state.true_roll, state.true_pitch,
-                             state.true_yaw, state.joint_positions)
+            self.models.place(name, (state.true_x, state.true_y, state.true_z, state.true_roll, state.true_pitch,
+                                     state.true_yaw), state.joint_positions)
             robot.true.flush()
             robot.odom.flush()
             if self.robot_list.follow.value and name == self.robot_list.selected:
@@ -154,7 +166,7 @@ class LiveView:
             pending, self._readings = self._readings, {}
         for record in pending.values():
             cloud = readings.cloud_of(record)
-            robot = self.robots.get(cloud.robot) if cloud is not None else None
-            if robot is not None:
-                readings.draw(self.server, robot.model.link_paths.get(cloud.link, robot.model.path), cloud)
+            pose = self.models.link_pose(cloud.robot, cloud.link) if cloud is not None else None
+            if pose is not None:
+                readings.draw(self.server, cloud, pose)
 

@@ -39,6 +39,7 @@ class LivePath:
         self.server, self.name, self.color, self.every = server, name, color, every
         self.points: list[tuple[float, float, float]] = []
         self._sent, self._last = 0, 0.0
+        self._handle: Any = None
 
     def add(self, x: float, y: float, z: float) -> None:
         """Keep the point if it is far enough from the last one kept."""
@@ -53,5 +54,8 @@ class LivePath:
         now = time.monotonic()
         if len(self.points) == self._sent or (not force and now - self._last < self.every):
             return
-        draw_path(self.server, self.name, np.array(self.points), self.color, visible)
+        if self._handle is None:
+            self._handle = draw_path(self.server, self.name, np.array(self.points), self.color, visible)
+        else:  # an update of the node's points, cheaper than a new node
+            self._handle.points = _segments(np.array(self.points))
         self._sent, self._last = len(self.points), now

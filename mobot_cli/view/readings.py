@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from mobot_cli.sim.plan import SensorSpec
-from mobot_cli.view.geometry import matrix
+from mobot_cli.view.geometry import matrix, matrix_wxyz
 
 HIT_COLOR = (230, 40, 40)
 POINT_SIZE = 0.03  # m
@@ -88,10 +88,11 @@ def cloud_points(msg: Any) -> np.ndarray:
     return points[np.isfinite(points).all(axis=1)]
 
 
-def draw(server: Any, parent: str, cloud: Cloud) -> Any:
-    """Add (or replace) the cloud's points under the scene node ``parent`` (its link's frame)."""
-    return server.scene.add_point_cloud(f"{parent}/readings/{cloud.sensor}", cloud.points.astype(np.float32),
-                                        colors=HIT_COLOR, point_size=POINT_SIZE, point_shape="circle")
+def draw(server: Any, cloud: Cloud, link_pose: np.ndarray) -> Any:
+    """Add (or replace) the cloud's points, placed at its link's world pose (4x4)."""
+    return server.scene.add_point_cloud(f"/readings/{cloud.robot}/{cloud.sensor}", cloud.points.astype(np.float32),
+                                        colors=HIT_COLOR, point_size=POINT_SIZE, point_shape="circle",
+                                        position=tuple(link_pose[:3, 3].tolist()), wxyz=matrix_wxyz(link_pose))
 
 
 def _thin(points: np.ndarray) -> np.ndarray:

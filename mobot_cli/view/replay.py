@@ -16,7 +16,7 @@ import numpy as np
 from mobot_cli.view import readings
 from mobot_cli.view.panel import RobotList, Row, aim_camera, color_of, follow
 from mobot_cli.view.paths import LIFT, draw_path, lighter
-from mobot_cli.view.robot import RobotModel
+from mobot_cli.view.robot import Robots
 from mobot_cli.view.runfolder import RunView, read_run
 from mobot_cli.view.world import draw_world
 
@@ -31,7 +31,7 @@ class Replay:
                  on_notice: Callable[[str], None] = lambda _: None, robot_list: RobotList | None = None):
         self.server, self.runs, self.on_notice = server, runs, on_notice
         self.view: RunView | None = None
-        self.models: dict[str, RobotModel] = {}
+        self.models = Robots(server)
         self.t, self.playing = 0.0, False
         self._drawn: dict[tuple[str, str], int] = {}  # (robot, sensor) -> id of the cloud on the page
         self._lock = threading.Lock()
@@ -118,24 +118,25 @@ class Replay:
                     if self.t >= self.view.duration:
                         self.playing = False
                         self.play.label = "Play"
-                    self.slider.value = round(self.t, 3)
-                    self._show(self.t)
+                    with self.server.atomic():  # one wake-up of viser's loop per frame
+                        self.slider.value = round(self.t, 3)
+                        self._show(self.t)
             last = now
 
     # -- drawing ----------------------------------------------------------------------------
 
     def _clear(self) -> None:
-        for model in self.models.values():
-            model.remove()
-        self.models = {}
-        for node in ("/world", "/paths"):
+        for name in list(self.models.member):
+            self.models.remove(name)
+        self.models.flush()
+        for node in ("/world", "/paths", "/readings"):
             self.server.scene.remove_by_name(node)
         self._drawn = {}
 
     def _draw_robots(self, view: RunView) -> None:
         for i, track in enumerate(view.tracks):
             color = color_of(i)
-            self.models[track.name] = RobotModel(self.server, track.name, track.urdf, color)
+            self.models.add(track.name, track.urdf)
             self.robot_list.colors[track.name] = color
             lifted = track.true[:, :3] + np.array([0.0, 0.0, LIFT])
             draw_path(self.server, f"/paths/{track.name}/true", lifted, color)
@@ -151,21 +152,23 @@ class Replay:
         """Draw every robot as it was at time ``t``."""
         rows = []
         for track in self.view.tracks:
-            model = self.models[track.name]
             i = track.index(t)
-            model.visible(i is not None)
             if i is None:
+                self.models.hide(track.name)
                 continue
-            model.show(*track.true[i].tolist(), joints=track.joints.at(t) if track.joints else None)
-            self._reading(track, model, t)
+            self.models.place(track.name, track.true[i].tolist(), track.joints.at(t) if track.joints else None)
             x, y, _, _, _, yaw = track.true[i].tolist()
             rows.append(Row(track.name, x, y, yaw, float(track.odom_error[i]), track.collisions,
                             *track.cmd[i].tolist()))
             if self.robot_list.follow.value and track.name == self.robot_list.selected:
                 follow(self.server, x, y)
+        self.models.flush()
+        for track in self.view.tracks:
+            if track.index(t) is not None:
+                self._reading(track, t)
         self.robot_list.show(rows, force=not self.playing)
 
-    def _reading(self, track: Any, model: RobotModel, t: float) -> None:
+    def _reading(self, track: Any, t: float) -> None:
         if not track.readings:
             return
         times = [r[0] for r in track.readings]
@@ -176,5 +179,7 @@ class Replay:
         for cloud in latest.values():
             if self._drawn.get((track.name, cloud.sensor)) == id(cloud):
                 continue
-            self._drawn[(track.name, cloud.sensor)] = id(cloud)
-            readings.draw(self.server, model.link_paths.get(cloud.link, model.path), cloud)
+            pose = self.models.link_pose(track.name, cloud.link)
+            if pose is not None:
+                self._drawn[(track.name, cloud.sensor)] = id(cloud)
+                readings.draw(self.server, cloud, pose)
