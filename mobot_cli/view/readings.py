@@ -60,9 +60,10 @@ def spec_points(spec: SensorSpec, ranges: np.ndarray) -> np.ndarray:
     yaw = np.linspace(h.min_angle, h.max_angle, h.samples) if h is not None else np.zeros(ranges.shape[-1])
     pitch = np.linspace(v.min_angle, v.max_angle, v.samples) if v is not None else np.zeros(1)
     r = ranges.reshape(len(pitch), len(yaw))
+    keep = np.isfinite(r) & (r >= spec.range_min) & ((r <= spec.range_max) if spec.range_max > 0 else True)
+    r = np.where(keep, r, 0.0)  # no hit: inf or NaN must not reach the products
     cp, sp = np.cos(pitch)[:, None], np.sin(pitch)[:, None]
     xyz = np.stack([r * cp * np.cos(yaw), r * cp * np.sin(yaw), r * sp * np.ones_like(yaw)], axis=-1)
-    keep = np.isfinite(r) & (r >= spec.range_min) & ((r <= spec.range_max) if spec.range_max > 0 else True)
     return xyz[keep]
 
 
@@ -72,6 +73,7 @@ def scan_points(ranges: Any, angle_min: float, angle_increment: float, range_min
     r = np.asarray(ranges, float)
     a = angle_min + angle_increment * np.arange(len(r))
     keep = np.isfinite(r) & (r >= range_min) & (r <= range_max)
+    r = np.where(keep, r, 0.0)
     return np.stack([r * np.cos(a), r * np.sin(a), np.zeros_like(r)], axis=1)[keep]
 
 
