@@ -99,9 +99,15 @@ class Browser:
         elif method == "Log.entryAdded" and params.get("entry", {}).get("level") == "error":
             self.errors.append("log: " + params["entry"].get("text", ""))
 
-    def open(self, url: str) -> None:
-        """Load a page."""
+    def open(self, url: str, timeout: float = 60.0) -> None:
+        """Load a page and wait for its load event."""
         self.call("Page.navigate", url=url)
+        deadline = time.monotonic() + timeout
+        while True:
+            message = json.loads(self._socket.recv(timeout=max(0.1, deadline - time.monotonic())))
+            self._event(message)
+            if message.get("method") == "Page.loadEventFired":
+                return
 
     def evaluate(self, expression: str):
         """The value of a JavaScript expression in the page."""

@@ -238,3 +238,14 @@ def test_the_view_imports_only_the_layers_below_it_and_nothing_below_imports_the
                     assert parts[1] in LAYERS["view"], f"{path} imports {name}"
                 elif layer != "cli":
                     assert parts[1] != "view", f"{path} imports {name}: only the CLI may use the view"
+
+
+def test_mobot_run_without_view_imports_no_view_code(tmp_path):
+    import subprocess
+
+    code = ("import sys; from mobot_cli.cli import invoke; "
+            f"o = invoke(['run', {str(REPO / 'scenarios' / 'quickstart.yaml')!r}, '--out', {str(tmp_path / 'r')!r}, "
+            "'--quiet', '--duration', '1']); "
+            "print(o.exit_code, sorted(m for m in ('viser', 'websockets', 'mobot_cli.view') if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.stdout.strip() == "0 []", done.stderr

@@ -94,7 +94,9 @@ class LiveView:
                     self._readings[(robot, getattr(sensor, "name", str(sensor)))] = record
 
     def close(self) -> None:
-        """Draw the last states and stop the thread."""
+        """Draw the last states and stop the thread (once: the scene may be reset afterwards)."""
+        if self._stop.is_set():
+            return
         self._stop.set()
         self._thread.join(timeout=5.0)
         self.draw(force=True)

@@ -56,3 +56,7 @@ def close_page(server: Any) -> None:
     """Stop the server without its goodbye line on stdout."""
     with contextlib.redirect_stdout(io.StringIO()):
         server.stop()
+        # stop() waits a second at most; the goodbye line comes when the thread ends.
+        thread = getattr(getattr(server, "_websock_server", None), "_server_thread", None)
+        if thread is not None:
+            thread.join(timeout=5.0)
