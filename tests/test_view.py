@@ -173,8 +173,8 @@ def test_the_live_view_draws_states_and_readings_on_the_page(page):
         pose = live.models.link_pose("mobot_2", "base_link")
         assert pose[:2, 3] == pytest.approx([world_x := 2.0 + 0.2 * 1.5, 0.0], abs=0.15), world_x
         assert "mobot_2" in live.robot_list._text and "0.20, 0.20" in live.robot_list._text
-        path = live.robots["mobot_2"].true.points  # as many points as frames were drawn, the last one now
-        assert len(path) >= 2 and path[-1][:2] == pytest.approx(pose[:2, 3], abs=1e-6)
+        path = live.robots["mobot_2"].true.points  # a point per frame drawn, 5 cm apart at least
+        assert len(path) >= 2 and np.hypot(*(np.array(path[-1][:2]) - pose[:2, 3])) < 0.05
         assert "/readings/mobot_2/scan" in page.scene._handle_from_node_name
     finally:
         live.close()
@@ -249,3 +249,13 @@ def test_mobot_run_without_view_imports_no_view_code(tmp_path):
             "print(o.exit_code, sorted(m for m in ('viser', 'websockets', 'mobot_cli.view') if m in sys.modules))")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.stdout.strip() == "0 []", done.stderr
+
+
+def test_paths_keep_a_point_every_five_centimetres_and_both_ends():
+    from mobot_cli.view.paths import thin
+
+    line = np.column_stack([np.linspace(0.0, 1.0, 101), np.zeros(101), np.zeros(101)])  # 1 cm apart
+    x = thin(line)[:, 0]
+    gaps = np.diff(x)[:-1]  # the last gap ends at the kept end point
+    assert (x[0], x[-1]) == (0.0, 1.0) and len(x) in (18, 19, 20, 21)
+    assert gaps.min() >= 0.05 - 1e-9 and gaps.max() <= 0.06 + 1e-9

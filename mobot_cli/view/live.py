@@ -141,6 +141,7 @@ class LiveView:
         watched = force or bool(self.server.get_clients())
         rows = [self._robot(name, state, watched) for name, state in latest.items() if name in self.robots]
         if watched:
+            self.models.selected = self.robot_list.selected
             self.models.flush()
             self.clock.content = f"**t** = {step / self.rate:.3f} s"
             self.robot_list.show(rows, force=force)

@@ -15,7 +15,7 @@ import numpy as np
 
 from mobot_cli.view import readings
 from mobot_cli.view.panel import RobotList, Row, aim_camera, color_of, follow
-from mobot_cli.view.paths import LIFT, draw_path, lighter
+from mobot_cli.view.paths import LIFT, draw_path, lighter, thin
 from mobot_cli.view.robot import Robots
 from mobot_cli.view.runfolder import RunView, read_run
 from mobot_cli.view.world import draw_world
@@ -139,9 +139,9 @@ class Replay:
             self.models.add(track.name, track.urdf)
             self.robot_list.colors[track.name] = color
             lifted = track.true[:, :3] + np.array([0.0, 0.0, LIFT])
-            draw_path(self.server, f"/paths/{track.name}/true", lifted, color)
+            draw_path(self.server, f"/paths/{track.name}/true", thin(lifted), color)
             odom = np.column_stack([track.odom, lifted[:, 2]])
-            draw_path(self.server, f"/paths/{track.name}/odom", odom, lighter(color))
+            draw_path(self.server, f"/paths/{track.name}/odom", thin(odom), lighter(color))
         self.robot_list.names([t.name for t in view.tracks])
 
     def _aim_at_paths(self) -> None:
@@ -162,6 +162,7 @@ class Replay:
                             *track.cmd[i].tolist()))
             if self.robot_list.follow.value and track.name == self.robot_list.selected:
                 follow(self.server, x, y)
+        self.models.selected = self.robot_list.selected
         self.models.flush()
         for track in self.view.tracks:
             if track.index(t) is not None:

@@ -23,6 +23,9 @@ ROOT = "/robots"
 MARKER_SIZE = (0.3, 0.25, 0.15)  # m: the box drawn for a robot whose URDF is unknown
 LABEL_Z = 0.6  # m above the root link: the name floats clear of the body
 LABEL_EVERY = 0.2  # s between two moves of the name labels
+# Above this many robots only the selected one is named: each label is a text sprite that a
+# software-rendered page (no GPU) draws at a real cost (25 labels halved its frame rate).
+NAMED_MAX = 12
 MOVING = ("revolute", "continuous", "prismatic")
 
 
@@ -75,6 +78,7 @@ class Robots:
         self.groups: dict[str, _Group] = {}
         self.member: dict[str, _Group] = {}  # robot name -> its group
         self.labels: dict[str, Any] = {}
+        self.selected: str | None = None  # always named
         self._labels_at = 0.0
 
     def add(self, name: str, urdf: str | None) -> None:
@@ -141,13 +145,15 @@ class Robots:
         now = time.monotonic()
         if now - self._labels_at >= LABEL_EVERY:
             self._labels_at = now
+            every_one = len(self.member) <= NAMED_MAX
             for group in self.groups.values():
                 for i, name in enumerate(group.names):
                     label = self.labels[name]
+                    shown = bool(group.shown[i]) and (every_one or name == self.selected)
+                    if label.visible != shown:
+                        label.visible = shown
                     position = tuple((group.root[i, :3, 3] + (0.0, 0.0, LABEL_Z)).tolist())
-                    if label.visible != bool(group.shown[i]):
-                        label.visible = bool(group.shown[i])
-                    if group.shown[i] and np.abs(np.subtract(label.position, position)).max() > 0.01:
+                    if shown and np.abs(np.subtract(label.position, position)).max() > 0.01:
                         label.position = position
 
     def _send(self, group: _Group) -> None:
