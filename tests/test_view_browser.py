@@ -120,6 +120,11 @@ def click(browser: Browser, text: str) -> bool:
         f"{json.dumps(text)}); if (!b) return false; b.click(); return true; }})()")
 
 
+def buttons(browser: Browser) -> list[str]:
+    """The labels of the page's buttons."""
+    return browser.evaluate("[...document.querySelectorAll('button')].map(b => b.textContent.trim())") or []
+
+
 def settle(browser: Browser, condition, timeout: float = 90.0):
     """Screenshots until ``condition(image)`` holds; the last image either way."""
     deadline = time.monotonic() + timeout
@@ -175,6 +180,11 @@ def test_mobot_view_draws_the_house_and_the_robot_then_plays_the_run(house_run, 
             assert warm(first) > 0.03, "the house's walls are not drawn"
             assert click(browser, "Play")
             hide_notices(browser)
+            deadline = time.monotonic() + 60
+            for label in ("Pause", "Play"):  # playing, the button says Pause; at the run's end, Play again
+                while label not in buttons(browser):
+                    assert time.monotonic() < deadline, f"no {label} button: {buttons(browser)}"
+                    time.sleep(0.2)
             last = settle(browser, lambda img: robot_blue(img, project(cam, end)) >= 40, timeout=60)
             save(last, "view-end.png")
             assert robot_blue(last, project(cam, end)) >= 40, "the robot did not reach its last pose"

@@ -153,6 +153,8 @@ class LiveServer:
                 break
             if self.hold is not None and self.hold():
                 self._held(clock)
+                if self.stopping:
+                    break
             started = time.perf_counter()
             try:
                 timeline.advance()
