@@ -259,3 +259,22 @@ def test_paths_keep_a_point_every_five_centimetres_and_both_ends():
     gaps = np.diff(x)[:-1]  # the last gap ends at the kept end point
     assert (x[0], x[-1]) == (0.0, 1.0) and len(x) in (18, 19, 20, 21)
     assert gaps.min() >= 0.05 - 1e-9 and gaps.max() <= 0.06 + 1e-9
+
+
+def test_a_replay_switches_between_the_runs_of_a_sweep(page, fleet_run, tmp_path):
+    from mobot_cli.view.replay import Replay
+    from mobot_cli.view.runfolder import read_run
+
+    other = tmp_path / "quick"
+    assert invoke(["run", REPO / "scenarios" / "quickstart.yaml", "--out", other, "--quiet", "--duration", "2"]
+                  ).exit_code == 0
+    replay = Replay(page, [fleet_run, other], read_run(fleet_run))
+    try:
+        assert sorted(replay.models.member) == [f"mobot_{i}" for i in range(5)]
+        replay.run_pick.value = "quick"  # what the page's dropdown does
+        assert sorted(replay.models.member) == ["mobot"] and replay.slider.max == pytest.approx(2.0)
+        replay.slider.value = 1.0
+        replay._scrub(type("Event", (), {"client": object()})())  # a user's scrub, as the page sends it
+        assert replay.t == 1.0 and "mobot" in replay.robot_list._text
+    finally:
+        replay.close()
