@@ -20,7 +20,7 @@ LAYERS = {
 BOTTOM = {"", "errors"}  # the package itself, mobot_cli.errors
 TOP = {"__main__"}
 # The only imports between two packages of the same layer, each one way.
-SAME_LAYER = {("run", "plot"), ("live", "run"), ("sweep", "run"), ("api", "run"), ("gym", "api"), ("ros2", "run"), ("scenario", "assets")}
+SAME_LAYER = {("run", "plot"), ("live", "run"), ("sweep", "run"), ("api", "run"), ("gym", "api"), ("ros2", "run"), ("view", "run"), ("scenario", "assets")}
 
 
 def module_name(root: Path, path: Path) -> str:

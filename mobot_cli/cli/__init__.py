@@ -22,6 +22,7 @@ from mobot_cli.cli import check, inspect, run, xacro
 from mobot_cli.cli import plot as plot_command
 from mobot_cli.cli import sweep as sweep_command
 from mobot_cli.cli import cmd, delete, goto, odom, scan, serve, spawn, stop
+from mobot_cli.cli import view as view_command
 from mobot_cli.cli import list as list_command  # not `list`: that would shadow the builtin here
 from mobot_cli.cli.environment import Environment
 from mobot_cli.cli.output import report_error
@@ -69,6 +70,7 @@ app.command("goto", context_settings={"ignore_unknown_options": True})(goto.goto
 app.command("odom")(odom.odom)
 app.command("scan")(scan.scan)
 app.command("stop")(stop.stop)
+app.command("view")(view_command.view)
 
 
 @dataclass(frozen=True)

@@ -313,3 +313,24 @@ def plot_written(env: Environment, result) -> None:
     """Where mobot plot wrote its picture."""
     runs = f" from {result.runs} runs" if result.runs > 1 else ""
     env.stdout.write(f"wrote {result.out} ({result.tracks} path{'s' if result.tracks != 1 else ''}{runs})\n")
+
+
+def view_ready(env: Environment, url: str, what: str) -> None:
+    """`mobot view`: the page's address on stdout (the command's one result), at once."""
+    env.stdout.write(f"view of {what}: {url}\n")
+    env.stdout.flush()
+    env.stderr.write("mobot: open the address in a browser; stop with Ctrl-C\n")
+    env.stderr.flush()
+
+
+def view_live(env: Environment, url: str) -> None:
+    """`run --view` and `serve --view`: the page's address on stderr (stdout stays for data)."""
+    env.stderr.write(f"mobot: live view at {url}\n")
+    env.stderr.flush()
+
+
+def view_held(env: Environment, url: str, out_dir) -> None:
+    """After `run --view`: the page stays until Ctrl-C."""
+    env.stderr.write(f"mobot: run finished; the view stays at {url} until Ctrl-C "
+                     f"(replay it later with: mobot view {out_dir})\n")
+    env.stderr.flush()

@@ -27,6 +27,9 @@ def run(
                                       help="Leave out world models and robot visuals/collisions whose files "
                                            "are missing, with a warning."),
     ros2_: bool = ros2.OPTION,
+    view: bool = typer.Option(False, "--view", help="Watch the run in a local 3D web page (extra 'view'); "
+                              "when it ends the page replays it until Ctrl-C."),
+    view_port: int = typer.Option(8080, "--view-port", help="Port of the --view page on 127.0.0.1 (0: any)."),
 ) -> int:
     """Run a scenario to its end and write odometry, a summary and the resolved scenario."""
     from mobot_cli.common.files import check_out_folder
@@ -41,6 +44,10 @@ def run(
         overrides.append(f"duration={duration}")
     if skip_missing:
         overrides.append("skip_missing=true")
+    if view:
+        from mobot_cli.view.page import require_viser
+
+        require_viser()  # before the run, not after it
     prepared = prepare(scenario, overrides)
     output.notices(env, prepared.plan.notices, quiet=quiet or json_)
     bridges = ros2.bridges(prepared.plan, ros2_)
@@ -49,10 +56,16 @@ def run(
     bar = None if (quiet or json_) else output.progress_bar(env, prepared.plan.total_steps, prepared.plan.name)
     progress = _progress(bar, realtime, prepared.plan.physics.rate_hz)
     ros2.joined(env, bridges, quiet=quiet or json_)
+    watcher = _Watcher(env, prepared.plan, view_port) if view else None
     if bar:
         bar.start()
     try:
-        result = execute(prepared.plan, prepared.resolved_yaml, out_dir, progress=progress, attachments=bridges)
+        result = execute(prepared.plan, prepared.resolved_yaml, out_dir, progress=progress, attachments=bridges,
+                         watch=watcher.watch if watcher else None)
+    except BaseException:
+        if watcher:
+            watcher.close()
+        raise
     finally:
         if bar:
             bar.stop()
@@ -62,9 +75,55 @@ def run(
     elif not quiet:
         output.run_table(env, result.record, result.out_dir)
     output.expectations(env, result.expectations, verbose=not (quiet or json_))
+    if watcher:
+        watcher.replay(result.out_dir)
     if any(not r.passed for r in result.expectations):
         return ExitCode.EXPECTATION_FAILED
     return ExitCode.OK
+
+
+class _Watcher:
+    """--view: the live page during the run, then a replay of the run folder until Ctrl-C."""
+
+    def __init__(self, env, plan, port: int):
+        from mobot_cli.view.live import LiveView
+        from mobot_cli.view.page import open_page, url
+
+        self.env, self.server = env, open_page(port, label=f"mobot run: {plan.name}")
+        self.url = url(self.server)
+        self.live = LiveView(self.server, plan)
+        output.view_live(env, self.url)
+
+    def watch(self, timeline) -> None:
+        self.live.watch(timeline)
+
+    def replay(self, out_dir: Path) -> None:
+        """Turn the page into a replay of the finished run and wait for Ctrl-C."""
+        from mobot_cli.cli.view import wait_for_interrupt
+        from mobot_cli.view.replay import Replay
+        from mobot_cli.view.runfolder import read_run
+
+        self.live.close()
+        replay = None
+        try:
+            self.server.scene.reset()
+            self.live.clock.content = "the run finished: replay it below"
+            replay = Replay(self.server, [out_dir], read_run(out_dir),
+                            on_notice=lambda line: output.notices(self.env, [line]), robot_list=self.live.robot_list)
+            output.view_held(self.env, self.url, out_dir)
+            wait_for_interrupt()
+        except KeyboardInterrupt:
+            pass
+        finally:
+            if replay is not None:
+                replay.close()
+            self.close()
+
+    def close(self) -> None:
+        from mobot_cli.view.page import close_page
+
+        self.live.close()
+        close_page(self.server)
 
 
 def _progress(bar, realtime: bool, rate_hz: int):

@@ -25,6 +25,9 @@ def serve(
     duration: Optional[float] = typer.Option(None, "--duration", help="Stop after this many simulated seconds."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),
     ros2_: bool = ros2.OPTION,
+    view: bool = typer.Option(False, "--view", help="Watch and drive the world in a local 3D web page "
+                              "(extra 'view'): pause, resume, step, a teleop pad."),
+    view_port: int = typer.Option(8080, "--view-port", help="Port of the --view page on 127.0.0.1 (0: any)."),
 ) -> int:
     """Keep a headless world running; spawn, delete, drive and read robots with the other commands."""
     from mobot_cli.live.endpoint import default_endpoint
@@ -37,14 +40,22 @@ def serve(
     pace = _pace(realtime, fast, rtf)
     if duration is not None and not duration > 0:
         raise UsageError(f"--duration {duration:g} must be above zero")
+    if view:
+        from mobot_cli.view.page import require_viser
+
+        require_viser()
     prepared = prepare_target(target, set_)
     plan = prepared.plan
     output.notices(env, plan.notices, quiet=quiet)
     stop_after = steps(duration, plan.physics.rate_hz) if duration is not None else None
     bridges = ros2.bridges(plan, ros2_)
+    page = _Page(env, plan, view_port) if view else None
     server = LiveServer(plan, endpoint or default_endpoint(), rtf=pace, bind_any=bind_any,
                         out_dir=out, resolved_yaml=prepared.resolved_yaml, stop_after=stop_after,
-                        attachments=bridges)
+                        attachments=bridges, watch=page.watch if page else None,
+                        hold=page.gate.hold if page else None)
+    if page:
+        page.connect(server)
 
     def ready(where: str) -> None:
         if not quiet:
@@ -57,6 +68,8 @@ def serve(
         result = server.serve(ready)
     finally:
         ros2.report(env, bridges, quiet)
+        if page:
+            page.close()
     if not quiet:
         t = result.steps / plan.physics.rate_hz
         where = f"; record in {out}" if out is not None else ""
@@ -75,3 +88,43 @@ def _pace(realtime: bool, fast: bool, rtf: Optional[float]) -> Optional[float]:
     if rtf is not None and not 0 < rtf <= 1000:
         raise UsageError(f"--rtf {rtf:g} must be above 0 and at most 1000", hint="Use --fast for no pacing.")
     return None if fast else (rtf or 1.0)
+
+
+class _Page:
+    """--view: the live page, its World buttons on the server's hold gate, its pad sending `cmd`."""
+
+    def __init__(self, env, plan, port: int):
+        from mobot_cli.view.controls import Gate, GateControl, add_controls
+        from mobot_cli.view.live import LiveView
+        from mobot_cli.view.page import open_page, url
+
+        self.server = open_page(port, label=f"mobot serve: {plan.name}")
+        self.gate, self.live_server = Gate(), None
+        self.live = LiveView(self.server, plan)
+        add_controls(self.server, GateControl(self.gate, self._cmd), lambda: self.live.robot_list.selected,
+                     plan.physics.rate_hz)
+        output.view_live(env, url(self.server))
+
+    def watch(self, timeline) -> None:
+        self.live.watch(timeline)
+
+    def connect(self, server) -> None:
+        """The live server whose endpoint the pad sends `cmd` requests to."""
+        self.live_server = server
+
+    def _cmd(self, name: str, linear: float, angular: float, seconds: float) -> Optional[str]:
+        from mobot_cli.errors import MobotError
+        from mobot_cli.live.client import Client
+
+        try:
+            with Client(self.live_server.endpoint, timeout=2.0) as client:
+                reply = client.cmd(name, linear, angular, for_=seconds)
+        except MobotError as exc:
+            return str(exc)
+        return None if reply.get("ok") else f"{reply.get('result')}: {reply.get('message')}"
+
+    def close(self) -> None:
+        from mobot_cli.view.page import close_page
+
+        self.live.close()
+        close_page(self.server)

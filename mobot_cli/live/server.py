@@ -28,7 +28,7 @@ from mobot_cli.live import protocol, schema, spawning
 from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.live.session import Session
 from mobot_cli.run.record import LiveInfo, Status
-from mobot_cli.run.timeline import Attachment
+from mobot_cli.run.timeline import Attachment, Timeline
 from mobot_cli.sim.plan import Plan
 from mobot_cli.sim.world import World
 
@@ -41,6 +41,7 @@ FAST_SLICE = (0.0001, 0.002)  # s
 # load is pending the loop waits this long for requests, lending the GIL to the loader.
 LEND_GIL_MS = 1
 MAX_LAG = 0.25  # s: a real-time world further behind than this drops the lost time
+HOLD_POLL = 0.02  # s: how long a held (paused) world waits for requests between two looks at hold()
 
 
 @dataclass
@@ -91,9 +92,13 @@ class LiveServer:
 
     def __init__(self, plan: Plan, endpoint: str, *, rtf: float | None = 1.0, bind_any: bool = False,
                  out_dir: Path | None = None, resolved_yaml: str = "", stop_after: int | None = None,
-                 attachments: Sequence[Attachment] = ()):
+                 attachments: Sequence[Attachment] = (), watch: Callable[[Timeline], None] | None = None,
+                 hold: Callable[[], bool] | None = None):
         self.plan, self.rtf, self.stop_after = plan, rtf, stop_after
         self.attachments = attachments  # ride along the timeline (the ROS 2 bridge): run/timeline.py
+        # watch: called with the timeline before the first spawn (a view attaches there);
+        # hold: asked before each step, True keeps the world paused while requests are answered.
+        self.watch, self.hold = watch, hold
         self.out_dir, self.resolved_yaml = out_dir, resolved_yaml
         self.endpoint = endpoints.check(endpoint, bind_any)
         self.session: Session | None = None  # made once the world is up and listening
@@ -115,6 +120,8 @@ class LiveServer:
             with World(self.plan.physics, self.plan.world, seed=self.plan.seed) as world:
                 self._bind()
                 self.session = Session(self.plan, world, self.out_dir, self.resolved_yaml)
+                if self.watch is not None:
+                    self.watch(self.session.timeline)
                 opened: list[Attachment] = []
                 try:
                     for attachment in self.attachments:
@@ -154,6 +161,10 @@ class LiveServer:
             self._serve_requests(clock.due(), step_time)
             if self.stopping or (self.stop_after is not None and step >= self.stop_after):
                 break
+            if self.hold is not None and self.hold():
+                self._held(clock)
+                if self.stopping:
+                    break
             started = time.perf_counter()
             try:
                 timeline.advance()
@@ -162,6 +173,14 @@ class LiveServer:
                     self.status, self.error, self.stopping = Status.FAULT, str(exc), True
             step_time = time.perf_counter() - started
             clock.stepped()
+
+    def _held(self, clock: Clock) -> None:
+        """Paused: answer requests (spawns too) until released, then go on where the clock stopped."""
+        since = time.monotonic()
+        while not self.stopping and self.hold():
+            self._finish_spawns()
+            self._serve_requests(time.monotonic() + HOLD_POLL, 0.0)
+        clock.start += time.monotonic() - since
 
     # -- the socket -------------------------------------------------------------------------
 

@@ -27,9 +27,13 @@ class RunResult:
 
 
 def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | None = None,
-            attachments: Sequence[Attachment] = ()) -> RunResult:
+            attachments: Sequence[Attachment] = (),
+            watch: Callable[[Timeline], None] | None = None) -> RunResult:
     """Run a plan and write its run folder; summary.json is written last and says how it ended.
-    ``attachments`` (the ROS 2 bridge) open after the robots are placed and close at the end."""
+
+    ``attachments`` (the ROS 2 bridge) open after the robots are placed and close at the end;
+    ``watch`` is called with the timeline once its robots are spawned, to attach more consumers
+    (a live view)."""
     with World(plan.physics, plan.world, seed=plan.seed) as world:
         # The robots are spawned and checked before the folder is made: a spawn refused
         # (inside furniture, below the floor) leaves no run folder behind.
@@ -40,6 +44,8 @@ def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | 
         opened: list[Attachment] = []
         try:
             timeline.attach(recording)  # the spawns' records: a robot's CSV opens here
+            if watch is not None:
+                watch(timeline)
             for attachment in attachments:
                 attachment.open(timeline)
                 opened.append(attachment)

@@ -149,7 +149,8 @@ def test_a_warm_headless_run_imports_no_plotting_viewer_or_mesh_code(tmp_path):
             "from mobot_cli.run.execute import execute; "
             f"p = prepare({str(REPO / 'scenarios' / 'quickstart.yaml')!r}); "
             f"execute(p.plan, p.resolved_yaml, pathlib.Path({str(tmp_path / 'r')!r})); "
-            "print(sorted(m for m in ('matplotlib', 'yourdfpy', 'trimesh', 'rich', 'xacro', 'pyglet', 'cyclonedds') "
+            "print(sorted(m for m in ('matplotlib', 'yourdfpy', 'trimesh', 'rich', 'xacro', 'pyglet', 'cyclonedds', "
+            "'viser', 'websockets', 'mobot_cli.view') "
             "if m in sys.modules))")
     import subprocess
     import sys

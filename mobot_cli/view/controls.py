@@ -1,0 +1,122 @@
+"""`mobot serve --view`: buttons that pause, resume and step the world, and a teleop pad.
+
+The page talks to the world through ``WorldControl``, a small interface: the CLI wires it to the
+live server (a ``Gate`` the server's loop consults between steps, and ordinary `cmd` requests for
+the pad, which therefore show in history.jsonl like any client's). When the protocol gains its own
+pause/resume/step requests, an implementation that sends them replaces the Gate, and the page stays.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any, Callable, Protocol
+
+DRIVE_FOR_S = 1.0  # each press of the pad drives this long, then the robot stops (a lost page stops it)
+
+
+class WorldControl(Protocol):
+    """What the page may ask of a live world."""
+
+    def pause(self) -> None: ...
+
+    def resume(self) -> None: ...
+
+    def step(self, steps: int = 1) -> None: ...
+
+    @property
+    def paused(self) -> bool: ...
+
+    def command(self, name: str, linear: float, angular: float, seconds: float) -> str | None:
+        """Drive a robot for ``seconds``; returns why it was refused, or None."""
+
+
+class Gate:
+    """Pause, resume and single steps for a loop that calls ``hold()`` before each step."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._paused, self._budget = False, 0
+
+    @property
+    def paused(self) -> bool:
+        return self._paused
+
+    def pause(self) -> None:
+        with self._lock:
+            self._paused, self._budget = True, 0
+
+    def resume(self) -> None:
+        with self._lock:
+            self._paused, self._budget = False, 0
+
+    def step(self, steps: int = 1) -> None:
+        """While paused: let ``steps`` more physics steps through."""
+        with self._lock:
+            if self._paused:
+                self._budget += max(0, steps)
+
+    def hold(self) -> bool:
+        """True while the world must wait; each False while paused spends one step of the budget."""
+        with self._lock:
+            if not self._paused:
+                return False
+            if self._budget > 0:
+                self._budget -= 1
+                return False
+            return True
+
+
+class GateControl:
+    """WorldControl over a Gate and a function that sends `cmd` requests."""
+
+    def __init__(self, gate: Gate, send_cmd: Callable[[str, float, float, float], str | None]):
+        self.gate, self._send = gate, send_cmd
+
+    @property
+    def paused(self) -> bool:
+        return self.gate.paused
+
+    def pause(self) -> None:
+        self.gate.pause()
+
+    def resume(self) -> None:
+        self.gate.resume()
+
+    def step(self, steps: int = 1) -> None:
+        self.gate.step(steps)
+
+    def command(self, name: str, linear: float, angular: float, seconds: float) -> str | None:
+        return self._send(name, linear, angular, seconds)
+
+
+def add_controls(server: Any, control: WorldControl, selected: Callable[[], str | None], rate_hz: int) -> Any:
+    """The World folder (pause, resume, step) and the Teleop folder (a pad for the selected robot)."""
+    gui = server.gui
+    with gui.add_folder("World"):
+        run = gui.add_button_group("world", ("Pause", "Resume", "Step"))
+        steps = gui.add_number("steps per Step", initial_value=max(1, rate_hz // 10), min=1, max=100_000, step=1)
+        state = gui.add_markdown("running")
+    with gui.add_folder("Teleop"):
+        speed = gui.add_slider("speed (m/s)", min=0.05, max=2.0, step=0.05, initial_value=0.3)
+        turn = gui.add_slider("turn (rad/s)", min=0.1, max=3.0, step=0.1, initial_value=0.8)
+        pad = gui.add_button_group("drive", ("◀", "▲", "■", "▼", "▶"))
+        reply = gui.add_markdown("select a robot under Robots")
+
+    @run.on_click
+    def _(event: Any) -> None:
+        {"Pause": control.pause, "Resume": control.resume,
+         "Step": lambda: control.step(int(steps.value))}[run.value]()
+        state.content = "paused" if control.paused else "running"
+
+    @pad.on_click
+    def _(event: Any) -> None:
+        name = selected()
+        if name is None:
+            reply.content = "select a robot under Robots first"
+            return
+        linear, angular = {"▲": (speed.value, 0.0), "▼": (-speed.value, 0.0), "◀": (0.0, turn.value),
+                           "▶": (0.0, -turn.value), "■": (0.0, 0.0)}[pad.value]
+        refused = control.command(name, float(linear), float(angular), DRIVE_FOR_S)
+        reply.content = refused or f"{name}: {linear:g} m/s, {angular:g} rad/s for {DRIVE_FOR_S:g} s"
+
+    return state

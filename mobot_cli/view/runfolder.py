@@ -1,0 +1,190 @@
+"""A run folder read back for the view: the plan, each robot's time series, joint states, readings.
+
+The world and the robots' URDF come from the resolved scenario.yaml (prepared again, as `mobot
+plot` does); paths from odom/*.csv; joint angles (wheels turning) and sensor readings from the bag
+when the run recorded one; the record from summary.json. Whatever is missing is left out with a
+notice: a folder that still has its CSV files can be viewed.
+"""
+
+from __future__ import annotations
+
+import csv
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from mobot_cli.errors import MobotError, UsageError
+from mobot_cli.run.folder import is_run_folder, is_sweep_folder
+from mobot_cli.run.record import RunRecord
+from mobot_cli.sim.plan import Plan, RobotPlan
+from mobot_cli.view.bagread import Joints
+from mobot_cli.view.readings import Cloud
+
+TRUE = ("true_x", "true_y", "true_z", "true_roll", "true_pitch", "true_yaw")
+ODOM = ("odom_x", "odom_y", "odom_yaw")
+_LIFE = re.compile(r"^(.*)__(\d+)$")  # a name used again in a live world: "<name>__2"
+
+
+@dataclass
+class Track:
+    """One robot's life in the run: its rows, its model and what its sensors saw."""
+
+    name: str
+    t: np.ndarray  # (n,) seconds
+    true: np.ndarray  # (n, 6) x, y, z, roll, pitch, yaw
+    odom: np.ndarray  # (n, 2) odometry position mapped into the world
+    odom_error: np.ndarray  # (n,) m
+    cmd: np.ndarray  # (n, 2) linear, angular
+    urdf: str | None = None
+    frame_prefix: str = ""
+    namespace: str = ""
+    collisions: int | None = None  # from summary.json: the count at the end of its life
+    joints: Joints | None = None
+    readings: list[tuple[float, Cloud]] = field(default_factory=list)  # in time order
+
+    def index(self, t: float) -> int | None:
+        """The row shown at time ``t``; None before the robot's first row or after its last."""
+        if not len(self.t) or t < self.t[0] - 1e-9 or t > self.t[-1] + 1e-9:
+            return None
+        return max(0, int(np.searchsorted(self.t, t, side="right")) - 1)
+
+
+@dataclass
+class RunView:
+    """Everything `mobot view` draws of one run folder."""
+
+    folder: Path
+    plan: Plan | None
+    record: RunRecord | None
+    tracks: list[Track]
+    duration: float
+    log_rate_hz: float
+    notices: list[str] = field(default_factory=list)
+
+
+def runs_of(folder: Path) -> list[Path]:
+    """The run folders to offer: the folder itself, or each run of a sweep folder."""
+    if is_sweep_folder(folder):
+        runs = sorted(p for p in (folder / "runs").iterdir() if is_run_folder(p))
+        if runs:
+            return runs
+    elif is_run_folder(folder):
+        return [folder]
+    raise UsageError(f"'{folder}' is neither a run folder nor a sweep folder with runs",
+                     hint="Give the folder that mobot run --out, mobot serve --out or mobot sweep --out wrote.")
+
+
+def read_run(folder: Path) -> RunView:
+    """Read one run folder for the view (UsageError when it has no odometry to show)."""
+    notices: list[str] = []
+    plan = _plan(folder / "scenario.yaml", notices)
+    record = RunRecord.load(folder)
+    robots = _robot_plans(plan)
+    tracks = [t for t in (_track(p, robots, record) for p in sorted((folder / "odom").glob("*.csv"))) if t]
+    if not tracks:
+        raise UsageError(f"'{folder}' holds no odometry rows to show",
+                         hint="Record with log.formats including csv, and let the run start.")
+    bag = folder / "bag"
+    if (bag / "metadata.yaml").is_file():
+        _read_bag(bag, tracks, notices)
+    elif bag.is_dir():
+        notices.append(f"{bag} was not closed (no metadata.yaml): wheels are drawn without turning")
+    duration = max(float(t.t[-1]) for t in tracks)
+    rate = record.log_rate_hz if record else 1.0 / max(float(np.median(np.diff(tracks[0].t))), 1e-3) \
+        if len(tracks[0].t) > 1 else 1.0
+    return RunView(folder, plan, record, tracks, duration, rate, notices)
+
+
+def _plan(scenario: Path, notices: list[str]) -> Plan | None:
+    from mobot_cli.run.prepare import prepare
+
+    if not scenario.is_file():
+        notices.append(f"{scenario} is missing: no world, and robots drawn as boxes")
+        return None
+    try:
+        return prepare(scenario).plan
+    except MobotError as exc:
+        notices.append(f"no world, and robots drawn as boxes: {exc}")
+        return None
+
+
+def _robot_plans(plan: Plan | None) -> dict[str, RobotPlan]:
+    if plan is None:
+        return {}
+    spawned = [e.spawn for e in plan.events if e.spawn is not None]
+    return {r.name: r for r in (*plan.robots, *spawned)}
+
+
+def _track(path: Path, robots: dict[str, RobotPlan], record: RunRecord | None) -> Track | None:
+    rows = _rows(path)
+    if not rows:
+        return None
+    a = np.array(rows)
+    columns = rows_header(path)
+    col = {name: i for i, name in enumerate(columns)}
+    t, true = a[:, col["t"]], a[:, [col[k] for k in TRUE]]
+    ox, oy, oyaw = (a[:, col[k]] for k in ODOM)
+    # The odom frame is the first row's true pose (the spawn pose), as summary.json's odom_error.
+    c, s = np.cos(true[0, 5] - oyaw[0]), np.sin(true[0, 5] - oyaw[0])
+    x0 = true[0, 0] - (c * ox[0] - s * oy[0])
+    y0 = true[0, 1] - (s * ox[0] + c * oy[0])
+    odom = np.stack([x0 + c * ox - s * oy, y0 + s * ox + c * oy], axis=1)
+    name = path.stem
+    match = _LIFE.match(name)
+    plan = robots.get(name) or (robots.get(match.group(1)) if match else None)
+    robot_record = record.robots.get(name) if record else None
+    track = Track(name, t, true, odom, np.hypot(*(odom - true[:, :2]).T),
+                  a[:, [col["cmd_linear"], col["cmd_angular"]]])
+    if plan is not None:
+        track.urdf, track.frame_prefix, track.namespace = plan.urdf, plan.frame_prefix, plan.namespace
+    if robot_record is not None:
+        track.collisions, track.namespace = robot_record.collisions, robot_record.namespace
+        track.frame_prefix = track.frame_prefix or robot_record.namespace.strip("/") + "/"
+    return track
+
+
+def rows_header(path: Path) -> list[str]:
+    """The CSV's column names."""
+    with path.open(encoding="utf-8", newline="") as f:
+        return next(csv.reader(f), [])
+
+
+def _rows(path: Path) -> list[list[float]]:
+    out = []
+    with path.open(encoding="utf-8", newline="") as f:
+        reader = csv.reader(f)
+        header = next(reader, None)
+        if not header or not {"t", *TRUE, *ODOM, "cmd_linear", "cmd_angular"} <= set(header):
+            return []
+        for row in reader:
+            try:
+                values = [float(v) for v in row]
+            except ValueError:
+                continue  # a row cut short by a killed run
+            if len(values) == len(header):
+                out.append(values)
+    return out
+
+
+def _read_bag(bag: Path, tracks: list[Track], notices: list[str]) -> None:
+    """Joint states, robot descriptions and sensor readings per namespace, from the rosbag2 folder."""
+    from mobot_cli.view.bagread import read_topics
+
+    by_ns: dict[str, list[Track]] = {}
+    for track in tracks:
+        by_ns.setdefault(track.namespace, []).append(track)
+    try:
+        topics = read_topics(bag, set(by_ns))
+    except Exception as exc:  # noqa: BLE001 - a bag the view cannot read still leaves the CSV paths
+        notices.append(f"{bag} could not be read ({exc}): wheels are drawn without turning")
+        return
+    for ns, found in topics.items():
+        for track in by_ns.get(ns, ()):
+            track.joints = found.joints
+            track.urdf = track.urdf or found.description
+            prefix = track.frame_prefix
+            track.readings = [(t, Cloud(track.name, sensor, frame[len(prefix):] if frame.startswith(prefix)
+                                        else frame, points)) for t, sensor, frame, points in found.readings
+                              if track.t[0] - 1e-9 <= t <= track.t[-1] + 1e-9]
