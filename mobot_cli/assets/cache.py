@@ -11,10 +11,12 @@ from pathlib import Path
 from typing import Any
 
 import mobot_cli
-from mobot_cli.sim.urdf_file import cache_dir  # noqa: F401  (one rule for the whole cache folder)
+from mobot_cli.sim.urdf_file import cache_dir, prune, touch  # one rule for the whole cache folder
 
 # Bump when the layout of a cached document changes, so old entries are simply missed.
 CACHE_FORMAT = 1
+# Kinds with one entry per distinct robot text (which live clients choose): bounded by prune().
+BOUNDED_KINDS = ("xacro", "robot")
 
 
 @functools.lru_cache(maxsize=1)
@@ -53,9 +55,12 @@ def load(kind: str, key: str) -> Any | None:
     """The cached document, or None when absent or unreadable (a cache never fails a run)."""
     path = cache_dir() / kind / f"{key}.json"
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
+        document = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return None
+    if kind in BOUNDED_KINDS:
+        touch(path)
+    return document
 
 
 def store(kind: str, key: str, document: Any) -> None:
@@ -71,5 +76,7 @@ def store(kind: str, key: str, document: Any) -> None:
         except BaseException:
             Path(tmp).unlink(missing_ok=True)
             raise
+        if kind in BOUNDED_KINDS:
+            prune(folder)
     except OSError:
         pass

@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from mobot_cli.assets import cache
+from mobot_cli.assets import cache, sandbox
 from mobot_cli.assets.drive_detect import detect_drive
 from mobot_cli.assets.frames import LinkTree, floats
 from mobot_cli.assets.resources import ResourceResolver, bundled_dir, model_sdf
@@ -235,6 +235,8 @@ def _from_document(document: dict[str, Any] | None) -> RobotDescription | None:
     try:
         # A mesh edited or removed since the entry was written makes it stale.
         if any(list(_stat(path)) != [size, mtime] for path, size, mtime in document["meshes"]):
+            return None
+        if not all(sandbox.allows(path) for path, _, _ in document["meshes"]):  # live spawns
             return None
         drive = document["drive"]
         if drive is not None:

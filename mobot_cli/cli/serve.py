@@ -22,10 +22,16 @@ def serve(
     out: Optional[Path] = typer.Option(None, "--out", "-o", help="Record odometry, history and a summary here."),
     set_: list[str] = typer.Option([], "--set", help="Override a key, e.g. physics.rate_hz=480 (repeatable)."),
     duration: Optional[float] = typer.Option(None, "--duration", help="Stop after this many simulated seconds."),
+    load_timeout: float = typer.Option(10.0, "--load-timeout", metavar="S",
+                                       help="Refuse a spawn whose description takes longer to load."),
+    load_memory: int = typer.Option(1024, "--load-memory", metavar="MIB",
+                                    help="Memory limit of the process that loads spawned descriptions."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),
 ) -> int:
     """Keep a headless world running; spawn, delete, drive and read robots with the other commands."""
-    from mobot_cli.live.endpoint import default_endpoint
+    from mobot_cli.live.endpoint import default_endpoint, ipc_path
+    from mobot_cli.live.keys import authorise_hint
+    from mobot_cli.live.loader import Limits
     from mobot_cli.live.server import LiveServer, pace_text
     from mobot_cli.run.record import Status
     from mobot_cli.live.start import serve_plan
@@ -34,18 +40,24 @@ def serve(
     pace = _pace(realtime, fast, rtf)
     if duration is not None and not duration > 0:
         raise UsageError(f"--duration {duration:g} must be above zero")
+    if not 0 < load_timeout <= 3600 or not 256 <= load_memory <= 1 << 20:
+        raise UsageError("--load-timeout must be above 0 and at most 3600 s, --load-memory at least 256 MiB",
+                         hint="The defaults are 10 s and 1024 MiB.")
     prepared = serve_plan(target, set_)
     plan = prepared.plan
     output.notices(plan.notices, quiet=quiet)
     stop_after = steps(duration, plan.physics.rate_hz) if duration is not None else None
     server = LiveServer(plan, endpoint or default_endpoint(), rtf=pace, bind_any=bind_any,
-                        out_dir=out, resolved_yaml=prepared.resolved_yaml, stop_after=stop_after)
+                        out_dir=out, resolved_yaml=prepared.resolved_yaml, stop_after=stop_after,
+                        limits=Limits(seconds=load_timeout, memory=load_memory * 2**20))
 
     def ready(where: str) -> None:
         if not quiet:
             live_common.status(f"serving '{plan.name}' (world {plan.world.name}, {len(plan.robots)} robot(s)) "
                                f"at {where}, {pace_text(pace)}, {plan.physics.rate_hz} Hz. "
                                "Stop with Ctrl-C or `mobot stop`.")
+            if ipc_path(where) is None:
+                live_common.status(authorise_hint())
 
     result = server.serve(ready)
     if not quiet:
