@@ -53,6 +53,10 @@ class Forbidden(DescriptionError):
     """A confined xacro expression uses something that could escape the expression language."""
 
 
+class LimitExceeded(DescriptionError):
+    """A confined xacro expression ran out of the loader's memory."""
+
+
 @dataclass(frozen=True)
 class Confinement:
     """The folders (and single files) a confined description may read."""
@@ -124,8 +128,7 @@ def check_expression(expr: str) -> None:
             if name and name.startswith("_"):
                 bad = f"the name '{name}'"
         if bad is not None:
-            shown = expr.strip() if len(expr.strip()) <= 80 else expr.strip()[:77] + "..."
-            raise Forbidden(f"xacro expression '{shown}' uses {bad}, which a live spawn may not use",
+            raise Forbidden(f"xacro expression '{_short(expr)}' uses {bad}, which a live spawn may not use",
                             hint="Live spawns evaluate plain arithmetic, strings, lists and the "
                                  "python./math./xacro. helpers, without Python's internals.")
 
@@ -147,7 +150,11 @@ def xacro_limits(xacro: types.ModuleType) -> Iterator[None]:
 
     def safe_eval(expr, globals, locals=None):
         check_expression(expr)
-        return original_eval(expr, globals, locals)
+        try:
+            return original_eval(expr, globals, locals)
+        except MemoryError:
+            raise LimitExceeded(f"xacro expression '{_short(expr)}' needs more memory than a live spawn "
+                                "may use", hint="Live spawns load within `mobot serve --load-memory`.") from None
 
     def load_yaml(filename):
         check(xacro.abs_filename_spec(filename), f"xacro.load_yaml file '{filename}'")
@@ -214,6 +221,11 @@ def _confined_glob(pattern: str) -> list[str]:
 
 def _plain_builtins() -> dict[str, Any]:
     return {name: getattr(builtins, name) for name in _PLAIN_BUILTINS}
+
+
+def _short(expr: str) -> str:
+    expr = expr.strip()
+    return expr if len(expr) <= 80 else expr[:77] + "..."
 
 
 def _resolved(path: str | os.PathLike) -> Path:

@@ -23,7 +23,8 @@ def serve(
     set_: list[str] = typer.Option([], "--set", help="Override a key, e.g. physics.rate_hz=480 (repeatable)."),
     duration: Optional[float] = typer.Option(None, "--duration", help="Stop after this many simulated seconds."),
     load_timeout: float = typer.Option(10.0, "--load-timeout", metavar="S",
-                                       help="Refuse a spawn whose description takes longer to load."),
+                                       help="CPU seconds a spawned description may take to load "
+                                            "(and 3x as long in wall time)."),
     load_memory: int = typer.Option(1024, "--load-memory", metavar="MIB",
                                     help="Memory limit of the process that loads spawned descriptions."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),

@@ -2,8 +2,9 @@
 cmd and skipped scenario event, refused ones too.
 
 Request fields come from clients, so a line keeps them bounded: a string longer than
-MAX_CHARS is cut and marked with its length, and lists and objects keep their first MAX_ITEMS
-items. Everything else in DIR is the run folder `mobot run` writes (run/recording.py).
+MAX_CHARS is cut and marked with its length, lists and objects keep their first MAX_ITEMS
+items, and a line still longer than MAX_LINE has each structured field cut to a piece of its
+JSON text. Everything else in DIR is the run folder `mobot run` writes (run/recording.py).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from typing import Any
 MAX_CHARS = 256
 MAX_ITEMS = 32
 MAX_DEPTH = 4
+MAX_LINE = 4096  # a longer line has each structured field cut to MAX_CHARS of its JSON text
 
 
 class History:
@@ -27,8 +29,12 @@ class History:
 
     def write(self, step: int, record: dict[str, Any]) -> None:
         """One line: the time, the step and the record's fields (bounded)."""
-        line = {"t": step / self.rate_hz, "step": step, **bounded(record)}
-        self._file.write(json.dumps(line, allow_nan=False, default=str) + "\n")
+        fields = {str(key): bounded(value) for key, value in record.items()}
+        line = json.dumps({"t": step / self.rate_hz, "step": step, **fields}, allow_nan=False)
+        if len(line) > MAX_LINE:  # many long items: each field becomes a cut piece of its JSON text
+            fields = {key: _squeezed(value) for key, value in fields.items()}
+            line = json.dumps({"t": step / self.rate_hz, "step": step, **fields}, allow_nan=False)
+        self._file.write(line + "\n")
         self._file.flush()
 
     def close(self) -> None:
@@ -57,3 +63,9 @@ def bounded(value: Any, depth: int = 0) -> Any:
     if value is None or isinstance(value, (bool, int, float)):
         return value
     return bounded(str(value), depth)
+
+
+def _squeezed(value: Any) -> Any:
+    if not isinstance(value, (dict, list)):
+        return value
+    return bounded(json.dumps(value, allow_nan=False))

@@ -1,10 +1,10 @@
 """A small pool of warm loader processes (worker.py) for the descriptions spawn requests send.
 
 The world's thread never expands or checks a description a client sent: it hands the request
-to an idle worker process and goes on stepping. A load that takes longer than the time limit
-is ended by killing its process; one that needs more memory than the limit fails in the worker
-(RLIMIT_AS). Either way the spawn is refused with RESOURCE_PARSE_ERROR and a fresh worker
-takes the dead one's place. Workers are reused between loads, so a warm load costs
+to an idle worker process and goes on stepping. A load that uses more CPU time than the limit
+is ended by the kernel (RLIMIT_CPU), one that waits three times as long in wall time is killed
+here, and one that needs more memory than the limit fails in the worker (RLIMIT_AS). Either
+way the spawn is refused with RESOURCE_PARSE_ERROR and a fresh worker takes the dead one's place. Workers are reused between loads, so a warm load costs
 milliseconds; one is started with the server, and while every worker is loading one more is
 started (up to ``Limits.workers``), so a slow or hostile load never makes the next one cold.
 """
@@ -12,6 +12,7 @@ started (up to ``Limits.workers``), so a slow or hostile load never makes the ne
 from __future__ import annotations
 
 import os
+import signal
 import socket
 import subprocess
 import sys
@@ -25,16 +26,22 @@ from typing import Any
 from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.live.schema import Spawn
 
+WALL_FACTOR = 3  # CPU time is the limit (fair on a busy machine); wall time only catches waiting
 _PACKAGE_PARENT = str(Path(__file__).resolve().parent.parent.parent)  # the folder holding mobot_cli/
 
 
 @dataclass(frozen=True)
 class Limits:
-    """What one load may take: wall seconds, bytes of address space; and how many run at once."""
+    """What one load may take: CPU seconds, bytes of address space; and how many run at once."""
 
-    seconds: float = 10.0
+    seconds: float = 10.0  # of CPU time; a load that waits is stopped after WALL_FACTOR times as long
     memory: int = 1 << 30  # 1 GiB
     workers: int = 2
+
+    @property
+    def wall(self) -> float:
+        """Wall seconds after which a load is stopped even if it used little CPU (it waits on something)."""
+        return WALL_FACTOR * self.seconds
 
 
 @dataclass
@@ -99,16 +106,13 @@ class LoaderPool:
                 continue
             if worker.job is not None and now >= worker.deadline:
                 self._fail(worker, Result.RESOURCE_PARSE_ERROR, "loading the description took longer "
-                           f"than the {self.limits.seconds:g} s limit; it was stopped")
+                           f"than {self.limits.wall:g} s of wall time; it was stopped")
                 continue
             try:
                 if worker.connection.poll(0):
                     self._receive(worker, worker.connection.recv())
             except (EOFError, OSError):
-                code = worker.process.poll()
-                self._fail(worker, Result.RESOURCE_PARSE_ERROR, "the loader process died while loading "
-                           f"the description (exit status {code}); it may have needed more than the "
-                           f"{self.limits.memory // 2**20} MiB memory limit")
+                self._fail(worker, Result.RESOURCE_PARSE_ERROR, self._death(worker))
         self._reap()
         self._dispatch()
         done, self._done = self._done, []
@@ -158,7 +162,7 @@ class LoaderPool:
                 self._retire(idle)
                 continue
             job.started = time.monotonic()
-            idle.job, idle.deadline = job, job.started + self.limits.seconds
+            idle.job, idle.deadline = job, job.started + self.limits.wall
         self._keep_warm()
 
     def _keep_warm(self) -> None:
@@ -178,6 +182,18 @@ class LoaderPool:
         else:
             job.outcome = Refusal(Result(message[1]), message[2])
         self._done.append(job)
+
+    def _death(self, worker: _Worker) -> str:
+        """Why a worker's connection closed, as the refused spawn's message."""
+        try:
+            code = worker.process.wait(0.2)  # its connection closed because it ended: no real wait
+        except subprocess.TimeoutExpired:
+            code = None
+        if code == -signal.SIGXCPU:
+            return (f"loading the description took more than the {self.limits.seconds:g} s limit of CPU "
+                    "time; it was stopped")
+        return (f"the loader process ended while loading the description (exit status {code}); it may "
+                f"have needed more than the {self.limits.memory // 2**20} MiB memory limit")
 
     def _fail(self, worker: _Worker, result: Result, message: str) -> None:
         if worker.job is not None:

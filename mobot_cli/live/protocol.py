@@ -64,12 +64,12 @@ def encode_reply(answer: dict[str, Any]) -> bytes:
     """A reply's bytes; never raises: a reply that cannot be encoded becomes OPERATION_FAILED."""
     try:
         return encode(answer)
-    except (ValueError, TypeError, OverflowError, RecursionError) as exc:
-        problem = f"the reply could not be encoded as JSON: {exc}"[:300]
+    except Exception as exc:  # noqa: BLE001 - whatever a reply holds, the peer gets an answer
+        problem = f"the reply could not be encoded as JSON: {exc!r}"[:300]
     for request_id in (answer.get("id"), None):
         try:
             return encode(reply(request_id, Result.OPERATION_FAILED, problem))
-        except (ValueError, TypeError, OverflowError, RecursionError):
+        except Exception:  # noqa: BLE001 - the id itself cannot be encoded: answer without it
             continue
     return encode(reply(None, Result.OPERATION_FAILED, "the reply could not be encoded as JSON"))
 

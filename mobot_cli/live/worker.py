@@ -4,20 +4,20 @@ LoaderPool (loader.py) starts it as ``python -m mobot_cli.live.worker FD MEMORY_
 It limits its own address space (RLIMIT_AS) to MEMORY_BYTES, lowers its priority, reads
 ``(Spawn request, rate_hz)`` pairs from the connection on FD and answers each with
 ``("ok", RobotPlan, notices)`` or ``("refused", Result, message)``, pickled. Descriptions are
-loaded confined (assets/sandbox.py). The pool kills it when one load takes longer than SECONDS;
-a CPU-time limit is the backstop should the server itself be gone.
+loaded confined (assets/sandbox.py). Each load may use SECONDS of CPU time: the kernel ends the
+process past that (SIGXCPU, RLIMIT_CPU), whether or not the server is still there to notice;
+the pool also kills a load that takes three times as long in wall time (one that waits).
 """
 
 from __future__ import annotations
 
+import math
 import os
 import resource
 import signal
 import sys
 
 NICE = 5  # the world's own thread wins when both want the CPU
-# Slack on top of the wall-clock limit before the kernel's CPU limit (SIGXCPU) ends a load.
-CPU_SLACK = 5.0  # s
 
 
 def main(argv: list[str]) -> int:
@@ -27,6 +27,7 @@ def main(argv: list[str]) -> int:
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ[var] = "1"  # thread pools would reserve address space for nothing
     resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
+    resource.setrlimit(resource.RLIMIT_CORE, (0, 0))  # a load ended by a limit leaves no core file
     try:
         os.nice(NICE)
     except OSError:
@@ -65,11 +66,11 @@ def _load(spawning, request, rate_hz: int, memory: int) -> tuple:
 
 
 def _cpu_budget(seconds: float) -> None:
-    """Let this load use at most ``seconds`` + slack of CPU time from now (soft RLIMIT_CPU)."""
+    """Let this load use at most ``seconds`` of CPU time from now (soft RLIMIT_CPU: SIGXCPU past it)."""
     usage = resource.getrusage(resource.RUSAGE_SELF)
     used = usage.ru_utime + usage.ru_stime
     _, hard = resource.getrlimit(resource.RLIMIT_CPU)
-    soft = int(used + seconds + CPU_SLACK) + 1
+    soft = math.ceil(used + seconds)
     if hard != resource.RLIM_INFINITY:
         soft = min(soft, hard)
     resource.setrlimit(resource.RLIMIT_CPU, (soft, hard))

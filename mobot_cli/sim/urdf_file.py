@@ -52,11 +52,13 @@ def touch(path: Path) -> None:
         pass
 
 
-def prune(folder: Path, max_files: int = CACHE_MAX_FILES, max_bytes: int = CACHE_MAX_BYTES) -> int:
+def prune(folder: Path, max_files: int | None = None, max_bytes: int | None = None) -> int:
     """Delete a cache folder's least recently used files beyond the limits; returns how many went.
 
     The newest file always stays (it was just written for use). Files being written (.tmp) are left alone.
     """
+    max_files = CACHE_MAX_FILES if max_files is None else max_files
+    max_bytes = CACHE_MAX_BYTES if max_bytes is None else max_bytes
     entries = []
     try:
         with os.scandir(folder) as scan:
