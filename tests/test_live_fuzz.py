@@ -99,6 +99,8 @@ def requests(draw) -> bytes:
             document.pop(draw(st.sampled_from(keys)))
         else:
             document["id"] = draw(VALUES)
+    if document.get("op") == "stop":
+        document["never"] = "valid"  # a valid stop would end the world under test
     return dump(document).encode()
 
 

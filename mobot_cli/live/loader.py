@@ -27,6 +27,7 @@ from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.live.schema import Spawn
 
 WALL_FACTOR = 3  # CPU time is the limit (fair on a busy machine); wall time only catches waiting
+FAILED_STARTS = 3  # workers that end before they are ready, in a row: the installation is broken
 _PACKAGE_PARENT = str(Path(__file__).resolve().parent.parent.parent)  # the folder holding mobot_cli/
 
 
@@ -73,6 +74,7 @@ class LoaderPool:
         self._queue: deque[Job] = deque()
         self._dying: list[subprocess.Popen] = []
         self._done: list[Job] = []
+        self._failed_starts = 0
 
     def start(self) -> None:
         """Start the first worker now, so the first spawn finds it warm."""
@@ -112,9 +114,12 @@ class LoaderPool:
                 if worker.connection.poll(0):
                     self._receive(worker, worker.connection.recv())
             except (EOFError, OSError):
+                self._failed_starts = 0 if worker.ready else self._failed_starts + 1
                 self._fail(worker, Result.RESOURCE_PARSE_ERROR, self._death(worker))
         self._reap()
         self._dispatch()
+        if self._failed_starts >= FAILED_STARTS and not self._workers:
+            self._refuse_queue()
         done, self._done = self._done, []
         return done
 
@@ -167,12 +172,21 @@ class LoaderPool:
 
     def _keep_warm(self) -> None:
         """While every worker is loading, start one more (up to the limit), so the next load finds it warm."""
+        if self._failed_starts >= FAILED_STARTS:
+            return  # it would end at start again: no restart loop
         if all(w.job is not None for w in self._workers) and len(self._workers) < self.limits.workers:
             self._workers.append(self._start_worker())
 
+    def _refuse_queue(self) -> None:
+        while self._queue:
+            job = self._queue.popleft()
+            job.outcome = Refusal(Result.OPERATION_FAILED, "the loader process ends as soon as it starts "
+                                  "(see the server's error output); nothing can be spawned")
+            self._done.append(job)
+
     def _receive(self, worker: _Worker, message: tuple) -> None:
         if message[0] == "ready":
-            worker.ready = True
+            worker.ready, self._failed_starts = True, 0
             return
         job, worker.job, worker.deadline = worker.job, None, float("inf")
         if job is None:
