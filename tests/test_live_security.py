@@ -186,7 +186,7 @@ def test_optenv_takes_its_default_in_a_live_spawn(live):
     """The server's environment is not read: $(optenv HOME x) is x, not the server's HOME."""
     body = '<link name="$(optenv HOME nohome)"><inertial><mass value="1"/>' \
            '<inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>'
-    with live.client() as client:
+    with live.client(timeout=90) as client:  # a cold load on a busy machine
         client.spawn("envless", urdf=robot(body), pose={"x": 40.0})
         assert client.odom("envless")["child_frame_id"] == "envless/nohome"
 
@@ -207,7 +207,7 @@ def test_a_package_with_includes_and_yaml_loads_confined(live, tmp_path):
         '<xacro:box n="base_${python.int(r * 1000 * math.cos(0))}"/>'))
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
-    with live.client() as client:
+    with live.client(timeout=90) as client:  # a cold load on a busy machine
         reply = client.spawn("pkg_bot", description=str(package / "urdf" / "bot.urdf.xacro"),
                              base_dir=str(elsewhere), pose={"x": 44.0})
         assert client.odom(reply["name"])["child_frame_id"] == "pkg_bot/base_50"
@@ -217,7 +217,7 @@ def test_the_request_base_dir_widens_what_a_text_spawn_may_read(live, tmp_path):
     (tmp_path / "dims.yaml").write_text("size: 7\n")
     body = (f"""<link name="part_${{xacro.load_yaml('{tmp_path}/dims.yaml')['size']}}"><inertial><mass value="1"/>"""
             '<inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>')
-    with live.client() as client:
+    with live.client(timeout=90) as client:  # a cold load on a busy machine
         refused = client.call("spawn", name="dims", urdf=robot(body))
         client.spawn("dims", urdf=robot(body), base_dir=str(tmp_path), pose={"x": 48.0})
         assert client.odom("dims")["child_frame_id"] == "dims/part_7"

@@ -85,15 +85,17 @@ class LoaderPool:
         """Queue a load; it starts as soon as a worker is free."""
         self._queue.append(job)
         self._dispatch()
+        if self._failed_starts >= FAILED_STARTS and not self._workers:
+            self._refuse_queue()
 
     @property
     def busy(self) -> bool:
-        """True while loads are queued or running, or a worker is starting: poll() has work."""
-        return bool(self._queue) or any(w.job is not None or not w.ready for w in self._workers)
+        """True while loads are queued, running or unanswered, or a worker is starting: poll() has work."""
+        return bool(self._queue or self._done) or any(w.job is not None or not w.ready for w in self._workers)
 
-    def fds(self) -> list[int]:
+    def fds(self) -> tuple[int, ...]:
         """File descriptors to wait on: workers starting up or loading."""
-        return [w.connection.fileno() for w in self._workers if w.job is not None or not w.ready]
+        return tuple(w.connection.fileno() for w in self._workers if w.job is not None or not w.ready)
 
     def next_deadline(self) -> float | None:
         """Monotonic time at which the oldest running load runs out of time."""

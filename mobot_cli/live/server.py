@@ -38,6 +38,9 @@ from mobot_cli.sim.world import World
 # In --fast mode requests get at most as much wall time between two steps as the last step
 # took (so a flood of requests at least halves, never stops, the world), within these bounds.
 FAST_SLICE = (0.0001, 0.002)  # s
+# A --fast world takes a step every few tens of microseconds; looking at the loader processes
+# that often would cost it a good part of its pace, so it looks once per this many seconds.
+LOADER_CHECK = 0.001
 MAX_LAG = 0.25  # s: a real-time world further behind than this drops the lost time
 
 
@@ -98,6 +101,8 @@ class LiveServer:
         self.counts: dict[str, int] = {}
         self._socket: zmq.Socket | None = None
         self._authenticator = None  # CURVE on TCP endpoints
+        self._poller, self._poller_fds = None, ()  # the socket and the loaders' pipes, while loads run
+        self._loaders_due = 0.0
         self._waits: list[_Pending] = []
         self._loader = LoaderPool(limits)
         self._handlers: dict[str, Callable] = {
@@ -139,8 +144,7 @@ class LiveServer:
             step = timeline.step
             timeline.tick()
             self._answer_waits(step)
-            self._finish_spawns()
-            self._serve_requests(clock.due(), step_time)
+            self._serve_requests(clock.due(), step_time)  # finished loads are answered there, too
             if self.stopping or (self.stop_after is not None and step >= self.stop_after):
                 break
             started = time.perf_counter()
@@ -204,18 +208,22 @@ class LiveServer:
         While loads run, their processes wake the wait too: a finished (or timed-out) load is
         placed and answered at once, between the same two steps.
         """
+        if wait_ms == 0 and time.monotonic() < self._loaders_due:  # --fast: look at loaders each ms only
+            return bool(self._socket.poll(0))
+        self._loaders_due = time.monotonic() + LOADER_CHECK
         loaders = self._loader.fds() if self._loader.busy else ()
         if not loaders:
             return bool(self._socket.poll(wait_ms))
-        poller = zmq.Poller()
-        poller.register(self._socket, zmq.POLLIN)
-        for fd in loaders:
-            poller.register(fd, zmq.POLLIN)
+        if loaders != self._poller_fds:  # a poller per set of loaders: --fast waits once per step
+            self._poller, self._poller_fds = zmq.Poller(), loaders
+            self._poller.register(self._socket, zmq.POLLIN)
+            for fd in loaders:
+                self._poller.register(fd, zmq.POLLIN)
         deadline = self._loader.next_deadline()
         if deadline is not None:  # wake up to stop a load that ran out of time
             wait_ms = min(wait_ms, max(0, math.ceil((deadline - time.monotonic()) * 1000)))
-        events = dict(poller.poll(wait_ms))
-        if any(fd in events for fd in loaders) or (deadline is not None and time.monotonic() >= deadline):
+        events = dict(self._poller.poll(wait_ms))
+        if len(events) > (self._socket in events) or (deadline is not None and time.monotonic() >= deadline):
             self._finish_spawns()
         return self._socket in events
 
@@ -291,6 +299,7 @@ class LiveServer:
             spawning.final_name(request, self.session.taken())
         self.session.reference(request)
         self._loader.submit(Job(request, self.plan.physics.rate_hz, owner=envelope))
+        self._finish_spawns()  # a load refused at once (no loader can start) is answered now
         return None
 
     # -- replies owed -----------------------------------------------------------------------
