@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import time
 
 import pytest
@@ -92,3 +93,22 @@ def test_a_broken_installation_refuses_spawns_instead_of_restarting_forever(monk
 @pytest.mark.parametrize("seconds, memory", [(10.0, 1 << 30)])
 def test_the_documented_defaults(seconds, memory):
     assert Limits() == Limits(seconds=seconds, memory=memory, workers=2) and Limits().wall == 30.0
+
+
+def test_a_long_load_drops_to_the_lowest_priority():
+    pool = LoaderPool(Limits(seconds=30, memory=512 * 2**20))
+    try:
+        pool.start()
+        slow = Job(spawn("slow", urdf=HEAD + '<link name="${python.sum(python.range(10**12))}"/></robot>'), 240)
+        pool.submit(slow)
+        while slow.started is None:
+            pool.poll()
+            time.sleep(0.01)
+        worker = next(w for w in pool._workers if w.job is slow)
+        assert os.getpriority(os.PRIO_PROCESS, worker.process.pid) == 0  # quick loads are not held back
+        while time.monotonic() < slow.started + loader.DEMOTE_AFTER + 0.1:
+            assert pool.poll() == []
+            time.sleep(0.01)
+        assert worker.demoted and os.getpriority(os.PRIO_PROCESS, worker.process.pid) == loader.LOW_PRIORITY
+    finally:
+        assert [job.request.name for job in pool.close()] == ["slow"]

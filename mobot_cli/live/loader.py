@@ -7,6 +7,8 @@ here, and one that needs more memory than the limit fails in the worker (RLIMIT_
 way the spawn is refused with RESOURCE_PARSE_ERROR and a fresh worker takes the dead one's place. Workers are reused between loads, so a warm load costs
 milliseconds; one is started with the server, and while every worker is loading one more is
 started (up to ``Limits.workers``), so a slow or hostile load never makes the next one cold.
+Workers run at normal priority, so a spawn is quick on a busy machine too; a load still running
+after DEMOTE_AFTER seconds drops to nice 19 and its worker is replaced when it is done.
 """
 
 from __future__ import annotations
@@ -28,6 +30,10 @@ from mobot_cli.live.schema import Spawn
 
 WALL_FACTOR = 3  # CPU time is the limit (fair on a busy machine); wall time only catches waiting
 FAILED_STARTS = 3  # workers that end before they are ready, in a row: the installation is broken
+# A load still running after this many seconds (a cold one takes about one) drops to the lowest
+# priority, so the world's thread wins the CPU; its worker is replaced once it is done.
+DEMOTE_AFTER = 2.0
+LOW_PRIORITY = 19
 _PACKAGE_PARENT = str(Path(__file__).resolve().parent.parent.parent)  # the folder holding mobot_cli/
 
 
@@ -63,6 +69,8 @@ class _Worker:
     ready: bool = False
     job: Job | None = None
     deadline: float = field(default=float("inf"))
+    demote_at: float = field(default=float("inf"))
+    demoted: bool = False
 
 
 class LoaderPool:
@@ -98,8 +106,8 @@ class LoaderPool:
         return tuple(w.connection.fileno() for w in self._workers if w.job is not None or not w.ready)
 
     def next_deadline(self) -> float | None:
-        """Monotonic time at which the oldest running load runs out of time."""
-        deadlines = [w.deadline for w in self._workers if w.job is not None]
+        """Monotonic time at which poll() has something to do for a running load: demote or stop it."""
+        deadlines = [w.deadline if w.demoted else w.demote_at for w in self._workers if w.job is not None]
         return min(deadlines) if deadlines else None
 
     def poll(self) -> list[Job]:
@@ -112,6 +120,8 @@ class LoaderPool:
                 self._fail(worker, Result.RESOURCE_PARSE_ERROR, "loading the description took longer "
                            f"than {self.limits.wall:g} s of wall time; it was stopped")
                 continue
+            if worker.job is not None and not worker.demoted and now >= worker.demote_at:
+                self._demote(worker)
             try:
                 if worker.connection.poll(0):
                     self._receive(worker, worker.connection.recv())
@@ -170,6 +180,7 @@ class LoaderPool:
                 continue
             job.started = time.monotonic()
             idle.job, idle.deadline = job, job.started + self.limits.wall
+            idle.demote_at = job.started + DEMOTE_AFTER
         self._keep_warm()
 
     def _keep_warm(self) -> None:
@@ -198,6 +209,16 @@ class LoaderPool:
         else:
             job.outcome = Refusal(Result(message[1]), message[2])
         self._done.append(job)
+        if worker.demoted:  # it cannot get its priority back: a fresh worker takes its place
+            self._retire(worker)
+
+    def _demote(self, worker: _Worker) -> None:
+        """A long load yields the CPU to the world (raising a child's nice needs no privilege)."""
+        worker.demoted = True
+        try:
+            os.setpriority(os.PRIO_PROCESS, worker.process.pid, LOW_PRIORITY)
+        except OSError:
+            pass  # it just ended: poll() sees that next
 
     def _death(self, worker: _Worker) -> str:
         """Why a worker's connection closed, as the refused spawn's message."""

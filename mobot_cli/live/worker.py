@@ -1,7 +1,7 @@
 """A loader process: the robot descriptions that spawn requests send are expanded and checked here.
 
 LoaderPool (loader.py) starts it as ``python -m mobot_cli.live.worker FD MEMORY_BYTES SECONDS``.
-It limits its own address space (RLIMIT_AS) to MEMORY_BYTES, lowers its priority, reads
+It limits its own address space (RLIMIT_AS) to MEMORY_BYTES, reads
 ``(Spawn request, rate_hz)`` pairs from the connection on FD and answers each with
 ``("ok", RobotPlan, notices)`` or ``("refused", Result, message)``, pickled. Descriptions are
 loaded confined (assets/sandbox.py). Each load may use SECONDS of CPU time: the kernel ends the
@@ -17,7 +17,6 @@ import resource
 import signal
 import sys
 
-NICE = 10  # the world's own thread wins when both want the CPU
 
 
 def main(argv: list[str]) -> int:
@@ -28,10 +27,6 @@ def main(argv: list[str]) -> int:
         os.environ[var] = "1"  # thread pools would reserve address space for nothing
     resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
     resource.setrlimit(resource.RLIMIT_CORE, (0, 0))  # a load ended by a limit leaves no core file
-    try:
-        os.nice(NICE)
-    except OSError:
-        pass
     from multiprocessing.connection import Connection
 
     connection = Connection(fd)
