@@ -40,7 +40,7 @@ from mobot_cli.sim.world import World
 FAST_SLICE = (0.0001, 0.002)  # s
 # A --fast world takes a step every few tens of microseconds; looking at the loader processes
 # that often would cost it a good part of its pace, so it looks once per this many seconds.
-LOADER_CHECK = 0.001
+LOADER_CHECK = 0.0005
 MAX_LAG = 0.25  # s: a real-time world further behind than this drops the lost time
 
 

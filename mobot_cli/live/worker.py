@@ -18,7 +18,6 @@ import signal
 import sys
 
 
-
 def main(argv: list[str]) -> int:
     """Serve load requests until the connection closes."""
     fd, memory, seconds = int(argv[0]), int(argv[1]), float(argv[2])
