@@ -23,6 +23,15 @@ def corpus() -> Path:
     return CORPUS
 
 
+@pytest.fixture(scope="session", autouse=True)
+def _isolated_keys(tmp_path_factory):
+    """CURVE keys live in the session's temp folder, never the user's (module fixtures start servers)."""
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("MOBOT_KEYS_DIR", str(tmp_path_factory.getbasetemp() / "mobot-keys"))
+        patch.delenv("MOBOT_SERVER_KEY", raising=False)
+        yield
+
+
 @pytest.fixture(autouse=True)
 def _isolated_cache(tmp_path_factory, monkeypatch):
     """Every test session gets its own cache folder so runs never see a user's cache."""

@@ -13,6 +13,7 @@ import threading
 from pathlib import Path
 from urllib.parse import unquote
 
+from mobot_cli.assets import sandbox
 from mobot_cli.errors import Location, ResourceError
 
 # Environment variables holding extra search roots, in search order.
@@ -195,7 +196,7 @@ class ResourceResolver:
             return self._existing(Path(path), uri, referenced_from)
         for folder in self._relative_bases(referenced_from):
             candidate = folder / path
-            if candidate.exists():
+            if candidate.exists() and sandbox.allows(candidate):  # live spawns: inside their roots
                 return candidate.resolve()
         raise self._missing(f"'{uri}'", referenced_from, self._relative_bases(referenced_from))
 
@@ -213,6 +214,7 @@ class ResourceResolver:
         return bases
 
     def _existing(self, path: Path, uri: str, referenced_from: Path | None) -> Path:
+        sandbox.check(path, f"'{uri}' names {path}, which")  # before looking: no existence oracle
         if path.exists():
             return path.resolve()
         raise ResourceError(

@@ -23,6 +23,11 @@ def serve(
     out: Optional[Path] = typer.Option(None, "--out", "-o", help="Record odometry, history and a summary here."),
     set_: list[str] = typer.Option([], "--set", help="Override a key, e.g. physics.rate_hz=480 (repeatable)."),
     duration: Optional[float] = typer.Option(None, "--duration", help="Stop after this many simulated seconds."),
+    load_timeout: float = typer.Option(10.0, "--load-timeout", metavar="S",
+                                       help="CPU seconds a spawned description may take to load "
+                                            "(and 3x as long in wall time)."),
+    load_memory: int = typer.Option(1024, "--load-memory", metavar="MIB",
+                                    help="Memory limit of the process that loads spawned descriptions."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),
     ros2_: bool = ros2.OPTION,
     view: bool = typer.Option(False, "--view", help="Watch and drive the world in a local 3D web page "
@@ -30,7 +35,9 @@ def serve(
     view_port: int = typer.Option(8080, "--view-port", help="Port of the --view page on 127.0.0.1 (0: any)."),
 ) -> int:
     """Keep a headless world running; spawn, delete, drive and read robots with the other commands."""
-    from mobot_cli.live.endpoint import default_endpoint
+    from mobot_cli.live.endpoint import default_endpoint, ipc_path
+    from mobot_cli.live.keys import authorise_hint
+    from mobot_cli.live.loader import Limits
     from mobot_cli.live.server import LiveServer, pace_text
     from mobot_cli.run.prepare import prepare_target
     from mobot_cli.run.record import Status
@@ -40,6 +47,9 @@ def serve(
     pace = _pace(realtime, fast, rtf)
     if duration is not None and not duration > 0:
         raise UsageError(f"--duration {duration:g} must be above zero")
+    if not 0 < load_timeout <= 3600 or not 256 <= load_memory <= 1 << 20:
+        raise UsageError("--load-timeout must be above 0 and at most 3600 s, --load-memory at least 256 MiB",
+                         hint="The defaults are 10 s and 1024 MiB.")
     if view:
         from mobot_cli.view.page import require_viser
 
@@ -53,7 +63,8 @@ def serve(
     server = LiveServer(plan, endpoint or default_endpoint(), rtf=pace, bind_any=bind_any,
                         out_dir=out, resolved_yaml=prepared.resolved_yaml, stop_after=stop_after,
                         attachments=bridges, watch=page.watch if page else None,
-                        hold=page.gate.hold if page else None)
+                        hold=page.gate.hold if page else None,
+                        limits=Limits(seconds=load_timeout, memory=load_memory * 2**20))
     if page:
         page.connect(server)
 
@@ -63,6 +74,8 @@ def serve(
                                f"at {where}, {pace_text(pace)}, {plan.physics.rate_hz} Hz. "
                                "Stop with Ctrl-C or `mobot stop`.")
             ros2.joined(env, bridges, quiet=False)
+            if ipc_path(where) is None:
+                live_common.status(env, authorise_hint())
 
     try:
         result = server.serve(ready)

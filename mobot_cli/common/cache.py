@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import json
@@ -17,6 +18,14 @@ _PACKAGE = Path(__file__).resolve().parent.parent  # mobot_cli/
 # The code that builds cached documents (asset loading, the plan types it fills, this folder)
 # and the version number; paths, not imports: the cache sits below all of them.
 _BUILDERS = ("__init__.py", "common", "assets", "sim/plan.py")
+
+
+# Kinds with one entry per distinct robot text (which live clients choose): bounded by prune().
+BOUNDED_KINDS = ("xacro", "robot")
+# Cache folders that grow with every distinct robot text (urdf/, spawned/, xacro/, robot/) keep
+# at most this many files and bytes each; the least recently used go first (README, Security).
+CACHE_MAX_FILES = 1024
+CACHE_MAX_BYTES = 256 * 1024 * 1024
 
 
 def cache_dir() -> Path:
@@ -66,9 +75,12 @@ def load(kind: str, key: str) -> Any | None:
     """The cached document, or None when absent or unreadable (a cache never fails a run)."""
     path = cache_dir() / kind / f"{key}.json"
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
+        document = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return None
+    if kind in BOUNDED_KINDS:
+        touch(path)
+    return document
 
 
 def store(kind: str, key: str, document: Any) -> None:
@@ -77,5 +89,46 @@ def store(kind: str, key: str, document: Any) -> None:
     try:
         folder.mkdir(parents=True, exist_ok=True)
         write_text_atomic(folder / f"{key}.json", json.dumps(document))
+        if kind in BOUNDED_KINDS:
+            prune(folder)
     except OSError:
         pass
+
+
+def touch(path: Path) -> None:
+    """Mark a cache file as just used (pruning keeps the most recently used)."""
+    try:
+        os.utime(path)
+    except OSError:
+        pass
+
+
+def prune(folder: Path, max_files: int | None = None, max_bytes: int | None = None) -> int:
+    """Delete a cache folder's least recently used files beyond the limits; returns how many went.
+
+    The newest file always stays (it was just written for use). Files being written (.tmp) are left alone.
+    """
+    max_files = CACHE_MAX_FILES if max_files is None else max_files
+    max_bytes = CACHE_MAX_BYTES if max_bytes is None else max_bytes
+    entries = []
+    try:
+        with os.scandir(folder) as scan:
+            for entry in scan:
+                if entry.name.endswith(".tmp") or not entry.is_file(follow_symlinks=False):
+                    continue
+                try:
+                    info = entry.stat(follow_symlinks=False)
+                except OSError:
+                    continue
+                entries.append((info.st_mtime_ns, info.st_size, entry.path))
+    except OSError:
+        return 0
+    entries.sort(reverse=True)
+    kept, removed = 0, 0
+    for index, (_, size, name) in enumerate(entries):
+        kept += size
+        if index > 0 and (index >= max_files or kept > max_bytes):
+            with contextlib.suppress(OSError):
+                os.unlink(name)
+                removed += 1
+    return removed

@@ -8,6 +8,8 @@
 
 Every method returns the reply document and raises RequestRefused when the world refuses
 (``reply["result"]`` names why) or LiveWorldError when nothing answers within ``timeout``.
+Over ``tcp://`` the client authenticates with CURVE (keys.py): this user's client key, and
+the server's public key from ``server_key``, $MOBOT_SERVER_KEY or the key folder's server.key.
 """
 
 from __future__ import annotations
@@ -21,17 +23,21 @@ import zmq
 
 from mobot_cli.errors import LiveWorldError, RequestRefused
 from mobot_cli.live import endpoint as endpoints
+from mobot_cli.live import keys
 from mobot_cli.live.protocol import HARD_LIMIT_BYTES, decode_reply, encode
 
 START_HINT = "Start one with `mobot serve` (in another terminal), or point --endpoint / MOBOT_ENDPOINT at it."
+TCP_HINT = ("A tcp:// live world answers only clients it has authorised, and the client must hold the "
+            "server's public key: see `mobot serve`'s message or the README's Security section.")
 
 
 class Client:
     """One connection to a live world; requests are answered in order, one at a time."""
 
-    def __init__(self, endpoint: str | None = None, timeout: float = 5.0):
+    def __init__(self, endpoint: str | None = None, timeout: float = 5.0, server_key: str | None = None):
         self.endpoint = endpoints.check(endpoint or endpoints.default_endpoint(), bind_any=True)
         self.timeout = timeout
+        self.server_key = server_key  # tcp://: the server's public key file
         self._ids = itertools.count(1)
         self._context = zmq.Context.instance()
         self._socket: zmq.Socket | None = None
@@ -46,6 +52,12 @@ class Client:
             socket = self._context.socket(zmq.DEALER)
             socket.setsockopt(zmq.LINGER, 0)
             socket.setsockopt(zmq.MAXMSGSIZE, HARD_LIMIT_BYTES)
+            if path is None:
+                try:
+                    keys.secure_client(socket, self.server_key)
+                except BaseException:
+                    socket.close()
+                    raise
             socket.connect(self.endpoint)
             self._socket = socket
         return self._socket
@@ -70,8 +82,8 @@ class Client:
                 return reply
             # Otherwise a late reply to an earlier request that timed out: skip it.
         self.close()  # drop the unanswered request so a later one does not read its reply
-        raise LiveWorldError(f"no live world answered at {self.endpoint} within {limit:g} s",
-                             hint=START_HINT)
+        hint = START_HINT if endpoints.ipc_path(self.endpoint) is not None else f"{START_HINT} {TCP_HINT}"
+        raise LiveWorldError(f"no live world answered at {self.endpoint} within {limit:g} s", hint=hint)
 
     def ping(self) -> dict[str, Any]:
         """World name, step, sim time, robot count, pace."""

@@ -10,6 +10,7 @@ This module stays light (no pydantic, no zmq) so the CLI client imports it cheap
 from __future__ import annotations
 
 import json
+import math
 from enum import IntEnum
 from typing import Any
 
@@ -21,6 +22,8 @@ PROTOCOL_VERSION = 1
 MAX_REQUEST_BYTES = 4 * 1024 * 1024
 # Larger frames are dropped by ZeroMQ itself before they reach Python (memory safety).
 HARD_LIMIT_BYTES = 64 * 1024 * 1024
+# JSON nested deeper than this is refused (no request needs more than a few levels).
+MAX_DEPTH = 32
 
 OPS = ("ping", "spawn", "delete", "list", "cmd", "odom", "scan", "stop", "goto")
 
@@ -55,8 +58,22 @@ class Refusal(Exception):
 
 
 def encode(document: dict[str, Any]) -> bytes:
-    """One message: compact UTF-8 JSON; NaN and infinity are not JSON and never sent."""
+    """One message: compact UTF-8 JSON; NaN and infinity are not JSON and never sent (ValueError)."""
     return json.dumps(document, separators=(",", ":"), allow_nan=False, default=json_default).encode()
+
+
+def encode_reply(answer: dict[str, Any]) -> bytes:
+    """A reply's bytes; never raises: a reply that cannot be encoded becomes OPERATION_FAILED."""
+    try:
+        return encode(answer)
+    except Exception as exc:  # noqa: BLE001 - whatever a reply holds, the peer gets an answer
+        problem = f"the reply could not be encoded as JSON: {exc!r}"[:300]
+    for request_id in (answer.get("id"), None):
+        try:
+            return encode(reply(request_id, Result.OPERATION_FAILED, problem))
+        except Exception:  # noqa: BLE001 - the id itself cannot be encoded: answer without it
+            continue
+    return encode(reply(None, Result.OPERATION_FAILED, "the reply could not be encoded as JSON"))
 
 
 def decode(frame: bytes) -> dict[str, Any]:
@@ -65,9 +82,15 @@ def decode(frame: bytes) -> dict[str, Any]:
         raise Refusal(Result.INVALID_REQUEST, f"request of {len(frame)} bytes is larger than the "
                       f"limit of {MAX_REQUEST_BYTES} bytes")
     try:
-        document = json.loads(frame.decode("utf-8"), parse_constant=_no_constant)
+        document = json.loads(frame.decode("utf-8"), parse_constant=_no_constant, parse_float=_finite)
+    except _NotFinite as exc:
+        raise Refusal(Result.INVALID_REQUEST, str(exc)) from None
     except (UnicodeDecodeError, ValueError) as exc:
-        raise Refusal(Result.INVALID_REQUEST, f"request is not UTF-8 JSON: {exc}") from None
+        raise Refusal(Result.INVALID_REQUEST, f"request is not UTF-8 JSON: {str(exc)[:200]}") from None
+    except RecursionError:
+        raise Refusal(Result.INVALID_REQUEST, f"request nests deeper than {MAX_DEPTH} levels") from None
+    if not _shallow(document):
+        raise Refusal(Result.INVALID_REQUEST, f"request nests deeper than {MAX_DEPTH} levels")
     if not isinstance(document, dict):
         raise Refusal(Result.INVALID_REQUEST, "a request must be a JSON object with an 'op'")
     op = document.get("op")
@@ -94,3 +117,28 @@ def reply(request_id: Any, result: Result = Result.OK, message: str = "", **fiel
 def _no_constant(name: str) -> Any:
     raise ValueError(f"{name} is not a number JSON allows")
 
+
+class _NotFinite(ValueError):
+    pass
+
+
+def _finite(text: str) -> float:
+    """json's float parsing, refusing what overflows to infinity (1e999)."""
+    value = float(text)
+    if not math.isfinite(value):
+        shown = text if len(text) <= 40 else text[:37] + "..."
+        raise _NotFinite(f"request has the number {shown}, which is not finite as a float: "
+                         "numbers must be finite")
+    return value
+
+
+def _shallow(document: Any) -> bool:
+    """True when no list or object nests deeper than MAX_DEPTH."""
+    stack = [(document, 1)]
+    while stack:
+        value, depth = stack.pop()
+        if isinstance(value, (dict, list)):
+            if depth > MAX_DEPTH:
+                return False
+            stack.extend((item, depth + 1) for item in (value.values() if isinstance(value, dict) else value))
+    return True

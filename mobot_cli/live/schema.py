@@ -98,9 +98,11 @@ _ADAPTER: TypeAdapter = TypeAdapter(AnyRequest)
 
 def parse(document: dict[str, Any]) -> Request:
     """A decoded request to its typed form, or a Refusal saying which field is wrong."""
-    if document["op"] not in OPS:
-        raise Refusal(Result.FEATURE_UNSUPPORTED,
-                      f"unknown request op '{document['op']}': this server knows " + ", ".join(OPS))
+    op = document["op"]
+    if op not in OPS:
+        shown = op if len(op) <= 60 else op[:57] + "..."
+        raise Refusal(Result.FEATURE_UNSUPPORTED, f"unknown request op '{shown}': this server knows "
+                      + ", ".join(OPS))
     try:
         request = _ADAPTER.validate_python(document)
     except ValidationError as exc:

@@ -3,8 +3,10 @@
 Between two physics steps the server answers requests for a bounded time (until the next
 step is due in real time, a short slice in --fast), so neither a flood of requests nor a
 slow or vanished client stops the clock: a ROUTER socket never blocks on send, and a reply
-to a peer that is gone is dropped. Robot descriptions load in a worker thread; the robot
-is spawned (placed and collision-checked) between steps, and only then is the spawn answered.
+to a peer that is gone is dropped. Robot descriptions load in loader processes (loader.py),
+within time and memory limits; the robot is spawned (placed and collision-checked) between
+steps, and only then is the spawn answered. A TCP endpoint only serves CURVE-authenticated
+clients (keys.py); nothing a client sends ends the loop (every request gets a reply or is dropped).
 """
 
 from __future__ import annotations
@@ -12,9 +14,9 @@ from __future__ import annotations
 import math
 import os
 import signal
+import stat
 import threading
 import time
-from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Sequence
@@ -22,9 +24,11 @@ from typing import Any, Callable, Sequence
 import zmq
 
 from mobot_cli import __version__
-from mobot_cli.errors import MobotError, SimulationFault, UsageError
+from mobot_cli.errors import Location, MobotError, SimulationFault, UsageError
 from mobot_cli.live import endpoint as endpoints
+from mobot_cli.live import keys
 from mobot_cli.live import protocol, schema, spawning
+from mobot_cli.live.loader import Job, Limits, LoaderPool
 from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.live.session import Session
 from mobot_cli.run.record import LiveInfo, Status
@@ -35,11 +39,9 @@ from mobot_cli.sim.world import World
 # In --fast mode requests get at most as much wall time between two steps as the last step
 # took (so a flood of requests at least halves, never stops, the world), within these bounds.
 FAST_SLICE = (0.0001, 0.002)  # s
-# A robot description loads in a worker thread, which needs the GIL. A --fast loop that
-# only ever polls with a zero timeout takes the GIL straight back and starves it (CPython
-# hands the GIL to a waiting thread only when nobody else took it meanwhile), so while a
-# load is pending the loop waits this long for requests, lending the GIL to the loader.
-LEND_GIL_MS = 1
+# A --fast world takes a step every few tens of microseconds; looking at the loader processes
+# that often would cost it a good part of its pace, so it looks once per this many seconds.
+LOADER_CHECK = 0.0005
 MAX_LAG = 0.25  # s: a real-time world further behind than this drops the lost time
 HOLD_POLL = 0.02  # s: how long a held (paused) world waits for requests between two looks at hold()
 
@@ -50,7 +52,6 @@ class _Pending:
 
     envelope: list[bytes]
     request: Any
-    future: Future | None = None  # spawn: the loader's result
     until: int | None = None  # cmd: the step at which the command ends
 
 
@@ -93,7 +94,8 @@ class LiveServer:
     def __init__(self, plan: Plan, endpoint: str, *, rtf: float | None = 1.0, bind_any: bool = False,
                  out_dir: Path | None = None, resolved_yaml: str = "", stop_after: int | None = None,
                  attachments: Sequence[Attachment] = (), watch: Callable[[Timeline], None] | None = None,
-                 hold: Callable[[], bool] | None = None):
+                 hold: Callable[[], bool] | None = None,
+                 limits: Limits = Limits()):
         self.plan, self.rtf, self.stop_after = plan, rtf, stop_after
         self.attachments = attachments  # ride along the timeline (the ROS 2 bridge): run/timeline.py
         # watch: called with the timeline before the first spawn (a view attaches there);
@@ -106,9 +108,11 @@ class LiveServer:
         self.status, self.error = Status.OK, None
         self.counts: dict[str, int] = {}
         self._socket: zmq.Socket | None = None
-        self._spawns: list[_Pending] = []
+        self._authenticator = None  # CURVE on TCP endpoints
+        self._poller, self._poller_fds = None, ()  # the socket and the loaders' pipes, while loads run
+        self._loaders_due = 0.0
         self._waits: list[_Pending] = []
-        self._loader = ThreadPoolExecutor(max_workers=1, thread_name_prefix="mobot-loader")
+        self._loader = LoaderPool(limits)
         self._handlers: dict[str, Callable] = {
             "ping": self._ping, "list": self._list, "spawn": self._spawn, "delete": self._delete,
             "cmd": self._cmd, "odom": self._odom, "scan": self._scan, "stop": self._stop, "goto": self._goto}
@@ -119,6 +123,7 @@ class LiveServer:
         try:
             with World(self.plan.physics, self.plan.world, seed=self.plan.seed) as world:
                 self._bind()
+                self._loader.start()
                 self.session = Session(self.plan, world, self.out_dir, self.resolved_yaml)
                 if self.watch is not None:
                     self.watch(self.session.timeline)
@@ -157,8 +162,7 @@ class LiveServer:
             step = timeline.step
             timeline.tick()
             self._answer_waits(step)
-            self._finish_spawns()
-            self._serve_requests(clock.due(), step_time)
+            self._serve_requests(clock.due(), step_time)  # finished loads are answered there, too
             if self.stopping or (self.stop_after is not None and step >= self.stop_after):
                 break
             if self.hold is not None and self.hold():
@@ -185,12 +189,18 @@ class LiveServer:
     # -- the socket -------------------------------------------------------------------------
 
     def _bind(self) -> None:
-        socket = zmq.Context.instance().socket(zmq.ROUTER)
-        socket.setsockopt(zmq.LINGER, 0)
-        socket.setsockopt(zmq.MAXMSGSIZE, protocol.HARD_LIMIT_BYTES)  # larger: the peer is dropped
         path = endpoints.ipc_path(self.endpoint)
         if path is not None:
             _claim_socket_file(self.endpoint, path)
+        socket = zmq.Context.instance().socket(zmq.ROUTER)
+        socket.setsockopt(zmq.LINGER, 0)
+        socket.setsockopt(zmq.MAXMSGSIZE, protocol.HARD_LIMIT_BYTES)  # larger: the peer is dropped
+        if path is None:  # TCP: only clients with an authorised key get through the handshake
+            try:
+                self._authenticator = keys.secure_server(socket)
+            except BaseException:
+                socket.close()
+                raise
         old = os.umask(0o177)  # the socket file is born 0600: no window with looser rights
         try:
             socket.bind(self.endpoint)
@@ -211,52 +221,76 @@ class LiveServer:
         fast = due is None
         end = time.monotonic() + min(max(step_time, FAST_SLICE[0]), FAST_SLICE[1]) if fast else due
         while not self.stopping:
-            if fast:
-                wait_ms = LEND_GIL_MS if self._spawns else 0
-            else:
-                wait_ms = max(0, math.ceil((end - time.monotonic()) * 1000))
-            if not self._socket.poll(wait_ms):
+            wait_ms = 0 if fast else max(0, math.ceil((end - time.monotonic()) * 1000))
+            if self._wait(wait_ms):
+                try:
+                    self._receive(self._socket.recv_multipart(zmq.NOBLOCK))
+                except zmq.ZMQError:
+                    pass  # the message went away (EAGAIN): nothing to answer
+            elif fast:
                 return
-            try:
-                frames = self._socket.recv_multipart(zmq.NOBLOCK)
-            except zmq.Again:
-                return
-            self._receive(frames)
             if time.monotonic() >= end:
                 return
+
+    def _wait(self, wait_ms: int) -> bool:
+        """Wait up to ``wait_ms`` for a request; True when one is there.
+
+        While loads run, their processes wake the wait too: a finished (or timed-out) load is
+        placed and answered at once, between the same two steps.
+        """
+        if wait_ms == 0 and time.monotonic() < self._loaders_due:  # --fast: look at loaders each ms only
+            return bool(self._socket.poll(0))
+        self._loaders_due = time.monotonic() + LOADER_CHECK
+        loaders = self._loader.fds() if self._loader.busy else ()
+        if not loaders:
+            return bool(self._socket.poll(wait_ms))
+        if loaders != self._poller_fds:  # a poller per set of loaders: --fast waits once per step
+            self._poller, self._poller_fds = zmq.Poller(), loaders
+            self._poller.register(self._socket, zmq.POLLIN)
+            for fd in loaders:
+                self._poller.register(fd, zmq.POLLIN)
+        deadline = self._loader.next_deadline()
+        if deadline is not None:  # wake up to stop a load that ran out of time
+            wait_ms = min(wait_ms, max(0, math.ceil((deadline - time.monotonic()) * 1000)))
+        events = dict(self._poller.poll(wait_ms))
+        if len(events) > (self._socket in events) or (deadline is not None and time.monotonic() >= deadline):
+            self._finish_spawns()
+        return self._socket in events
 
     def _receive(self, frames: list[bytes]) -> None:
         # REQ peers (and our DEALER client) put an empty delimiter after the identity.
         cut = 2 if len(frames) >= 3 and frames[1] == b"" else 1
         envelope, body = frames[:cut], frames[cut:]
-        request_id, op = None, None
+        request_id, op, name = None, None, None
         try:
             if len(body) != 1:
                 raise Refusal(Result.INVALID_REQUEST, f"a request is one JSON frame, got {len(body)}")
             document = protocol.decode(body[0])
-            request_id, op = document.get("id"), document.get("op")
+            request_id, op, name = document.get("id"), document.get("op"), document.get("name")
             request = schema.parse(document)
             self.counts[request.op] = self.counts.get(request.op, 0) + 1
             answer = self._handlers[request.op](envelope, request)
         except Refusal as exc:
             answer = protocol.reply(request_id, exc.result, exc.message)
             if op in ("spawn", "delete", "cmd"):  # the history keeps what was refused, too
-                self.session.history(op=op, name=str(document.get("name")), result=exc.result.name,
-                                     message=exc.message)
+                self._history(op=op, name=name, result=exc.result.name, message=exc.message)
         except Exception as exc:  # a bug must cost one request, never the world
-            answer = protocol.reply(request_id, Result.OPERATION_FAILED, f"internal error: {exc!r}")
+            answer = protocol.reply(request_id, Result.OPERATION_FAILED, f"internal error: {exc!r}"[:500])
         if answer is not None:
             self._send(envelope, answer)
 
     def _send(self, envelope: list[bytes], answer: dict[str, Any]) -> None:
-        try:
-            payload = protocol.encode(answer)
-        except ValueError as exc:  # a non-finite number in a robot's state
-            payload = protocol.encode(protocol.reply(answer.get("id"), Result.OPERATION_FAILED, str(exc)))
+        payload = protocol.encode_reply(answer)  # never raises: OPERATION_FAILED when it cannot encode
         try:
             self._socket.send_multipart([*envelope, payload], zmq.NOBLOCK)
         except zmq.ZMQError:
             pass  # the peer is gone or not reading: its reply is dropped, the world goes on
+
+    def _history(self, **record: Any) -> None:
+        try:
+            self.session.history(**record)
+        except (OSError, ValueError):
+            pass  # a full disk costs the history line, not the world
 
     # -- requests ---------------------------------------------------------------------------
 
@@ -303,18 +337,20 @@ class LiveServer:
         if not request.allow_renaming:
             spawning.final_name(request, self.session.taken())
         self.session.reference(request)
-        future = self._loader.submit(spawning.load_plan, request, self.plan.physics.rate_hz)
-        self._spawns.append(_Pending(envelope, request, future=future))
+        self._loader.submit(Job(request, self.plan.physics.rate_hz, owner=envelope))
+        self._finish_spawns()  # a load refused at once (no loader can start) is answered now
         return None
 
     # -- replies owed -----------------------------------------------------------------------
 
     def _finish_spawns(self) -> None:
-        while self._spawns and self._spawns[0].future.done():
-            job = self._spawns.pop(0)
+        """Place the robots whose loads finished (in the order they finished) and answer them."""
+        for job in self._loader.poll() if self._loader.busy else ():
             request = job.request
             try:
-                answer = self.session.place(request, *job.future.result())
+                if isinstance(job.outcome, Refusal):
+                    raise job.outcome
+                answer = self.session.place(request, *job.outcome)
             except Refusal as exc:
                 answer = protocol.reply(request.id, exc.result, exc.message)
             except MobotError as exc:
@@ -322,9 +358,8 @@ class LiveServer:
             except Exception as exc:
                 answer = protocol.reply(request.id, Result.OPERATION_FAILED, f"internal error: {exc!r}")
             if not answer["ok"]:
-                self.session.history(op="spawn", name=request.name, result=answer["result"],
-                                     message=answer["message"])
-            self._send(job.envelope, answer)
+                self._history(op="spawn", name=request.name, result=answer["result"], message=answer["message"])
+            self._send(job.owner, answer)
 
     def _answer_waits(self, step: int) -> None:
         for wait in [w for w in self._waits if step >= w.until]:
@@ -345,13 +380,17 @@ class LiveServer:
 
     def _answer_owed(self) -> None:
         """Every reply still owed says the world stopped."""
-        for job in self._spawns + self._waits:
-            self._send(job.envelope, protocol.reply(job.request.id, Result.INCORRECT_STATE,
-                                                    "the live world stopped before it could answer"))
-        self._spawns, self._waits = [], []
+        owed = [(job.owner, job.request) for job in self._loader.close()]
+        owed += [(wait.envelope, wait.request) for wait in self._waits]
+        for envelope, request in owed:
+            self._send(envelope, protocol.reply(request.id, Result.INCORRECT_STATE,
+                                                "the live world stopped before it could answer"))
+        self._waits = []
 
     def _shutdown(self) -> None:
-        self._loader.shutdown(wait=False, cancel_futures=True)
+        self._loader.close()
+        if self._authenticator is not None:
+            self._authenticator.stop()
         if self._socket is not None:
             self._socket.close(linger=0)
             path = endpoints.ipc_path(self.endpoint)
@@ -365,11 +404,22 @@ def pace_text(rtf: float | None) -> str:
 
 
 def _claim_socket_file(endpoint: str, path: Path) -> None:
-    """Refuse to take over a live server's socket; remove a stale one left by a crash."""
+    """Refuse to take over a live server's socket or any file that is not a socket; remove a stale one."""
     if path.parent == endpoints.runtime_dir() or not path.parent.exists():
         endpoints.private_dir(path.parent)  # made 0700, or checked to be the user's own
-    if not os.path.exists(path):
+    try:
+        info = os.lstat(path)
+    except FileNotFoundError:
         return
+    except OSError as exc:
+        raise UsageError(f"cannot use {endpoint}: {exc.strerror}", location=Location(file=path),
+                         hint="Pick another --endpoint.") from None
+    if not stat.S_ISSOCK(info.st_mode):
+        kind = "a symbolic link" if stat.S_ISLNK(info.st_mode) else (
+            "a folder" if stat.S_ISDIR(info.st_mode) else "a file that is not a socket")
+        raise UsageError(f"endpoint {endpoint} names {kind}; mobot serve only replaces a stale socket "
+                         "and leaves it untouched", location=Location(file=path),
+                         hint="Pick a path that does not exist yet, e.g. ipc:///tmp/mobot-$USER/mobot.sock.")
     from mobot_cli.live.client import Client
 
     try:

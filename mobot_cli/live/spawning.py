@@ -1,7 +1,8 @@
 """A live spawn request to a RobotPlan, through the same RobotResolver scenario robots use.
 
-Loading (xacro, checks, meshes) runs in a worker thread; naming, the reference frame and
-the spawn itself happen on the world's thread, against the robots alive at that moment.
+Loading (xacro, checks, meshes) runs in a loader process (worker.py), confined to the
+folders the request may read (assets/sandbox.py); naming, the reference frame and the spawn
+itself happen on the world's thread, against the robots alive at that moment.
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ import math
 import re
 from pathlib import Path
 
+from mobot_cli.assets import sandbox
 from mobot_cli.assets.description.load import resolve_description
 from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.common.transforms import compose_poses, quat_from_rpy
@@ -28,28 +30,36 @@ DESCRIPTION_SUFFIXES = (".urdf", ".xacro")
 UNSUPPORTED_SUFFIXES = (".sdf", ".world", ".dae", ".stl", ".obj", ".mjcf", ".xml")
 # Far past any run: a live robot's spawn time is only known when it is spawned.
 NO_END = 2**62
+# The world's thread loads a spawned robot into PyBullet and checks it for collisions; past
+# these sizes that would stall the world, so the loader refuses the robot first.
+MAX_LINKS = 1000
+MAX_URDF_CHARS = 16 * 1024 * 1024
+MAX_NOTICES, MAX_NOTICE_CHARS = 50, 2000  # xacro messages from a client come back as notices
 _MISSING_ASSET = re.compile(r"mesh '.*' of link '.*' (cannot be found|resolves to .* not a readable file)"
                             r"|^included file '.*' cannot be read", re.DOTALL)
 
 
 def load_plan(request: Spawn, rate_hz: int) -> tuple[RobotPlan, list[str]]:
-    """The robot of a spawn request, loaded and checked (not yet named or placed); plus notices."""
+    """The robot of a spawn request, loaded confined and checked (not yet named or placed); plus notices."""
     base_dir = Path(request.base_dir) if request.base_dir else Path.cwd()
-    description, label = request.description, None
+    description, label, files, roots = request.description, None, (), []
     if request.urdf is not None:
-        description, label = str(_text_file(request.urdf)), "<urdf text>"
+        path = _text_file(request.urdf)
+        description, label, files = str(path), "<urdf text>", (path,)
     else:
-        _check_format(description, base_dir)
+        roots.append(_package_of(_check_format(description, base_dir)))
+    roots.extend(ResourceResolver(base_dir).roots)
     spec = RobotSpec(name=request.name, description=description, args=request.args, pose=request.pose)
     resolver = RobotResolver(rate_hz, 0, NO_END, base_dir=base_dir)
     try:
-        (plan,) = resolver.plans(spec, ())
+        with sandbox.confined(roots, files):
+            (plan,) = resolver.plans(spec, ())
     except MobotError as exc:
         message = str(exc) if label is None else str(exc).replace(description, label)
         raise Refusal(classify(exc), message) from None
-    if label is not None:
-        return plan, [notice.replace(description, label) for notice in resolver.notices]
-    return plan, resolver.notices
+    _check_size(plan)
+    notices = resolver.notices if label is None else [n.replace(description, label) for n in resolver.notices]
+    return plan, [_short(notice, MAX_NOTICE_CHARS) for notice in notices[:MAX_NOTICES]]
 
 
 def _text_file(text: str) -> Path:
@@ -59,8 +69,8 @@ def _text_file(text: str) -> Path:
     return urdf_path(text, folder="spawned")  # xacro is detected from the text
 
 
-def _check_format(description: str, base_dir: Path) -> None:
-    """NO_RESOURCE when nothing is there, UNSUPPORTED_FORMAT for a file that is not URDF/xacro."""
+def _check_format(description: str, base_dir: Path) -> Path:
+    """The description's file; NO_RESOURCE when nothing is there, UNSUPPORTED_FORMAT when not URDF/xacro."""
     try:
         path = resolve_description(description, base_dir, ResourceResolver(base_dir))
     except ResourceError as exc:
@@ -68,6 +78,28 @@ def _check_format(description: str, base_dir: Path) -> None:
     if path.name.lower().endswith(UNSUPPORTED_SUFFIXES) or not path.name.endswith(DESCRIPTION_SUFFIXES):
         raise Refusal(Result.UNSUPPORTED_FORMAT, f"{path} is not a URDF or xacro file: mobot spawns "
                       ".urdf, .urdf.xacro and .xacro descriptions")
+    return path
+
+
+def _package_of(path: Path) -> Path:
+    """The package (nearest folder with a package.xml) holding a description, else its folder."""
+    for folder in path.parents:
+        if (folder / "package.xml").is_file():
+            return folder
+    return path.parent
+
+
+def _check_size(plan: RobotPlan) -> None:
+    """The world's thread loads and collision-checks the robot: refuse one too big to do it briskly."""
+    links = plan.urdf.count("<link")
+    if len(plan.urdf) > MAX_URDF_CHARS or links > MAX_LINKS:
+        raise Refusal(Result.RESOURCE_PARSE_ERROR, f"the expanded robot has {links} links and "
+                      f"{len(plan.urdf)} characters; a live spawn takes at most {MAX_LINKS} links and "
+                      f"{MAX_URDF_CHARS} characters")
+
+
+def _short(text: str, limit: int) -> str:
+    return text if len(text) <= limit else text[:limit] + f"... ({len(text)} characters)"
 
 
 def classify(exc: MobotError) -> Result:

@@ -99,7 +99,8 @@ def rest_on_floor(cid: int, body: int, probe: int, floors: set[int], xyz, quat,
     """
     _place(cid, body, (xyz[0], xyz[1], PARKING_HEIGHT), quat)
     base_z = link_frame_z(cid, body)
-    lowest = min(lowest_points(cid, body, probe, probe_z).values())  # its world z, parked
+    # Its world z, parked; a robot without collision geometry rests its base frame on the floor.
+    lowest = min(lowest_points(cid, body, probe, probe_z).values(), default=base_z)
     box = _probe_box(cid, body)
     floor = floor_height(cid, box, floors, box[1][2] - lowest + FLOOR_PROBE_CLEARANCE, name)
     z = floor + (base_z - lowest)

@@ -9,17 +9,23 @@ import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from mobot_cli.common.cache import cache_dir
+from mobot_cli.common.cache import cache_dir, prune, touch
 from mobot_cli.common.files import write_text_atomic
 
 
 def urdf_path(text: str, folder: str = "urdf") -> Path:
-    """A file holding ``text``, named by its content hash, written once and atomically."""
+    """A file holding ``text``, named by its content hash, written once and atomically.
+
+    The folder is bounded (``prune``): every distinct text a live client sends makes a file.
+    """
     digest = hashlib.sha256(text.encode("utf-8")).hexdigest()[:32]
     path = cache_dir() / folder / f"{digest}.urdf"
-    if not path.is_file():
-        path.parent.mkdir(parents=True, exist_ok=True)
-        write_text_atomic(path, text)  # parallel sweep workers may write the same file
+    if path.is_file():
+        touch(path)
+        return path
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_text_atomic(path, text)  # parallel sweep workers may write the same file
+    prune(path.parent)
     return path
 
 

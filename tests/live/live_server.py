@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -21,18 +22,20 @@ START_TIMEOUT = 60.0  # s; a cold first start imports pybullet and may expand xa
 class LiveProcess:
     """`python -m mobot_cli serve ARGS --endpoint ipc://<short tmp path>` in a subprocess."""
 
-    def __init__(self, *args: str, cache_dir: Path, out: Path | None = None, ready: bool = True):
+    def __init__(self, *args: str, cache_dir: Path, out: Path | None = None, ready: bool = True,
+                 endpoint: str | None = None):
         # Unix socket paths must stay short: pytest's tmp_path is often too long for one.
         self.folder = Path(tempfile.mkdtemp(prefix="mobot-t-"))
-        self.endpoint = f"ipc://{self.folder / 's.sock'}"
+        self.endpoint = endpoint or f"ipc://{self.folder / 's.sock'}"
         self.out = out
         command = [sys.executable, "-m", "mobot_cli", "serve", *args, "--endpoint", self.endpoint]
         if out is not None:
             command += ["--out", str(out)]
         env = {k: v for k, v in os.environ.items()
                if k not in ("MOBOT_RESOURCE_PATH", "ROS_PACKAGE_PATH", "AMENT_PREFIX_PATH",
-                            "GZ_SIM_RESOURCE_PATH", "GAZEBO_MODEL_PATH", "MOBOT_ENDPOINT")}
+                            "GZ_SIM_RESOURCE_PATH", "GAZEBO_MODEL_PATH", "MOBOT_ENDPOINT", "MOBOT_SERVER_KEY")}
         env["MOBOT_CACHE_DIR"] = str(cache_dir)
+        env["MOBOT_KEYS_DIR"] = str(cache_dir.parent / "mobot-keys")  # conftest's: never the user's keys
         self.log = open(self.folder / "server.log", "w+")
         self.process = subprocess.Popen(command, cwd=REPO, env=env, stdout=self.log, stderr=subprocess.STDOUT)
         if ready:
@@ -43,6 +46,12 @@ class LiveProcess:
         while time.monotonic() < deadline:
             if self.process.poll() is not None:
                 raise RuntimeError(f"mobot serve exited with {self.process.returncode}: {self.output()}")
+            if self.endpoint.endswith(":*"):  # the server picks the port and prints it
+                found = re.search(r" at (tcp://\S+?), ", self.output())
+                if found is None:
+                    time.sleep(0.05)
+                    continue
+                self.endpoint = found.group(1)
             try:
                 with Client(self.endpoint, timeout=0.5) as client:
                     client.ping()

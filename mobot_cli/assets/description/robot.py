@@ -13,6 +13,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from mobot_cli.assets import sandbox
 from mobot_cli.assets.description.check import check_geometry, check_tree, check_with_yourdfpy, \
     parse_urdf
 from mobot_cli.assets.description.drive import detect_drive
@@ -184,6 +185,8 @@ def _from_document(document: dict[str, Any] | None) -> RobotDescription | None:
     try:
         # A mesh edited or removed since the entry was written makes it stale.
         if any(list(_stat(path)) != [size, mtime] for path, size, mtime in document["meshes"]):
+            return None
+        if not all(sandbox.allows(path) for path, _, _ in document["meshes"]):  # live spawns
             return None
         drive = document["drive"]
         if drive is not None:

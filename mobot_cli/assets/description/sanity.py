@@ -1,9 +1,9 @@
 """Checks that keep an untrusted robot description from failing deep inside PyBullet.
 
 Every number a URDF gives (origins, sizes, scales, masses, inertias, axes, limits) must be
-finite; masses and inertia diagonals must not be negative; the robot must collide somewhere
-(something has to rest on the floor); its collision meshes must be meshes; and it may have at
-most MAX_LINKS links. Each refusal names the file, the link or joint and the element.
+finite; masses and inertia diagonals must not be negative; its collision meshes must be meshes;
+and it may have at most MAX_LINKS links. (A robot with no collision geometry at all is placed
+with its base frame on the floor: sim/placement.py.) Each refusal names the file, the link or joint and the element.
 """
 
 from __future__ import annotations
@@ -39,11 +39,6 @@ def check_sanity(robot: ET.Element, source: Path) -> None:
         _check_numbers(element, source)
     for link in links:
         _check_inertial(link, source)
-    if not any(link.find("collision") is not None for link in links):
-        raise DescriptionError("the robot has no <collision> geometry: it could neither rest on a floor "
-                               "nor touch anything", location=Location(file=source),
-                               hint="Give its base (and wheels) <collision> elements, e.g. copies of "
-                                    "their <visual> geometry.")
 
 
 def check_mesh_file(path: Path, link: str, source: Path) -> None:

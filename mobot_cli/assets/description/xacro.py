@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator, Mapping
 
+from mobot_cli.assets import sandbox
 from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.common import cache
 from mobot_cli.errors import DescriptionError, Location, MobotError, Notice, ResourceError, \
@@ -65,7 +66,7 @@ def expand_file(path: Path, args: Mapping[str, str] | None,
         return Expansion(text=text, files=(path,))
     args = {str(k): str(v) for k, v in (args or {}).items()}
     key = cache.digest("xacro", str(path), top, json.dumps(sorted(args.items())),
-                       resolver.fingerprint())
+                       resolver.fingerprint(), *sandbox.cache_marker())
     hit = cache.load("xacro", key)
     if hit is not None and _still_valid(hit):
         return Expansion(text=hit["text"], files=tuple(Path(d[0]) for d in hit["deps"]),
@@ -83,6 +84,8 @@ def expand_file(path: Path, args: Mapping[str, str] | None,
 def _still_valid(entry: dict) -> bool:
     # An entry is only as good as the files and environment variables it was made from.
     try:
+        if not all(sandbox.allows(p) for p, _ in entry["deps"]):  # a live spawn may not read them
+            return False
         if any(cache.file_digest(Path(p)) != sha for p, sha in entry["deps"]):
             return False
         return all(os.environ.get(name) == value for name, value in entry["env"])
@@ -96,7 +99,8 @@ def _run_xacro(path: Path, args: dict[str, str],
 
     env: dict[str, str | None] = {}
     stderr = io.StringIO()
-    with _lock, _patched_substitutions(resolver, env), contextlib.redirect_stderr(stderr):
+    with _lock, _patched_substitutions(resolver, env), sandbox.xacro_limits(xacro), \
+            contextlib.redirect_stderr(stderr):
         _reset_xacro_state(xacro)
         try:
             doc = xacro.process_file(str(path), mappings=dict(args), verbosity=0)

@@ -1,0 +1,74 @@
+"""A loader process: the robot descriptions that spawn requests send are expanded and checked here.
+
+LoaderPool (loader.py) starts it as ``python -m mobot_cli.live.worker FD MEMORY_BYTES SECONDS``.
+It limits its own address space (RLIMIT_AS) to MEMORY_BYTES, reads
+``(Spawn request, rate_hz)`` pairs from the connection on FD and answers each with
+``("ok", RobotPlan, notices)`` or ``("refused", Result, message)``, pickled. Descriptions are
+loaded confined (assets/sandbox.py). Each load may use SECONDS of CPU time: the kernel ends the
+process past that (SIGXCPU, RLIMIT_CPU), whether or not the server is still there to notice;
+the pool also kills a load that takes three times as long in wall time (one that waits).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import resource
+import signal
+import sys
+
+
+def main(argv: list[str]) -> int:
+    """Serve load requests until the connection closes."""
+    fd, memory, seconds = int(argv[0]), int(argv[1]), float(argv[2])
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C in the terminal is the server's to handle
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ[var] = "1"  # thread pools would reserve address space for nothing
+    resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
+    resource.setrlimit(resource.RLIMIT_CORE, (0, 0))  # a load ended by a limit leaves no core file
+    from multiprocessing.connection import Connection
+
+    connection = Connection(fd)
+    from mobot_cli.live import spawning  # warm: pydantic, the scenario model, the loaders
+
+    connection.send(("ready", os.getpid()))
+    while True:
+        try:
+            request, rate_hz = connection.recv()
+        except (EOFError, OSError):
+            return 0
+        _cpu_budget(seconds)
+        outcome = _load(spawning, request, rate_hz, memory)
+        connection.send(outcome)
+
+
+def _load(spawning, request, rate_hz: int, memory: int) -> tuple:
+    from mobot_cli.live.protocol import Refusal, Result
+
+    try:
+        plan, notices = spawning.load_plan(request, rate_hz)
+        return ("ok", plan, notices)
+    except Refusal as exc:
+        return ("refused", exc.result, exc.message)
+    except MemoryError:
+        return ("refused", Result.RESOURCE_PARSE_ERROR, "loading the description needed more than "
+                f"the loader's memory limit of {memory // 2**20} MiB")
+    except RecursionError:
+        return ("refused", Result.RESOURCE_PARSE_ERROR, "the description nests too deeply to load")
+    except Exception as exc:  # a bug costs this request only
+        return ("refused", Result.OPERATION_FAILED, f"internal error while loading: {exc!r}")
+
+
+def _cpu_budget(seconds: float) -> None:
+    """Let this load use at most ``seconds`` of CPU time from now (soft RLIMIT_CPU: SIGXCPU past it)."""
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    used = usage.ru_utime + usage.ru_stime
+    _, hard = resource.getrlimit(resource.RLIMIT_CPU)
+    soft = math.ceil(used + seconds)
+    if hard != resource.RLIM_INFINITY:
+        soft = min(soft, hard)
+    resource.setrlimit(resource.RLIMIT_CPU, (soft, hard))
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

@@ -1,0 +1,114 @@
+"""The loader pool on its own: warm worker processes, CPU and memory limits, broken installs."""
+
+from __future__ import annotations
+
+import os
+import time
+
+import pytest
+
+from mobot_cli.live import loader
+from mobot_cli.live.loader import Job, Limits, LoaderPool
+from mobot_cli.live.protocol import Refusal, Result
+from mobot_cli.live.schema import parse
+from mobot_cli.live.spawning import load_plan
+from mobot_cli.sim.plan import RobotPlan
+
+HEAD = '<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">'
+
+
+def spawn(name: str, **fields):
+    return parse({"op": "spawn", "name": name, **fields})
+
+
+def finish(pool: LoaderPool, jobs: list[Job], timeout: float = 60.0) -> list[Job]:
+    done: list[Job] = []
+    deadline = time.monotonic() + timeout
+    while len(done) < len(jobs):
+        assert time.monotonic() < deadline, "the pool never finished"
+        done += pool.poll()
+        time.sleep(0.01)
+    return done
+
+
+def test_loads_come_back_as_plans_or_refusals_and_workers_stay_warm():
+    pool = LoaderPool(Limits(seconds=5, memory=512 * 2**20))
+    try:
+        pool.start()
+        good = Job(spawn("good", description="mobot"), 240)
+        bad = Job(spawn("bad", urdf=HEAD + '<link name="${python.vars}"/></robot>'), 240)
+        missing = Job(spawn("missing", description="no_such_robot"), 240)
+        for job in (good, bad, missing):
+            pool.submit(job)
+        finish(pool, [good, bad, missing])
+        plan, notices = good.outcome
+        assert isinstance(plan, RobotPlan) and plan.name == "good" and isinstance(notices, list)
+        assert isinstance(bad.outcome, Refusal) and bad.outcome.result == Result.RESOURCE_PARSE_ERROR
+        assert isinstance(missing.outcome, Refusal) and missing.outcome.result == Result.NO_RESOURCE
+        pids = {w.process.pid for w in pool._workers}
+        again = Job(spawn("again", description="mobot"), 240)
+        pool.submit(again)
+        started = time.monotonic()
+        finish(pool, [again])
+        assert time.monotonic() - started < 2.0 and {w.process.pid for w in pool._workers} == pids
+    finally:
+        assert pool.close() == []
+
+
+def test_a_load_past_the_cpu_limit_is_stopped_and_replaced():
+    load_plan(spawn("warm", description="mobot"), 240)  # the cache made warm: loads need no imports
+    pool = LoaderPool(Limits(seconds=1, memory=512 * 2**20))
+    try:
+        pool.start()
+        hostile = Job(spawn("hostile", urdf=HEAD + '<link name="${python.sum(python.range(10**12))}"/></robot>'), 240)
+        pool.submit(hostile)
+        finish(pool, [hostile])
+        assert time.monotonic() - hostile.started < loader.WALL_FACTOR * 1 + 1  # from its dispatch
+        assert hostile.outcome.result == Result.RESOURCE_PARSE_ERROR
+        assert "it was stopped" in hostile.outcome.message
+        after = Job(spawn("after", description="mobot"), 240)
+        pool.submit(after)
+        finish(pool, [after])
+        assert not isinstance(after.outcome, Refusal), after.outcome.message
+        assert after.outcome[0].name == "after"
+    finally:
+        pool.close()
+
+
+def test_a_broken_installation_refuses_spawns_instead_of_restarting_forever(monkeypatch):
+    monkeypatch.setattr(loader.sys, "executable", "/bin/false")
+    pool = LoaderPool(Limits(seconds=5))
+    try:
+        pool.start()
+        job = Job(spawn("x", description="mobot"), 240)
+        pool.submit(job)
+        finish(pool, [job], timeout=30)
+        assert job.outcome.result == Result.OPERATION_FAILED
+        assert "ends as soon as it starts" in job.outcome.message
+        assert pool._workers == [] and pool._failed_starts == loader.FAILED_STARTS
+    finally:
+        pool.close()
+
+
+@pytest.mark.parametrize("seconds, memory", [(10.0, 1 << 30)])
+def test_the_documented_defaults(seconds, memory):
+    assert Limits() == Limits(seconds=seconds, memory=memory, workers=2) and Limits().wall == 30.0
+
+
+def test_a_long_load_drops_to_the_lowest_priority():
+    pool = LoaderPool(Limits(seconds=30, memory=512 * 2**20))
+    try:
+        pool.start()
+        slow = Job(spawn("slow", urdf=HEAD + '<link name="${python.sum(python.range(10**12))}"/></robot>'), 240)
+        pool.submit(slow)
+        while slow.started is None:
+            pool.poll()
+            time.sleep(0.01)
+        worker = next(w for w in pool._workers if w.job is slow)
+        assert os.getpriority(os.PRIO_PROCESS, worker.process.pid) == 0  # quick loads are not held back
+        while time.monotonic() < slow.started + loader.DEMOTE_AFTER + 0.1:
+            assert pool.poll() == []
+            time.sleep(0.01)
+        assert worker.demoted and os.getpriority(os.PRIO_PROCESS, worker.process.pid) == loader.LOW_PRIORITY
+    finally:
+        assert [job.request.name for job in pool.close()] == ["slow"]
