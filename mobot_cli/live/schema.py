@@ -11,6 +11,7 @@ from typing import Annotated, Any, Literal, Optional, Union
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
 
 from mobot_cli.live.protocol import OPS, Refusal, Result
+from mobot_cli.scenario.limits import MAX_NAME_LENGTH
 from mobot_cli.scenario.model import NAME_RE, NAMESPACE_RE, PoseSpec
 
 MAX_NAME = 256
@@ -121,10 +122,10 @@ def parse(document: dict[str, Any]) -> Request:
 
 def check_spawn(request: Spawn) -> None:
     """What a spawn request must hold beyond its field types."""
-    if not NAME_RE.match(request.name) or len(request.name) > MAX_NAME:
+    if not NAME_RE.match(request.name) or len(request.name) > MAX_NAME_LENGTH:
         shown = request.name if len(request.name) <= 60 else request.name[:57] + "..."
         raise Refusal(Result.NAME_INVALID, f"'{shown}' is not a valid robot name: use letters, "
-                      f"digits and '_', not starting with a digit, at most {MAX_NAME} characters")
+                      f"digits and '_', not starting with a digit, at most {MAX_NAME_LENGTH} characters")
     if request.namespace is not None and not NAMESPACE_RE.match(normalize_namespace(request.namespace)):
         raise Refusal(Result.NAMESPACE_INVALID, f"'{request.namespace}' is not a valid ROS namespace: "
                       "names of letters, digits and '_' separated by '/', e.g. /robot1")

@@ -108,6 +108,7 @@ def test_renaming_takes_the_first_free_suffix():
 @pytest.mark.parametrize("fields, result", [
     ({"name": "9r"}, Result.NAME_INVALID),
     ({"name": "a b"}, Result.NAME_INVALID),
+    ({"name": "r" * 65}, Result.NAME_INVALID),  # longer than a scenario name may be (odom/<name>.csv)
     ({"namespace": "/"}, Result.NAMESPACE_INVALID),
     ({"namespace": "/a//b"}, Result.NAMESPACE_INVALID),
     ({"pose": {"x": 1, "xyz": [0, 0, 0]}}, Result.INVALID_POSE),
