@@ -70,11 +70,14 @@ def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | 
 
 
 def _play(timeline: Timeline, progress: Progress | None) -> None:
-    total = timeline.plan.total_steps
-    while True:
-        timeline.tick()
-        if progress and timeline.step % timeline.plan.log_every == 0:
-            progress(timeline.step, total)
-        if timeline.finished:
-            break
-        timeline.advance()
+    """Tick and step to the plan's last step, then tick it (its events and final row)."""
+    total, every = timeline.plan.total_steps, timeline.plan.log_every
+    tick, advance = timeline.tick, timeline.advance
+    for step in range(timeline.step, total):
+        tick()
+        if progress and step % every == 0:
+            progress(step, total)
+        advance()
+    tick()
+    if progress:
+        progress(total, total)

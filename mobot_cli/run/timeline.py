@@ -111,6 +111,7 @@ class Timeline:
         self._drivers: dict[str, Driver] = {}  # robot -> the driver of its goals (and what follows them)
         self._logged = -1  # the step of the last complete sample
         self._ticked = -1  # the step of the last tick
+        self._log_every, self._total = plan.log_every, plan.total_steps
         # step -> the sensors due then: (robot name, its plan, sensor); empty without sensors
         self._due: dict[int, list[tuple[str, RobotPlan, SensorSpec]]] = {}
         # robot name (or "all") -> how far its clearance is measured, for `clearance` expectations
@@ -163,14 +164,18 @@ class Timeline:
     def tick(self) -> None:
         """Everything due at the current step, in order: inputs, events, commands, ends of timed
         commands, the log row, sensor readings."""
-        step = self.step
-        for poll in self._inputs:
-            poll()
-        for event in self._events.get(step, ()):
-            self._scripted(event)
-        for name, linear, angular in self._commands.get(step, ()):
-            if name in self.robots:  # a live world may have deleted it meanwhile
-                self.world.set_command(name, linear, angular)
+        # Runs every physics step: each check is one dict lookup or one truth test.
+        step = self.world.step_count
+        if self._inputs:
+            for poll in self._inputs:
+                poll()
+        if step in self._events:
+            for event in self._events[step]:
+                self._scripted(event)
+        if step in self._commands:
+            for name, linear, angular in self._commands[step]:
+                if name in self.robots:  # a live world may have deleted it meanwhile
+                    self.world.set_command(name, linear, angular)
         if self._stops:
             for name, until in list(self._stops.items()):
                 if step >= until:
@@ -178,7 +183,7 @@ class Timeline:
                     self.world.set_command(name, 0.0, 0.0)
         if self._drivers:
             self._drive(step)
-        if step % self.plan.log_every == 0 or step == self.plan.total_steps:
+        if step % self._log_every == 0 or step == self._total:
             self.log()
         if self._due:
             due = self._due.pop(step, None)
@@ -302,10 +307,12 @@ def simulate(plan: Plan) -> Iterator[Record]:
         timeline = Timeline(plan, world)
         timeline.attach(records.append)
         timeline.start()
-        while True:
-            timeline.tick()
-            yield from records
-            records.clear()
-            if timeline.finished:
-                break
-            timeline.advance()
+        tick, advance = timeline.tick, timeline.advance
+        for _ in range(plan.total_steps):
+            tick()
+            if records:
+                yield from records
+                records.clear()
+            advance()
+        tick()
+        yield from records
