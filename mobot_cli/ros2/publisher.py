@@ -24,7 +24,8 @@ from mobot_cli.run.cdr import Packer
 from mobot_cli.run.ros_messages import (CLOCK, CLOCK_PACKER, JOINT_STATE, ODOMETRY, STRING, TF, TWIST,
                                         RobotMessages, stamp_of, tf_layout, tf_static)
 from mobot_cli.run.ros_msgs import MESSAGES
-from mobot_cli.run.timeline import Deleted, Record, Sample, Spawned
+from mobot_cli.run import sensor_topics
+from mobot_cli.run.timeline import Deleted, Reading, Record, Sample, Spawned
 from mobot_cli.sim.plan import RobotPlan
 from mobot_cli.sim.state import RobotState
 
@@ -147,6 +148,8 @@ class RecordPublisher:
             self.sample(record)
         elif isinstance(record, Spawned):
             self.arriving[record.robot.name] = record.robot
+        elif isinstance(record, Reading):
+            self.reading(record)
         elif isinstance(record, Deleted):
             self.leave(record.name)
         elif type(record) in _HANDLERS:
@@ -184,6 +187,17 @@ class RecordPublisher:
                 if packer is None:
                     packer = self.tf_packers[present] = tf_layout([robots[n].messages.frames for n in present])
                 write(self.tf, packer.pack(tf_values))
+
+    def reading(self, reading: Reading) -> None:
+        """A sensor reading on its bag topic, built only while someone reads it. Readings whose
+        type has no DDS description here yet (PointCloud2, Imu, ContactsState) are not sent."""
+        robot = self.robots.get(reading.robot)
+        msgtype = sensor_topics.message_type(reading.sensor)
+        if robot is None or msgtype not in idl.TYPES:
+            return
+        writer = self.topics.writer(sensor_topics.topic(robot.messages.plan, reading.sensor), msgtype)
+        if writer.readers:
+            self._write(writer, robot.messages.reading(stamp_of(reading.step, self.rate)[1], reading))
 
     def _write(self, writer: dds.Writer, data: bytes) -> None:
         if writer.write(data):
@@ -223,9 +237,12 @@ class RecordPublisher:
         self.arriving.pop(name, None)
         if name not in self.robots:
             return
-        namespace = self.robots.pop(name).namespace
+        robot = self.robots.pop(name)
+        namespace = robot.namespace
         self.statics.pop(name, None)
-        self.topics.drop(*(names.join(namespace, t) for t in ("odom", "joint_states", "robot_description", "cmd_vel")))
+        sensors = [sensor_topics.topic(robot.messages.plan, spec) for spec in robot.messages.plan.sensors]
+        self.topics.drop(*(names.join(namespace, t) for t in ("odom", "joint_states", "robot_description", "cmd_vel")),
+                         *(t for t in sensors if t in self.topics.writers))
         self.publish_statics(stamp_of(self.clock_step if self.clock_step >= 0 else 0, self.rate)[1])
 
     def publish_statics(self, stamp: tuple[int, int]) -> None:

@@ -271,3 +271,21 @@ def test_a_dds_configuration_cyclone_refuses_is_bad_input_before_any_output(monk
                              "error. Occurred upon initialisation of a cyclonedds.domain.Domain. Check CYCLONEDDS_URI "
                              "and the ROS discovery variables (ROS_AUTOMATIC_DISCOVERY_RANGE, ROS_STATIC_PEERS).\n")
     assert not (tmp_path / "r").exists()
+
+
+def test_a_lidar_scan_reaches_another_participant_as_the_bag_has_it(tmp_path, cache):
+    """<ns>/scan (sensor_msgs/LaserScan) from the bundled robot's lidar, at its 10 Hz, stamped in sim time."""
+    scenario = tmp_path / "world.yaml"
+    scenario.write_text(WORLD.format(ros2="").replace("description: mobot,", "description: mobot, args: {lidar: 'true'},"))
+    live = LiveProcess(str(scenario), "--ros2", cache_dir=cache)
+    try:
+        scans = peer("take", "rt/r1/scan", "sensor_msgs/msg/LaserScan", "2")
+    finally:
+        live.signal()
+        live.kill()
+    assert len(scans) >= 10  # 2 s at 10 Hz, real time
+    scan = scans[-1]
+    assert scan["header"]["frame_id"] == "r1/lidar_link" and len(scan["ranges"]) == 360
+    assert scan["range_min"] == pytest.approx(0.12) and scan["range_max"] == pytest.approx(12.0)
+    stamps = [s["header"]["stamp"]["sec"] + s["header"]["stamp"]["nanosec"] * 1e-9 for s in scans]
+    assert all(abs(b - a - 0.1) < 1e-6 for a, b in zip(stamps, stamps[1:]))  # every 24 steps, no gaps
