@@ -5,12 +5,14 @@ Plain text only (no Rich), so `mobot list` and `mobot odom` answer fast.
 
 from __future__ import annotations
 
-from typing import Any, Optional
+import json
+import time
+from typing import Any, Callable, Optional
 
 import typer
 
 from mobot_cli.cli.environment import Environment
-from mobot_cli.errors import RequestRefused
+from mobot_cli.errors import ExitCode, RequestRefused
 
 ENDPOINT = typer.Option(None, "--endpoint", "-e", metavar="ENDPOINT",
                         help="Where the live world listens [default: $MOBOT_ENDPOINT, else "
@@ -82,3 +84,30 @@ def odom_line(reply: dict[str, Any]) -> str:
 
 def _f(value: Any) -> str:
     return "nan" if value is None else f"{value:.3f}".replace("-0.000", "0.000")
+
+
+def read_or_follow(env: Environment, world, op: str, fields: dict[str, Any], line: Callable[[dict], str],
+                   follow: bool, rate: float, json_: bool) -> int:
+    """Ask ``op`` once and print its reply; with ``follow``, poll at ``rate`` per second and print
+    every reply of a new step (one JSON line each with ``json_``) until Ctrl-C or the robot goes."""
+    reply = world.call(op, **fields)
+    if not follow or not reply.get("ok"):
+        if json_:
+            json_out(env, reply)
+        checked(reply)
+        if not json_:
+            say(env, line(reply))
+        return ExitCode.OK
+    rate, last = max(0.1, min(rate, 1000.0)), None
+    try:
+        while True:
+            if not reply.get("ok"):
+                status(env, f"'{fields['name']}' is gone: {reply.get('result')}: {reply.get('message')}")
+                return ExitCode.OK
+            if reply["step"] != last:
+                last = reply["step"]
+                say(env, json.dumps(reply) if json_ else line(reply))
+            time.sleep(1.0 / rate)
+            reply = world.call(op, **fields)
+    except KeyboardInterrupt:
+        return ExitCode.OK

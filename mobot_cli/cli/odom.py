@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-import time
 from typing import Optional
 
 import typer
 
 from mobot_cli.cli import live_common
-from mobot_cli.errors import ExitCode
 
 
 def odom(
@@ -23,30 +21,5 @@ def odom(
     """Print a robot's odometry (odom frame = its spawn pose), ground truth and command."""
     env = ctx.obj
     with live_common.client(endpoint, timeout) as world:
-        reply = world.call("odom", name=name)
-        if not follow or not reply.get("ok"):
-            if json_:
-                live_common.json_out(env, reply)
-            live_common.checked(reply)
-            if not json_:
-                live_common.say(env, live_common.odom_line(reply))
-            return ExitCode.OK
-        return _follow(env, world, name, reply, max(0.1, min(rate, 1000.0)), json_)
-
-
-def _follow(env, world, name: str, reply: dict, rate: float, json_: bool) -> int:
-    import json
-
-    last = None
-    try:
-        while True:
-            if not reply.get("ok"):
-                live_common.status(env, f"'{name}' is gone: {reply.get('result')}: {reply.get('message')}")
-                return ExitCode.OK
-            if reply["step"] != last:
-                last = reply["step"]
-                live_common.say(env, json.dumps(reply) if json_ else live_common.odom_line(reply))
-            time.sleep(1.0 / rate)
-            reply = world.call("odom", name=name)
-    except KeyboardInterrupt:
-        return ExitCode.OK
+        return live_common.read_or_follow(env, world, "odom", {"name": name}, live_common.odom_line,
+                                          follow, rate, json_)

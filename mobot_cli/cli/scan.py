@@ -2,15 +2,12 @@
 
 from __future__ import annotations
 
-import json
 import math
-import time
 from typing import Any, Optional
 
 import typer
 
 from mobot_cli.cli import live_common
-from mobot_cli.errors import ExitCode
 
 
 def scan(
@@ -28,31 +25,7 @@ def scan(
     env = ctx.obj
     fields = {"name": name, **({"sensor": sensor} if sensor else {})}
     with live_common.client(endpoint, timeout) as world:
-        reply = world.call("scan", **fields)
-        if not follow or not reply.get("ok"):
-            if json_:
-                live_common.json_out(env, reply)
-            live_common.checked(reply)
-            if not json_:
-                live_common.say(env, reading_line(reply))
-            return ExitCode.OK
-        return _follow(env, world, fields, reply, max(0.1, min(rate, 1000.0)), json_)
-
-
-def _follow(env, world, fields: dict, reply: dict, rate: float, json_: bool) -> int:
-    last = None
-    try:
-        while True:
-            if not reply.get("ok"):
-                live_common.status(env, f"'{fields['name']}' is gone: {reply.get('result')}: {reply.get('message')}")
-                return ExitCode.OK
-            if reply["step"] != last:
-                last = reply["step"]
-                live_common.say(env, json.dumps(reply) if json_ else reading_line(reply))
-            time.sleep(1.0 / rate)
-            reply = world.call("scan", **fields)
-    except KeyboardInterrupt:
-        return ExitCode.OK
+        return live_common.read_or_follow(env, world, "scan", fields, reading_line, follow, rate, json_)
 
 
 def reading_line(reply: dict[str, Any]) -> str:
