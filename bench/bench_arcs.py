@@ -29,8 +29,6 @@ REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(REPO / "tests"))
 
-RATE = 240
-
 
 def load_plans(corpus: Path, names: list[str]):
     from mobot_cli.assets.description.load import load_robot
@@ -51,25 +49,10 @@ def load_plans(corpus: Path, names: list[str]):
 
 
 def drive(plan, linear: float, angular: float, seconds: float):
-    """Settle, command, stop; the states before, during (every 12 steps) and after."""
-    from mobot_cli.sim.plan import Physics, WorldPlan
-    from mobot_cli.sim.world import World
+    """Settle, command, stop: the fidelity tests' own drive (states before, every 12 steps, after)."""
+    from sim.test_fidelity import drive as fidelity_drive
 
-    with World(Physics(rate_hz=RATE), WorldPlan()) as world:
-        world.spawn(plan)
-        for _ in range(RATE // 2):
-            world.step()
-        before = world.read(plan.name)
-        world.set_command(plan.name, linear, angular)
-        samples = []
-        for i in range(round(seconds * RATE)):
-            world.step()
-            if i % 12 == 0:
-                samples.append(world.read(plan.name))
-        world.set_command(plan.name, 0.0, 0.0)
-        for _ in range(RATE):
-            world.step()
-        return before, samples, world.read(plan.name)
+    return fidelity_drive(plan, linear, angular, seconds)
 
 
 def fit_circle(points) -> float:
