@@ -12,8 +12,9 @@ import os
 import stat
 import tempfile
 from pathlib import Path
+from typing import Callable
 
-from mobot_cli.errors import UsageError
+from mobot_cli.errors import Location, UsageError
 
 ENV = "MOBOT_ENDPOINT"
 SOCKET_NAME = "mobot.sock"
@@ -86,3 +87,30 @@ def is_loopback(host: str) -> bool:
         return ipaddress.ip_address(host).is_loopback
     except ValueError:
         return False
+
+
+def claim_socket_file(endpoint: str, path: Path, server_pid: Callable[[str], int | None]) -> None:
+    """Refuse to take over a live server's socket or any file that is not a socket; remove a stale one.
+
+    ``server_pid(endpoint)`` asks whoever answers there for its pid, None when nobody does."""
+    if path.parent == runtime_dir() or not path.parent.exists():
+        private_dir(path.parent)  # made 0700, or checked to be the user's own
+    try:
+        info = os.lstat(path)
+    except FileNotFoundError:
+        return
+    except OSError as exc:
+        raise UsageError(f"cannot use {endpoint}: {exc.strerror}", location=Location(file=path),
+                         hint="Pick another --endpoint.") from None
+    if not stat.S_ISSOCK(info.st_mode):
+        kind = "a symbolic link" if stat.S_ISLNK(info.st_mode) else (
+            "a folder" if stat.S_ISDIR(info.st_mode) else "a file that is not a socket")
+        raise UsageError(f"endpoint {endpoint} names {kind}; mobot serve only replaces a stale socket "
+                         "and leaves it untouched", location=Location(file=path),
+                         hint="Pick a path that does not exist yet, e.g. ipc:///tmp/mobot-$USER/mobot.sock.")
+    pid = server_pid(endpoint)
+    if pid is None:
+        os.unlink(path)  # nobody answers: a server that died without cleaning up
+        return
+    raise UsageError(f"a live world (pid {pid}) already serves at {endpoint}",
+                     hint=f"Stop it with `mobot stop --endpoint {endpoint}`, or pick another --endpoint.")

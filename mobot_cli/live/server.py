@@ -14,20 +14,20 @@ from __future__ import annotations
 import math
 import os
 import signal
-import stat
 import threading
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
 import zmq
 
 from mobot_cli import __version__
-from mobot_cli.errors import Location, MobotError, SimulationFault, UsageError
+from mobot_cli.errors import MobotError, SimulationFault, UsageError
 from mobot_cli.live import endpoint as endpoints
 from mobot_cli.live import keys
 from mobot_cli.live import protocol, schema, spawning
+from mobot_cli.live.clock import Clock, pace_text
 from mobot_cli.live.loader import Job, Limits, LoaderPool
 from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.live.session import Session
@@ -42,7 +42,6 @@ FAST_SLICE = (0.0001, 0.002)  # s
 # A --fast world takes a step every few tens of microseconds; looking at the loader processes
 # that often would cost it a good part of its pace, so it looks once per this many seconds.
 LOADER_CHECK = 0.0005
-MAX_LAG = 0.25  # s: a real-time world further behind than this drops the lost time
 HOLD_POLL = 0.02  # s: how long a held (paused) world waits for requests between two looks at hold()
 
 
@@ -63,29 +62,6 @@ class Served:
     error: str | None
     steps: int
     requests: dict[str, int]
-
-
-@dataclass
-class Clock:
-    """Paces steps to the wall clock at ``rtf`` times real time; ``rtf`` None: as fast as possible."""
-
-    dt: float
-    rtf: float | None
-    start: float = field(default_factory=time.monotonic)
-    count: int = 0
-    lags: int = 0  # how often the world fell behind and dropped the lost time
-
-    def due(self) -> float | None:
-        """Wall time at which the next step is due; None in fast mode."""
-        return None if self.rtf is None else self.start + (self.count + 1) * self.dt / self.rtf
-
-    def stepped(self) -> None:
-        """Count a step; a world too far behind starts its clock afresh instead of racing."""
-        self.count += 1
-        due = self.due()
-        if due is not None and time.monotonic() - due > MAX_LAG:
-            self.start = time.monotonic() - self.count * self.dt / self.rtf
-            self.lags += 1
 
 
 class LiveServer:
@@ -191,7 +167,7 @@ class LiveServer:
     def _bind(self) -> None:
         path = endpoints.ipc_path(self.endpoint)
         if path is not None:
-            _claim_socket_file(self.endpoint, path)
+            endpoints.claim_socket_file(self.endpoint, path, _server_pid)
         socket = zmq.Context.instance().socket(zmq.ROUTER)
         socket.setsockopt(zmq.LINGER, 0)
         socket.setsockopt(zmq.MAXMSGSIZE, protocol.HARD_LIMIT_BYTES)  # larger: the peer is dropped
@@ -398,38 +374,15 @@ class LiveServer:
                 path.unlink(missing_ok=True)
 
 
-def pace_text(rtf: float | None) -> str:
-    """'real time', '2x real time' or 'fast'."""
-    return "fast" if rtf is None else ("real time" if rtf == 1.0 else f"{rtf:g}x real time")
-
-
-def _claim_socket_file(endpoint: str, path: Path) -> None:
-    """Refuse to take over a live server's socket or any file that is not a socket; remove a stale one."""
-    if path.parent == endpoints.runtime_dir() or not path.parent.exists():
-        endpoints.private_dir(path.parent)  # made 0700, or checked to be the user's own
-    try:
-        info = os.lstat(path)
-    except FileNotFoundError:
-        return
-    except OSError as exc:
-        raise UsageError(f"cannot use {endpoint}: {exc.strerror}", location=Location(file=path),
-                         hint="Pick another --endpoint.") from None
-    if not stat.S_ISSOCK(info.st_mode):
-        kind = "a symbolic link" if stat.S_ISLNK(info.st_mode) else (
-            "a folder" if stat.S_ISDIR(info.st_mode) else "a file that is not a socket")
-        raise UsageError(f"endpoint {endpoint} names {kind}; mobot serve only replaces a stale socket "
-                         "and leaves it untouched", location=Location(file=path),
-                         hint="Pick a path that does not exist yet, e.g. ipc:///tmp/mobot-$USER/mobot.sock.")
+def _server_pid(endpoint: str) -> int | None:
+    """The pid of the live world answering at ``endpoint``, or None when nobody answers."""
     from mobot_cli.live.client import Client
 
     try:
         with Client(endpoint, timeout=1.0) as client:
-            pid = client.ping().get("pid")
+            return client.ping().get("pid")
     except MobotError:
-        os.unlink(path)  # nobody answers: a server that died without cleaning up
-        return
-    raise UsageError(f"a live world (pid {pid}) already serves at {endpoint}",
-                     hint=f"Stop it with `mobot stop --endpoint {endpoint}`, or pick another --endpoint.")
+        return None
 
 
 def _catch_signals(server: LiveServer) -> Callable[[], None]:

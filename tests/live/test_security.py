@@ -185,7 +185,8 @@ def test_meshes_outside_the_allowed_folders_are_refused(live, outside):
 def test_optenv_takes_its_default_in_a_live_spawn(live):
     """The server's environment is not read: $(optenv HOME x) is x, not the server's HOME."""
     body = '<link name="$(optenv HOME nohome)"><inertial><mass value="1"/>' \
-           '<inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>'
+           '<inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial>' \
+           '<collision><geometry><box size="0.2 0.2 0.1"/></geometry></collision></link>'  # rests, never falls
     with live.client(timeout=90) as client:  # a cold load on a busy machine
         client.spawn("envless", urdf=robot(body), pose={"x": 40.0})
         assert client.odom("envless")["child_frame_id"] == "envless/nohome"

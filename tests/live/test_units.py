@@ -13,7 +13,7 @@ from mobot_cli.errors import DescriptionError, ResourceError, ScenarioError, Spa
 from mobot_cli.live import endpoint, protocol, spawning
 from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.live.schema import Spawn, normalize_namespace, parse
-from mobot_cli.live.server import Clock
+from mobot_cli.live.clock import Clock
 from mobot_cli.sim.plan import SpawnPose
 from mobot_cli.sim.state import RobotState
 
