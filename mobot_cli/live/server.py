@@ -26,8 +26,9 @@ from mobot_cli import __version__
 from mobot_cli.errors import MobotError, SimulationFault, UsageError
 from mobot_cli.live import endpoint as endpoints
 from mobot_cli.live import keys
-from mobot_cli.live import protocol, schema, spawning
+from mobot_cli.live import lockstep, protocol, schema, spawning
 from mobot_cli.live.clock import Clock, pace_text
+from mobot_cli.live.lockstep import Lockstep
 from mobot_cli.live.loader import Job, Limits, LoaderPool
 from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.live.session import Session
@@ -42,16 +43,17 @@ FAST_SLICE = (0.0001, 0.002)  # s
 # A --fast world takes a step every few tens of microseconds; looking at the loader processes
 # that often would cost it a good part of its pace, so it looks once per this many seconds.
 LOADER_CHECK = 0.0005
-HOLD_POLL = 0.02  # s: how long a held (paused) world waits for requests between two looks at hold()
+HOLD_POLL = 20  # ms: how long a paused world waits for a request before it looks at the view's buttons
 
 
 @dataclass
 class _Pending:
-    """A reply the server owes: a spawn whose robot is loading, or a `cmd --wait`."""
+    """A reply the server owes at step ``until``: a `cmd --wait`, or a `step`."""
 
     envelope: list[bytes]
     request: Any
-    until: int | None = None  # cmd: the step at which the command ends
+    until: int
+    answer: Callable[[], dict[str, Any]]
 
 
 @dataclass(frozen=True)
@@ -70,13 +72,12 @@ class LiveServer:
     def __init__(self, plan: Plan, endpoint: str, *, rtf: float | None = 1.0, bind_any: bool = False,
                  out_dir: Path | None = None, resolved_yaml: str = "", stop_after: int | None = None,
                  attachments: Sequence[Attachment] = (), watch: Callable[[Timeline], None] | None = None,
-                 hold: Callable[[], bool] | None = None,
-                 limits: Limits = Limits()):
+                 paused: bool = False, limits: Limits = Limits()):
         self.plan, self.rtf, self.stop_after = plan, rtf, stop_after
         self.attachments = attachments  # ride along the timeline (the ROS 2 bridge): run/timeline.py
-        # watch: called with the timeline before the first spawn (a view attaches there);
-        # hold: asked before each step, True keeps the world paused while requests are answered.
-        self.watch, self.hold = watch, hold
+        # watch: called with the timeline before the first spawn (a view attaches there).
+        self.watch = watch
+        self.control = Lockstep(paused)  # pause, resume, step: the protocol's and the view's buttons
         self.out_dir, self.resolved_yaml = out_dir, resolved_yaml
         self.endpoint = endpoints.check(endpoint, bind_any)
         self.session: Session | None = None  # made once the world is up and listening
@@ -91,7 +92,10 @@ class LiveServer:
         self._loader = LoaderPool(limits)
         self._handlers: dict[str, Callable] = {
             "ping": self._ping, "list": self._list, "spawn": self._spawn, "delete": self._delete,
-            "cmd": self._cmd, "odom": self._odom, "scan": self._scan, "stop": self._stop, "goto": self._goto}
+            "cmd": self._cmd, "odom": self._odom, "scan": self._scan, "stop": self._stop, "goto": self._goto,
+            "pause": self._pause, "resume": self._resume, "step": self._step_request, "reset": self._reset,
+            "get_state": self._get_state, "set_state": self._set_state,
+            "features": lambda envelope, request: lockstep.features_reply(request.id, self.control)}
 
     def serve(self, ready: Callable[[str], None] | None = None) -> Served:
         """Run until `stop`, SIGINT/SIGTERM or ``stop_after`` steps; returns status and counts."""
@@ -132,19 +136,23 @@ class LiveServer:
         return Served(self.status, self.error, self._step(), dict(self.counts))
 
     def _loop(self, session: Session, clock: Clock) -> None:
-        timeline = session.timeline
+        timeline, control = session.timeline, self.control
         step_time = 0.0
         while not self.stopping:
             step = timeline.step
             timeline.tick()
-            self._answer_waits(step)
-            self._serve_requests(clock.due(), step_time)  # finished loads are answered there, too
+            if self._waits:
+                self._answer_waits(step)
+            # Steps a paused world was asked for go as fast as they can, requests between them.
+            self._serve_requests(None if control.budget else clock.due(), step_time)
             if self.stopping or (self.stop_after is not None and step >= self.stop_after):
                 break
-            if self.hold is not None and self.hold():
-                self._held(clock)
+            if control.hold():
+                self._held()
+                clock.restart()
                 if self.stopping:
                     break
+            lockstep_step = control.spend()
             started = time.perf_counter()
             try:
                 timeline.advance()
@@ -153,14 +161,15 @@ class LiveServer:
                     self.status, self.error, self.stopping = Status.FAULT, str(exc), True
             step_time = time.perf_counter() - started
             clock.stepped()
+            if lockstep_step:  # real time goes on from here once the world plays again
+                clock.restart()
 
-    def _held(self, clock: Clock) -> None:
-        """Paused: answer requests (spawns too) until released, then go on where the clock stopped."""
-        since = time.monotonic()
-        while not self.stopping and self.hold():
+    def _held(self) -> None:
+        """Paused: answer requests (spawns too) until a step is asked for or the world plays."""
+        while not self.stopping and self.control.hold():
             self._finish_spawns()
-            self._serve_requests(time.monotonic() + HOLD_POLL, 0.0)
-        clock.start += time.monotonic() - since
+            if self._wait(HOLD_POLL):
+                self._receive_one()
 
     # -- the socket -------------------------------------------------------------------------
 
@@ -199,10 +208,7 @@ class LiveServer:
         while not self.stopping:
             wait_ms = 0 if fast else max(0, math.ceil((end - time.monotonic()) * 1000))
             if self._wait(wait_ms):
-                try:
-                    self._receive(self._socket.recv_multipart(zmq.NOBLOCK))
-                except zmq.ZMQError:
-                    pass  # the message went away (EAGAIN): nothing to answer
+                self._receive_one()
             elif fast:
                 return
             if time.monotonic() >= end:
@@ -233,6 +239,13 @@ class LiveServer:
             self._finish_spawns()
         return self._socket in events
 
+    def _receive_one(self) -> None:
+        try:
+            frames = self._socket.recv_multipart(zmq.NOBLOCK)
+        except zmq.ZMQError:
+            return  # the message went away (EAGAIN): nothing to answer
+        self._receive(frames)
+
     def _receive(self, frames: list[bytes]) -> None:
         # REQ peers (and our DEALER client) put an empty delimiter after the identity.
         cut = 2 if len(frames) >= 3 and frames[1] == b"" else 1
@@ -248,7 +261,7 @@ class LiveServer:
             answer = self._handlers[request.op](envelope, request)
         except Refusal as exc:
             answer = protocol.reply(request_id, exc.result, exc.message)
-            if op in ("spawn", "delete", "cmd"):  # the history keeps what was refused, too
+            if op in ("spawn", "delete", "cmd", "set_state", "reset"):  # the history keeps what was refused, too
                 self._history(op=op, name=name, result=exc.result.name, message=exc.message)
         except Exception as exc:  # a bug must cost one request, never the world
             answer = protocol.reply(request_id, Result.OPERATION_FAILED, f"internal error: {exc!r}"[:500])
@@ -272,7 +285,8 @@ class LiveServer:
 
     def _ping(self, envelope, request) -> dict[str, Any]:
         step = self._step()
-        return protocol.reply(request.id, world=self.plan.world.name, scenario=self.plan.name, step=step,
+        return protocol.reply(request.id, **self.control.fields(), world=self.plan.world.name,
+                              scenario=self.plan.name, step=step,
                               t=step / self.plan.physics.rate_hz, robots=len(self.session.robots),
                               rate_hz=self.plan.physics.rate_hz, pace=pace_text(self.rtf), rtf=self.rtf,
                               pid=os.getpid(),
@@ -294,7 +308,7 @@ class LiveServer:
     def _cmd(self, envelope, request: schema.Cmd) -> dict[str, Any] | None:
         until = self.session.command(request)
         if until is not None and request.wait:
-            self._waits.append(_Pending(envelope, request, until=until))
+            self._waits.append(_Pending(envelope, request, until, lambda: self._cmd_ended(request)))
             return None
         return protocol.reply(request.id, name=request.name, step=self._step(), t=self._t(), until_step=until)
 
@@ -303,6 +317,57 @@ class LiveServer:
         done = (lambda answer: self._send(envelope, answer)) if request.wait else None
         answer = self.session.goto(request, done)
         return None if request.wait else answer
+
+    def _cmd_ended(self, request: schema.Cmd) -> dict[str, Any]:
+        try:
+            return self.session.odometry(request.id, request.name)
+        except Refusal:
+            return protocol.reply(request.id, Result.NOT_FOUND,
+                                  f"robot '{request.name}' was deleted before its command ended")
+
+    # -- lockstep ---------------------------------------------------------------------------
+
+    def _pause(self, envelope, request) -> dict[str, Any]:
+        changed = self.control.pause()
+        if changed:
+            self._history(op="pause", result="OK")
+        return protocol.reply(request.id, changed=changed, step=self._step(), t=self._t(), **self.control.fields())
+
+    def _resume(self, envelope, request) -> dict[str, Any]:
+        changed = self.control.resume()
+        if changed:
+            self._history(op="resume", result="OK")
+        return protocol.reply(request.id, changed=changed, step=self._step(), t=self._t(), **self.control.fields())
+
+    def _step_request(self, envelope, request: schema.Step) -> None:
+        """StepSimulation: only while paused; the reply comes once the steps are taken."""
+        count = lockstep.steps_of(request.steps, request.seconds, self.plan.physics.rate_hz)
+        if not self.control.paused:
+            raise Refusal(Result.INCORRECT_STATE, "the world is playing: step only a paused world "
+                          "(pause it first, or start it with `mobot serve --paused`)")
+        until = self._step() + self.control.budget + count
+        self.control.step(count)
+
+        def done() -> dict[str, Any]:
+            states = {"robots": self.session.states()} if request.states else {}
+            return protocol.reply(request.id, steps=count, step=self._step(), t=self._t(), **self.control.fields(),
+                                  **states)
+
+        self._waits.append(_Pending(envelope, request, until, done))
+
+    def _reset(self, envelope, request) -> dict[str, Any]:
+        """ResetSimulation (SCOPE_ALL): replies still owed end first, then the world starts over."""
+        self.control.clear()
+        self._answer_owed(waits_only=True, why="the world was reset before this request finished")
+        self.session.reset()
+        return protocol.reply(request.id, step=self._step(), t=self._t(), resets=self.session.timeline.resets,
+                              robots=list(self.session.robots), **self.control.fields())
+
+    def _get_state(self, envelope, request: schema.GetState) -> dict[str, Any]:
+        return self.session.entity_state(request.id, request.name, request.reference_frame)
+
+    def _set_state(self, envelope, request: schema.SetState) -> dict[str, Any]:
+        return self.session.teleport(request)
 
     def _stop(self, envelope, request) -> dict[str, Any]:
         self.stopping = True
@@ -340,12 +405,10 @@ class LiveServer:
     def _answer_waits(self, step: int) -> None:
         for wait in [w for w in self._waits if step >= w.until]:
             self._waits.remove(wait)
-            name = wait.request.name
             try:
-                answer = self.session.odometry(wait.request.id, name)
-            except Refusal:
-                answer = protocol.reply(wait.request.id, Result.NOT_FOUND,
-                                        f"robot '{name}' was deleted before its command ended")
+                answer = wait.answer()
+            except Exception as exc:  # a bug must cost one reply, never the world
+                answer = protocol.reply(wait.request.id, Result.OPERATION_FAILED, f"internal error: {exc!r}"[:500])
             self._send(wait.envelope, answer)
 
     def _step(self) -> int:
@@ -354,13 +417,13 @@ class LiveServer:
     def _t(self) -> float:
         return self._step() / self.plan.physics.rate_hz
 
-    def _answer_owed(self) -> None:
-        """Every reply still owed says the world stopped."""
-        owed = [(job.owner, job.request) for job in self._loader.close()]
+    def _answer_owed(self, waits_only: bool = False,
+                     why: str = "the live world stopped before it could answer") -> None:
+        """Every reply still owed (or only those waiting for a step) says why it never came."""
+        owed = [] if waits_only else [(job.owner, job.request) for job in self._loader.close()]
         owed += [(wait.envelope, wait.request) for wait in self._waits]
         for envelope, request in owed:
-            self._send(envelope, protocol.reply(request.id, Result.INCORRECT_STATE,
-                                                "the live world stopped before it could answer"))
+            self._send(envelope, protocol.reply(request.id, Result.INCORRECT_STATE, why))
         self._waits = []
 
     def _shutdown(self) -> None:
