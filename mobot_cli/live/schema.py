@@ -19,10 +19,10 @@ MAX_NAME = 256
 # answering other requests between them, so a big one delays its own reply only.
 MAX_STEPS = 10_000_000
 Name = Annotated[str, Field(min_length=1, max_length=MAX_NAME)]
-# Spawn (and set_state) request fields whose problems have their own result code.
-FIELD_RESULTS = {"name": Result.NAME_INVALID, "namespace": Result.NAMESPACE_INVALID,
-                 "pose": Result.INVALID_POSE}
-POSE_OPS = ("spawn", "set_state")
+# Request fields whose problems have their own result code (SpawnEntity's, SetEntityState's).
+FIELD_RESULTS = {"spawn": {"name": Result.NAME_INVALID, "namespace": Result.NAMESPACE_INVALID,
+                           "pose": Result.INVALID_POSE},
+                 "set_state": {"pose": Result.INVALID_POSE}}
 
 
 class Request(BaseModel):
@@ -178,8 +178,9 @@ def parse(document: dict[str, Any]) -> Request:
         field = ".".join("for" if part == "for_" else part for part in loc) or "request"
         message = err["msg"].removeprefix("Value error, ")
         result = Result.INVALID_REQUEST
-        if document["op"] in POSE_OPS and loc and loc[0] in FIELD_RESULTS and err["type"] != "missing":
-            result = FIELD_RESULTS[loc[0]]
+        special = FIELD_RESULTS.get(document["op"], {})
+        if loc and loc[0] in special and err["type"] != "missing":
+            result = special[loc[0]]
         raise Refusal(result, f"{document['op']} request, field '{field}': {message}") from None
     if isinstance(request, Spawn):
         check_spawn(request)
