@@ -296,3 +296,26 @@ def test_bad_cli_input_exits_2_with_one_line(paused, args, text):
 def test_no_live_world_exits_4(tmp_path, verb):
     done = invoke([*verb, "--endpoint", f"ipc://{tmp_path}/none.sock", "--timeout", "0.5"])
     assert done.exit_code == 4 and done.stdout == "" and "no live world" in done.stderr
+
+
+def test_the_readme_wall_follower_runs_in_lockstep(cache, monkeypatch):
+    """The README's lockstep example, as written, against `mobot serve house --paused`."""
+    import re
+
+    readme = (REPO / "README.md").read_text()
+    section = readme[readme.index("## Lockstep control"):]
+    block = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    server = LiveProcess("house", "--paused", "--fast", cache_dir=cache)
+    try:
+        with server.client() as client:
+            client.spawn("r1", description="mobot", args={"lidar": "true"}, pose={"x": -3.0, "y": -4.3}, timeout=120)
+            start = client.get_state("r1")
+        monkeypatch.setenv("MOBOT_ENDPOINT", server.endpoint)
+        exec(compile(block, "README.md", "exec"), {})
+        with server.client() as client:
+            end = client.get_state("r1")
+    finally:
+        server.kill()
+    assert end["t"] == start["t"] + 10.0  # 100 x 24 steps at 240 Hz
+    assert end["pose"]["x"] - start["pose"]["x"] > 1.5  # along the south wall (y = -5), 0.5 m from it
+    assert -4.6 < end["pose"]["y"] < -4.0, end["pose"]  # neither into the wall nor away from it
