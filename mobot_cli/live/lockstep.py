@@ -9,12 +9,23 @@ paused world takes exactly the steps it was asked for, as fast as it can, then w
 from __future__ import annotations
 
 import threading
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, Callable
 
 from mobot_cli.live import protocol
 from mobot_cli.live.protocol import Feature, Refusal, Result, SimulationState
 
 SPAWN_FORMATS = ("urdf", "xacro")
+
+
+@dataclass
+class Owed:
+    """A reply the server owes at step ``until``: a `step`, or a `cmd --wait`."""
+
+    envelope: list[bytes]
+    request: Any
+    until: int
+    answer: Callable[[], dict[str, Any]]
 
 
 class Lockstep:
@@ -106,3 +117,62 @@ def features_reply(request_id: Any, control: Lockstep) -> dict[str, Any]:
                           spawn_formats=list(SPAWN_FORMATS), ops=list(protocol.OPS),
                           custom_info="mobot live world: see the README's 'Lockstep control'",
                           **control.fields())
+
+
+class LockstepRequests:
+    """The server's answers to pause, resume, step, reset, get_state, set_state and features."""
+
+    def __init__(self, server: Any):
+        self.server = server  # live.server.LiveServer: its session, control, history and owed replies
+
+    def handlers(self) -> dict[str, Callable]:
+        """op -> handler(envelope, request), as the server calls them."""
+        return {"pause": self.pause, "resume": self.resume, "step": self.step, "reset": self.reset,
+                "get_state": self.get_state, "set_state": self.set_state,
+                "features": lambda envelope, request: features_reply(request.id, self.server.control)}
+
+    def pause(self, envelope, request) -> dict[str, Any]:
+        """SetSimulationState(PAUSED), idempotent."""
+        return self._set(request, self.server.control.pause(), "pause")
+
+    def resume(self, envelope, request) -> dict[str, Any]:
+        """SetSimulationState(PLAYING), idempotent."""
+        return self._set(request, self.server.control.resume(), "resume")
+
+    def _set(self, request, changed: bool, op: str) -> dict[str, Any]:
+        if changed:
+            self.server.history(op=op, result="OK")
+        return protocol.reply(request.id, changed=changed, **self.server.now(), **self.server.control.fields())
+
+    def step(self, envelope, request) -> None:
+        """StepSimulation: only while paused; the reply comes once the steps are taken."""
+        server = self.server
+        count = steps_of(request.steps, request.seconds, server.plan.physics.rate_hz)
+        if not server.control.paused:
+            raise Refusal(Result.INCORRECT_STATE, "the world is playing: step only a paused world "
+                          "(pause it first, or start it with `mobot serve --paused`)")
+        until = server.session.step + server.control.budget + count
+        server.control.step(count)
+
+        def done() -> dict[str, Any]:
+            states = {"robots": server.session.states()} if request.states else {}
+            return protocol.reply(request.id, steps=count, **server.now(), **server.control.fields(), **states)
+
+        server.owe(Owed(envelope, request, until, done))
+
+    def reset(self, envelope, request) -> dict[str, Any]:
+        """ResetSimulation (SCOPE_ALL): replies still owed end first, then the world starts over."""
+        server = self.server
+        server.control.clear()
+        server.answer_owed(waits_only=True, why="the world was reset before this request finished")
+        server.session.reset()
+        return protocol.reply(request.id, **server.now(), resets=server.session.timeline.resets,
+                              robots=list(server.session.robots), **server.control.fields())
+
+    def get_state(self, envelope, request) -> dict[str, Any]:
+        """GetEntityState."""
+        return self.server.session.entity_state(request.id, request.name, request.reference_frame)
+
+    def set_state(self, envelope, request) -> dict[str, Any]:
+        """SetEntityState: a teleport."""
+        return self.server.session.teleport(request)

@@ -23,12 +23,11 @@ from typing import Any, Callable, Sequence
 import zmq
 
 from mobot_cli import __version__
-from mobot_cli.errors import MobotError, SimulationFault, UsageError
+from mobot_cli.errors import MobotError, SimulationFault
 from mobot_cli.live import endpoint as endpoints
-from mobot_cli.live import keys
-from mobot_cli.live import lockstep, protocol, schema, spawning
+from mobot_cli.live import protocol, schema, spawning
 from mobot_cli.live.clock import Clock, pace_text
-from mobot_cli.live.lockstep import Lockstep
+from mobot_cli.live.lockstep import Lockstep, LockstepRequests, Owed
 from mobot_cli.live.loader import Job, Limits, LoaderPool
 from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.live.session import Session
@@ -44,16 +43,6 @@ FAST_SLICE = (0.0001, 0.002)  # s
 # that often would cost it a good part of its pace, so it looks once per this many seconds.
 LOADER_CHECK = 0.0005
 HOLD_POLL = 20  # ms: how long a paused world waits for a request before it looks at the view's buttons
-
-
-@dataclass
-class _Pending:
-    """A reply the server owes at step ``until``: a `cmd --wait`, or a `step`."""
-
-    envelope: list[bytes]
-    request: Any
-    until: int
-    answer: Callable[[], dict[str, Any]]
 
 
 @dataclass(frozen=True)
@@ -88,14 +77,12 @@ class LiveServer:
         self._authenticator = None  # CURVE on TCP endpoints
         self._poller, self._poller_fds = None, ()  # the socket and the loaders' pipes, while loads run
         self._loaders_due = 0.0
-        self._waits: list[_Pending] = []
+        self._waits: list[Owed] = []
         self._loader = LoaderPool(limits)
         self._handlers: dict[str, Callable] = {
             "ping": self._ping, "list": self._list, "spawn": self._spawn, "delete": self._delete,
             "cmd": self._cmd, "odom": self._odom, "scan": self._scan, "stop": self._stop, "goto": self._goto,
-            "pause": self._pause, "resume": self._resume, "step": self._step_request, "reset": self._reset,
-            "get_state": self._get_state, "set_state": self._set_state,
-            "features": lambda envelope, request: lockstep.features_reply(request.id, self.control)}
+            **LockstepRequests(self).handlers()}
 
     def serve(self, ready: Callable[[str], None] | None = None) -> Served:
         """Run until `stop`, SIGINT/SIGTERM or ``stop_after`` steps; returns status and counts."""
@@ -123,7 +110,7 @@ class LiveServer:
                         self.error = None if interrupted else str(exc) or repr(exc)
                     raise
                 finally:
-                    self._answer_owed()
+                    self.answer_owed()
                     try:
                         self.session.close(self.status, self.error, LiveInfo(
                             endpoint=self.endpoint, pace=pace_text(self.rtf), requests=self.counts))
@@ -174,32 +161,7 @@ class LiveServer:
     # -- the socket -------------------------------------------------------------------------
 
     def _bind(self) -> None:
-        path = endpoints.ipc_path(self.endpoint)
-        if path is not None:
-            endpoints.claim_socket_file(self.endpoint, path, _server_pid)
-        socket = zmq.Context.instance().socket(zmq.ROUTER)
-        socket.setsockopt(zmq.LINGER, 0)
-        socket.setsockopt(zmq.MAXMSGSIZE, protocol.HARD_LIMIT_BYTES)  # larger: the peer is dropped
-        if path is None:  # TCP: only clients with an authorised key get through the handshake
-            try:
-                self._authenticator = keys.secure_server(socket)
-            except BaseException:
-                socket.close()
-                raise
-        old = os.umask(0o177)  # the socket file is born 0600: no window with looser rights
-        try:
-            socket.bind(self.endpoint)
-        except zmq.ZMQError as exc:
-            socket.close()
-            raise UsageError(f"cannot listen at {self.endpoint}: {exc}",
-                             hint="Pick another --endpoint (is another server using it?).") from None
-        finally:
-            os.umask(old)
-        self._socket = socket
-        if path is not None:
-            os.chmod(path, 0o600)
-        else:  # tcp://127.0.0.1:* picks a free port: report the one it got
-            self.endpoint = socket.getsockopt_string(zmq.LAST_ENDPOINT)
+        self._socket, self._authenticator, self.endpoint = endpoints.bind(self.endpoint, _server_pid)
 
     def _serve_requests(self, due: float | None, step_time: float) -> None:
         """Answer requests until the next step is due (real time) or for one slice (fast)."""
@@ -262,7 +224,7 @@ class LiveServer:
         except Refusal as exc:
             answer = protocol.reply(request_id, exc.result, exc.message)
             if op in ("spawn", "delete", "cmd", "set_state", "reset"):  # the history keeps what was refused, too
-                self._history(op=op, name=name, result=exc.result.name, message=exc.message)
+                self.history(op=op, name=name, result=exc.result.name, message=exc.message)
         except Exception as exc:  # a bug must cost one request, never the world
             answer = protocol.reply(request_id, Result.OPERATION_FAILED, f"internal error: {exc!r}"[:500])
         if answer is not None:
@@ -275,7 +237,12 @@ class LiveServer:
         except zmq.ZMQError:
             pass  # the peer is gone or not reading: its reply is dropped, the world goes on
 
-    def _history(self, **record: Any) -> None:
+    def owe(self, owed: Owed) -> None:
+        """Send ``owed``'s answer once the world reaches its step."""
+        self._waits.append(owed)
+
+    def history(self, **record: Any) -> None:
+        """A line in history.jsonl (when recording); a full disk costs the line, not the world."""
         try:
             self.session.history(**record)
         except (OSError, ValueError):
@@ -308,7 +275,7 @@ class LiveServer:
     def _cmd(self, envelope, request: schema.Cmd) -> dict[str, Any] | None:
         until = self.session.command(request)
         if until is not None and request.wait:
-            self._waits.append(_Pending(envelope, request, until, lambda: self._cmd_ended(request)))
+            self.owe(Owed(envelope, request, until, lambda: self._cmd_ended(request)))
             return None
         return protocol.reply(request.id, name=request.name, step=self._step(), t=self._t(), until_step=until)
 
@@ -324,50 +291,6 @@ class LiveServer:
         except Refusal:
             return protocol.reply(request.id, Result.NOT_FOUND,
                                   f"robot '{request.name}' was deleted before its command ended")
-
-    # -- lockstep ---------------------------------------------------------------------------
-
-    def _pause(self, envelope, request) -> dict[str, Any]:
-        changed = self.control.pause()
-        if changed:
-            self._history(op="pause", result="OK")
-        return protocol.reply(request.id, changed=changed, step=self._step(), t=self._t(), **self.control.fields())
-
-    def _resume(self, envelope, request) -> dict[str, Any]:
-        changed = self.control.resume()
-        if changed:
-            self._history(op="resume", result="OK")
-        return protocol.reply(request.id, changed=changed, step=self._step(), t=self._t(), **self.control.fields())
-
-    def _step_request(self, envelope, request: schema.Step) -> None:
-        """StepSimulation: only while paused; the reply comes once the steps are taken."""
-        count = lockstep.steps_of(request.steps, request.seconds, self.plan.physics.rate_hz)
-        if not self.control.paused:
-            raise Refusal(Result.INCORRECT_STATE, "the world is playing: step only a paused world "
-                          "(pause it first, or start it with `mobot serve --paused`)")
-        until = self._step() + self.control.budget + count
-        self.control.step(count)
-
-        def done() -> dict[str, Any]:
-            states = {"robots": self.session.states()} if request.states else {}
-            return protocol.reply(request.id, steps=count, step=self._step(), t=self._t(), **self.control.fields(),
-                                  **states)
-
-        self._waits.append(_Pending(envelope, request, until, done))
-
-    def _reset(self, envelope, request) -> dict[str, Any]:
-        """ResetSimulation (SCOPE_ALL): replies still owed end first, then the world starts over."""
-        self.control.clear()
-        self._answer_owed(waits_only=True, why="the world was reset before this request finished")
-        self.session.reset()
-        return protocol.reply(request.id, step=self._step(), t=self._t(), resets=self.session.timeline.resets,
-                              robots=list(self.session.robots), **self.control.fields())
-
-    def _get_state(self, envelope, request: schema.GetState) -> dict[str, Any]:
-        return self.session.entity_state(request.id, request.name, request.reference_frame)
-
-    def _set_state(self, envelope, request: schema.SetState) -> dict[str, Any]:
-        return self.session.teleport(request)
 
     def _stop(self, envelope, request) -> dict[str, Any]:
         self.stopping = True
@@ -399,7 +322,7 @@ class LiveServer:
             except Exception as exc:
                 answer = protocol.reply(request.id, Result.OPERATION_FAILED, f"internal error: {exc!r}")
             if not answer["ok"]:
-                self._history(op="spawn", name=request.name, result=answer["result"], message=answer["message"])
+                self.history(op="spawn", name=request.name, result=answer["result"], message=answer["message"])
             self._send(job.owner, answer)
 
     def _answer_waits(self, step: int) -> None:
@@ -417,7 +340,11 @@ class LiveServer:
     def _t(self) -> float:
         return self._step() / self.plan.physics.rate_hz
 
-    def _answer_owed(self, waits_only: bool = False,
+    def now(self) -> dict[str, Any]:
+        """The step and time as reply fields."""
+        return {"step": self._step(), "t": self._t()}
+
+    def answer_owed(self, waits_only: bool = False,
                      why: str = "the live world stopped before it could answer") -> None:
         """Every reply still owed (or only those waiting for a step) says why it never came."""
         owed = [] if waits_only else [(job.owner, job.request) for job in self._loader.close()]
