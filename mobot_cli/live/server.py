@@ -130,8 +130,9 @@ class LiveServer:
             timeline.tick()
             if self._waits:
                 self._answer_waits(step)
-            # Steps a paused world was asked for go as fast as they can, requests between them.
-            self._serve_requests(None if control.budget else clock.due(), step_time)
+            # A paused world is not paced: the steps it was asked for go as fast as they can,
+            # requests between them, and it waits for the next request in _held.
+            self._serve_requests(None if control.paused else clock.due(), step_time)
             if self.stopping or (self.stop_after is not None and step >= self.stop_after):
                 break
             if control.hold():

@@ -93,7 +93,12 @@ def test_serve_paused_starts_at_t_0_and_stays_there(cache):
             ping = client.ping()
             assert (ping["step"], ping["state"]) == (0, "paused")
             assert "240 Hz, paused." in server.output()
+            started = time.perf_counter()
             assert client.request("step", steps=240)["t"] == 1.0  # as fast as it can, not paced
+            for _ in range(120):  # one step per request: paced, each would wait 1/240 s (0.5 s in all)
+                client.request("step", states=False)
+            elapsed = time.perf_counter() - started
+            assert client.ping()["step"] == 360 and elapsed < 0.45, elapsed
     finally:
         server.kill()
 
