@@ -301,7 +301,7 @@ class LiveServer:
         # Cheap refusals before loading; the same checks run again when the robot is placed.
         if not request.allow_renaming:
             spawning.final_name(request, self.session.taken())
-        self.session.reference(request)
+        self.session.reference(request.reference_frame)
         self._loader.submit(Job(request, self.plan.physics.rate_hz, owner=envelope))
         self._finish_spawns()  # a load refused at once (no loader can start) is answered now
         return None

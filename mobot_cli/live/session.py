@@ -94,7 +94,7 @@ class Session:
         name = spawning.final_name(request, self.taken())
         taken = {robot.namespace: n for n, robot in self.robots.items()}
         plan = spawning.named(plan, name, request.namespace, taken)
-        reference = self.reference(request)
+        reference = self.reference(request.reference_frame)
         if reference is not None:
             plan = dataclasses.replace(plan, pose=spawning.in_frame(plan.pose, self.world.read(reference)))
         plan = dataclasses.replace(plan, spawn_step=step)
@@ -166,7 +166,7 @@ class Session:
     def entity_state(self, request_id: Any, name: str, reference_frame: str | None) -> dict[str, Any]:
         """GetEntityState: a robot's pose and twist in the world or a robot's frame."""
         self.known(name)
-        ref = self.reference(_Frame(reference_frame))
+        ref = self.reference(reference_frame)
         state = entity_state.relative(self.world.kinematics(name),
                                       None if ref is None else self.world.kinematics(ref))
         return protocol.reply(request_id, name=name, reference_frame=ref or "world", step=self.step,
@@ -175,7 +175,7 @@ class Session:
     def teleport(self, request: schema.SetState) -> dict[str, Any]:
         """SetEntityState: move a robot (checked like a spawn: INVALID_POSE) and set its twist."""
         self.known(request.name)
-        ref = self.reference(request)
+        ref = self.reference(request.reference_frame)
         pose = spawn_pose(request.pose)
         frame = None if ref is None else self.world.kinematics(ref)
         if ref is not None:
@@ -241,9 +241,8 @@ class Session:
             hint = did_you_mean(name, self.robots) or "`mobot list` shows the robots."
             raise Refusal(Result.NOT_FOUND, f"no robot named '{name}'. {hint}")
 
-    def reference(self, request: Any) -> str | None:
+    def reference(self, ref: str | None) -> str | None:
         """The robot a request's pose (or state) is relative to; None for the world frame."""
-        ref = request.reference_frame
         if ref in (None, "", "world"):
             return None
         if ref not in self.robots:
@@ -270,8 +269,3 @@ def _healthy(world: World, name: str) -> bool:
     state = world.read(name)
     values = (state.true_x, state.true_y, state.true_z)
     return all(math.isfinite(v) for v in values) and state.true_z > FLOOR_OF_THE_WORLD
-
-
-@dataclasses.dataclass(frozen=True)
-class _Frame:
-    reference_frame: str | None
