@@ -125,8 +125,15 @@ class _Page:
         from mobot_cli.view.controls import GateControl, add_controls
 
         self.live_server = server
-        add_controls(self.server, GateControl(server.control, self._cmd), lambda: self.live.robot_list.selected,
-                     self.plan.physics.rate_hz)
+        state = add_controls(self.server, GateControl(server.control, self._cmd),
+                             lambda: self.live.robot_list.selected, self.plan.physics.rate_hz)
+
+        def show_state() -> None:  # a `mobot pause` or `resume` from any client shows on the page
+            text = "paused" if server.control.paused else "running"
+            if state.content != text:
+                state.content = text
+
+        self.live.on_frame = show_state
 
     def _cmd(self, name: str, linear: float, angular: float, seconds: float) -> Optional[str]:
         from mobot_cli.errors import MobotError

@@ -168,7 +168,10 @@ def test_the_live_view_draws_states_and_readings_on_the_page(page):
                 timeline.tick()
                 timeline.advance()
             live(Reading(timeline.step, "mobot_2", lidar(), np.array([1.0, 1.0, 1.0, 1.0])))
+            frames = []
+            live.on_frame = lambda: frames.append(live.clock.content)  # serve --view shows its pause state here
             live.draw(force=True)
+            assert frames == [live.clock.content] and frames[0].startswith("**t** = 1.9")  # after the clock
         assert sorted(live.robots) == [f"mobot_{i}" for i in range(5)]
         pose = live.models.link_pose("mobot_2", "base_link")
         assert pose[:2, 3] == pytest.approx([world_x := 2.0 + 0.2 * 1.5, 0.0], abs=0.15), world_x
