@@ -21,7 +21,7 @@ from mobot_cli import __version__
 from mobot_cli.cli import check, inspect, run, xacro
 from mobot_cli.cli import plot as plot_command
 from mobot_cli.cli import sweep as sweep_command
-from mobot_cli.cli import cmd, delete, goto, odom, scan, serve, spawn, stop
+from mobot_cli.cli import cmd, delete, goto, lockstep, odom, scan, serve, spawn, stop
 from mobot_cli.cli import view as view_command
 from mobot_cli.cli import list as list_command  # not `list`: that would shadow the builtin here
 from mobot_cli.cli.environment import Environment
@@ -70,6 +70,13 @@ app.command("goto", context_settings={"ignore_unknown_options": True})(goto.goto
 app.command("odom")(odom.odom)
 app.command("scan")(scan.scan)
 app.command("stop")(stop.stop)
+app.command("pause")(lockstep.pause)
+app.command("resume")(lockstep.resume)
+app.command("step", context_settings={"ignore_unknown_options": True})(lockstep.step)  # N may be negative: refused
+app.command("reset")(lockstep.reset)
+app.command("state")(lockstep.state)
+app.command("teleport")(lockstep.teleport)
+app.command("features")(lockstep.features)
 app.command("view")(view_command.view)
 
 

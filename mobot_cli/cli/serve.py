@@ -33,6 +33,8 @@ def serve(
     view: bool = typer.Option(False, "--view", help="Watch and drive the world in a local 3D web page "
                               "(extra 'view'): pause, resume, step, a teleop pad."),
     view_port: int = typer.Option(8080, "--view-port", help="Port of the --view page on 127.0.0.1 (0: any)."),
+    paused: bool = typer.Option(False, "--paused", help="Start paused: the world moves only when asked to "
+                                "(`mobot step`, `mobot resume`), for lockstep clients."),
 ) -> int:
     """Keep a headless world running; spawn, delete, drive and read robots with the other commands."""
     from mobot_cli.live.endpoint import default_endpoint, ipc_path
@@ -63,15 +65,15 @@ def serve(
     server = LiveServer(plan, endpoint or default_endpoint(), rtf=pace, bind_any=bind_any,
                         out_dir=out, resolved_yaml=prepared.resolved_yaml, stop_after=stop_after,
                         attachments=bridges, watch=page.watch if page else None,
-                        hold=page.gate.hold if page else None,
-                        limits=Limits(seconds=load_timeout, memory=load_memory * 2**20))
+                        paused=paused, limits=Limits(seconds=load_timeout, memory=load_memory * 2**20))
     if page:
         page.connect(server)
 
     def ready(where: str) -> None:
         if not quiet:
             live_common.status(env, f"serving '{plan.name}' (world {plan.world.name}, {len(plan.robots)} robot(s)) "
-                               f"at {where}, {pace_text(pace)}, {plan.physics.rate_hz} Hz. "
+                               f"at {where}, {pace_text(pace)}, {plan.physics.rate_hz} Hz"
+                               f"{', paused' if paused else ''}. "
                                "Stop with Ctrl-C or `mobot stop`.")
             ros2.joined(env, bridges, quiet=False)
             if ipc_path(where) is None:
@@ -104,26 +106,34 @@ def _pace(realtime: bool, fast: bool, rtf: Optional[float]) -> Optional[float]:
 
 
 class _Page:
-    """--view: the live page, its World buttons on the server's hold gate, its pad sending `cmd`."""
+    """--view: the live page, its World buttons on the server's own pause state, its pad sending `cmd`."""
 
     def __init__(self, env, plan, port: int):
-        from mobot_cli.view.controls import Gate, GateControl, add_controls
         from mobot_cli.view.live import LiveView
         from mobot_cli.view.page import open_page, url
 
         self.server = open_page(port, label=f"mobot serve: {plan.name}")
-        self.gate, self.live_server = Gate(), None
+        self.plan, self.live_server = plan, None
         self.live = LiveView(self.server, plan)
-        add_controls(self.server, GateControl(self.gate, self._cmd), lambda: self.live.robot_list.selected,
-                     plan.physics.rate_hz)
         output.view_live(env, url(self.server))
 
     def watch(self, timeline) -> None:
         self.live.watch(timeline)
 
     def connect(self, server) -> None:
-        """The live server whose endpoint the pad sends `cmd` requests to."""
+        """The live server whose pause state the World buttons press and whose endpoint the pad sends `cmd` to."""
+        from mobot_cli.view.controls import GateControl, add_controls
+
         self.live_server = server
+        state = add_controls(self.server, GateControl(server.control, self._cmd),
+                             lambda: self.live.robot_list.selected, self.plan.physics.rate_hz)
+
+        def show_state() -> None:  # a `mobot pause` or `resume` from any client shows on the page
+            text = "paused" if server.control.paused else "running"
+            if state.content != text:
+                state.content = text
+
+        self.live.on_frame = show_state
 
     def _cmd(self, name: str, linear: float, angular: float, seconds: float) -> Optional[str]:
         from mobot_cli.errors import MobotError

@@ -129,6 +129,47 @@ class Client:
         """The latest reading of a robot's sensor (default: its first lidar)."""
         return self.request("scan", name=name, **({"sensor": sensor} if sensor else {}))
 
+    def pause(self) -> dict[str, Any]:
+        """Pause the world (idempotent); the reply's ``state`` is 'paused'."""
+        return self.request("pause")
+
+    def resume(self) -> dict[str, Any]:
+        """Let the world play on (idempotent); the reply's ``state`` is 'playing'."""
+        return self.request("resume")
+
+    def step(self, steps: int | None = None, seconds: float | None = None, states: bool = True,
+             timeout: float | None = None) -> dict[str, Any]:
+        """Advance a paused world exactly ``steps`` (default 1) or ``seconds``; the reply comes when
+        done, with every robot's pose and twist unless ``states`` is False."""
+        fields: dict[str, Any] = {"states": states}
+        if steps is not None:
+            fields["steps"] = steps
+        if seconds is not None:
+            fields["seconds"] = seconds
+        return self.request("step", timeout=timeout, **fields)
+
+    def reset(self) -> dict[str, Any]:
+        """Back to the scenario's start at t = 0."""
+        return self.request("reset")
+
+    def get_state(self, name: str, reference_frame: str | None = None) -> dict[str, Any]:
+        """A robot's pose and twist, in the world or another robot's frame."""
+        return self.request("get_state", name=name, **({"reference_frame": reference_frame} if reference_frame else {}))
+
+    def set_state(self, name: str, pose: dict[str, Any], twist: dict[str, Any] | None = None,
+                  reference_frame: str | None = None) -> dict[str, Any]:
+        """Teleport a robot (checked like a spawn); ``twist`` {linear: {x, y, z}, angular: {...}}."""
+        fields: dict[str, Any] = {"name": name, "pose": pose}
+        if twist is not None:
+            fields["twist"] = twist
+        if reference_frame:
+            fields["reference_frame"] = reference_frame
+        return self.request("set_state", **fields)
+
+    def features(self) -> dict[str, Any]:
+        """What the server supports, as simulation_interfaces' SimulatorFeatures."""
+        return self.request("features")
+
     def stop(self) -> dict[str, Any]:
         """Shut the world down cleanly (it writes its record first)."""
         return self.request("stop")

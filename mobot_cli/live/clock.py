@@ -22,6 +22,11 @@ class Clock:
         """Wall time at which the next step is due; None in fast mode."""
         return None if self.rtf is None else self.start + (self.count + 1) * self.dt / self.rtf
 
+    def restart(self) -> None:
+        """Pace from now on (after a pause): the next step is due one period from now."""
+        if self.rtf is not None:
+            self.start = time.monotonic() - self.count * self.dt / self.rtf
+
     def stepped(self) -> None:
         """Count a step; a world too far behind starts its clock afresh instead of racing."""
         self.count += 1

@@ -114,3 +114,41 @@ def claim_socket_file(endpoint: str, path: Path, server_pid: Callable[[str], int
         return
     raise UsageError(f"a live world (pid {pid}) already serves at {endpoint}",
                      hint=f"Stop it with `mobot stop --endpoint {endpoint}`, or pick another --endpoint.")
+
+
+def bind(endpoint: str, server_pid: Callable[[str], int | None]):
+    """The server's ROUTER socket listening at ``endpoint``: (socket, CURVE authenticator or None,
+    the endpoint as bound). An ipc socket file is claimed first and born 0600; a TCP endpoint only
+    lets clients with an authorised key through the handshake, and ``:*`` reports the port it got."""
+    import zmq
+
+    from mobot_cli.live import keys
+    from mobot_cli.live.protocol import HARD_LIMIT_BYTES
+
+    path = ipc_path(endpoint)
+    if path is not None:
+        claim_socket_file(endpoint, path, server_pid)
+    socket = zmq.Context.instance().socket(zmq.ROUTER)
+    socket.setsockopt(zmq.LINGER, 0)
+    socket.setsockopt(zmq.MAXMSGSIZE, HARD_LIMIT_BYTES)  # larger: the peer is dropped
+    authenticator = None
+    try:
+        if path is None:
+            authenticator = keys.secure_server(socket)
+        old = os.umask(0o177)  # the socket file is born 0600: no window with looser rights
+        try:
+            socket.bind(endpoint)
+        except zmq.ZMQError as exc:
+            raise UsageError(f"cannot listen at {endpoint}: {exc}",
+                             hint="Pick another --endpoint (is another server using it?).") from None
+        finally:
+            os.umask(old)
+    except BaseException:
+        if authenticator is not None:
+            authenticator.stop()
+        socket.close()
+        raise
+    if path is not None:
+        os.chmod(path, 0o600)
+        return socket, authenticator, endpoint
+    return socket, authenticator, socket.getsockopt_string(zmq.LAST_ENDPOINT)

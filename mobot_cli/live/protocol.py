@@ -25,7 +25,32 @@ HARD_LIMIT_BYTES = 64 * 1024 * 1024
 # JSON nested deeper than this is refused (no request needs more than a few levels).
 MAX_DEPTH = 32
 
-OPS = ("ping", "spawn", "delete", "list", "cmd", "odom", "scan", "stop", "goto")
+OPS = ("ping", "spawn", "delete", "list", "cmd", "odom", "scan", "stop", "goto",
+       "pause", "resume", "step", "reset", "get_state", "set_state", "features")
+
+
+class SimulationState(IntEnum):
+    """The world's state, as simulation_interfaces' ``msg/SimulationState``."""
+
+    STOPPED = 0
+    PLAYING = 1
+    PAUSED = 2
+    QUITTING = 3
+
+
+class Feature(IntEnum):
+    """What this server supports, as simulation_interfaces' ``msg/SimulatorFeatures`` numbers them."""
+
+    SPAWNING = 0  # spawn
+    DELETING = 1  # delete
+    SPAWNING_RESOURCE_STRING = 9  # spawn with 'urdf' text
+    ENTITY_STATE_GETTING = 10  # get_state
+    ENTITY_STATE_SETTING = 11  # set_state
+    SIMULATION_RESET = 20  # reset (the whole scope only: SCOPE_ALL)
+    SIMULATION_STATE_SETTING = 25  # pause, resume
+    SIMULATION_STATE_PAUSE = 26
+    STEP_SIMULATION_SINGLE = 31  # step with steps = 1
+    STEP_SIMULATION_MULTIPLE = 32  # step with steps > 1 (or seconds)
 
 
 class Result(IntEnum):
@@ -34,7 +59,7 @@ class Result(IntEnum):
     FEATURE_UNSUPPORTED = 0  # an op the server does not know
     OK = 1
     NOT_FOUND = 2  # no robot (or reference frame) of that name
-    INCORRECT_STATE = 3  # the world is shutting down
+    INCORRECT_STATE = 3  # the world is in the wrong state for it (step while playing, shutting down)
     OPERATION_FAILED = 4  # anything else that went wrong
     NAME_NOT_UNIQUE = 101
     NAME_INVALID = 102

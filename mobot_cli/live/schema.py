@@ -8,17 +8,21 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal, Optional, Union
 
-from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, StrictInt, TypeAdapter, ValidationError
 
 from mobot_cli.live.protocol import OPS, Refusal, Result
 from mobot_cli.scenario.limits import MAX_NAME_LENGTH
 from mobot_cli.scenario.model import NAME_RE, NAMESPACE_RE, PoseSpec
 
 MAX_NAME = 256
+# A step request advances at most this many physics steps (11.5 h at 240 Hz); the world keeps
+# answering other requests between them, so a big one delays its own reply only.
+MAX_STEPS = 10_000_000
 Name = Annotated[str, Field(min_length=1, max_length=MAX_NAME)]
-# Spawn request fields whose problems have their own result code.
-FIELD_RESULTS = {"name": Result.NAME_INVALID, "namespace": Result.NAMESPACE_INVALID,
-                 "pose": Result.INVALID_POSE}
+# Request fields whose problems have their own result code (SpawnEntity's, SetEntityState's).
+FIELD_RESULTS = {"spawn": {"name": Result.NAME_INVALID, "namespace": Result.NAMESPACE_INVALID,
+                           "pose": Result.INVALID_POSE},
+                 "set_state": {"pose": Result.INVALID_POSE}}
 
 
 class Request(BaseModel):
@@ -93,7 +97,69 @@ class Spawn(Request):
     base_dir: Optional[str] = None  # the client's folder: relative paths resolve against it
 
 
-AnyRequest = Annotated[Union[Ping, ListRobots, Stop, Delete, Odom, Scan, Cmd, Goto, Spawn], Field(discriminator="op")]
+class Pause(Request):
+    op: Literal["pause"]
+
+
+class Resume(Request):
+    op: Literal["resume"]
+
+
+class Features(Request):
+    op: Literal["features"]
+
+
+class Reset(Request):
+    op: Literal["reset"]
+    scope: StrictInt = 0  # ResetSimulation's: 0 (default) and 255 (all) are the same, all this server does
+
+
+class Step(Request):
+    """StepSimulation: ``steps`` physics steps (default 1) or ``seconds`` of them, while paused."""
+
+    op: Literal["step"]
+    steps: Optional[Annotated[StrictInt, Field(ge=1, le=MAX_STEPS)]] = None
+    seconds: Optional[Annotated[float, Field(gt=0)]] = None
+    states: bool = True  # the reply carries every robot's pose and twist
+
+
+# A teleport's twist: far past any wheeled robot, short of what makes PyBullet's state blow up.
+Speed = Annotated[float, Field(ge=-1000.0, le=1000.0)]
+
+
+class Vector(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+
+    x: Speed = 0.0
+    y: Speed = 0.0
+    z: Speed = 0.0
+
+
+class Twist(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+
+    linear: Vector = Vector()  # m/s
+    angular: Vector = Vector()  # rad/s
+
+
+class GetState(Request):
+    op: Literal["get_state"]
+    name: Name
+    reference_frame: Optional[str] = None  # a robot's name; None, "" or "world": the world
+
+
+class SetState(Request):
+    """SetEntityState: a teleport, checked like a spawn; the twist defaults to rest."""
+
+    op: Literal["set_state"]
+    name: Name
+    pose: PoseSpec
+    twist: Twist = Twist()
+    reference_frame: Optional[str] = None
+
+
+AnyRequest = Annotated[Union[Ping, ListRobots, Stop, Delete, Odom, Scan, Cmd, Goto, Spawn, Pause, Resume,
+                             Features, Reset, Step, GetState, SetState], Field(discriminator="op")]
 _ADAPTER: TypeAdapter = TypeAdapter(AnyRequest)
 
 
@@ -112,11 +178,17 @@ def parse(document: dict[str, Any]) -> Request:
         field = ".".join("for" if part == "for_" else part for part in loc) or "request"
         message = err["msg"].removeprefix("Value error, ")
         result = Result.INVALID_REQUEST
-        if document["op"] == "spawn" and loc and loc[0] in FIELD_RESULTS and err["type"] != "missing":
-            result = FIELD_RESULTS[loc[0]]
+        special = FIELD_RESULTS.get(document["op"], {})
+        if loc and loc[0] in special and err["type"] != "missing":
+            result = special[loc[0]]
         raise Refusal(result, f"{document['op']} request, field '{field}': {message}") from None
     if isinstance(request, Spawn):
         check_spawn(request)
+    elif isinstance(request, Step) and request.steps is not None and request.seconds is not None:
+        raise Refusal(Result.INVALID_REQUEST, "a step request gives 'steps' or 'seconds', not both")
+    elif isinstance(request, Reset) and request.scope not in (0, 255):
+        raise Refusal(Result.FEATURE_UNSUPPORTED, f"reset scope {request.scope}: this server resets "
+                      "everything at once (scope 0 or 255, SCOPE_ALL)")
     return request
 
 

@@ -23,11 +23,11 @@ from typing import Any, Callable, Sequence
 import zmq
 
 from mobot_cli import __version__
-from mobot_cli.errors import MobotError, SimulationFault, UsageError
+from mobot_cli.errors import MobotError, SimulationFault
 from mobot_cli.live import endpoint as endpoints
-from mobot_cli.live import keys
 from mobot_cli.live import protocol, schema, spawning
 from mobot_cli.live.clock import Clock, pace_text
+from mobot_cli.live.lockstep import Lockstep, LockstepRequests, Owed
 from mobot_cli.live.loader import Job, Limits, LoaderPool
 from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.live.session import Session
@@ -42,16 +42,7 @@ FAST_SLICE = (0.0001, 0.002)  # s
 # A --fast world takes a step every few tens of microseconds; looking at the loader processes
 # that often would cost it a good part of its pace, so it looks once per this many seconds.
 LOADER_CHECK = 0.0005
-HOLD_POLL = 0.02  # s: how long a held (paused) world waits for requests between two looks at hold()
-
-
-@dataclass
-class _Pending:
-    """A reply the server owes: a spawn whose robot is loading, or a `cmd --wait`."""
-
-    envelope: list[bytes]
-    request: Any
-    until: int | None = None  # cmd: the step at which the command ends
+HOLD_POLL = 20  # ms: how long a paused world waits for a request before it looks at the view's buttons
 
 
 @dataclass(frozen=True)
@@ -70,13 +61,12 @@ class LiveServer:
     def __init__(self, plan: Plan, endpoint: str, *, rtf: float | None = 1.0, bind_any: bool = False,
                  out_dir: Path | None = None, resolved_yaml: str = "", stop_after: int | None = None,
                  attachments: Sequence[Attachment] = (), watch: Callable[[Timeline], None] | None = None,
-                 hold: Callable[[], bool] | None = None,
-                 limits: Limits = Limits()):
+                 paused: bool = False, limits: Limits = Limits()):
         self.plan, self.rtf, self.stop_after = plan, rtf, stop_after
         self.attachments = attachments  # ride along the timeline (the ROS 2 bridge): run/timeline.py
-        # watch: called with the timeline before the first spawn (a view attaches there);
-        # hold: asked before each step, True keeps the world paused while requests are answered.
-        self.watch, self.hold = watch, hold
+        # watch: called with the timeline before the first spawn (a view attaches there).
+        self.watch = watch
+        self.control = Lockstep(paused)  # pause, resume, step: the protocol's and the view's buttons
         self.out_dir, self.resolved_yaml = out_dir, resolved_yaml
         self.endpoint = endpoints.check(endpoint, bind_any)
         self.session: Session | None = None  # made once the world is up and listening
@@ -87,11 +77,12 @@ class LiveServer:
         self._authenticator = None  # CURVE on TCP endpoints
         self._poller, self._poller_fds = None, ()  # the socket and the loaders' pipes, while loads run
         self._loaders_due = 0.0
-        self._waits: list[_Pending] = []
+        self._waits: list[Owed] = []
         self._loader = LoaderPool(limits)
         self._handlers: dict[str, Callable] = {
             "ping": self._ping, "list": self._list, "spawn": self._spawn, "delete": self._delete,
-            "cmd": self._cmd, "odom": self._odom, "scan": self._scan, "stop": self._stop, "goto": self._goto}
+            "cmd": self._cmd, "odom": self._odom, "scan": self._scan, "stop": self._stop, "goto": self._goto,
+            **LockstepRequests(self).handlers()}
 
     def serve(self, ready: Callable[[str], None] | None = None) -> Served:
         """Run until `stop`, SIGINT/SIGTERM or ``stop_after`` steps; returns status and counts."""
@@ -119,7 +110,7 @@ class LiveServer:
                         self.error = None if interrupted else str(exc) or repr(exc)
                     raise
                 finally:
-                    self._answer_owed()
+                    self.answer_owed()
                     try:
                         self.session.close(self.status, self.error, LiveInfo(
                             endpoint=self.endpoint, pace=pace_text(self.rtf), requests=self.counts))
@@ -132,19 +123,24 @@ class LiveServer:
         return Served(self.status, self.error, self._step(), dict(self.counts))
 
     def _loop(self, session: Session, clock: Clock) -> None:
-        timeline = session.timeline
+        timeline, control = session.timeline, self.control
         step_time = 0.0
         while not self.stopping:
             step = timeline.step
             timeline.tick()
-            self._answer_waits(step)
-            self._serve_requests(clock.due(), step_time)  # finished loads are answered there, too
+            if self._waits:
+                self._answer_waits(step)
+            # A paused world is not paced: the steps it was asked for go as fast as they can,
+            # requests between them, and it waits for the next request in _held.
+            self._serve_requests(None if control.paused else clock.due(), step_time)
             if self.stopping or (self.stop_after is not None and step >= self.stop_after):
                 break
-            if self.hold is not None and self.hold():
-                self._held(clock)
+            if control.hold():
+                self._held()
+                clock.restart()
                 if self.stopping:
                     break
+            lockstep_step = control.spend()
             started = time.perf_counter()
             try:
                 timeline.advance()
@@ -153,44 +149,20 @@ class LiveServer:
                     self.status, self.error, self.stopping = Status.FAULT, str(exc), True
             step_time = time.perf_counter() - started
             clock.stepped()
+            if lockstep_step:  # real time goes on from here once the world plays again
+                clock.restart()
 
-    def _held(self, clock: Clock) -> None:
-        """Paused: answer requests (spawns too) until released, then go on where the clock stopped."""
-        since = time.monotonic()
-        while not self.stopping and self.hold():
+    def _held(self) -> None:
+        """Paused: answer requests (spawns too) until a step is asked for or the world plays."""
+        while not self.stopping and self.control.hold():
             self._finish_spawns()
-            self._serve_requests(time.monotonic() + HOLD_POLL, 0.0)
-        clock.start += time.monotonic() - since
+            if self._wait(HOLD_POLL):
+                self._receive_one()
 
     # -- the socket -------------------------------------------------------------------------
 
     def _bind(self) -> None:
-        path = endpoints.ipc_path(self.endpoint)
-        if path is not None:
-            endpoints.claim_socket_file(self.endpoint, path, _server_pid)
-        socket = zmq.Context.instance().socket(zmq.ROUTER)
-        socket.setsockopt(zmq.LINGER, 0)
-        socket.setsockopt(zmq.MAXMSGSIZE, protocol.HARD_LIMIT_BYTES)  # larger: the peer is dropped
-        if path is None:  # TCP: only clients with an authorised key get through the handshake
-            try:
-                self._authenticator = keys.secure_server(socket)
-            except BaseException:
-                socket.close()
-                raise
-        old = os.umask(0o177)  # the socket file is born 0600: no window with looser rights
-        try:
-            socket.bind(self.endpoint)
-        except zmq.ZMQError as exc:
-            socket.close()
-            raise UsageError(f"cannot listen at {self.endpoint}: {exc}",
-                             hint="Pick another --endpoint (is another server using it?).") from None
-        finally:
-            os.umask(old)
-        self._socket = socket
-        if path is not None:
-            os.chmod(path, 0o600)
-        else:  # tcp://127.0.0.1:* picks a free port: report the one it got
-            self.endpoint = socket.getsockopt_string(zmq.LAST_ENDPOINT)
+        self._socket, self._authenticator, self.endpoint = endpoints.bind(self.endpoint, _server_pid)
 
     def _serve_requests(self, due: float | None, step_time: float) -> None:
         """Answer requests until the next step is due (real time) or for one slice (fast)."""
@@ -199,10 +171,7 @@ class LiveServer:
         while not self.stopping:
             wait_ms = 0 if fast else max(0, math.ceil((end - time.monotonic()) * 1000))
             if self._wait(wait_ms):
-                try:
-                    self._receive(self._socket.recv_multipart(zmq.NOBLOCK))
-                except zmq.ZMQError:
-                    pass  # the message went away (EAGAIN): nothing to answer
+                self._receive_one()
             elif fast:
                 return
             if time.monotonic() >= end:
@@ -233,6 +202,13 @@ class LiveServer:
             self._finish_spawns()
         return self._socket in events
 
+    def _receive_one(self) -> None:
+        try:
+            frames = self._socket.recv_multipart(zmq.NOBLOCK)
+        except zmq.ZMQError:
+            return  # the message went away (EAGAIN): nothing to answer
+        self._receive(frames)
+
     def _receive(self, frames: list[bytes]) -> None:
         # REQ peers (and our DEALER client) put an empty delimiter after the identity.
         cut = 2 if len(frames) >= 3 and frames[1] == b"" else 1
@@ -248,8 +224,8 @@ class LiveServer:
             answer = self._handlers[request.op](envelope, request)
         except Refusal as exc:
             answer = protocol.reply(request_id, exc.result, exc.message)
-            if op in ("spawn", "delete", "cmd"):  # the history keeps what was refused, too
-                self._history(op=op, name=name, result=exc.result.name, message=exc.message)
+            if op in ("spawn", "delete", "cmd", "set_state", "reset"):  # the history keeps what was refused, too
+                self.history(op=op, name=name, result=exc.result.name, message=exc.message)
         except Exception as exc:  # a bug must cost one request, never the world
             answer = protocol.reply(request_id, Result.OPERATION_FAILED, f"internal error: {exc!r}"[:500])
         if answer is not None:
@@ -262,7 +238,12 @@ class LiveServer:
         except zmq.ZMQError:
             pass  # the peer is gone or not reading: its reply is dropped, the world goes on
 
-    def _history(self, **record: Any) -> None:
+    def owe(self, owed: Owed) -> None:
+        """Send ``owed``'s answer once the world reaches its step."""
+        self._waits.append(owed)
+
+    def history(self, **record: Any) -> None:
+        """A line in history.jsonl (when recording); a full disk costs the line, not the world."""
         try:
             self.session.history(**record)
         except (OSError, ValueError):
@@ -272,7 +253,8 @@ class LiveServer:
 
     def _ping(self, envelope, request) -> dict[str, Any]:
         step = self._step()
-        return protocol.reply(request.id, world=self.plan.world.name, scenario=self.plan.name, step=step,
+        return protocol.reply(request.id, **self.control.fields(), world=self.plan.world.name,
+                              scenario=self.plan.name, step=step,
                               t=step / self.plan.physics.rate_hz, robots=len(self.session.robots),
                               rate_hz=self.plan.physics.rate_hz, pace=pace_text(self.rtf), rtf=self.rtf,
                               pid=os.getpid(),
@@ -294,7 +276,7 @@ class LiveServer:
     def _cmd(self, envelope, request: schema.Cmd) -> dict[str, Any] | None:
         until = self.session.command(request)
         if until is not None and request.wait:
-            self._waits.append(_Pending(envelope, request, until=until))
+            self.owe(Owed(envelope, request, until, lambda: self._cmd_ended(request)))
             return None
         return protocol.reply(request.id, name=request.name, step=self._step(), t=self._t(), until_step=until)
 
@@ -304,6 +286,13 @@ class LiveServer:
         answer = self.session.goto(request, done)
         return None if request.wait else answer
 
+    def _cmd_ended(self, request: schema.Cmd) -> dict[str, Any]:
+        try:
+            return self.session.odometry(request.id, request.name)
+        except Refusal:
+            return protocol.reply(request.id, Result.NOT_FOUND,
+                                  f"robot '{request.name}' was deleted before its command ended")
+
     def _stop(self, envelope, request) -> dict[str, Any]:
         self.stopping = True
         return protocol.reply(request.id, step=self._step(), t=self._t(), message="stopping")
@@ -312,7 +301,7 @@ class LiveServer:
         # Cheap refusals before loading; the same checks run again when the robot is placed.
         if not request.allow_renaming:
             spawning.final_name(request, self.session.taken())
-        self.session.reference(request)
+        self.session.reference(request.reference_frame)
         self._loader.submit(Job(request, self.plan.physics.rate_hz, owner=envelope))
         self._finish_spawns()  # a load refused at once (no loader can start) is answered now
         return None
@@ -334,18 +323,16 @@ class LiveServer:
             except Exception as exc:
                 answer = protocol.reply(request.id, Result.OPERATION_FAILED, f"internal error: {exc!r}")
             if not answer["ok"]:
-                self._history(op="spawn", name=request.name, result=answer["result"], message=answer["message"])
+                self.history(op="spawn", name=request.name, result=answer["result"], message=answer["message"])
             self._send(job.owner, answer)
 
     def _answer_waits(self, step: int) -> None:
         for wait in [w for w in self._waits if step >= w.until]:
             self._waits.remove(wait)
-            name = wait.request.name
             try:
-                answer = self.session.odometry(wait.request.id, name)
-            except Refusal:
-                answer = protocol.reply(wait.request.id, Result.NOT_FOUND,
-                                        f"robot '{name}' was deleted before its command ended")
+                answer = wait.answer()
+            except Exception as exc:  # a bug must cost one reply, never the world
+                answer = protocol.reply(wait.request.id, Result.OPERATION_FAILED, f"internal error: {exc!r}"[:500])
             self._send(wait.envelope, answer)
 
     def _step(self) -> int:
@@ -354,13 +341,17 @@ class LiveServer:
     def _t(self) -> float:
         return self._step() / self.plan.physics.rate_hz
 
-    def _answer_owed(self) -> None:
-        """Every reply still owed says the world stopped."""
-        owed = [(job.owner, job.request) for job in self._loader.close()]
+    def now(self) -> dict[str, Any]:
+        """The step and time as reply fields."""
+        return {"step": self._step(), "t": self._t()}
+
+    def answer_owed(self, waits_only: bool = False,
+                     why: str = "the live world stopped before it could answer") -> None:
+        """Every reply still owed (or only those waiting for a step) says why it never came."""
+        owed = [] if waits_only else [(job.owner, job.request) for job in self._loader.close()]
         owed += [(wait.envelope, wait.request) for wait in self._waits]
         for envelope, request in owed:
-            self._send(envelope, protocol.reply(request.id, Result.INCORRECT_STATE,
-                                                "the live world stopped before it could answer"))
+            self._send(envelope, protocol.reply(request.id, Result.INCORRECT_STATE, why))
         self._waits = []
 
     def _shutdown(self) -> None:

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from mobot_cli.errors import MobotError, SimulationFault, did_you_mean
-from mobot_cli.live import protocol, schema, spawning
+from mobot_cli.live import entity_state, protocol, schema, spawning
 from mobot_cli.live.history import History
 from mobot_cli.live.readings import LatestReadings
 from mobot_cli.live.protocol import Refusal, Result
@@ -23,7 +23,7 @@ from mobot_cli.run.goals import GoalEnded, GoalStarted
 from mobot_cli.run.timeline import Deleted, Record, Spawned, Timeline
 from mobot_cli.scenario.goal_model import GoalFields, GotoSpec
 from mobot_cli.scenario.goals import goal_step
-from mobot_cli.scenario.units import steps
+from mobot_cli.scenario.units import spawn_pose, steps
 from mobot_cli.sim.plan import Event, Plan, RobotPlan
 from mobot_cli.sim.world import FLOOR_OF_THE_WORLD, World
 
@@ -94,7 +94,7 @@ class Session:
         name = spawning.final_name(request, self.taken())
         taken = {robot.namespace: n for n, robot in self.robots.items()}
         plan = spawning.named(plan, name, request.namespace, taken)
-        reference = self.reference(request)
+        reference = self.reference(request.reference_frame)
         if reference is not None:
             plan = dataclasses.replace(plan, pose=spawning.in_frame(plan.pose, self.world.read(reference)))
         plan = dataclasses.replace(plan, spawn_step=step)
@@ -154,6 +154,49 @@ class Session:
                               error=ended.error if math.isfinite(ended.error) else None,
                               pose=spawning.pose_fields(state) if state is not None else None)
 
+    # -- lockstep: reset, entity states --------------------------------------------------------
+
+    def reset(self) -> None:
+        """ResetSimulation: the plan's world at t = 0 again, its step 0 ticked (the loop goes on
+        from there). history.jsonl says so first; the robots' lives end and start again in the record."""
+        self.history(op="reset", result="OK", resets=self.timeline.resets + 1)
+        self.timeline.reset()
+        self.timeline.tick()
+
+    def entity_state(self, request_id: Any, name: str, reference_frame: str | None) -> dict[str, Any]:
+        """GetEntityState: a robot's pose and twist in the world or a robot's frame."""
+        self.known(name)
+        ref = self.reference(reference_frame)
+        state = entity_state.relative(self.world.kinematics(name),
+                                      None if ref is None else self.world.kinematics(ref))
+        return protocol.reply(request_id, name=name, reference_frame=ref or "world", step=self.step,
+                              t=self.step / self.rate_hz, **entity_state.fields(state))
+
+    def teleport(self, request: schema.SetState) -> dict[str, Any]:
+        """SetEntityState: move a robot (checked like a spawn: INVALID_POSE) and set its twist."""
+        self.known(request.name)
+        ref = self.reference(request.reference_frame)
+        pose = spawn_pose(request.pose)
+        frame = None if ref is None else self.world.kinematics(ref)
+        if ref is not None:
+            pose = spawning.in_frame(pose, self.world.read(ref))
+        twist = request.twist
+        linear, angular = entity_state.world_twist(
+            pose.xyz, (twist.linear.x, twist.linear.y, twist.linear.z),
+            (twist.angular.x, twist.angular.y, twist.angular.z), frame)
+        try:
+            self.world.teleport(request.name, pose, linear, angular)
+        except MobotError as exc:
+            raise Refusal(Result.INVALID_POSE, str(exc)) from None
+        state = self.world.kinematics(request.name)
+        self.history(op="set_state", name=request.name, result="OK", pose=spawning.pose_fields(self.world.read(request.name)))
+        return protocol.reply(request.id, name=request.name, reference_frame="world", step=self.step,
+                              t=self.step / self.rate_hz, **entity_state.fields(state))
+
+    def states(self) -> list[dict[str, Any]]:
+        """Every robot's world pose and twist, in spawn order (a step's reply)."""
+        return [{"name": name, **entity_state.fields(self.world.kinematics(name))} for name in self.robots]
+
     def fault(self, exc: SimulationFault) -> bool:
         """Remove robots whose state went bad; False when none can be blamed."""
         bad = [name for name in self.world.names() if not _healthy(self.world, name)]
@@ -198,9 +241,8 @@ class Session:
             hint = did_you_mean(name, self.robots) or "`mobot list` shows the robots."
             raise Refusal(Result.NOT_FOUND, f"no robot named '{name}'. {hint}")
 
-    def reference(self, request: schema.Spawn) -> str | None:
-        """The robot a spawn pose is relative to; None for the world frame."""
-        ref = request.reference_frame
+    def reference(self, ref: str | None) -> str | None:
+        """The robot a request's pose (or state) is relative to; None for the world frame."""
         if ref in (None, "", "world"):
             return None
         if ref not in self.robots:

@@ -105,6 +105,12 @@ class Timeline:
         self._consume: Consumer = self._held.append
         self._inputs: list[Callable[[], None]] = []
         self._on_refused = on_refused  # None: a refused scripted event ends the run
+        self.resets = 0
+        self._schedule()
+
+    def _schedule(self) -> None:
+        """What the plan has due, from t = 0 on: its events, command scripts and log cadence."""
+        plan = self.plan
         self._events: dict[int, list[Event]] = defaultdict(list)
         self._commands: dict[int, list[tuple[str, float, float]]] = defaultdict(list)
         self._stops: dict[str, int] = {}  # robot -> step at which its timed command ends
@@ -156,10 +162,22 @@ class Timeline:
         delete (a thread-safe queue drained here is how other threads reach the world)."""
         self._inputs.append(poll)
 
-    def start(self) -> None:
+    def start(self, by: str = "scenario") -> None:
         """Spawn the plan's own robots at t = 0."""
         for robot in self.plan.robots:
-            self.spawn(robot, "scenario")
+            self.spawn(robot, by)
+
+    def reset(self) -> None:
+        """Back to t = 0 as the plan starts (ResetSimulation's SCOPE_ALL): every robot leaves
+        (its last row, then ``Deleted`` by "reset"), the world is rebuilt at step 0, scripts and
+        events start over and the plan's robots are spawned again (``Spawned`` by "reset").
+        The caller ticks step 0, as a loop does after ``start``."""
+        for name in list(self.robots):
+            self.delete(name, "reset")
+        self.world.reset()
+        self._schedule()
+        self.resets += 1
+        self.start("reset")
 
     def tick(self) -> None:
         """Everything due at the current step, in order: inputs, events, commands, ends of timed

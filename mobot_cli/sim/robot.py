@@ -72,8 +72,8 @@ class SimRobot:
         self.cmd = (float(linear), float(angular))
         self.drive.command(linear, angular)
 
-    def state(self, step: int = -1) -> RobotState:
-        """Command, odometry and truth after ``step`` steps (called at log rate: few PyBullet calls)."""
+    def kinematics(self) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...], tuple[float, ...]]:
+        """World position, quaternion, linear and angular velocity of the root link's URDF frame."""
         cid, body = self.cid, self.body
         com, orn = p.getBasePositionAndOrientation(body, physicsClientId=cid)
         lin, ang = p.getBaseVelocity(body, physicsClientId=cid)
@@ -85,6 +85,12 @@ class SimRobot:
             lin = (lin[0] + ang[1] * r[2] - ang[2] * r[1],
                    lin[1] + ang[2] * r[0] - ang[0] * r[2],
                    lin[2] + ang[0] * r[1] - ang[1] * r[0])
+        return pos, orn, lin, ang
+
+    def state(self, step: int = -1) -> RobotState:
+        """Command, odometry and truth after ``step`` steps (called at log rate: few PyBullet calls)."""
+        cid, body = self.cid, self.body
+        pos, orn, lin, ang = self.kinematics()
         roll, pitch, yaw = p.getEulerFromQuaternion(orn)
         rot = p.getMatrixFromQuaternion(orn)
         true_vx = lin[0] * rot[0] + lin[1] * rot[3] + lin[2] * rot[6]  # along the body x axis

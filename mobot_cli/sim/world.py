@@ -11,10 +11,10 @@ from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from mobot_cli.errors import SimulationFault, SpawnError, WorldError, did_you_mean
-from mobot_cli.sim import clearance, placement, static_shapes, surroundings
+from mobot_cli.sim import clearance, entity, placement, static_shapes, surroundings
 from mobot_cli.sim.bullet import p
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, ContactCounter
-from mobot_cli.sim.plan import Physics, RobotPlan, WorldPlan
+from mobot_cli.sim.plan import Physics, RobotPlan, SpawnPose, WorldPlan
 from mobot_cli.sim.robot import SimRobot
 from mobot_cli.sim.state import RobotState
 from mobot_cli.sim.urdf_file import links_with_friction, quiet_stdout, urdf_path
@@ -85,6 +85,19 @@ class World:
         except BaseException:
             self.close()
             raise
+
+    def reset(self) -> None:
+        """Back to the world as built, at step 0, with no robots: PyBullet's own reset, then the
+        same static bodies in the same order (so the same ids), as if the world were new."""
+        for name in list(self._robots):
+            self.remove(name)
+        p.resetSimulation(physicsClientId=self._cid)
+        self._steps = 0
+        self._ramping = []
+        self._contacts = ContactCounter()
+        self._sensing = None  # rebuilt with the first robot with sensors: its noise restarts too
+        self._clearance = {}
+        self._build(self.plan)
 
     def _build(self, world: WorldPlan) -> None:
         cid, physics = self._cid, self.physics
@@ -195,15 +208,7 @@ class World:
         finally:
             if probe != self._ground:
                 p.removeBody(probe, physicsClientId=cid)
-        xyz = placement.link_frame_xyz(cid, uid)
-        others = dict(self._statics)
-        others.update({r.body: f"robot '{n}'" for n, r in self._robots.items()})
-        placement.check_clear(cid, uid, others, robot.name, xyz, z_auto=pose.z_auto)
-        box = placement.body_bounds(cid, uid)
-        surroundings.check_not_inside(cid, {b: self._statics[b] for b in self._solids},
-                                      robot.name, xyz, box)
-        if not pose.z_auto:
-            surroundings.check_above_floor(cid, self._statics, robot.name, xyz, box)
+        self._check_placed(uid, robot.name, pose.z_auto)
         bottom = min(lowest.values(), default=0.0)
         wheels = _wheel_links(cid, uid, robot)
         casters = {link for link, h in lowest.items()
@@ -219,6 +224,49 @@ class World:
             p.changeDynamics(uid, link, linearDamping=0.0, angularDamping=0.0,
                              activationState=p.ACTIVATION_STATE_DISABLE_SLEEPING,
                              physicsClientId=cid)
+
+    def _check_placed(self, uid: int, name: str, z_auto: bool) -> None:
+        """SpawnError unless the body is clear of the floor, the world and the other robots."""
+        cid = self._cid
+        xyz = placement.link_frame_xyz(cid, uid)
+        others = dict(self._statics)
+        others.update({r.body: f"robot '{n}'" for n, r in self._robots.items() if r.body != uid})
+        placement.check_clear(cid, uid, others, name, xyz, z_auto=z_auto)
+        box = placement.body_bounds(cid, uid)
+        surroundings.check_not_inside(cid, {b: self._statics[b] for b in self._solids}, name, xyz, box)
+        if not z_auto:
+            surroundings.check_above_floor(cid, self._statics, name, xyz, box)
+
+    def _rest(self, uid: int, pose: SpawnPose, name: str) -> None:
+        """Rest a body at (x, y) on the floor below (z: auto), as a spawn does."""
+        cid = self._cid
+        probe_z = 0.0 if self._ground is not None else placement.PROBE_Z
+        probe = self._ground if self._ground is not None else self._plane(probe_z)
+        try:
+            placement.rest_on_floor(cid, uid, probe, set(self._statics), pose.xyz, pose.quat, name, probe_z)
+        finally:
+            if probe != self._ground:
+                p.removeBody(probe, physicsClientId=cid)
+
+    def kinematics(self, name: str) -> entity.Kinematics:
+        """The root link's world pose and velocity (of its origin) now."""
+        return entity.kinematics(self._robot(name))
+
+    def teleport(self, name: str, pose: SpawnPose, linear=(0.0, 0.0, 0.0), angular=(0.0, 0.0, 0.0)) -> None:
+        """Move a robot to ``pose`` (world frame; z: auto rests it on the floor) with this twist
+        (world frame, of its root link's origin), checked like a spawn: SpawnError leaves it where it was."""
+        robot = self._robot(name)
+        saved = entity.saved(robot)
+        try:
+            if pose.z_auto:
+                self._rest(robot.body, pose, name)
+            else:
+                entity.place(robot, pose.xyz, pose.quat)
+            self._check_placed(robot.body, name, pose.z_auto)
+        except BaseException:
+            entity.restore(robot, saved)
+            raise
+        entity.set_twist(robot, linear, angular)
 
     def remove(self, name: str) -> None:
         """Delete a robot from the world."""

@@ -1,14 +1,13 @@
 """`mobot serve --view`: buttons that pause, resume and step the world, and a teleop pad.
 
 The page talks to the world through ``WorldControl``, a small interface: the CLI wires it to the
-live server (a ``Gate`` the server's loop consults between steps, and ordinary `cmd` requests for
-the pad, which therefore show in history.jsonl like any client's). When the protocol gains its own
-pause/resume/step requests, an implementation that sends them replaces the Gate, and the page stays.
+live server's own pause state (its Lockstep, which the protocol's pause, resume and step requests
+press too, so the page and every client always agree) and to ordinary `cmd` requests for the pad,
+which therefore show in history.jsonl like any client's.
 """
 
 from __future__ import annotations
 
-import threading
 from typing import Any, Callable, Protocol
 
 DRIVE_FOR_S = 1.0  # each press of the pad drives this long, then the robot stops (a lost page stops it)
@@ -30,46 +29,23 @@ class WorldControl(Protocol):
         """Drive a robot for ``seconds``; returns why it was refused, or None."""
 
 
-class Gate:
-    """Pause, resume and single steps for a loop that calls ``hold()`` before each step."""
-
-    def __init__(self) -> None:
-        self._lock = threading.Lock()
-        self._paused, self._budget = False, 0
+class PauseState(Protocol):
+    """The live world's pause state (live.lockstep.Lockstep): thread-safe, pressed from the page's thread."""
 
     @property
-    def paused(self) -> bool:
-        return self._paused
+    def paused(self) -> bool: ...
 
-    def pause(self) -> None:
-        with self._lock:
-            self._paused, self._budget = True, 0
+    def pause(self) -> Any: ...
 
-    def resume(self) -> None:
-        with self._lock:
-            self._paused, self._budget = False, 0
+    def resume(self) -> Any: ...
 
-    def step(self, steps: int = 1) -> None:
-        """While paused: let ``steps`` more physics steps through."""
-        with self._lock:
-            if self._paused:
-                self._budget += max(0, steps)
-
-    def hold(self) -> bool:
-        """True while the world must wait; each False while paused spends one step of the budget."""
-        with self._lock:
-            if not self._paused:
-                return False
-            if self._budget > 0:
-                self._budget -= 1
-                return False
-            return True
+    def step(self, steps: int = 1) -> Any: ...
 
 
 class GateControl:
-    """WorldControl over a Gate and a function that sends `cmd` requests."""
+    """WorldControl over the world's pause state and a function that sends `cmd` requests."""
 
-    def __init__(self, gate: Gate, send_cmd: Callable[[str, float, float, float], str | None]):
+    def __init__(self, gate: PauseState, send_cmd: Callable[[str, float, float, float], str | None]):
         self.gate, self._send = gate, send_cmd
 
     @property
@@ -95,7 +71,7 @@ def add_controls(server: Any, control: WorldControl, selected: Callable[[], str 
     with gui.add_folder("World"):
         run = gui.add_button_group("world", ("Pause", "Resume", "Step"))
         steps = gui.add_number("steps per Step", initial_value=max(1, rate_hz // 10), min=1, max=100_000, step=1)
-        state = gui.add_markdown("running")
+        state = gui.add_markdown("paused" if control.paused else "running")
     with gui.add_folder("Teleop"):
         speed = gui.add_slider("speed (m/s)", min=0.05, max=2.0, step=0.05, initial_value=0.3)
         turn = gui.add_slider("turn (rad/s)", min=0.1, max=3.0, step=0.1, initial_value=0.8)

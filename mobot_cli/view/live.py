@@ -13,7 +13,7 @@ import math
 import threading
 import time
 from collections import deque
-from typing import Any
+from typing import Any, Callable
 
 from mobot_cli.run.timeline import Deleted, Record, Sample, Spawned, Timeline
 from mobot_cli.common.transforms import Planar
@@ -64,6 +64,7 @@ class LiveView:
             template_of(robot.urdf)
         self.step = 0
         self.frames = 0  # pages drawn: for tests and the benchmark
+        self.on_frame: Callable[[], None] | None = None  # called in each watched frame (serve: the pause state)
         self._latest: dict[str, RobotState] = {}
         self._events: deque[tuple[str, Any]] = deque()
         self._readings: dict[tuple[str, str], Any] = {}
@@ -145,6 +146,8 @@ class LiveView:
             self.models.selected = self.robot_list.selected
             self.models.flush()
             self.clock.content = f"**t** = {step / self.rate:.3f} s"
+            if self.on_frame is not None:
+                self.on_frame()
             self.robot_list.show(rows, force=force)
             self._draw_readings()
 

@@ -69,7 +69,7 @@ def test_unknown_op_is_feature_unsupported(live, raw):
     reply = exchange(raw, b'{"op": "teleport", "id": "t1"}')
     assert (reply["id"], reply["result"], reply["code"]) == ("t1", "FEATURE_UNSUPPORTED", 0)
     assert reply["message"] == ("unknown request op 'teleport': this server knows ping, spawn, delete, "
-                                "list, cmd, odom, scan, stop, goto")
+                                "list, cmd, odom, scan, stop, goto, pause, resume, step, reset, get_state, set_state, features")
 
 
 def test_more_than_one_frame_or_no_delimiter(live, raw):

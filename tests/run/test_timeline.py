@@ -142,3 +142,34 @@ def test_a_live_spawned_robot_is_recorded_like_a_scenario_robot(tmp_path, tmp_pa
     assert [(r.name, r.namespace, r.source.endswith("mobot.urdf.xacro")) for r in record.robots.values()] \
         == [("a", "/a", True), ("b", "/b", True)]
     assert record.live is not None and record.live.requests["spawn"] == 1
+
+
+@pytest.mark.parametrize("name", ["fleet", "events"])
+def test_a_reset_timeline_replays_its_scenario_to_the_last_bit(name):
+    """Timeline.reset (a live world's `reset`): the world rebuilt at step 0, the same robots, events and
+    scripts, the same rows; robots leave by "reset" and come back by "reset"."""
+    from mobot_cli.run.timeline import Timeline
+    from mobot_cli.sim.world import World
+
+    plan = prepare(Path(__file__).resolve().parents[2] / "scenarios" / f"{name}.yaml").plan
+    records: list = []
+    with World(plan.physics, plan.world, seed=plan.seed) as world:
+        timeline = Timeline(plan, world)
+        timeline.attach(records.append)
+        timeline.start()
+        lives = []
+        for _ in range(2):
+            start = len(records)
+            for _ in range(900):
+                timeline.tick()
+                timeline.advance()
+            timeline.tick()
+            lives.append([(r.step, sorted((n, s.row()) for n, s in r.states.items()))
+                          for r in records[start:] if isinstance(r, Sample)])
+            before = timeline.robots.copy()
+            timeline.reset()
+            assert timeline.step == 0 and timeline.resets == len(lives)
+            assert [r.name for r in records if isinstance(r, Deleted) and r.by == "reset"][-len(before):] == list(before)
+            assert [r.robot.name for r in records if isinstance(r, Spawned) and r.by == "reset"][-len(plan.robots):] \
+                == [robot.name for robot in plan.robots]
+    assert lives[0] == lives[1] and len(lives[0]) > 10

@@ -168,7 +168,10 @@ def test_the_live_view_draws_states_and_readings_on_the_page(page):
                 timeline.tick()
                 timeline.advance()
             live(Reading(timeline.step, "mobot_2", lidar(), np.array([1.0, 1.0, 1.0, 1.0])))
+            frames = []
+            live.on_frame = lambda: frames.append(live.clock.content)  # serve --view shows its pause state here
             live.draw(force=True)
+            assert frames == [live.clock.content] and frames[0].startswith("**t** = 1.9")  # after the clock
         assert sorted(live.robots) == [f"mobot_{i}" for i in range(5)]
         pose = live.models.link_pose("mobot_2", "base_link")
         assert pose[:2, 3] == pytest.approx([world_x := 2.0 + 0.2 * 1.5, 0.0], abs=0.15), world_x
@@ -180,19 +183,20 @@ def test_the_live_view_draws_states_and_readings_on_the_page(page):
         live.close()
 
 
-def test_the_gate_pauses_a_live_server_and_lets_single_steps_through():
-    """The hold hook of LiveServer, driven as the page's buttons drive it."""
+def test_the_page_buttons_press_the_servers_own_pause_state():
+    """The page's World buttons press LiveServer.control, the state the protocol's pause/step use."""
     import tempfile
 
     from mobot_cli.live.client import Client
     from mobot_cli.live.server import LiveServer
     from mobot_cli.run.prepare import prepare_target
-    from mobot_cli.view.controls import Gate
+    from mobot_cli.view.controls import GateControl
 
-    gate, ready = Gate(), threading.Event()
+    ready = threading.Event()
     folder = Path(tempfile.mkdtemp(prefix="mobot-t-"))  # a socket path must stay short
     endpoint = f"ipc://{folder}/s.sock"
-    server = LiveServer(prepare_target("empty").plan, endpoint, rtf=None, hold=gate.hold)
+    server = LiveServer(prepare_target("empty").plan, endpoint, rtf=None)
+    gate = GateControl(server.control, lambda *a: None)  # what the page's buttons call
     thread = threading.Thread(target=server.serve, args=(lambda where: ready.set(),), daemon=True)
     thread.start()
     assert ready.wait(60)
@@ -203,13 +207,16 @@ def test_the_gate_pauses_a_live_server_and_lets_single_steps_through():
         held = client.ping()["step"]
         time.sleep(0.2)
         assert client.ping()["step"] == held  # paused, yet answering
+        assert client.ping()["state"] == "paused" and client.call("pause")["changed"] is False
         gate.step(5)
         deadline = time.monotonic() + 5
         while client.ping()["step"] < held + 5 and time.monotonic() < deadline:
             time.sleep(0.01)
         time.sleep(0.1)
         assert client.ping()["step"] == held + 5
-        gate.resume()
+        assert client.request("step", steps=3)["step"] == held + 8  # the protocol's step, on the same state
+        client.request("resume")
+        assert not gate.paused  # the page sees what the protocol did
         time.sleep(0.1)
         assert client.ping()["step"] > held + 50
         client.stop()
