@@ -7,8 +7,10 @@ here, and one that needs more memory than the limit fails in the worker (RLIMIT_
 way the spawn is refused with RESOURCE_PARSE_ERROR and a fresh worker takes the dead one's place. Workers are reused between loads, so a warm load costs
 milliseconds; one is started with the server, and while every worker is loading one more is
 started (up to ``Limits.workers``), so a slow or hostile load never makes the next one cold.
-Workers run at normal priority, so a spawn is quick on a busy machine too; a load still running
-after DEMOTE_AFTER seconds drops to nice 19 and its worker is replaced when it is done.
+Workers run at normal priority, so a spawn is quick on a busy machine too; a load that has used
+DEMOTE_AFTER seconds of CPU time drops to nice 19 and its worker is replaced when it is done.
+CPU time, not wall time: on a busy machine a legitimate load waits for the CPU, and demoting it
+then would starve it past the wall-time limit.
 """
 
 from __future__ import annotations
@@ -30,9 +32,10 @@ from mobot_cli.live.schema import Spawn
 
 WALL_FACTOR = 3  # CPU time is the limit (fair on a busy machine); wall time only catches waiting
 FAILED_STARTS = 3  # workers that end before they are ready, in a row: the installation is broken
-# A load still running after this many seconds (a cold one takes about one) drops to the lowest
+# A load that has used this many seconds of CPU (a cold one takes about one) drops to the lowest
 # priority, so the world's thread wins the CPU; its worker is replaced once it is done.
 DEMOTE_AFTER = 2.0
+_TICK = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
 LOW_PRIORITY = 19
 _PACKAGE_PARENT = str(Path(__file__).resolve().parent.parent.parent)  # the folder holding mobot_cli/
 
@@ -71,6 +74,7 @@ class _Worker:
     deadline: float = field(default=float("inf"))
     demote_at: float = field(default=float("inf"))
     demoted: bool = False
+    cpu_at_start: float = 0.0  # the worker's CPU seconds when its job was sent
 
 
 class LoaderPool:
@@ -121,7 +125,7 @@ class LoaderPool:
                            f"than {self.limits.wall:g} s of wall time; it was stopped")
                 continue
             if worker.job is not None and not worker.demoted and now >= worker.demote_at:
-                self._demote(worker)
+                self._demote_if_busy(worker, now)
             try:
                 if worker.connection.poll(0):
                     self._receive(worker, worker.connection.recv())
@@ -181,6 +185,7 @@ class LoaderPool:
             job.started = time.monotonic()
             idle.job, idle.deadline = job, job.started + self.limits.wall
             idle.demote_at = job.started + DEMOTE_AFTER
+            idle.cpu_at_start = _cpu_seconds(idle.process.pid) or 0.0
         self._keep_warm()
 
     def _keep_warm(self) -> None:
@@ -211,6 +216,15 @@ class LoaderPool:
         self._done.append(job)
         if worker.demoted:  # it cannot get its priority back: a fresh worker takes its place
             self._retire(worker)
+
+    def _demote_if_busy(self, worker: _Worker, now: float) -> None:
+        """Demote a load that has used DEMOTE_AFTER s of CPU; one that waited for the CPU is looked at again later."""
+        cpu = _cpu_seconds(worker.process.pid)
+        used = DEMOTE_AFTER if cpu is None else cpu - worker.cpu_at_start  # no /proc: wall time it is
+        if used >= DEMOTE_AFTER:
+            self._demote(worker)
+        else:
+            worker.demote_at = now + max(DEMOTE_AFTER - used, 0.1)
 
     def _demote(self, worker: _Worker) -> None:
         """A long load yields the CPU to the world (raising a child's nice needs no privilege)."""
@@ -253,3 +267,13 @@ class LoaderPool:
 
     def _reap(self) -> None:
         self._dying = [process for process in self._dying if process.poll() is None]
+
+
+def _cpu_seconds(pid: int) -> float | None:
+    """CPU seconds (user + system) process ``pid`` has used, from /proc; None where there is none."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as stat:
+            fields = stat.read().rsplit(b")", 1)[1].split()
+    except (OSError, IndexError):
+        return None
+    return (int(fields[11]) + int(fields[12])) / _TICK  # utime, stime: fields 14 and 15 of stat

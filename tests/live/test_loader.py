@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import signal
 import time
 
 import pytest
@@ -106,9 +107,37 @@ def test_a_long_load_drops_to_the_lowest_priority():
             time.sleep(0.01)
         worker = next(w for w in pool._workers if w.job is slow)
         assert os.getpriority(os.PRIO_PROCESS, worker.process.pid) == 0  # quick loads are not held back
-        while time.monotonic() < slow.started + loader.DEMOTE_AFTER + 0.1:
+        # Demoted once the load has used DEMOTE_AFTER s of CPU (however long that takes on a busy machine).
+        deadline = time.monotonic() + 60
+        while not worker.demoted and time.monotonic() < deadline:
+            used = loader._cpu_seconds(worker.process.pid) - worker.cpu_at_start
             assert pool.poll() == []
             time.sleep(0.01)
+        assert used >= loader.DEMOTE_AFTER - 0.05  # what it had used just before it was demoted
         assert worker.demoted and os.getpriority(os.PRIO_PROCESS, worker.process.pid) == loader.LOW_PRIORITY
     finally:
         assert [job.request.name for job in pool.close()] == ["slow"]
+
+
+def test_a_load_waiting_for_the_cpu_is_not_demoted():
+    """Wall time alone (a busy machine) never demotes a load: only the CPU time it used does."""
+    pool = LoaderPool(Limits(seconds=30, memory=512 * 2**20))
+    try:
+        pool.start()
+        job = Job(spawn("slow", urdf=HEAD + '<link name="${python.sum(python.range(10**12))}"/></robot>'), 240)
+        pool.submit(job)
+        while job.started is None:
+            pool.poll()
+            time.sleep(0.01)
+        worker = next(w for w in pool._workers if w.job is job)
+        os.kill(worker.process.pid, signal.SIGSTOP)  # it gets no CPU, as on a machine busy with others
+        try:
+            while time.monotonic() < job.started + loader.DEMOTE_AFTER + 0.5:
+                assert pool.poll() == []
+                time.sleep(0.01)
+            assert not worker.demoted and os.getpriority(os.PRIO_PROCESS, worker.process.pid) == 0
+            assert worker.demote_at > time.monotonic()  # it is looked at again later
+        finally:
+            os.kill(worker.process.pid, signal.SIGCONT)
+    finally:
+        pool.close()
