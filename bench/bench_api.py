@@ -3,13 +3,17 @@
 
 1. A scenario whose script commands the bundled robot every 10 physics steps, run by
    ``execute`` (as `mobot run`), against a Python loop through ``Simulation`` that sends the
-   same commands at the same steps to the same scenario without its script (goal: <= 1.10x).
+   same commands at the same steps to the same scenario without its script (goal: <= 1.10x;
+   both timed from a prepared scenario: parsing and xacro, the same for both, are left out);
+   with a lidar robot in a walled room the loop also reads ``sim.scan`` before each command.
 2. ``MobotEnv.step`` at a 10 Hz control rate against ``Simulation.step`` of the same 24
-   physics steps (the physics it advances; goal: <= 10 % more).
+   physics steps of the same world (the physics it advances, lidar readings included;
+   goal: <= 10 % more), without and with a lidar.
 
-Both are interleaved and print medians.
+The machine may be shared: runs alternate (run, API, run, API...; gym period, bare period...)
+so that a change of load hits both sides, and each figure is the median with its spread.
 
-    python3 bench/bench_api.py [--seconds 20] [--repeat 5]
+    python3 bench/bench_api.py [--seconds 20] [--repeat 5] [--periods 300]
 """
 
 from __future__ import annotations
@@ -27,88 +31,120 @@ sys.path.insert(0, str(REPO))
 
 from mobot_cli.api import Simulation  # noqa: E402
 from mobot_cli.run.execute import execute  # noqa: E402
-from mobot_cli.run.prepare import prepare  # noqa: E402
+from mobot_cli.run.prepare import prepare, prepare_target  # noqa: E402
+from common import timed  # noqa: E402  (bench/common.py)
+from tests.sim.sensor_world import ROOM_SDF  # noqa: E402
 
 EVERY = 10  # physics steps between two commands
+PERIOD = 24  # physics steps of one 10 Hz control period at 240 Hz
 
 
-def scenario(folder: Path, seconds: float) -> Path:
-    """A one-robot scenario whose script changes the command every 10 steps after settling."""
-    lines = ["version: 1", "name: every10", "world: empty", f"duration: {seconds:g}", "settle: 0.5",
-             "log: {formats: [csv]}", "robots:", "  - name: r", "    description: mobot", "    commands:"]
+def scenario(folder: Path, seconds: float, lidar: bool) -> Path:
+    """A one-robot scenario whose script changes the command every 10 steps after settling;
+    with ``lidar``, the robot carries the bundled lidar inside a walled room."""
+    (folder / "room.sdf").write_text(ROOM_SDF)
+    lines = ["version: 1", "name: every10", f"world: {'room.sdf' if lidar else 'empty'}", f"duration: {seconds:g}",
+             "settle: 0.5", "log: {formats: [csv]}", "robots:", "  - name: r", "    description: mobot",
+             "    args: {lidar: 'true'}" if lidar else "    args: {}", "    pose: {x: -2.0, y: -1.0}",
+             "    commands:"]
     for step in range(120, int(seconds * 240), EVERY):
-        linear = 0.3 + 0.1 * math.sin(step / 240)
+        linear = 0.1 + 0.05 * math.sin(step / 240)  # slow arcs: a 20 s run stays inside the room
         lines.append(f"      - {{at: {step / 240!r}, linear: {linear:.4f}, angular: {0.3 * math.cos(step / 300):.4f}}}")
-    path = folder / "every10.yaml"
+    path = folder / f"every10{'_lidar' if lidar else ''}.yaml"
     path.write_text("\n".join(lines) + "\n")
     return path
 
 
-def run_loop(path: Path, out: Path) -> float:
+def run_loop(path: Path, out: Path) -> tuple[float, float]:
+    """(wall, CPU) seconds of `mobot run`'s loop on the prepared scenario."""
     prepared = prepare(path)
-    started = time.perf_counter()
-    execute(prepared.plan, prepared.resolved_yaml, out)
-    return time.perf_counter() - started
+    return timed(execute, prepared.plan, prepared.resolved_yaml, out)
 
 
-def api_loop(path: Path, out: Path) -> float:
+def api_loop(path: Path, out: Path, lidar: bool) -> tuple[float, float]:
+    """(wall, CPU) seconds of a Python loop sending the script's commands at its steps."""
     plan = prepare(path).plan
     script = {c.step: (c.linear, c.angular) for c in plan.robots[0].commands}
-    started = time.perf_counter()
-    with Simulation.open(path, out=out, overrides=["robots.r.commands=[]"]) as sim:
-        while sim.step_count < plan.total_steps:
-            command = script.get(sim.step_count)
-            if command is not None:
-                sim.command("r", *command)
-            sim.step(EVERY if sim.step_count + EVERY <= plan.total_steps else 1)
-    return time.perf_counter() - started
+    bare = prepare_target(str(path), ["robots.r.commands=[]"])  # prepared outside the clock, as for run_loop
+
+    def loop():
+        with Simulation(bare, out=out) as sim:
+            while sim.step_count < plan.total_steps:
+                command = script.get(sim.step_count)
+                if command is not None:
+                    if lidar:
+                        sim.scan("r")  # what a controller would look at first
+                    sim.command("r", *command)
+                sim.step(EVERY if sim.step_count + EVERY <= plan.total_steps else 1)
+
+    return timed(loop)
 
 
-def gym_vs_physics(periods: int) -> tuple[float, float]:
+def gym_vs_physics(periods: int, lidar: bool, room: Path) -> tuple[float, float]:
+    """Seconds of ``periods`` gym steps and of as many bare 24-step advances of a twin world,
+    alternating. Two worlds, so that each one's lidar reads once per period as it would alone."""
     import numpy as np
 
     from mobot_cli.gym import MobotEnv
 
-    env = MobotEnv(goal=(50.0, 0.0))
+    world, robot_args = (room, {"lidar": "true"}) if lidar else ("empty", {})
+    env = MobotEnv(world, pose=(-2.5, 0.0, 0.0), goal=(2.5, 0.0), args=robot_args)
     env.reset(seed=0)
-    action = np.array([0.3, 0.1], dtype=np.float32)
-    started = time.perf_counter()
-    for _ in range(periods):
-        env.step(action)
-    gym_s = time.perf_counter() - started
-    sim = env._sim  # the same world, stepped bare
-    started = time.perf_counter()
-    for _ in range(periods):
-        sim.step(env._steps_per_action)
-    bare_s = time.perf_counter() - started
+    action = np.array([0.05, 0.2], dtype=np.float32)  # slow, in a circle: it stays in the room
+    with Simulation.open(world, seed=0) as bare:
+        bare.spawn("robot", "mobot", x=-2.5, args=robot_args)
+        bare.run_for(env.settle)
+        bare.command("robot", *action.tolist())
+        gym_s = bare_s = 0.0
+        for _ in range(periods):
+            started = time.perf_counter()
+            env.step(action)
+            middle = time.perf_counter()
+            bare.step(PERIOD)
+            gym_s += middle - started
+            bare_s += time.perf_counter() - middle
     env.close()
     return gym_s, bare_s
+
+
+def spread(values: list[float]) -> str:
+    return f"median {statistics.median(values):.3f} (min {min(values):.3f}, max {max(values):.3f})"
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=20.0)
     parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--periods", type=int, default=300)
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        path = scenario(folder, args.seconds)
-        run_loop(path, folder / "warm")  # descriptions cached, imports done
-        runs, apis = [], []
-        for i in range(args.repeat):
-            runs.append(run_loop(path, folder / f"run{i}"))
-            apis.append(api_loop(path, folder / f"api{i}"))
-        same = (folder / "run0" / "odom" / "r.csv").read_bytes() == (folder / "api0" / "odom" / "r.csv").read_bytes()
-    run_s, api_s = statistics.median(runs), statistics.median(apis)
-    print(f"{args.seconds:g} simulated s, a command every {EVERY} steps, medians of {args.repeat}, interleaved")
-    print(f"  mobot run loop (execute)      {run_s:.3f} s")
-    print(f"  Python API loop (Simulation)  {api_s:.3f} s   ratio {api_s / run_s:.3f} (goal <= 1.10); "
-          f"CSV identical: {same}")
-    pairs = [gym_vs_physics(200) for _ in range(args.repeat)]
-    gym_s, bare_s = statistics.median(p[0] for p in pairs), statistics.median(p[1] for p in pairs)
-    print(f"Gymnasium step at 10 Hz (24 physics steps), 200 periods, medians of {args.repeat}")
-    print(f"  MobotEnv.step  {gym_s / 200 * 1e3:.3f} ms   Simulation.step(24)  {bare_s / 200 * 1e3:.3f} ms   "
-          f"overhead {100 * (gym_s / bare_s - 1):+.1f} % (goal <= 10 %)")
+        for lidar in (False, True):
+            path = scenario(folder, args.seconds, lidar)
+            run_loop(path, folder / "warm")  # descriptions cached, imports done
+            walls, cpus, same = [], [], True
+            for i in range(args.repeat):
+                run_s = run_loop(path, folder / f"run{lidar}{i}")
+                api_s = api_loop(path, folder / f"api{lidar}{i}", lidar)
+                walls.append(api_s[0] / run_s[0])
+                cpus.append(api_s[1] / run_s[1])
+            for name in ("odom/r.csv", *(("sensors/r/lidar.npy",) if lidar else ())):
+                same &= (folder / f"run{lidar}0" / name).read_bytes() == (folder / f"api{lidar}0" / name).read_bytes()
+            print(f"{'lidar robot in a room' if lidar else 'no sensors, empty world'}: {args.seconds:g} simulated s, "
+                  f"a command every {EVERY} steps, {args.repeat} interleaved pairs (last run {run_s[0]:.3f} s)")
+            print(f"  Python API loop / mobot run loop, wall: {spread(walls)}; CPU: {spread(cpus)} (goal <= 1.10)")
+            print(f"  files identical: {same}")
+        room = folder / "room.sdf"
+        for lidar in (False, True):
+            overheads, per_step = [], []
+            for _ in range(args.repeat):
+                gym_s, bare_s = gym_vs_physics(args.periods, lidar, room)
+                overheads.append(100 * (gym_s / bare_s - 1))
+                per_step.append(gym_s / args.periods * 1e3)
+            print(f"Gymnasium step at 10 Hz ({PERIOD} physics steps), {'lidar' if lidar else 'no lidar'}, "
+                  f"{args.periods} alternating periods x {args.repeat}")
+            print(f"  MobotEnv.step {spread(per_step)} ms; overhead over Simulation.step({PERIOD}) "
+                  f"{spread(overheads)} % (goal <= 10 %)")
 
 
 if __name__ == "__main__":

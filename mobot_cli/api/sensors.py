@@ -55,7 +55,8 @@ def scan_of(reading: Reading, rate_hz: int) -> Scan:
     """A lidar reading as a ``Scan``."""
     spec, data = reading.sensor, reading.data
     assert isinstance(data, ScanData)
-    ranges = data.ranges[0] if data.ranges.shape[0] == 1 else data.ranges
+    ranges = (data.ranges[0] if data.ranges.shape[0] == 1 else data.ranges).view()
+    ranges.flags.writeable = False  # shared by every call until the next reading
     return Scan(reading.robot, spec.name, reading.step, reading.step / rate_hz, axis_angles(spec.horizontal),
                 axis_angles(spec.vertical), ranges, spec.range_min, spec.range_max, spec.frame_id or spec.link)
 
@@ -81,17 +82,31 @@ def pick(name: str, sensors: tuple[SensorSpec, ...], sensor: str | None, kind: s
 class Latest:
     """The latest reading of every sensor, from the timeline's records (a consumer)."""
 
-    def __init__(self):
+    def __init__(self, rate_hz: int):
+        self.rate_hz = rate_hz
         self.readings: dict[str, dict[str, Reading]] = {}  # robot -> sensor name -> its last reading
+        self._scans: dict[tuple[str, str], Scan] = {}  # the last reading as a Scan, made once when asked
 
     def __call__(self, record) -> None:
         if isinstance(record, Reading):
             self.readings.setdefault(record.robot, {})[record.sensor.name] = record
+            self._scans.pop((record.robot, record.sensor.name), None)
         elif isinstance(record, Deleted):
-            self.readings.pop(record.name, None)
+            for sensor in self.readings.pop(record.name, {}):
+                self._scans.pop((record.name, sensor), None)
 
     def get(self, robot: str, sensor: str) -> Reading | None:
         return self.readings.get(robot, {}).get(sensor)
+
+    def scan(self, robot: str, sensor: str) -> Scan | None:
+        """The lidar's last reading as a Scan (the same read-only object until the next reading)."""
+        scan = self._scans.get((robot, sensor))
+        if scan is None:
+            reading = self.get(robot, sensor)
+            if reading is None:
+                return None
+            scan = self._scans[robot, sensor] = scan_of(reading, self.rate_hz)
+        return scan
 
 
 def robot_plan(name: str, description: str, *, rate_hz: int = 240, x: float = 0.0, y: float = 0.0,

@@ -15,7 +15,7 @@ from typing import Iterable, Mapping
 
 from pydantic import ValidationError
 
-from mobot_cli.api.sensors import Latest, Scan, pick, robot_plan, scan_of
+from mobot_cli.api.sensors import Latest, Scan, pick, robot_plan
 
 from mobot_cli.errors import MobotError, UsageError, did_you_mean
 from mobot_cli.run.prepare import Prepared, prepare_target
@@ -48,7 +48,7 @@ class Simulation:
                 self._timeline.attach(lambda record: None)
             self._goals: dict[str, GoalStarted | GoalEnded] = {}  # robot -> its last goal's record
             self._timeline.attach(self._goal_record)
-            self._latest = Latest()  # every sensor's last reading
+            self._latest = Latest(self.plan.physics.rate_hz)  # every sensor's last reading
             self._timeline.attach(self._latest)
         except BaseException:
             self._world.close()
@@ -182,8 +182,7 @@ class Simulation:
         self._known(name)
         spec = pick(name, self._timeline.robots[name].sensors, sensor, "lidar")
         self._sense_now()
-        reading = self._latest.get(name, spec.name)
-        return None if reading is None else scan_of(reading, self.rate_hz)
+        return self._latest.scan(name, spec.name)
 
     def _sense_now(self) -> None:
         """Take the readings due at this step now rather than as the next step begins, so that a

@@ -109,3 +109,8 @@ def test_sensor_mistakes_are_mobot_errors(tmp_path):
         scan = sim.scan("seeing")
         assert scan.step == 0 and np.isinf(scan.ranges).all() and (scan.finite() == 12.0).all()
         assert sim.reading("seeing").data.ranges.shape == (1, 360)
+        assert sim.scan("seeing") is scan  # made once per reading, and read-only
+        with pytest.raises(ValueError, match="read-only"):
+            scan.ranges[0] = 1.0
+        sim.step(24)
+        assert sim.scan("seeing").step == 24
