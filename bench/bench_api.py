@@ -8,7 +8,8 @@
    with a lidar robot in a walled room the loop also reads ``sim.scan`` before each command.
 2. ``MobotEnv.step`` at a 10 Hz control rate against ``Simulation.step`` of the same 24
    physics steps of the same world (the physics it advances, lidar readings included;
-   goal: <= 10 % more), without and with a lidar.
+   goal: <= 10 % more), without and with a lidar; and, steadier on a loaded machine, the
+   gym's own work per step timed inside each step against the physics within it.
 
 The machine may be shared: runs alternate (run, API, run, API...; gym period, bare period...)
 so that a change of load hits both sides, and each figure is the median with its spread.
@@ -80,9 +81,10 @@ def api_loop(path: Path, out: Path, lidar: bool) -> tuple[float, float]:
     return timed(loop)
 
 
-def gym_vs_physics(periods: int, lidar: bool, room: Path) -> tuple[float, float]:
-    """Seconds of ``periods`` gym steps and of as many bare 24-step advances of a twin world,
-    alternating. Two worlds, so that each one's lidar reads once per period as it would alone."""
+def gym_vs_physics(periods: int, lidar: bool, room: Path) -> tuple[float, float, float, float]:
+    """Wall and CPU seconds of ``periods`` gym steps and of as many bare 24-step advances of a
+    twin world, alternating: (gym wall, bare wall, gym CPU, bare CPU). Two worlds, so that each
+    one's lidar reads once per period as it would alone."""
     import numpy as np
 
     from mobot_cli.gym import MobotEnv
@@ -91,20 +93,54 @@ def gym_vs_physics(periods: int, lidar: bool, room: Path) -> tuple[float, float]
     env = MobotEnv(world, pose=(-2.5, 0.0, 0.0), goal=(2.5, 0.0), args=robot_args)
     env.reset(seed=0)
     action = np.array([0.05, 0.2], dtype=np.float32)  # slow, in a circle: it stays in the room
+    wall, cpu = time.perf_counter, time.process_time
     with Simulation.open(world, seed=0) as bare:
         bare.spawn("robot", "mobot", x=-2.5, args=robot_args)
         bare.run_for(env.settle)
         bare.command("robot", *action.tolist())
-        gym_s = bare_s = 0.0
+        sums = [0.0, 0.0, 0.0, 0.0]
         for _ in range(periods):
-            started = time.perf_counter()
+            w0, c0 = wall(), cpu()
             env.step(action)
-            middle = time.perf_counter()
+            w1, c1 = wall(), cpu()
             bare.step(PERIOD)
-            gym_s += middle - started
-            bare_s += time.perf_counter() - middle
+            w2, c2 = wall(), cpu()
+            sums[0] += w1 - w0
+            sums[1] += w2 - w1
+            sums[2] += c1 - c0
+            sums[3] += c2 - c1
     env.close()
-    return gym_s, bare_s
+    return sums[0], sums[1], sums[2], sums[3]
+
+
+def gym_own_work(periods: int, lidar: bool, room: Path) -> tuple[float, float]:
+    """(µs of the gym's own work per step, µs of the physics and sensing it advances), from one
+    world: the time inside ``Simulation.step`` and the readings taken at the observation's step
+    is the physics; the rest of ``env.step`` is the gym's. Timed within each call, so a change of
+    load between two calls does not enter."""
+    import numpy as np
+
+    from mobot_cli.gym import MobotEnv
+
+    env = MobotEnv(room if lidar else "empty", pose=(-2.5, 0.0, 0.0), args={"lidar": "true"} if lidar else None)
+    env.reset(seed=0)
+    sim, inner = env._sim, [0.0]
+
+    def clocked(fn):
+        def call(*a):
+            started = time.perf_counter()
+            fn(*a)
+            inner[0] += time.perf_counter() - started
+        return call
+
+    sim.step, sim._sense_now = clocked(sim.step), clocked(sim._sense_now)
+    action = np.array([0.05, 0.2], dtype=np.float32)
+    started = time.perf_counter()
+    for _ in range(periods):
+        env.step(action)
+    total = time.perf_counter() - started
+    env.close()
+    return (total - inner[0]) / periods * 1e6, inner[0] / periods * 1e6
 
 
 def spread(values: list[float]) -> str:
@@ -136,15 +172,19 @@ def main() -> None:
             print(f"  files identical: {same}")
         room = folder / "room.sdf"
         for lidar in (False, True):
-            overheads, per_step = [], []
+            walls, cpus, per_step = [], [], []
             for _ in range(args.repeat):
-                gym_s, bare_s = gym_vs_physics(args.periods, lidar, room)
-                overheads.append(100 * (gym_s / bare_s - 1))
-                per_step.append(gym_s / args.periods * 1e3)
+                gym_w, bare_w, gym_c, bare_c = gym_vs_physics(args.periods, lidar, room)
+                walls.append(100 * (gym_w / bare_w - 1))
+                cpus.append(100 * (gym_c / bare_c - 1))
+                per_step.append(gym_w / args.periods * 1e3)
             print(f"Gymnasium step at 10 Hz ({PERIOD} physics steps), {'lidar' if lidar else 'no lidar'}, "
                   f"{args.periods} alternating periods x {args.repeat}")
-            print(f"  MobotEnv.step {spread(per_step)} ms; overhead over Simulation.step({PERIOD}) "
-                  f"{spread(overheads)} % (goal <= 10 %)")
+            print(f"  MobotEnv.step {spread(per_step)} ms; overhead over Simulation.step({PERIOD}), "
+                  f"wall: {spread(walls)} %; CPU: {spread(cpus)} % (goal <= 10 %)")
+            own = [gym_own_work(args.periods, lidar, room) for _ in range(args.repeat)]
+            print(f"  the gym's own work per step: {spread([o[0] for o in own])} us over "
+                  f"{spread([o[1] for o in own])} us of physics: {spread([100 * o[0] / o[1] for o in own])} %")
 
 
 if __name__ == "__main__":
