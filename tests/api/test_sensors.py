@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mobot_cli.api import Simulation
 from mobot_cli.errors import MobotError
@@ -114,3 +116,26 @@ def test_sensor_mistakes_are_mobot_errors(tmp_path):
             scan.ranges[0] = 1.0
         sim.step(24)
         assert sim.scan("seeing").step == 24
+
+
+def _scan(ranges, angles):
+    from mobot_cli.api import Scan
+
+    return Scan("r", "lidar", 0, 0.0, np.asarray(angles), np.zeros(1), np.asarray(ranges, np.float32),
+                0.12, 12.0, "f")
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.one_of(st.floats(0.12, 12.0), st.just(math.inf)), min_size=2, max_size=50),
+       st.floats(-10.0, 10.0))
+def test_finite_and_toward_on_any_scan(values, angle):
+    n = len(values)
+    angles = -math.pi + 2 * math.pi * np.arange(n) / n  # a full circle, as a 360-degree lidar's
+    scan = _scan(values, angles)
+    finite = scan.finite()
+    assert np.isfinite(finite).all() and (finite >= 0).all() and (finite <= np.float32(12.0)).all()
+    assert np.array_equal(finite[np.isfinite(scan.ranges)], scan.ranges[np.isfinite(scan.ranges)])
+    # toward() takes the beam nearest to the angle, the circle wrapped: no other beam is nearer.
+    got = scan.toward(angle)
+    gaps = np.abs(np.remainder(angles - angle + math.pi, 2 * math.pi) - math.pi)
+    assert got in scan.ranges[gaps <= gaps.min() + 1e-9]  # (a tie: either beam; inf == inf in NumPy)
