@@ -35,7 +35,7 @@ class Scan:
     t: float  # s
     angles: np.ndarray = field(repr=False)  # (H,) azimuths in the sensor frame, rad, ccw from x forward
     elevations: np.ndarray = field(repr=False)  # (V,) beam elevations, rad; one 0 for a 2D lidar
-    ranges: np.ndarray = field(repr=False)  # float32, (H,) for a 2D lidar and (V, H) for a 3D one, m; +inf: no return
+    ranges: np.ndarray = field(repr=False)  # float32 m, (H,) 2D or (V, H) 3D; +inf: no return
     range_min: float
     range_max: float
     frame: str  # the frame the scan is stamped with

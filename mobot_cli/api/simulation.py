@@ -16,7 +16,6 @@ from typing import Iterable, Mapping
 from pydantic import ValidationError
 
 from mobot_cli.api.sensors import Latest, Scan, pick, robot_plan
-
 from mobot_cli.errors import MobotError, UsageError, did_you_mean
 from mobot_cli.run.prepare import Prepared, prepare_target
 from mobot_cli.run.record import RunRecord, Status

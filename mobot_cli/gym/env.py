@@ -3,11 +3,12 @@
 Observation: the robot's odometry ``[x, y, yaw, vx, wz]`` in its odom frame (its spawn pose)
 and the goal in that frame ``[gx, gy]``, one flat Box of 7; for a robot with a lidar, a Dict
 ``{"odom": Box(5), "goal": Box(2), "scan": Box(beams, 0, range_max)}`` whose scan is the
-lidar's latest reading with no return (+inf) as ``range_max``. Action: ``[linear, angular]`` (m/s, rad/s), held for
-one control period (``physics rate / control_hz`` whole steps). Reward and termination are
-yours to give (callables of an ``Outcome``); by default the reward is minus the distance to the
-goal per control period, and an episode ends when the robot is within ``goal_tolerance``.
-Every ``reset`` builds the world afresh, so ``reset(seed=s)`` always starts the same episode.
+lidar's latest reading with no return (+inf) as ``range_max``. Action: ``[linear, angular]``
+(m/s, rad/s), held for one control period (``physics rate / control_hz`` whole steps). Reward
+and termination are yours to give (callables of an ``Outcome``); by default the reward is
+minus the distance to the goal per control period, and an episode ends when the robot is
+within ``goal_tolerance``. Every ``reset`` builds the world afresh, so ``reset(seed=s)``
+always starts the same episode, the lidar's noise included.
 """
 
 from __future__ import annotations
