@@ -8,6 +8,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from mobot_cli.cli import Outcome, invoke
 
 REPO = Path(__file__).resolve().parent.parent
@@ -72,3 +74,18 @@ def test_the_goals_example_runs_and_passes(tmp_path):
     record = json.loads((tmp_path / "r" / "summary.json").read_text())
     assert [g["status"] for g in record["robots"]["mobot"]["goals"]] == ["reached"] * 4
     assert record["expectations"]["failed"] == 0
+
+
+def test_the_python_api_scan_example_stops_in_front_of_the_wall(monkeypatch, tmp_path):
+    """The Python API section's lidar example, as written: it stops 0.4 m short of the wall ahead."""
+    section = README[README.index("## Python API and Gymnasium"):README.index("## ROS 2 bag")]
+    block = next(b for b in re.findall(r"```python\n(.*?)```", section, re.S) if "sim.scan(" in b)
+    monkeypatch.chdir(tmp_path)
+    scope: dict = {}
+    exec(compile(block, "README.md", "exec"), scope)
+    sim, ahead, scan = scope["sim"], scope["ahead"], scope["scan"]
+    assert 0.3 < ahead.min() < 0.4 and scan.t == pytest.approx(16.4, abs=0.3)  # 7.9 m at 0.5 m/s
+    # The house's wall ahead of (-3, -2.5) has its face at x = 5.3 (8.3 m away at the start).
+    final = sim.record.robots["r1"]
+    assert final.final_pose.x + ahead.min() == pytest.approx(5.3, abs=0.03)
+    assert (tmp_path / "runs" / "stop" / "sensors" / "r1" / "lidar.npy").is_file()

@@ -15,22 +15,19 @@ from typing import Iterable, Mapping
 
 from pydantic import ValidationError
 
+from mobot_cli.api.sensors import Latest, Scan, pick, robot_plan
 from mobot_cli.errors import MobotError, UsageError, did_you_mean
 from mobot_cli.run.prepare import Prepared, prepare_target
 from mobot_cli.run.record import RunRecord, Status
 from mobot_cli.run.recording import Recording
 from mobot_cli.run.goals import GoalEnded, GoalStarted
-from mobot_cli.run.timeline import Timeline
+from mobot_cli.run.timeline import Reading, Timeline
 from mobot_cli.scenario.goal_model import GoalFields, GotoSpec
 from mobot_cli.scenario.goals import goal_step
-from mobot_cli.scenario.model import RobotSpec
-from mobot_cli.scenario.robots import RobotResolver
 from mobot_cli.scenario.units import steps
 from mobot_cli.sim.plan import Plan
 from mobot_cli.sim.state import RobotState
 from mobot_cli.sim.world import World
-
-NO_END = 2**62  # a spawned robot's commands come from your code, not a script
 
 
 class Simulation:
@@ -50,6 +47,8 @@ class Simulation:
                 self._timeline.attach(lambda record: None)
             self._goals: dict[str, GoalStarted | GoalEnded] = {}  # robot -> its last goal's record
             self._timeline.attach(self._goal_record)
+            self._latest = Latest(self.plan.physics.rate_hz)  # every sensor's last reading
+            self._timeline.attach(self._latest)
         except BaseException:
             self._world.close()
             raise
@@ -152,22 +151,48 @@ class Simulation:
               yaw: float = 0.0, args: Mapping[str, str] | None = None, namespace: str | None = None) -> None:
         """Place a robot now (bundled name or .urdf/.xacro path), resting on the floor unless ``z``."""
         self._open()
-        pose = {"x": x, "y": y, "yaw": yaw, "z": "auto" if z is None else z}
-        try:
-            spec = RobotSpec(name=name, description=description, args=dict(args or {}), pose=pose,
-                             **({"namespace": namespace} if namespace is not None else {}))
-        except ValidationError as exc:
-            first = exc.errors()[0]
-            key = ".".join(str(part) for part in first["loc"])
-            raise UsageError(f"spawn '{name}': {key}: {first['msg']}") from None
-        resolver = RobotResolver(self.rate_hz, 0, NO_END, base_dir=self._base_dir)
-        (plan,) = resolver.plans(spec, ())
+        plan = robot_plan(name, description, rate_hz=self.rate_hz, x=x, y=y, z=z, yaw=yaw, args=args,
+                          namespace=namespace, base_dir=self._base_dir)
         self._timeline.spawn(dataclasses.replace(plan, spawn_step=self.step_count), "request")
 
     def delete(self, name: str) -> None:
         """Take a robot out of the world now."""
         self._known(name)
         self._timeline.delete(name, "request")
+
+    # -- sensors ----------------------------------------------------------------------------
+
+    def sensors(self, name: str) -> dict[str, str]:
+        """A robot's sensors: name -> kind ('lidar', 'imu', 'contact')."""
+        self._known(name)
+        return {spec.name: spec.kind for spec in self._timeline.robots[name].sensors}
+
+    def reading(self, name: str, sensor: str | None = None) -> Reading | None:
+        """A sensor's latest reading (``step``, ``data``: ScanData, ImuData or ContactData), None
+        before its first; ``sensor`` may be left out when the robot has one."""
+        self._known(name)
+        spec = pick(name, self._timeline.robots[name].sensors, sensor, None)
+        self._sense_now()
+        return self._latest.get(name, spec.name)
+
+    def scan(self, name: str, sensor: str | None = None) -> Scan | None:
+        """A lidar's latest scan (beam angles and ranges, +inf: no return), None before its first;
+        ``sensor`` may be left out when the robot has one lidar."""
+        self._known(name)
+        spec = pick(name, self._timeline.robots[name].sensors, sensor, "lidar")
+        self._sense_now()
+        return self._latest.scan(name, spec.name)
+
+    def _sense_now(self) -> None:
+        """Take the readings due at this step now rather than as the next step begins, so that a
+        reading of the world as it is now is there to be read. The readings are the same either
+        way (the world does not move in between, and each sensor has its own noise generator);
+        not at a step where a scenario event or an input could change the world first."""
+        timeline = self._timeline
+        step = timeline.step
+        due = timeline._due  # the timeline's own schedule: what tick() would read at this step
+        if step in due and timeline._ticked != step and step not in timeline._events and not timeline._inputs:
+            timeline._read(step, due.pop(step))
 
     # -- the end ----------------------------------------------------------------------------
 

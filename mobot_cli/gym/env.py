@@ -1,11 +1,14 @@
 """A Gymnasium environment on mobot's timeline: one robot, a twist as the action.
 
 Observation: the robot's odometry ``[x, y, yaw, vx, wz]`` in its odom frame (its spawn pose)
-and the goal in that frame ``[gx, gy]``. Action: ``[linear, angular]`` (m/s, rad/s), held for
-one control period (``physics rate / control_hz`` whole steps). Reward and termination are
-yours to give (callables of an ``Outcome``); by default the reward is minus the distance to the
-goal per control period, and an episode ends when the robot is within ``goal_tolerance``.
-Every ``reset`` builds the world afresh, so ``reset(seed=s)`` always starts the same episode.
+and the goal in that frame ``[gx, gy]``, one flat Box of 7; for a robot with a lidar, a Dict
+``{"odom": Box(5), "goal": Box(2), "scan": Box(beams, 0, range_max)}`` whose scan is the
+lidar's latest reading with no return (+inf) as ``range_max``. Action: ``[linear, angular]``
+(m/s, rad/s), held for one control period (``physics rate / control_hz`` whole steps). Reward
+and termination are yours to give (callables of an ``Outcome``); by default the reward is
+minus the distance to the goal per control period, and an episode ends when the robot is
+within ``goal_tolerance``. Every ``reset`` builds the world afresh, so ``reset(seed=s)``
+always starts the same episode, the lidar's noise included.
 """
 
 from __future__ import annotations
@@ -19,7 +22,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from mobot_cli.api import RobotState, Simulation
+from mobot_cli.api import RobotState, Scan, Simulation
+from mobot_cli.api.sensors import pick, robot_plan
 from mobot_cli.errors import UsageError
 
 
@@ -31,6 +35,7 @@ class Outcome:
     goal: tuple[float, float]  # in the robot's odom frame
     action: tuple[float, float]
     steps: int  # control periods since reset
+    scan: Optional[np.ndarray] = None  # the observation's scan (finite), None without a lidar
 
     @property
     def distance(self) -> float:
@@ -51,31 +56,48 @@ class MobotEnv(gym.Env):
                  pose: tuple[float, float, float] = (0.0, 0.0, 0.0), goal: tuple[float, float] = (2.0, 0.0),
                  goal_tolerance: float = 0.1, control_hz: float = 10.0, max_linear: float = 0.5,
                  max_angular: float = 2.0, settle: float = 0.5, reward: Optional[Reward] = None,
-                 terminated: Optional[Termination] = None, args: Optional[dict[str, str]] = None):
+                 terminated: Optional[Termination] = None, args: Optional[dict[str, str]] = None,
+                 scan: bool = True, scan_sensor: Optional[str] = None, out: str | Path | None = None):
         self.world, self.description, self.robot = str(world), description, robot
         self.pose, self.goal = tuple(pose), (float(goal[0]), float(goal[1]))
         self.goal_tolerance, self.control_hz, self.settle = goal_tolerance, control_hz, settle
         self.reward_fn = reward or (lambda o: -o.distance)
         self.terminated_fn = terminated or (lambda o: o.distance < self.goal_tolerance)
         self.args = dict(args or {})
+        self.out = None if out is None else Path(out)  # episode k's run folder: out/episode_000k
+        self._lidar = self._find_lidar(scan_sensor) if scan else None
         high = np.array([max_linear, max_angular], dtype=np.float32)
         self.action_space = spaces.Box(-high, high, dtype=np.float32)
         # Odometry is bounded by the farthest spawn a scenario allows and by what a robot can do.
         far, turn = 2e6, np.float32(np.pi)
-        bound = np.array([far, far, turn, 1e3, 1e3, far, far], dtype=np.float32)
-        self.observation_space = spaces.Box(-bound, bound, dtype=np.float32)
+        odom = np.array([far, far, turn, 1e3, 1e3], dtype=np.float32)
+        goal = np.array([far, far], dtype=np.float32)
+        if self._lidar is None:
+            bound = np.concatenate([odom, goal])
+            self.observation_space = spaces.Box(-bound, bound, dtype=np.float32)
+        else:
+            rows = self._lidar.vertical.samples if self._lidar.vertical is not None else 1
+            beams = self._lidar.horizontal.samples if self._lidar.horizontal is not None else 1
+            self._range_max = np.float32(self._lidar.range_max)
+            self.observation_space = spaces.Dict({
+                "odom": spaces.Box(-odom, odom, dtype=np.float32),
+                "goal": spaces.Box(-goal, goal, dtype=np.float32),
+                "scan": spaces.Box(0.0, self._range_max, (beams,) if rows <= 1 else (rows, beams), np.float32)})
         self._low, self._high = tuple(float(v) for v in -high), tuple(float(v) for v in high)
         self._goal = self._goal_in_odom()
         self._sim: Simulation | None = None
         self._steps_per_action = 0
         self._count = 0
+        self._episodes = 0
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         """A fresh world at t = 0 with the robot at its pose, settled; ``seed`` seeds the world."""
         super().reset(seed=seed)
         self._close_sim()
         world_seed = int(self.np_random.integers(0, 2**31 - 1))
-        self._sim = Simulation.open(self.world, seed=world_seed)
+        out = None if self.out is None else self.out / f"episode_{self._episodes:04d}"
+        self._episodes += 1
+        self._sim = Simulation.open(self.world, seed=world_seed, out=out)
         rate = self._sim.rate_hz
         steps = rate / self.control_hz
         if abs(steps - round(steps)) > 1e-9 or round(steps) < 1:
@@ -87,7 +109,8 @@ class MobotEnv(gym.Env):
         self._sim.run_for(self.settle)
         self._count = 0
         self._goal = self._goal_in_odom()
-        return self._observation(self._sim.state(self.robot)), {}
+        scan = self._scan()
+        return self._observation(self._sim.state(self.robot), scan), self._info(scan)
 
     def step(self, action):
         """Hold ``action`` for one control period."""
@@ -97,10 +120,11 @@ class MobotEnv(gym.Env):
         self._sim.command(self.robot, linear, angular)
         self._sim.step(self._steps_per_action)
         self._count += 1
-        state = self._sim.state(self.robot)
-        outcome = Outcome(state, self._goal, (linear, angular), self._count)
+        state, scan = self._sim.state(self.robot), self._scan()
+        obs = self._observation(state, scan)
+        outcome = Outcome(state, self._goal, (linear, angular), self._count, obs["scan"] if self._lidar else None)
         reward = float(self.reward_fn(outcome))
-        return self._observation(state), reward, bool(self.terminated_fn(outcome)), False, {"t": self._sim.t}
+        return obs, reward, bool(self.terminated_fn(outcome)), False, self._info(scan)
 
     def close(self) -> None:
         self._close_sim()
@@ -112,9 +136,35 @@ class MobotEnv(gym.Env):
         c, s = math.cos(yaw0), math.sin(yaw0)
         return c * dx + s * dy, -s * dx + c * dy
 
-    def _observation(self, s: RobotState) -> np.ndarray:
+    def _find_lidar(self, sensor: Optional[str]):
+        """The lidar whose scan is observed (None: the robot has none), from the robot's description."""
+        sensors = robot_plan(self.robot, self.description, args=self.args).sensors
+        if sensor is None and not any(spec.kind == "lidar" for spec in sensors):
+            return None
+        return pick(self.robot, sensors, sensor, "lidar")
+
+    def _scan(self) -> Scan | None:
+        return None if self._lidar is None else self._sim.scan(self.robot, self._lidar.name)
+
+    def _finite(self, scan: Scan | None) -> np.ndarray:
+        """The ranges in the observation: no return as range_max (a full-range scan before the first)."""
+        if scan is None:
+            return np.full(self.observation_space["scan"].shape, self._range_max, np.float32)
+        return np.minimum(scan.ranges, self._range_max)
+
+    def _observation(self, s: RobotState, scan: Scan | None):
         gx, gy = self._goal
-        return np.array([s.odom_x, s.odom_y, s.odom_yaw, s.odom_vx, s.odom_wz, gx, gy], dtype=np.float32)
+        if self._lidar is None:
+            return np.array([s.odom_x, s.odom_y, s.odom_yaw, s.odom_vx, s.odom_wz, gx, gy], dtype=np.float32)
+        return {"odom": np.array([s.odom_x, s.odom_y, s.odom_yaw, s.odom_vx, s.odom_wz], dtype=np.float32),
+                "goal": np.array([gx, gy], dtype=np.float32), "scan": self._finite(scan)}
+
+    def _info(self, scan: Scan | None) -> dict[str, Any]:
+        """The time now, and when the observed scan was taken (the sensor runs at its own rate)."""
+        info: dict[str, Any] = {"t": self._sim.t}
+        if self._lidar is not None:
+            info["scan_t"] = None if scan is None else scan.t
+        return info
 
     def _close_sim(self) -> None:
         if self._sim is not None:
