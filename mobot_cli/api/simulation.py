@@ -185,14 +185,10 @@ class Simulation:
 
     def _sense_now(self) -> None:
         """Take the readings due at this step now rather than as the next step begins, so that a
-        reading of the world as it is now is there to be read. The readings are the same either
-        way (the world does not move in between, and each sensor has its own noise generator);
-        not at a step where a scenario event or an input could change the world first."""
-        timeline = self._timeline
-        step = timeline.step
-        due = timeline._due  # the timeline's own schedule: what tick() would read at this step
-        if step in due and timeline._ticked != step and step not in timeline._events and not timeline._inputs:
-            timeline._read(step, due.pop(step))
+        reading of the world as it is now is there to be read (the timeline records them in their
+        usual place when it ticks)."""
+        for reading in self._timeline.sense_early():
+            self._latest(reading)
 
     # -- the end ----------------------------------------------------------------------------
 

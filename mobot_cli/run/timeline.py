@@ -120,6 +120,8 @@ class Timeline:
         self._log_every, self._total = plan.log_every, plan.total_steps
         # step -> the sensors due then: (robot name, its plan, sensor); empty without sensors
         self._due: dict[int, list[tuple[str, RobotPlan, SensorSpec]]] = {}
+        # readings sensed ahead of this step's tick, with the plan of the robot each is of
+        self._early: tuple[int, list[tuple[RobotPlan, Reading]]] | None = None
         # robot name (or "all") -> how far its clearance is measured, for `clearance` expectations
         self._clearance: dict[str, float] = {}
         for exp in plan.expectations:
@@ -203,11 +205,39 @@ class Timeline:
             self._drive(step)
         if step % self._log_every == 0 or step == self._total:
             self.log()
+        if self._early is not None:
+            self._hand_early(step)
         if self._due:
             due = self._due.pop(step, None)
             if due:
                 self._read(step, due)
         self._ticked = step
+
+    def sense_early(self) -> list[Reading]:
+        """Take the readings due at this step now, before its tick, and return them (once); the tick
+        hands them to the consumers in their usual place (after the log row), so every record
+        is as a plain tick makes it. The world does not move before the tick and each sensor has
+        its own noise generator, so the readings are the same; not at a step where an input or
+        a scenario event could change the world first (then: none)."""
+        step = self.step
+        if step not in self._due or self._ticked == step or step in self._events or self._inputs:
+            return []
+        due = [entry for entry in self._due.pop(step) if self.robots.get(entry[0]) is entry[1]]
+        data = self.world.sense([(name, sensor.name) for name, _, sensor in due]) if due else []
+        taken = [(robot, Reading(step, name, sensor, reading)) for (name, robot, sensor), reading in zip(due, data)]
+        for name, robot, sensor in due:
+            self._due.setdefault(step + max(1, sensor.every), []).append((name, robot, sensor))
+        self._early = (step, taken)
+        return [reading for _, reading in taken]
+
+    def _hand_early(self, step: int) -> None:
+        early_step, readings = self._early
+        self._early = None
+        if early_step != step:
+            return
+        for robot, reading in readings:
+            if self.robots.get(reading.robot) is robot:  # not deleted (or replaced) since it was sensed
+                self._consume(reading)
 
     def _drive(self, step: int) -> None:
         for name, driver in list(self._drivers.items()):

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from mcap.reader import make_reader
 
 from mobot_cli.api import Simulation
 from mobot_cli.errors import MobotError
@@ -24,7 +25,7 @@ def lidar_scenario(folder, duration=3.0):
     robots = ("  - name: r\n    description: mobot\n    args: {lidar: 'true'}\n"
               "    pose: {x: -1.0, y: 0.5, yaw: 0.2}\n    commands:\n"
               "      - {at: 0.25, linear: 0.4, angular: 0.3}\n      - {at: 1.5, linear: 0.2, angular: -0.5}\n")
-    return room_scenario(folder, robots, duration)
+    return room_scenario(folder, robots, duration, extra="log: {formats: [csv, mcap]}\n")
 
 
 def test_reading_scans_in_a_loop_leaves_mobot_runs_files_byte_for_byte(tmp_path):
@@ -40,11 +41,28 @@ def test_reading_scans_in_a_loop_leaves_mobot_runs_files_byte_for_byte(tmp_path)
             scan = sim.scan("r")
             seen.append((sim.step_count, scan.step))
             sim.step(6)
-    for name in ("odom/r.csv", "sensors/r/lidar.npy", "sensors/r/lidar.json"):
+    bags = sorted(p.relative_to(tmp_path / "run").as_posix() for p in (tmp_path / "run" / "bag").glob("*.mcap"))
+    assert bags
+    for name in ("odom/r.csv", "sensors/r/lidar.npy", "sensors/r/lidar.json", *bags):
         assert (tmp_path / "api" / name).read_bytes() == (tmp_path / "run" / name).read_bytes(), name
     # Every 6 steps a look at the scan: the latest one, taken at the step the world is at when due.
     assert seen[:6] == [(0, 0), (6, 0), (12, 0), (18, 0), (24, 24), (30, 24)]
     assert all(now - 24 < taken <= now for now, taken in seen)
+
+
+def test_a_robot_deleted_after_its_scan_was_read_leaves_a_whole_bag(tmp_path):
+    """A scan read ahead of its step's tick is recorded at the tick only if its robot is still there."""
+    path = lidar_scenario(tmp_path, duration=1.0)
+    with Simulation.open(path, out=tmp_path / "api") as sim:
+        sim.step(24)
+        assert sim.scan("r").step == 24  # read ahead of step 24's tick
+        sim.delete("r")
+        sim.step(24)
+    rows = np.load(tmp_path / "api" / "sensors" / "r" / "lidar.npy")
+    assert list(rows["t"]) == [0.0]  # the scan read at step 24 was of a robot gone before the tick
+    with open(next((tmp_path / "api" / "bag").glob("*.mcap")), "rb") as bag:
+        scans = [m.log_time for _, c, m in make_reader(bag).iter_messages() if c.topic == "/r/scan"]
+    assert scans == [0]
 
 
 def test_the_scan_is_the_run_folders_row_and_sees_the_walls(tmp_path):
