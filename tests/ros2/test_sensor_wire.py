@@ -96,6 +96,23 @@ def test_point_cloud2_bytes_equal_rosbags_and_cyclonedds(store, stamp, ranges):
     assert np.array_equal(np.frombuffer(bytes(decoded.data), "<f4").reshape(-1, 4), points)
 
 
+@settings(max_examples=40, deadline=None)
+@given(stamp=stamps, frame=st.text("abc/_", max_size=9), lo=st.floats(-3.2, 0), hi=st.floats(0.01, 3.2),
+       ranges=st.lists(st.one_of(st.floats(0.125, 30.0, width=32), st.just(float("inf"))), min_size=1, max_size=40))
+def test_laser_scan_bytes_equal_rosbags_and_cyclonedds(store, stamp, frame, lo, hi, ranges):
+    spec = lidar(samples=len(ranges), lo=lo, hi=hi if len(ranges) > 1 else lo, range_min=0.12, range_max=30.0)
+    ours = sensor_cdr.laser_scan(stamp, frame, spec, np.array(ranges, dtype=np.float32))
+    step = (spec.horizontal.max_angle - lo) / (len(ranges) - 1) if len(ranges) > 1 else 0.0
+    values = dict(angle_min=lo, angle_max=spec.horizontal.max_angle, angle_increment=step, time_increment=0.0,
+                  scan_time=0.0, range_min=0.12, range_max=30.0)
+    msg = store.types["sensor_msgs/msg/LaserScan"](
+        header=_header(store, stamp, frame), ranges=np.array(ranges, dtype=np.float32),
+        intensities=np.zeros(len(ranges), dtype=np.float32), **{k: np.float32(v) for k, v in values.items()})
+    assert ours == bytes(store.serialize_cdr(msg, "sensor_msgs/msg/LaserScan"))
+    assert ours == idl.LaserScan(_idl_header(stamp, frame), ranges=ranges, intensities=[0.0] * len(ranges),
+                                 **values).serialize()
+
+
 contacts = st.lists(st.builds(Contact, st.sampled_from(["wall", "robot 'b'"]), vector, vector,
                               st.floats(0, 0.01), st.floats(0, 100)), max_size=5)
 
