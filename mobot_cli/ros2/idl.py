@@ -190,7 +190,6 @@ class ContactsState(IdlStruct, typename="gazebo_msgs::msg::dds_::ContactsState_"
     states: sequence[ContactState]
 
 
-
 @dataclass
 class Gid(IdlStruct, typename="rmw_dds_common::msg::dds_::Gid_"):
     data: array[uint8, 16]
