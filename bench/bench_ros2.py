@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
 """What does publishing to ROS 2 cost a run? Prints wall time with and without `--ros2`.
 
-10 bundled robots for 20 simulated seconds at 250 Hz physics with odometry, joint states,
-/tf and /clock at 50 Hz, plus a 360-ray LaserScan per robot at 10 Hz (published through the
-bridge's topic API with fixed ranges: this times publishing, not the lidar's ray casting,
-which the sensors work adds to both sides). A subscriber process takes every odom, scan and
+10 bundled robots with their 2D lidar (``lidar:=true``: 360 beams at 10 Hz) for 20 simulated
+seconds at 250 Hz physics with odometry, joint states, /tf and /clock at 50 Hz: the scans go
+out as a run makes them (``RobotMessages.reading``, the bag's bytes), and the lidar's ray
+casting is part of the run on both sides. A subscriber process takes every odom, scan and
 /tf (so those messages are built and sent; /clock and joint_states, unread, are not). Three
 ways, interleaved: no bridge; the bridge publishing on the world's thread (the default); the
 bridge's own thread. DDS stays on loopback (the same settings as the tests). Reports CPU
@@ -17,6 +17,7 @@ overhead and messages per second.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import statistics
 import subprocess
@@ -39,11 +40,10 @@ from mobot_cli.ros2 import publisher as publishing  # noqa: E402
 from mobot_cli.ros2.bridge import Bridge  # noqa: E402
 from mobot_cli.run.execute import execute  # noqa: E402
 from mobot_cli.run.prepare import prepare  # noqa: E402
-from mobot_cli.run.ros_messages import LASER_SCAN, laser_scan_layout, stamp_of  # noqa: E402
 from mobot_cli.run.timeline import simulate  # noqa: E402
 from mobot_cli.sim.plan import Ros2Settings  # noqa: E402
 
-ROBOTS, RAYS, SCAN_EVERY = 10, 360, 5  # a scan every 5th 50 Hz sample: 10 Hz
+ROBOTS, RAYS = 10, 360  # the bundled robot's lidar: 360 beams at 10 Hz
 LISTENER = textwrap.dedent("""
     import os, sys, time
     from cyclonedds.domain import DomainParticipant
@@ -67,25 +67,8 @@ def scenario(seconds: float) -> str:
     poses = ", ".join(f"[{(i % 5) * 1.0}, {(i // 5) * 1.0}, 0]" for i in range(ROBOTS))
     return (f"version: 1\nname: bench_ros2\nduration: {seconds}\nsettle: 0.5\n"
             f"physics: {{rate_hz: 250}}\nlog: {{rate_hz: 50}}\n"
-            f"robots:\n  - name: r_{{i}}\n    count: {ROBOTS}\n    poses: [{poses}]\n"
+            f"robots:\n  - name: r_{{i}}\n    count: {ROBOTS}\n    args: {{lidar: 'true'}}\n    poses: [{poses}]\n"
             f"    commands: [{{at: 0.5, linear: 0.3, angular: 0.3}}]\n")
-
-
-def with_scans() -> None:
-    """Give every robot a fixed 360-ray LaserScan on <ns>/scan at 10 Hz, as a lidar would."""
-    original = publishing.RecordPublisher.sample
-    packer = laser_scan_layout("lidar", RAYS)
-    ranges = [2.0] * RAYS
-
-    def sample(self, record) -> None:
-        original(self, record)
-        if record.complete and record.step // 5 % SCAN_EVERY == 0:
-            stamp = stamp_of(record.step, self.rate)[1]
-            for name in record.states:
-                data = packer.pack((*stamp, -3.14, 3.14, 0.0175, 0.0, 0.1, 0.12, 12.0, *ranges))
-                self.topics.publish(f"/{name}/scan", LASER_SCAN, data)
-
-    publishing.RecordPublisher.sample = sample
 
 
 def run(prepared, out: Path, bridge: bool, threaded: bool = False) -> tuple[float, float, object]:
@@ -104,6 +87,11 @@ def isolated_cost(prepared, repeat: int) -> None:
     started = time.thread_time()
     records = list(simulate(prepared.plan))
     sim = time.thread_time() - started
+    blind = dataclasses.replace(prepared.plan, robots=tuple(dataclasses.replace(r, sensors=()) for r in prepared.plan.robots))
+    started = time.thread_time()
+    for _ in simulate(blind):
+        pass
+    sim_blind = time.thread_time() - started
     participant = dds.Participant(int(os.environ["ROS_DOMAIN_ID"]), names.discovery_config(os.environ, True))
     topics = publishing.Topics(participant, "mobot", "/", 16)
     publisher = publishing.RecordPublisher(topics, prepared.plan.physics.rate_hz, lambda *a: None)
@@ -125,8 +113,9 @@ def isolated_cost(prepared, repeat: int) -> None:
         costs.append((cost, python, sent))
     participant.close()
     cost, python, sent = (statistics.median(c[i] for c in costs) for i in range(3))
-    print(f"  apart, CPU of one thread: simulating {sim:.3f} s; publishing {cost:.3f} s = {cost / sim * 100:.1f} % "
-          f"of it ({python:.3f} s mobot's Python, {cost - python:.3f} s DDS writes); {sent:.0f} messages, "
+    print(f"  apart, CPU of one thread: simulating {sim:.3f} s ({sim_blind:.3f} s without casting the lidars' rays); "
+          f"publishing {cost:.3f} s = {cost / sim * 100:.1f} % of it ({cost / sim_blind * 100:.1f} % of the run without "
+          f"rays) ({python:.3f} s mobot's Python, {cost - python:.3f} s DDS writes); {sent:.0f} messages, "
           f"{sent / cost:,.0f} per CPU second, {sent / (sim + cost):,.0f}/s at this run's pace")
 
 
@@ -135,7 +124,6 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=20.0)
     parser.add_argument("--repeat", type=int, default=3)
     args = parser.parse_args()
-    with_scans()
     work = Path(tempfile.mkdtemp(prefix="bench-ros2-"))
     (work / "s.yaml").write_text(scenario(args.seconds))
     prepared = prepare(work / "s.yaml")

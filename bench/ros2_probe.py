@@ -17,7 +17,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import JointState, LaserScan
+from sensor_msgs.msg import Imu, JointState, LaserScan
 from std_msgs.msg import String
 from geometry_msgs.msg import Twist
 
@@ -43,20 +43,35 @@ def rates(node: Node, robot: str, seconds: float) -> dict:
     seen: dict[str, list[float]] = {}
     topics = {"/clock": Clock, f"/{robot}/odom": Odometry, f"/{robot}/joint_states": JointState}
     listed = dict(node.get_topic_names_and_types())
-    if f"/{robot}/scan" in listed:
-        topics[f"/{robot}/scan"] = LaserScan
+    for name, kind in (("scan", LaserScan), ("imu", Imu)):
+        if f"/{robot}/{name}" in listed:
+            topics[f"/{robot}/{name}"] = kind
     if TFMessage is not None:
         topics["/tf"] = TFMessage
+    last: dict[str, object] = {}
     subs = []
     for topic, kind in topics.items():
-        qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT) if topic == "/clock" else 10
+        # /clock and the sensors as their usual readers take them (rclpy's clock, nav2, slam_toolbox:
+        # best effort, which a reliable publisher also serves); the rest as rclpy's default
+        best_effort = topic == "/clock" or kind in (LaserScan, Imu)
+        qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT) if best_effort else 10
         seen[topic] = []
-        subs.append(node.create_subscription(kind, topic, lambda m, t=topic: seen[t].append(stamp(m)), qos))
+        subs.append(node.create_subscription(kind, topic, lambda m, t=topic: (seen[t].append(stamp(m)),
+                                                                             last.__setitem__(t, m)), qos))
+    started = time.monotonic()
     spin_for(node, seconds)
+    wall = time.monotonic() - started
     out = {}
     for topic, stamps in seen.items():
         span = stamps[-1] - stamps[0] if len(stamps) > 1 else 0.0
-        out[topic] = {"count": len(stamps), "hz": (len(stamps) - 1) / span if span > 0 else 0.0}
+        out[topic] = {"count": len(stamps), "hz": (len(stamps) - 1) / span if span > 0 else 0.0,
+                      "wall_hz": len(stamps) / wall}  # received per wall second (the world runs in real time)
+    for topic, msg in last.items():  # what rclpy decoded of the sensors' messages
+        if isinstance(msg, LaserScan):
+            out[topic]["decoded"] = {"frame_id": msg.header.frame_id, "ranges": len(msg.ranges),
+                                     "finite": sum(map(math.isfinite, msg.ranges)), "range_max": msg.range_max}
+        elif isinstance(msg, Imu):
+            out[topic]["decoded"] = {"frame_id": msg.header.frame_id, "az": msg.linear_acceleration.z}
     for sub in subs:
         node.destroy_subscription(sub)
     return out
@@ -77,11 +92,13 @@ def graph(node: Node, robot: str) -> dict:
     nodes = nodes_now()
     pubs = node.get_publisher_names_and_types_by_node("mobot", "/") if "/mobot" in nodes else []
     subs = node.get_subscriber_names_and_types_by_node("mobot", "/") if "/mobot" in nodes else []
-    infos = node.get_publishers_info_by_topic(f"/{robot}/odom")
-    hashes = [str(getattr(i, "topic_type_hash", "")) for i in infos]
-    return {"seconds_to_discover": time.monotonic() - started, "nodes": nodes, "publishers": {t: types for t, types in pubs}, "subscribers": {t: types for t, types in subs},
-            "odom_publishers": [{"node": i.node_name, "namespace": i.node_namespace, "type": i.topic_type,
-                                 "hash": h} for i, h in zip(infos, hashes)]}
+    hashes = {}
+    for topic in (f"/{robot}/odom", f"/{robot}/scan", f"/{robot}/imu"):
+        hashes[topic] = [{"node": i.node_name, "namespace": i.node_namespace, "type": i.topic_type,
+                          "hash": str(getattr(i, "topic_type_hash", ""))} for i in node.get_publishers_info_by_topic(topic)]
+    return {"seconds_to_discover": time.monotonic() - started, "nodes": nodes,
+            "publishers": {t: types for t, types in pubs}, "subscribers": {t: types for t, types in subs},
+            "odom_publishers": hashes[f"/{robot}/odom"], "endpoints": hashes}
 
 
 def late_description(robot: str) -> dict:

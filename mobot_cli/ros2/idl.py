@@ -133,6 +133,64 @@ class LaserScan(IdlStruct, typename="sensor_msgs::msg::dds_::LaserScan_"):
 
 
 @dataclass
+class PointField(IdlStruct, typename="sensor_msgs::msg::dds_::PointField_"):
+    name: str
+    offset: uint32
+    datatype: uint8
+    count: uint32
+
+
+@dataclass
+class PointCloud2(IdlStruct, typename="sensor_msgs::msg::dds_::PointCloud2_"):
+    header: Header
+    height: uint32
+    width: uint32
+    fields: sequence[PointField]
+    is_bigendian: bool
+    point_step: uint32
+    row_step: uint32
+    data: sequence[uint8]
+    is_dense: bool
+
+
+@dataclass
+class Imu(IdlStruct, typename="sensor_msgs::msg::dds_::Imu_"):
+    header: Header
+    orientation: Quaternion
+    orientation_covariance: array[float64, 9]
+    angular_velocity: Vector3
+    angular_velocity_covariance: array[float64, 9]
+    linear_acceleration: Vector3
+    linear_acceleration_covariance: array[float64, 9]
+
+
+@dataclass
+class Wrench(IdlStruct, typename="geometry_msgs::msg::dds_::Wrench_"):
+    force: Vector3
+    torque: Vector3
+
+
+@dataclass
+class ContactState(IdlStruct, typename="gazebo_msgs::msg::dds_::ContactState_"):
+    info: str
+    collision1_name: str
+    collision2_name: str
+    wrenches: sequence[Wrench]
+    total_wrench: Wrench
+    contact_positions: sequence[Vector3]
+    contact_normals: sequence[Vector3]
+    depths: sequence[float64]
+
+
+@dataclass
+class ContactsState(IdlStruct, typename="gazebo_msgs::msg::dds_::ContactsState_"):
+    """What gazebo_ros_bumper publishes (the bag's bumper type)."""
+
+    header: Header
+    states: sequence[ContactState]
+
+
+@dataclass
 class Gid(IdlStruct, typename="rmw_dds_common::msg::dds_::Gid_"):
     data: array[uint8, 16]
 
@@ -181,5 +239,8 @@ TYPES: dict[str, type] = {
     "sensor_msgs/msg/JointState": JointState,
     "std_msgs/msg/String": String,
     "sensor_msgs/msg/LaserScan": LaserScan,
+    "sensor_msgs/msg/PointCloud2": PointCloud2,
+    "sensor_msgs/msg/Imu": Imu,
+    "gazebo_msgs/msg/ContactsState": ContactsState,
     "rmw_dds_common/msg/ParticipantEntitiesInfo": ParticipantEntitiesInfo,
 }

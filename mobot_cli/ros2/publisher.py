@@ -6,10 +6,15 @@ leaves, as tf2's static broadcaster does), per robot ``<ns>/odom`` and ``<ns>/jo
 every sample and ``<ns>/robot_description`` once. Each robot's ``<ns>/cmd_vel`` reader is made
 here too, so that the node's endpoints in the graph are always the ones that exist.
 
+Every sensor's readings go out on its bag topic (``<ns>/scan``, ``<ns>/points``, ``<ns>/imu``,
+``<ns>/bumper``: run/sensor_topics.py), at the sensor's rate, the bag's bytes
+(``RobotMessages.reading``), reliable, volatile, keep last 10 as ros_gz_bridge publishes
+them (a reliable writer also serves the best-effort readers nav2 and slam_toolbox make);
+their writers exist from the robot's arrival, so the graph lists them before the first reading.
+
 More topics plug in through ``Topics.publish(name, msgtype, cdr)``: a writer is made on first
-use with ROS's default QoS. A record type the timeline does not make yet (a sensor reading)
-gets a handler with ``register(record_type, handler)``; the handler turns it into publishes,
-e.g. a lidar's ``<ns>/scan`` from ``laser_scan_layout`` (run/ros_messages.py).
+use with ROS's default QoS. A record type the timeline does not make yet gets a handler with
+``register(record_type, handler)``; the handler turns it into publishes.
 """
 
 from __future__ import annotations
@@ -24,15 +29,15 @@ from mobot_cli.run.cdr import Packer
 from mobot_cli.run.ros_messages import (CLOCK, CLOCK_PACKER, JOINT_STATE, ODOMETRY, STRING, TF, TWIST,
                                         RobotMessages, stamp_of, tf_layout, tf_static)
 from mobot_cli.run.ros_msgs import MESSAGES
+from mobot_cli.run.ros_sensor_msgs import SENSOR_MESSAGES
 from mobot_cli.run import sensor_topics
 from mobot_cli.run.timeline import Deleted, Reading, Record, Sample, Spawned
 from mobot_cli.sim.plan import RobotPlan
 from mobot_cli.sim.state import RobotState
 
-# Type hashes of the types mobot sends that the bag does not record (rosbags' RIHS01 of the
-# Jazzy definitions; tests/test_ros2_wire.py checks them).
-HASHES = {"sensor_msgs/msg/LaserScan": "RIHS01_64c191398013af96509d518dac71d5164f9382553fce5c1f8cca5be7924bd828",
-          graph.MSGTYPE: graph.RIHS01}
+# Type hashes of the types mobot sends that the bag does not record (tests/ros2/test_wire.py
+# checks them); the others come with the bag's definitions (run/ros_msgs.py, run/ros_sensor_msgs.py).
+HASHES = {graph.MSGTYPE: graph.RIHS01}
 TWIST_FIELDS = struct.Struct("<4x6d")  # encapsulation header, linear xyz, angular xyz
 Handler = Callable[["Topics", Record], None]
 _HANDLERS: dict[type, Handler] = {}
@@ -45,7 +50,10 @@ def register(record_type: type, handler: Handler) -> None:
 
 def type_hash(msgtype: str) -> str:
     """The RIHS01 hash ROS 2 Jazzy and later expect in an endpoint's USER_DATA."""
-    return MESSAGES[msgtype][1] if msgtype in MESSAGES else HASHES[msgtype]
+    for table in (MESSAGES, SENSOR_MESSAGES):
+        if msgtype in table:
+            return table[msgtype][1]
+    return HASHES[msgtype]
 
 
 def twist(data: bytes) -> tuple[float, float]:
@@ -123,6 +131,7 @@ class _Robot:
     namespace: str
     odom: dds.Writer
     joint_states: dds.Writer
+    sensors: dict[str, dds.Writer]  # sensor name -> the writer of its topic
 
 
 class RecordPublisher:
@@ -189,14 +198,10 @@ class RecordPublisher:
                 write(self.tf, packer.pack(tf_values))
 
     def reading(self, reading: Reading) -> None:
-        """A sensor reading on its bag topic, built only while someone reads it. Readings whose
-        type has no DDS description here yet (PointCloud2, Imu, ContactsState) are not sent."""
+        """A sensor reading on its bag topic, built only while someone reads it."""
         robot = self.robots.get(reading.robot)
-        msgtype = sensor_topics.message_type(reading.sensor)
-        if robot is None or msgtype not in idl.TYPES:
-            return
-        writer = self.topics.writer(sensor_topics.topic(robot.messages.plan, reading.sensor), msgtype)
-        if writer.readers:
+        writer = robot.sensors.get(reading.sensor.name) if robot is not None else None
+        if writer is not None and writer.readers:
             self._write(writer, robot.messages.reading(stamp_of(reading.step, self.rate)[1], reading))
 
     def _write(self, writer: dds.Writer, data: bytes) -> None:
@@ -215,8 +220,10 @@ class RecordPublisher:
             self.left_out.append(f"robot '{plan.name}' is not on ROS 2: {exc}")
             return
         messages = RobotMessages(plan, state)
+        sensors = {spec.name: self.topics.writer(sensor_topics.topic(plan, spec), sensor_topics.message_type(spec))
+                   for spec in plan.sensors}
         self.robots[plan.name] = _Robot(messages, namespace, self.topics.writer(names.join(namespace, "odom"), ODOMETRY),
-                                        self.topics.writer(names.join(namespace, "joint_states"), JOINT_STATE))
+                                        self.topics.writer(names.join(namespace, "joint_states"), JOINT_STATE), sensors)
         self.topics.publish(names.join(namespace, "robot_description"), STRING, messages.description(), dds.LATCHED)
         statics = messages.statics(state)
         self.statics[plan.name] = statics if self.world_frame else statics[1:]
@@ -240,9 +247,9 @@ class RecordPublisher:
         robot = self.robots.pop(name)
         namespace = robot.namespace
         self.statics.pop(name, None)
-        sensors = [sensor_topics.topic(robot.messages.plan, spec) for spec in robot.messages.plan.sensors]
+        sensors = {sensor_topics.topic(robot.messages.plan, spec) for spec in robot.messages.plan.sensors}
         self.topics.drop(*(names.join(namespace, t) for t in ("odom", "joint_states", "robot_description", "cmd_vel")),
-                         *(t for t in sensors if t in self.topics.writers))
+                         *sensors)
         self.publish_statics(stamp_of(self.clock_step if self.clock_step >= 0 else 0, self.rate)[1])
 
     def publish_statics(self, stamp: tuple[int, int]) -> None:
