@@ -147,7 +147,7 @@ class Sensing:
             rig = self.rigs[robot][sensor]
             position, quat = self._pose(rig)
             if rig.spec.kind == "lidar":
-                rotation = np.array(p.getMatrixFromQuaternion(quat)).reshape(3, 3)
+                rotation = np.array(p.getMatrixFromQuaternion(quat), dtype=np.float32).reshape(3, 3)
                 job = lidar.ScanJob(rig.spec, rig.beams, np.array(position), rotation, rig.body)
                 scans.append((i, rig, job))
                 out[i] = (position, quat)
@@ -231,14 +231,20 @@ def _aabb(cid: int, body: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _lidar_noise(rig: _Rig, ranges: np.ndarray) -> np.ndarray:
-    """Noise, quantisation and clamping as the sensor's <ray> block asks (float32, +inf kept)."""
+    """Noise, quantisation and clamping as the sensor's <ray> block asks (float32, +inf kept).
+    ``ranges`` is a fresh array of this scan: it is changed in place, a few small ufuncs a scan."""
     spec = rig.spec
     if spec.noise_stddev > 0.0 or spec.noise_mean != 0.0:
         returns = np.isfinite(ranges)
-        noisy = ranges + rig.rng.normal(spec.noise_mean, spec.noise_stddev, ranges.shape).astype(np.float32)
-        ranges = np.where(returns, np.clip(noisy, spec.range_min, spec.range_max), ranges)
+        noisy = rig.rng.normal(spec.noise_mean, spec.noise_stddev, ranges.shape).astype(np.float32)
+        noisy += ranges
+        np.clip(noisy, spec.range_min, spec.range_max, out=noisy)
+        np.copyto(ranges, noisy, where=returns)
     if spec.range_resolution > 0.0:  # +inf stays +inf
-        ranges = np.round(ranges / np.float32(spec.range_resolution)) * np.float32(spec.range_resolution)
+        step = np.float32(spec.range_resolution)
+        ranges /= step
+        np.round(ranges, out=ranges)
+        ranges *= step
     return ranges.astype(np.float32, copy=False)
 
 
