@@ -92,9 +92,12 @@ def with_sensor(plan, spec, formats=None):
 
 
 def house_share(seconds: float, repeat: int, work: Path) -> None:
-    """The bundled house scenario with and without mobot's 360-beam lidar."""
+    """The bundled house scenario, mobot with lidar:=true, with its 360-beam lidar off and on."""
     prepared = prepare(REPO / "scenarios" / "house.yaml", [f"duration={seconds}", "robots.mobot.args.lidar=true"])
-    plans = {"no sensors": prepared.plan, "2D lidar 10 Hz": with_sensor(prepared.plan, MOBOT_LIDAR)}
+    own = prepared.plan.robots[0].sensors  # the bundled mobot's own <sensor>: 10 Hz, noise, 1 cm steps
+    assert [spec.kind for spec in own] == ["lidar"], own
+    plans = {"no sensors": replace(prepared.plan, robots=(replace(prepared.plan.robots[0], sensors=()),)),
+             "2D lidar 10 Hz": prepared.plan}
     results = {name: [] for name in plans}
     for i in range(repeat):
         for name, plan in plans.items():
@@ -107,6 +110,11 @@ def house_share(seconds: float, repeat: int, work: Path) -> None:
         least = min(c for _, c in values)  # the least disturbed run: steadier on a shared machine
         print(f"  {name:<16} {wall:7.3f} s wall  {cpu:7.3f} s CPU   wall x{wall / base_wall:5.3f}  "
               f"CPU x{cpu / base_cpu:5.3f}  least CPU x{least / base_min:5.3f}   ({seconds / wall:5.1f}x real time)")
+    # Each lidar run against the run without sensors just before it: the spread of the ratio.
+    pairs = sorted(c / b for (_, b), (_, c) in zip(results["no sensors"], results["2D lidar 10 Hz"]))
+    quarter = len(pairs) // 4
+    print(f"  lidar / no sensors, CPU, run by run: median x{statistics.median(pairs):5.3f}, middle half "
+          f"x{pairs[quarter]:5.3f}-x{pairs[-1 - quarter]:5.3f}, all x{pairs[0]:5.3f}-x{pairs[-1]:5.3f} ({len(pairs)} pairs)")
 
 
 def jackal_plan(seconds: float, formats: tuple[str, ...]):

@@ -120,13 +120,13 @@ class _Waiting:
 
     def __init__(self, scene):
         self.scene = scene
-        self.items: list[tuple[_Rig, tuple, tuple, ScanData]] = []  # rig, position, rotation (9), scan
+        self.items: list[tuple[_Rig, tuple, tuple, ScanData]] = []  # rig, position, quaternion, scan
         self.rays = 0
         self.lock = threading.Lock()  # a live world's scan op may read from another thread
 
-    def add(self, rig: _Rig, position: tuple, rotation: tuple, data: ScanData) -> None:
+    def add(self, rig: _Rig, position: tuple, quat: tuple, data: ScanData) -> None:
         with self.lock:
-            self.items.append((rig, position, rotation, data))
+            self.items.append((rig, position, quat, data))
             self.rays += len(rig.beams.directions)
             full = len(self.items) >= MAX_WAITING_SCANS or self.rays >= MAX_WAITING_RAYS
         if full:
@@ -142,7 +142,8 @@ class _Waiting:
             for scans in by_rig.values():
                 rig = scans[0][0]
                 positions = np.array([item[1] for item in scans], dtype=np.float32)
-                rotations = np.array([item[2] for item in scans], dtype=np.float32).reshape(-1, 3, 3)
+                rotations = np.array([p.getMatrixFromQuaternion(item[2]) for item in scans],
+                                     dtype=np.float32).reshape(-1, 3, 3)
                 ranges = _lidar_noise(rig, lidar.cast_scans(self.scene, rig.spec, rig.beams, positions, rotations))
                 for item, values in zip(scans, ranges):
                     item[3]._ranges = values
@@ -231,7 +232,7 @@ class Sensing:
             for i, rig in scans:
                 position, quat = out[i]
                 out[i] = ScanData(None, rig.beams, position, quat, self._waiting)
-                self._waiting.add(rig, position, p.getMatrixFromQuaternion(quat), out[i])
+                self._waiting.add(rig, position, quat, out[i])
             return
         if self._waiting is not None:
             self._waiting.cast()  # scans taken before come first: noise is drawn in order
