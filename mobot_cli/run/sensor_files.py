@@ -34,7 +34,7 @@ from mobot_cli.sim.plan import Plan, RobotPlan, SensorSpec
 
 NPY_MAGIC = b"\x93NUMPY\x01\x00"
 NPY_HEADER = 1024  # bytes, magic included: room for any row count and beam grid
-FLUSH_EVERY = 10  # readings (1 s of a 10 Hz lidar): a killed run loses at most this many
+FLUSH_EVERY = 50  # readings (5 s of a 10 Hz lidar), as the odometry CSV's rows: a killed run loses at most this many
 FLUSH_BYTES = 4 << 20
 IMU_COLUMNS = ("t", "qx", "qy", "qz", "qw", "wx", "wy", "wz", "ax", "ay", "az")
 CONTACT_COLUMNS = ("t", "contacts", "other", "x", "y", "z", "nx", "ny", "nz", "depth", "force")

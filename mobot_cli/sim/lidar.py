@@ -7,6 +7,9 @@ allows, with its worker threads on. A robot never sees itself: a ray that meets 
 links is cast on from just beyond the hit, so links in front of the sensor are transparent,
 as they are to a real sensor mounted clear of its robot.
 
+Scans that only the static world can be in the way of (one robot in the world) may also be
+cast later, many at once (``cast_scans``): the same numbers as one by one.
+
 As Gazebo's ray sensor, rays start ``range_min`` from the sensor (nothing closer is seen) and
 end at ``range_max``; a ray with no return reads +inf (REP 117).
 """
