@@ -129,18 +129,19 @@ def jackal_plan(seconds: float, formats: tuple[str, ...]):
 
 
 def jackal_pace(seconds: float, work: Path) -> None:
-    """jackal + VLP-16 in the house: pace, and the share of casting the rays (scans are cast
-    when read, a few at a time: the time inside lidar.cast and lidar.cast_scans, noise included)."""
+    """jackal + VLP-16 in the house: pace (wall, and CPU time, steadier on a shared machine), and
+    the share of casting the rays (scans are cast when read, a few at a time: the CPU time inside
+    lidar.cast and lidar.cast_scans)."""
     spent = {"cast": 0.0}
     originals = {name: getattr(lidar, name) for name in ("cast", "cast_scans")}
 
     def timing(call):
         def timed_call(*args, **kwargs):
-            started = time.perf_counter()
+            started = time.process_time()
             try:
                 return call(*args, **kwargs)
             finally:
-                spent["cast"] += time.perf_counter() - started
+                spent["cast"] += time.process_time() - started
         return timed_call
 
     for name, call in originals.items():
@@ -148,15 +149,17 @@ def jackal_pace(seconds: float, work: Path) -> None:
     try:
         bare, resolved = jackal_plan(seconds, ("csv",))
         bare = replace(bare, robots=(replace(bare.robots[0], sensors=()),))
-        wall, _ = timed(execute, bare, resolved, work / "jackal-bare")
-        print(f"  {'no sensors':<22} {wall:7.3f} s wall  {seconds / wall:6.1f}x real time")
+        wall, cpu = timed(execute, bare, resolved, work / "jackal-bare")
+        print(f"  {'no sensors':<22} {wall:7.3f} s wall {cpu:7.3f} s CPU  {seconds / wall:5.1f}x real time "
+              f"({seconds / cpu:5.1f}x by CPU time)")
         for formats in (("csv",), ("csv", "mcap")):
             plan, resolved = jackal_plan(seconds, formats)
             spent["cast"] = 0.0
-            wall, _ = timed(execute, plan, resolved, work / f"jackal-{len(formats)}")
+            wall, cpu = timed(execute, plan, resolved, work / f"jackal-{len(formats)}")
             rays = 1875 * 16 * 10 * seconds
-            print(f"  {'VLP-16, ' + '+'.join(formats):<22} {wall:7.3f} s wall  {seconds / wall:6.1f}x real time"
-                  f"  {rays / wall / 1e6:5.2f} M rays/s overall; casting {spent['cast']:.3f} s "
+            print(f"  {'VLP-16, ' + '+'.join(formats):<22} {wall:7.3f} s wall {cpu:7.3f} s CPU  "
+                  f"{seconds / wall:5.1f}x real time ({seconds / cpu:5.1f}x by CPU time), "
+                  f"{rays / cpu / 1e6:5.2f} M rays per CPU second overall; casting {spent['cast']:.3f} s CPU "
                   f"({rays / spent['cast'] / 1e6:.2f} M rays/s), records and physics the rest")
     finally:
         for name, call in originals.items():
