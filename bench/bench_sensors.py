@@ -92,9 +92,12 @@ def with_sensor(plan, spec, formats=None):
 
 
 def house_share(seconds: float, repeat: int, work: Path) -> None:
-    """The bundled house scenario with and without mobot's 360-beam lidar."""
+    """The bundled house scenario, mobot with lidar:=true, with its 360-beam lidar off and on."""
     prepared = prepare(REPO / "scenarios" / "house.yaml", [f"duration={seconds}", "robots.mobot.args.lidar=true"])
-    plans = {"no sensors": prepared.plan, "2D lidar 10 Hz": with_sensor(prepared.plan, MOBOT_LIDAR)}
+    own = prepared.plan.robots[0].sensors  # the bundled mobot's own <sensor>: 10 Hz, noise, 1 cm steps
+    assert [spec.kind for spec in own] == ["lidar"], own
+    plans = {"no sensors": replace(prepared.plan, robots=(replace(prepared.plan.robots[0], sensors=()),)),
+             "2D lidar 10 Hz": prepared.plan}
     results = {name: [] for name in plans}
     for i in range(repeat):
         for name, plan in plans.items():
@@ -107,6 +110,11 @@ def house_share(seconds: float, repeat: int, work: Path) -> None:
         least = min(c for _, c in values)  # the least disturbed run: steadier on a shared machine
         print(f"  {name:<16} {wall:7.3f} s wall  {cpu:7.3f} s CPU   wall x{wall / base_wall:5.3f}  "
               f"CPU x{cpu / base_cpu:5.3f}  least CPU x{least / base_min:5.3f}   ({seconds / wall:5.1f}x real time)")
+    # Each lidar run against the run without sensors just before it: the spread of the ratio.
+    pairs = sorted(c / b for (_, b), (_, c) in zip(results["no sensors"], results["2D lidar 10 Hz"]))
+    quarter = len(pairs) // 4
+    print(f"  lidar / no sensors, CPU, run by run: median x{statistics.median(pairs):5.3f}, middle half "
+          f"x{pairs[quarter]:5.3f}-x{pairs[-1 - quarter]:5.3f}, all x{pairs[0]:5.3f}-x{pairs[-1]:5.3f} ({len(pairs)} pairs)")
 
 
 def jackal_plan(seconds: float, formats: tuple[str, ...]):
@@ -121,33 +129,41 @@ def jackal_plan(seconds: float, formats: tuple[str, ...]):
 
 
 def jackal_pace(seconds: float, work: Path) -> None:
-    """jackal + VLP-16 in the house: pace, and the share of casting the rays."""
-    spent = {"sense": 0.0}
-    original = World.sense
+    """jackal + VLP-16 in the house: pace (wall, and CPU time, steadier on a shared machine), and
+    the share of casting the rays (scans are cast when read, a few at a time: the CPU time inside
+    lidar.cast and lidar.cast_scans)."""
+    spent = {"cast": 0.0}
+    originals = {name: getattr(lidar, name) for name in ("cast", "cast_scans")}
 
-    def sense(self, due):
-        started = time.perf_counter()
-        try:
-            return original(self, due)
-        finally:
-            spent["sense"] += time.perf_counter() - started
+    def timing(call):
+        def timed_call(*args, **kwargs):
+            started = time.process_time()
+            try:
+                return call(*args, **kwargs)
+            finally:
+                spent["cast"] += time.process_time() - started
+        return timed_call
 
-    World.sense = sense
+    for name, call in originals.items():
+        setattr(lidar, name, timing(call))
     try:
         bare, resolved = jackal_plan(seconds, ("csv",))
         bare = replace(bare, robots=(replace(bare.robots[0], sensors=()),))
-        wall, _ = timed(execute, bare, resolved, work / "jackal-bare")
-        print(f"  {'no sensors':<22} {wall:7.3f} s wall  {seconds / wall:6.1f}x real time")
+        wall, cpu = timed(execute, bare, resolved, work / "jackal-bare")
+        print(f"  {'no sensors':<22} {wall:7.3f} s wall {cpu:7.3f} s CPU  {seconds / wall:5.1f}x real time "
+              f"({seconds / cpu:5.1f}x by CPU time)")
         for formats in (("csv",), ("csv", "mcap")):
             plan, resolved = jackal_plan(seconds, formats)
-            spent["sense"] = 0.0
-            wall, _ = timed(execute, plan, resolved, work / f"jackal-{len(formats)}")
+            spent["cast"] = 0.0
+            wall, cpu = timed(execute, plan, resolved, work / f"jackal-{len(formats)}")
             rays = 1875 * 16 * 10 * seconds
-            print(f"  {'VLP-16, ' + '+'.join(formats):<22} {wall:7.3f} s wall  {seconds / wall:6.1f}x real time"
-                  f"  {rays / wall / 1e6:5.2f} M rays/s overall; sensing {spent['sense']:.3f} s "
-                  f"({rays / spent['sense'] / 1e6:.2f} M rays/s), records and physics the rest")
+            print(f"  {'VLP-16, ' + '+'.join(formats):<22} {wall:7.3f} s wall {cpu:7.3f} s CPU  "
+                  f"{seconds / wall:5.1f}x real time ({seconds / cpu:5.1f}x by CPU time), "
+                  f"{rays / cpu / 1e6:5.2f} M rays per CPU second overall; casting {spent['cast']:.3f} s CPU "
+                  f"({rays / spent['cast'] / 1e6:.2f} M rays/s), records and physics the rest")
     finally:
-        World.sense = original
+        for name, call in originals.items():
+            setattr(lidar, name, call)
 
 
 def memory(seconds: float, work: Path) -> None:

@@ -106,8 +106,7 @@ class BagSink(Sink):
 
     def reading(self, key: str, reading: Reading) -> None:
         self.pending.append((key, reading))
-        ranges = getattr(reading.data, "ranges", None)
-        self.waiting_bytes += 64 if ranges is None else ranges.nbytes
+        self.waiting_bytes += getattr(reading.data, "nbytes", 64)  # a scan's ranges are cast when written
         if self.waiting_bytes >= CHUNK_BYTES:
             self._record()
 

@@ -34,7 +34,7 @@ from mobot_cli.sim.plan import Plan, RobotPlan, SensorSpec
 
 NPY_MAGIC = b"\x93NUMPY\x01\x00"
 NPY_HEADER = 1024  # bytes, magic included: room for any row count and beam grid
-FLUSH_EVERY = 10  # readings (1 s of a 10 Hz lidar): a killed run loses at most this many
+FLUSH_EVERY = 50  # readings (5 s of a 10 Hz lidar), as the odometry CSV's rows: a killed run loses at most this many
 FLUSH_BYTES = 4 << 20
 IMU_COLUMNS = ("t", "qx", "qy", "qz", "qw", "wx", "wy", "wz", "ax", "ay", "az")
 CONTACT_COLUMNS = ("t", "contacts", "other", "x", "y", "z", "nx", "ny", "nz", "depth", "force")
@@ -52,7 +52,8 @@ def sensor_file(key: str, spec: SensorSpec) -> str:
 
 
 class NpyRows:
-    """A .npy file of one-dimensional structured rows that grows as they come."""
+    """A lidar's .npy file of (t, ranges) rows that grows as scans come. Scans wait until the
+    chunk is written, so that their ranges are read (and cast, sim/sensors.py) a chunk at a time."""
 
     def __init__(self, path: Path, dtype: np.dtype):
         self.dtype, self.rows, self._pending = dtype, 0, []
@@ -69,9 +70,10 @@ class NpyRows:
             raise ValueError(f"a .npy header of {len(body)} bytes does not fit in {room}")
         return NPY_MAGIC + struct.pack("<H", room + 1) + body.ljust(room) + b"\n"
 
-    def append(self, row: bytes) -> None:
-        self._pending.append(row)
-        self._buffered += len(row)
+    def append(self, t: float, scan) -> None:
+        """One scan (sim.sensors.ScanData) read at ``t`` seconds."""
+        self._pending.append((t, scan))
+        self._buffered += 8 + scan.nbytes
         if len(self._pending) >= FLUSH_EVERY or self._buffered >= FLUSH_BYTES:
             self.flush()
 
@@ -80,7 +82,8 @@ class NpyRows:
         if not self._pending:
             return
         f = self._file
-        f.write(b"".join(self._pending))
+        f.write(b"".join(struct.pack("<d", t) + scan.ranges.astype("<f4", copy=False).tobytes()
+                         for t, scan in self._pending))
         self.rows += len(self._pending)
         self._pending, self._buffered = [], 0
         f.flush()
@@ -156,7 +159,7 @@ class SensorFilesSink(Sink):
         t = reading.step / self.rate
         data = reading.data
         if spec.kind == "lidar":
-            target.append(struct.pack("<d", t) + data.ranges.astype("<f4", copy=False).tobytes())
+            target.append(t, data)
         elif spec.kind == "imu":
             target.write([[number(v) for v in (t, *data.orientation, *data.angular_velocity,
                                                 *data.linear_acceleration)]])

@@ -7,6 +7,9 @@ allows, with its worker threads on. A robot never sees itself: a ray that meets 
 links is cast on from just beyond the hit, so links in front of the sensor are transparent,
 as they are to a real sensor mounted clear of its robot.
 
+Scans that only the static world can be in the way of (one robot in the world) may also be
+cast later, many at once (``cast_scans``): the same numbers as one by one.
+
 As Gazebo's ray sensor, rays start ``range_min`` from the sensor (nothing closer is seen) and
 end at ``range_max``; a ray with no return reads +inf (REP 117).
 """
@@ -30,6 +33,7 @@ ROBOT_GROUP = 1  # PyBullet's collision filter group of dynamic bodies; static o
 STEP_PAST = 0.005
 MAX_PASSES = 8  # own links a single ray may pass through
 BOX_MARGIN = 0.01  # m added around robots' bounding boxes (AABBs are tight to the shapes)
+REACH_MARGIN = 0.1  # m: a box this much beyond range_max is still ray-tested (float32 origins)
 
 
 def axis_angles(axis: RayAxis | None) -> np.ndarray:
@@ -76,7 +80,7 @@ class ScanJob:
     spec: SensorSpec
     beams: Beams
     position: np.ndarray  # (3,)
-    rotation: np.ndarray  # (3, 3) sensor frame -> world
+    rotation: np.ndarray  # (3, 3) sensor frame -> world (float32 saves a conversion a scan)
     own_body: int
 
 
@@ -84,15 +88,18 @@ def cast(cid: int, scene: StaticScene | None, jobs: list[ScanJob],
          robot_boxes: dict[int, tuple[np.ndarray, np.ndarray]]) -> list[np.ndarray]:
     """Ranges (float32, (V, H), +inf for no return) of every job, cast in one batch."""
     # float32 throughout, as the ray engine and LaserScan take them (10 um at 100 m): a 360-beam
-    # scan must cost far less than the physics between two scans.
-    dirs = _joined([job.beams.directions32 @ job.rotation.T.astype(np.float32) for job in jobs])
-    lengths = _joined([job.beams.lengths32 for job in jobs])
-    origins = _joined([job.position.astype(np.float32) + d * np.float32(job.spec.range_min)
-                       for job, d in zip(jobs, _split(dirs, jobs))])
+    # scan must cost far less than the physics between two scans, so a lone scan (the usual
+    # case) goes through without joining or splitting arrays.
+    rays = [_rays(job) for job in jobs]
+    if len(jobs) == 1:
+        (origins, dirs), lengths = rays[0], jobs[0].beams.lengths32
+    else:
+        origins, dirs = np.concatenate([o for o, _ in rays]), np.concatenate([d for _, d in rays])
+        lengths = np.concatenate([job.beams.lengths32 for job in jobs])
     if scene is not None and scene.complete:
         t = scene.cast(origins, dirs, lengths)
-        candidates = _near_robots(origins, dirs, np.minimum(t, lengths), _owners(jobs), robot_boxes) \
-            if robot_boxes else ()
+        boxes = _within_reach(robot_boxes, jobs)
+        candidates = _near_robots(origins, dirs, np.minimum(t, lengths), _owners(jobs), boxes) if boxes else ()
         mask = ROBOT_GROUP
     else:  # no Embree scene: PyBullet casts every ray at everything
         t = np.full(len(dirs), np.inf, dtype=np.float32)
@@ -102,11 +109,45 @@ def cast(cid: int, scene: StaticScene | None, jobs: list[ScanJob],
         hit = _bullet(cid, origins[candidates].astype(float), dirs[candidates].astype(float),
                       reach[candidates].astype(float), _owners(jobs)[candidates], mask)
         t[candidates] = np.minimum(t[candidates], hit)
+    if len(jobs) == 1:  # t is a fresh array: the range_min is added in place
+        t += np.float32(jobs[0].spec.range_min)
+        return [t.reshape(jobs[0].beams.shape)]
     return [(part + np.float32(job.spec.range_min)).reshape(job.beams.shape) for job, part in zip(jobs, _split(t, jobs))]
 
 
-def _joined(parts: list[np.ndarray]) -> np.ndarray:
-    return parts[0] if len(parts) == 1 else np.concatenate(parts)
+def cast_scans(scene: StaticScene, spec: SensorSpec, beams: Beams, positions: np.ndarray,
+               rotations: np.ndarray) -> np.ndarray:
+    """Ranges (float32, (k, V, H), +inf for no return) of k scans of one lidar that only the
+    static world can be in the way of (no other robot in the world), at k poses (float32
+    positions (k, 3), rotations (k, 3, 3)): one call for all, the same numbers ``cast`` gives
+    each scan alone (the beams are turned by one small matmul a scan, as there)."""
+    dirs = np.matmul(beams.directions32, rotations.transpose(0, 2, 1))
+    origins = dirs * np.float32(spec.range_min)
+    origins += positions[:, None, :]
+    t = scene.cast(origins.reshape(-1, 3), dirs.reshape(-1, 3), np.tile(beams.lengths32, len(positions)))
+    t += np.float32(spec.range_min)
+    return t.reshape((len(positions), *beams.shape))
+
+
+def _rays(job: ScanJob) -> tuple[np.ndarray, np.ndarray]:
+    """A job's ray origins and directions in the world (float32): its beams turned by one matmul."""
+    dirs = job.beams.directions32 @ job.rotation.T.astype(np.float32, copy=False)
+    origins = dirs * np.float32(job.spec.range_min)
+    origins += job.position.astype(np.float32, copy=False)
+    return origins, dirs
+
+
+def _within_reach(boxes: dict[int, tuple[np.ndarray, np.ndarray]], jobs: list[ScanJob]) -> dict:
+    """The robots' boxes that some job's rays can reach (a cheap distance test first: a robot
+    beyond every sensor's range_max needs no ray test)."""
+    out = {}
+    for body, (lo, hi) in boxes.items():
+        for job in jobs:
+            gap = np.maximum(np.maximum(lo - job.position, job.position - hi), 0.0)
+            if float(gap @ gap) <= (job.spec.range_max + REACH_MARGIN) ** 2:
+                out[body] = (lo, hi)
+                break
+    return out
 
 
 def _split(values: np.ndarray, jobs: list[ScanJob]) -> list[np.ndarray]:

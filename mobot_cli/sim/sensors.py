@@ -2,7 +2,9 @@
 
 The World owns one ``Sensing`` once a robot with sensors arrives; the timeline asks it for
 the readings due at a step (each sensor at its own rate), and every lidar due at that step
-is cast in one batch (sim/lidar.py). Noise comes from a generator per sensor, seeded by the
+is cast in one batch (sim/lidar.py). With one robot in the world only the static world can
+be in a scan's way: the scan keeps its pose and waits, and the waiting scans are cast
+together when one of them is first read (``ScanData.ranges``) or 50 wait. Noise comes from a generator per sensor, seeded by the
 run's seed and the robot's and sensor's names: the same seed gives the same readings.
 
 * lidar: ranges (m, float32) on Gazebo's beam grid, +inf for no return, with gaussian noise
@@ -17,6 +19,7 @@ run's seed and the robot's and sensor's names: the same seed gives the same read
 from __future__ import annotations
 
 import hashlib
+import threading
 from dataclasses import dataclass
 from typing import Callable
 
@@ -30,16 +33,41 @@ from mobot_cli.sim.contacts import CONTACT_SLOP, SUPPORT_NORMAL_Z
 from mobot_cli.sim.plan import SensorSpec, WorldPlan
 
 KINDS = ("lidar", "imu", "contact")
+# Scans waiting to be cast (ScanData): at most this many, and this many rays (a VLP-16 scan
+# has 30,000), so readers that never read still see memory stay flat.
+MAX_WAITING_SCANS = 50  # a chunk of the .npy (run/sensor_files.py) reads them all at once
+MAX_WAITING_RAYS = 65536
 
 
-@dataclass(frozen=True)
 class ScanData:
-    """One lidar scan: ranges on the (vertical, horizontal) beam grid and where it was taken."""
+    """One lidar scan: ranges on the (vertical, horizontal) beam grid and where it was taken.
 
-    ranges: np.ndarray  # float32 (V, H); +inf where a beam had no return
-    beams: lidar.Beams
-    position: tuple[float, float, float]  # the sensor's origin in the world
-    quat: tuple[float, float, float, float]  # the sensor frame's orientation in the world
+    A scan that can meet only the static world (no other robot in the world) waits to be cast
+    until its ranges are first read, together with every scan taken since (``_Waiting``): the
+    same rays and noise, but cast and noised a few scans at once instead of between physics
+    steps that leave the CPU caches cold."""
+
+    __slots__ = ("beams", "position", "quat", "_ranges", "_waiting")
+
+    def __init__(self, ranges: np.ndarray | None, beams: lidar.Beams, position: tuple[float, float, float],
+                 quat: tuple[float, float, float, float], waiting: "_Waiting | None" = None):
+        self._ranges, self._waiting = ranges, waiting
+        self.beams = beams
+        self.position = position  # the sensor's origin in the world
+        self.quat = quat  # the sensor frame's orientation in the world
+
+    @property
+    def ranges(self) -> np.ndarray:
+        """float32 (V, H); +inf where a beam had no return."""
+        if self._ranges is None:
+            self._waiting.cast()
+        return self._ranges
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes of the ranges (known before they are cast)."""
+        rows, beams = self.beams.shape
+        return 4 * rows * beams
 
     def world_points(self) -> np.ndarray:
         """Every return as a world-frame point (n, 3)."""
@@ -87,6 +115,42 @@ class _Rig:
     to_link: tuple | None = None  # on the base: PyBullet's base (inertial) frame -> the URDF link frame
 
 
+class _Waiting:
+    """Scans of the static world taken but not cast yet, with the poses they were taken at;
+    cast a sensor's scans in one call when one is read or too many wait, then noised in the
+    order they were taken (so each sensor's noise is drawn as if they came one by one)."""
+
+    def __init__(self, scene):
+        self.scene = scene
+        self.items: list[tuple[_Rig, tuple, tuple, ScanData]] = []  # rig, position, quaternion, scan
+        self.rays = 0
+        self.lock = threading.Lock()  # a live world's scan op may read from another thread
+
+    def add(self, rig: _Rig, position: tuple, quat: tuple, data: ScanData) -> None:
+        with self.lock:
+            self.items.append((rig, position, quat, data))
+            self.rays += len(rig.beams.directions)
+            full = len(self.items) >= MAX_WAITING_SCANS or self.rays >= MAX_WAITING_RAYS
+        if full:
+            self.cast()
+
+    def cast(self) -> None:
+        """Cast every waiting scan, one call per sensor."""
+        with self.lock:
+            items, self.items, self.rays = self.items, [], 0
+            by_rig: dict[int, list] = {}
+            for item in items:
+                by_rig.setdefault(id(item[0]), []).append(item)
+            for scans in by_rig.values():
+                rig = scans[0][0]
+                positions = np.array([item[1] for item in scans], dtype=np.float32)
+                rotations = np.array([p.getMatrixFromQuaternion(item[2]) for item in scans],
+                                     dtype=np.float32).reshape(-1, 3, 3)
+                ranges = _lidar_noise(rig, lidar.cast_scans(self.scene, rig.spec, rig.beams, positions, rotations))
+                for item, values in zip(scans, ranges):
+                    item[3]._ranges = values
+
+
 def noise_rng(seed: int, robot: str, sensor: str) -> np.random.Generator:
     """The noise generator of one sensor: the run's seed and the names, nothing else."""
     digest = hashlib.sha256(f"{robot}/{sensor}".encode()).digest()
@@ -105,6 +169,7 @@ class Sensing:
         self.rigs: dict[str, dict[str, _Rig]] = {}  # robot name -> sensor name -> rig
         self._scene = None
         self._scene_built = False
+        self._waiting: _Waiting | None = None
 
     def add(self, name: str, body: int, links: dict[str, int], sensors: tuple[SensorSpec, ...]) -> None:
         """Mount a robot's sensors; SpawnError for a sensor on a link the robot lacks."""
@@ -142,27 +207,47 @@ class Sensing:
     def read(self, step: int, due: list[tuple[str, str]]) -> list[object]:
         """The readings of ``(robot, sensor)`` pairs due at ``step``, in order."""
         out: list[object] = [None] * len(due)
-        scans: list[tuple[int, _Rig, lidar.ScanJob]] = []
+        scans: list[tuple[int, _Rig]] = []
         for i, (robot, sensor) in enumerate(due):
             rig = self.rigs[robot][sensor]
             position, quat = self._pose(rig)
             if rig.spec.kind == "lidar":
-                rotation = np.array(p.getMatrixFromQuaternion(quat)).reshape(3, 3)
-                job = lidar.ScanJob(rig.spec, rig.beams, np.array(position), rotation, rig.body)
-                scans.append((i, rig, job))
+                scans.append((i, rig))
                 out[i] = (position, quat)
             elif rig.spec.kind == "imu":
                 out[i] = self._imu(step, rig, position, quat)
             else:
                 out[i] = self._contacts(rig)
         if scans:
-            bodies = self.robot_bodies()
-            boxes = {body: _aabb(self.cid, body) for body in bodies} if len(bodies) > 1 else {}
-            ranges = lidar.cast(self.cid, self.scene, [job for _, _, job in scans], boxes)
-            for (i, rig, _), values in zip(scans, ranges):
-                position, quat = out[i]
-                out[i] = ScanData(_lidar_noise(rig, values), rig.beams, position, quat)
+            self._scans(scans, out)
         return out
+
+    def _scans(self, scans: list[tuple[int, _Rig]], out: list[object]) -> None:
+        """The ScanData of the lidars due (``out[i]`` holds each one's pose): waiting to be cast
+        when only the static world can be in their way (one robot in the world), else cast now,
+        robots and all."""
+        bodies = self.robot_bodies()
+        scene = self.scene
+        if len(bodies) <= 1 and scene is not None and scene.complete:
+            if self._waiting is None:
+                self._waiting = _Waiting(scene)
+            for i, rig in scans:
+                position, quat = out[i]
+                out[i] = ScanData(None, rig.beams, position, quat, self._waiting)
+                self._waiting.add(rig, position, quat, out[i])
+            return
+        if self._waiting is not None:
+            self._waiting.cast()  # scans taken before come first: noise is drawn in order
+        jobs = []
+        for i, rig in scans:
+            position, quat = out[i]
+            rotation = np.array(p.getMatrixFromQuaternion(quat), dtype=np.float32).reshape(3, 3)
+            jobs.append(lidar.ScanJob(rig.spec, rig.beams, np.array(position), rotation, rig.body))
+        boxes = {body: _aabb(self.cid, body) for body in bodies} if len(bodies) > 1 else {}
+        ranges = lidar.cast(self.cid, scene, jobs, boxes)
+        for (i, rig), values in zip(scans, ranges):
+            position, quat = out[i]
+            out[i] = ScanData(_lidar_noise(rig, values), rig.beams, position, quat)
 
     def _pose(self, rig: _Rig) -> tuple[tuple[float, ...], tuple[float, ...]]:
         """The sensor frame's world pose: its link's URDF frame composed with the sensor pose."""
@@ -231,14 +316,20 @@ def _aabb(cid: int, body: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _lidar_noise(rig: _Rig, ranges: np.ndarray) -> np.ndarray:
-    """Noise, quantisation and clamping as the sensor's <ray> block asks (float32, +inf kept)."""
+    """Noise, quantisation and clamping as the sensor's <ray> block asks (float32, +inf kept).
+    ``ranges`` is a fresh array of this scan: it is changed in place, a few small ufuncs a scan."""
     spec = rig.spec
     if spec.noise_stddev > 0.0 or spec.noise_mean != 0.0:
         returns = np.isfinite(ranges)
-        noisy = ranges + rig.rng.normal(spec.noise_mean, spec.noise_stddev, ranges.shape).astype(np.float32)
-        ranges = np.where(returns, np.clip(noisy, spec.range_min, spec.range_max), ranges)
+        noisy = rig.rng.normal(spec.noise_mean, spec.noise_stddev, ranges.shape).astype(np.float32)
+        noisy += ranges
+        np.clip(noisy, spec.range_min, spec.range_max, out=noisy)
+        np.copyto(ranges, noisy, where=returns)
     if spec.range_resolution > 0.0:  # +inf stays +inf
-        ranges = np.round(ranges / np.float32(spec.range_resolution)) * np.float32(spec.range_resolution)
+        step = np.float32(spec.range_resolution)
+        ranges /= step
+        np.round(ranges, out=ranges)
+        ranges *= step
     return ranges.astype(np.float32, copy=False)
 
 
