@@ -71,6 +71,7 @@ class World:
         self.plan = world
         self.seed = seed  # handed in like every source of randomness; PyBullet itself draws none
         self._cid = p.connect(p.DIRECT)
+        self._probes = placement.Probes(self._cid)
         self._steps = 0
         self._robots: dict[str, SimRobot] = {}
         self._ramping: list[SimRobot] = []
@@ -185,21 +186,16 @@ class World:
         """Place the robot (z: auto), refuse overlaps, set contact and damping defaults."""
         cid, pose = self._cid, robot.pose
         probe_z = 0.0 if self._ground is not None else placement.PROBE_Z
-        probe = self._ground if self._ground is not None else self._plane(probe_z)
-        try:
-            lowest = placement.lowest_points(cid, uid, probe, probe_z)
-            if pose.z_auto:
-                floors = set(self._statics)  # the ground plane is among them, a probe is not
-                placement.rest_on_floor(cid, uid, probe, floors, pose.xyz, pose.quat, robot.name,
-                                        probe_z)
-        finally:
-            if probe != self._ground:
-                p.removeBody(probe, physicsClientId=cid)
+        lowest = placement.lowest_points(self._probes, uid, self._ground, probe_z)
+        if pose.z_auto:
+            floors = set(self._statics)  # the ground plane is among them
+            placement.rest_on_floor(self._probes, uid, self._ground, floors, pose.xyz, pose.quat, robot.name,
+                                    probe_z)
         xyz = placement.link_frame_xyz(cid, uid)
         others = dict(self._statics)
         others.update({r.body: f"robot '{n}'" for n, r in self._robots.items()})
         placement.check_clear(cid, uid, others, robot.name, xyz, z_auto=pose.z_auto)
-        box = placement.body_bounds(cid, uid)
+        box = placement.body_bounds(self._probes, uid)
         surroundings.check_not_inside(cid, {b: self._statics[b] for b in self._solids},
                                       robot.name, xyz, box)
         if not pose.z_auto:
