@@ -114,7 +114,7 @@ class Recording:
         try:
             out_dir.mkdir(parents=True, exist_ok=True)
             (out_dir / SUMMARY).unlink(missing_ok=True)  # a reused folder must not look finished early
-            write_text_atomic(out_dir / "scenario.yaml", resolved_yaml)
+            write_text_atomic(out_dir / "scenario.yaml", resolved_yaml, durable=False)  # summary.json is
             self.sinks = make_sinks(plan, out_dir, self.checker.sweeps)
         except OSError as exc:
             failure = self._failed(exc)
