@@ -173,7 +173,7 @@ class BagSink(Sink):
         storage = getattr(self.writer, "storage", None)
         try:
             if storage.chunk.bio.tell():
-                storage.close_chunk()
+                self.records.close_chunk()
             storage.bio.flush()
         except AttributeError:
             pass
