@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 
 from mobot_cli.errors import SimulationFault, SpawnError, WorldError, did_you_mean
 from mobot_cli.sim import clearance, placement, static_shapes, surroundings
+from mobot_cli.sim.clients import connect, release
 from mobot_cli.sim.bullet import p
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, ContactCounter
 from mobot_cli.sim.plan import Physics, RobotPlan, WorldPlan
@@ -70,7 +71,7 @@ class World:
         self.physics = physics
         self.plan = world
         self.seed = seed  # handed in like every source of randomness; PyBullet itself draws none
-        self._cid = p.connect(p.DIRECT)
+        self._cid = connect()
         self._probes = placement.Probes(self._cid)
         self._steps = 0
         self._robots: dict[str, SimRobot] = {}
@@ -314,9 +315,9 @@ class World:
             raise KeyError(f"no robot named '{name}'. {hint}".strip()) from None
 
     def close(self) -> None:
-        """Disconnect from PyBullet; the world is unusable afterwards."""
+        """Let go of the PyBullet client (see clients.keep_clients); the world is unusable afterwards."""
         if self._cid >= 0:
-            p.disconnect(physicsClientId=self._cid)
+            release(self._cid)
             self._cid = -1
 
     def __enter__(self) -> World:
