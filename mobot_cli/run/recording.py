@@ -11,6 +11,7 @@ A name used again after its robot was deleted (a live world) is recorded as ``<n
 
 from __future__ import annotations
 
+import functools
 import math
 import platform
 import time
@@ -270,7 +271,9 @@ def _command(index: int) -> int | None:
     return index if index >= 0 else None
 
 
+@functools.lru_cache(maxsize=None)
 def _version(package: str) -> str | None:
+    """An installed package's version, looked up once per process (a sweep worker's runs)."""
     try:
         return metadata.version(package)
     except metadata.PackageNotFoundError:
