@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 
 from mobot_cli.errors import SimulationFault, SpawnError, WorldError, did_you_mean
 from mobot_cli.sim import clearance, placement, static_shapes, surroundings
-from mobot_cli.sim.clients import connect, release
+from mobot_cli.sim.clients import Stage, connect, release
 from mobot_cli.sim.bullet import p
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, ContactCounter
 from mobot_cli.sim.plan import Physics, RobotPlan, WorldPlan
@@ -71,8 +71,10 @@ class World:
         self.physics = physics
         self.plan = world
         self.seed = seed  # handed in like every source of randomness; PyBullet itself draws none
-        self._cid = connect()
-        self._probes = placement.Probes(self._cid)
+        self._cid, stage = connect((physics, world))
+        # The static world stays for the next World only when nothing but this run's robots
+        # came and went: a body removed on the way, or a fault, and the client is reset instead.
+        self._pristine = True
         self._steps = 0
         self._robots: dict[str, SimRobot] = {}
         self._ramping: list[SimRobot] = []
@@ -82,9 +84,15 @@ class World:
         self._contact_every = max(1, round(physics.rate_hz / CONTACT_RATE_HZ))
         self._sensing: Sensing | None = None  # made when the first robot with sensors arrives
         self._clearance: dict[str, float] = {}  # robot -> how far its clearance is measured (m)
+        if stage is not None:
+            self._probes, self._statics, self._solids, self._ground = \
+                stage.probes, stage.statics, stage.solids, stage.ground
+            return
+        self._probes = placement.Probes(self._cid)
         try:
             self._build(world)
         except BaseException:
+            self._pristine = False
             self.close()
             raise
 
@@ -180,6 +188,7 @@ class World:
                 self._sensors().add(robot.name, uid, sim_robot.links, robot.sensors)
         except BaseException:
             p.removeBody(uid, physicsClientId=cid)
+            self._pristine = False
             raise
         self._robots[robot.name] = sim_robot
 
@@ -221,6 +230,7 @@ class World:
         """Delete a robot from the world."""
         robot = self._robot(name)
         p.removeBody(robot.body, physicsClientId=self._cid)
+        self._pristine = False
         del self._robots[name]
         self._contacts.forget(name)
         if self._sensing is not None:
@@ -262,6 +272,7 @@ class World:
         # One comparison chain on the hot path; NaN and inf fail it, then we look closer.
         if FLOOR_OF_THE_WORLD < pos[2] < math.inf and abs(pos[0]) + abs(pos[1]) < math.inf:
             return
+        self._pristine = False  # a faulted world is not kept for the next run
         if not all(math.isfinite(v) for v in pos):
             raise SimulationFault(
                 f"robot '{robot.name}' has a non-finite state at step {self._steps}",
@@ -317,7 +328,9 @@ class World:
     def close(self) -> None:
         """Let go of the PyBullet client (see clients.keep_clients); the world is unusable afterwards."""
         if self._cid >= 0:
-            release(self._cid)
+            stage = Stage((self.physics, self.plan), self._statics, self._solids, self._ground, self._probes) \
+                if self._pristine else None
+            release(self._cid, stage, [robot.body for robot in self._robots.values()])
             self._cid = -1
 
     def __enter__(self) -> World:
