@@ -5,7 +5,9 @@ For 1 and 10 bundled robots it runs the same scenario twice: through mobot's ``e
 (timeline, drive controllers, odometry, CSV sinks) and through a hand-written PyBullet loop
 on the same URDF text, rate, solver iterations and logging rate (velocity motors set when a
 command changes, base state and wheel joints read and a CSV row written at the log rate).
-Then it times whole processes: ``mobot --help`` and a 10-simulated-second ``mobot run``.
+Then it times whole processes: ``mobot --help``, a 10-simulated-second ``mobot run``, and the
+fixed cost of a run: a whole ``mobot run`` of one robot for 60 simulated s minus its loop (the
+same plan's ``simulate`` from its first record to its last, in this warm process; goal <= 0.25 s).
 
     python3 bench/bench_run.py [--seconds 20] [--repeat 3]
 """
@@ -18,6 +20,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
@@ -99,6 +102,16 @@ def mobot_sim_only(prepared, out_dir: Path) -> None:
         pass
 
 
+def loop_seconds(plan) -> float:
+    """The simulation loop alone: ``simulate(plan)`` from its first record (robots spawned) to its last."""
+    records = simulate(plan)
+    next(records)
+    started = time.perf_counter()
+    for _ in records:
+        pass
+    return time.perf_counter() - started
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=20.0, help="simulated seconds per run")
@@ -135,6 +148,17 @@ def main() -> None:
         print(f"mobot --help, whole process:                {process_seconds([mobot, '--help'], 5):.3f} s")
         t = process_seconds([mobot, "run", str(ten), "--out", str(work / "ten"), "--quiet"], args.repeat)
         print(f"mobot run, 10 simulated s, whole process:   {t:.3f} s (warm cache)")
+        sixty = work / "sixty.yaml"
+        sixty.write_text(scenario_text(1, 60.0))
+        plan = prepare(sixty).plan
+        wholes, loops = [], []
+        for i in range(args.repeat):  # interleaved: both see the same load
+            wholes.append(process_seconds([mobot, "run", str(sixty), "--out", str(work / f"sixty{i}"), "--quiet"], 1))
+            loops.append(loop_seconds(plan))
+        whole, loop = statistics.median(wholes), statistics.median(loops)
+        outside = statistics.median(w - lp for w, lp in zip(wholes, loops))
+        print(f"mobot run, one robot, 60 simulated s: whole process {whole:.3f} s, loop {loop:.3f} s, "
+              f"outside the loop {outside:.3f} s (goal <= 0.25 s)")
     finally:
         shutil.rmtree(work, ignore_errors=True)
 

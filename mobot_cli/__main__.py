@@ -23,6 +23,9 @@ def _on_sigint(signum, frame):
 def entry() -> None:
     """Run the `mobot` command; a Ctrl-C anywhere prints ``mobot: interrupted`` and exits 130."""
     signal.signal(signal.SIGINT, _on_sigint)
+    # Pydantic looks for plugins in every installed distribution's entry points when it builds
+    # mobot's first model (~10 ms a run); mobot's models have no use for them.
+    os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
     try:
         from mobot_cli.cli import main
 

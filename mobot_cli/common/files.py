@@ -2,7 +2,9 @@
 
 Each write goes to a uniquely named temporary sibling, is flushed to disk and renamed over
 the target, so parallel writers of the same file (sweep workers filling one cache) never
-mix their bytes, and a file that exists is whole.
+mix their bytes, and a file that exists is whole. A run folder's files other than
+summary.json skip the flush to disk (``durable=False``): the rename alone keeps them whole
+when a process is killed, and each fsync cost a run 1-5 ms.
 """
 
 from __future__ import annotations
@@ -18,8 +20,8 @@ from typing import Any
 from mobot_cli.errors import OutputError, cannot_write
 
 
-def write_bytes_atomic(path: Path, data: bytes) -> None:
-    """Write bytes to a temporary sibling, flush it to disk and rename it into place."""
+def write_bytes_atomic(path: Path, data: bytes, durable: bool = True) -> None:
+    """Write bytes to a temporary sibling, flush it to disk (``durable``) and rename it into place."""
     path = Path(path)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
     # os.open with 0o666 (not mkstemp's 0o600): the file gets the permissions the umask gives.
@@ -27,8 +29,9 @@ def write_bytes_atomic(path: Path, data: bytes) -> None:
     try:
         with os.fdopen(fd, "wb") as out:
             out.write(data)
-            out.flush()
-            os.fsync(out.fileno())
+            if durable:
+                out.flush()
+                os.fsync(out.fileno())
         os.replace(tmp, path)
     except OSError as exc:
         try:
@@ -42,9 +45,9 @@ def write_bytes_atomic(path: Path, data: bytes) -> None:
         raise
 
 
-def write_text_atomic(path: Path, text: str) -> None:
+def write_text_atomic(path: Path, text: str, durable: bool = True) -> None:
     """Write UTF-8 text atomically (newlines as given: files compare byte for byte)."""
-    write_bytes_atomic(path, text.encode("utf-8"))
+    write_bytes_atomic(path, text.encode("utf-8"), durable)
 
 
 def write_json_atomic(path: Path, data: Any) -> None:

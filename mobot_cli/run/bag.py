@@ -29,6 +29,7 @@ import shutil
 from pathlib import Path
 
 from mobot_cli.run.cdr import Packer
+from mobot_cli.run.mcap_records import Records
 from mobot_cli.run.ros_messages import (CLOCK, CLOCK_PACKER, JOINT_STATE, ODOMETRY, STRING, TF, TWIST,
                                         RobotMessages, file_uris, stamp_of, tf_layout, tf_static)
 from mobot_cli.run import sensor_topics
@@ -61,7 +62,9 @@ def _latched_qos():
 class BagSink(Sink):
     """Records samples into ``DIR/bag``; a robot's topics open with its first sample."""
 
-    def __init__(self, plan: Plan, out_dir: Path):
+    def __init__(self, plan: Plan, out_dir: Path, direct: bool = True):
+        """``direct=False`` sends every message through rosbags' Writer.write: the same bytes,
+        slower (the reference the tests compare the direct records with)."""
         from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 
         self.rate = plan.physics.rate_hz
@@ -74,6 +77,7 @@ class BagSink(Sink):
         # need no extra step.
         self.writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
         self.writer.open()
+        self.records = Records(self.writer, direct)
         self.broken = False  # a write failed: the file ends torn, as a killed run's (mobot check --repair)
         self.clock = self.topic("/clock", CLOCK)
         self.tf = self.topic("/tf", TF)
@@ -118,7 +122,7 @@ class BagSink(Sink):
                     self._record_one(item)
                 elif isinstance(item[1], Reading):
                     key, reading = item
-                    self.robots[key].write_reading(self.writer.write, reading, self.rate)
+                    self.robots[key].write_reading(self.records, reading, self.rate)
                 else:
                     key, robot = item
                     self.arriving[key] = robot
@@ -131,30 +135,35 @@ class BagSink(Sink):
 
     def _record_one(self, sample: Sample) -> None:
         ns, stamp = stamp_of(sample.step, self.rate)
-        write = self.writer.write
+        messages: list[tuple[object, bytes]] = []  # every message of the sample, in order
         if sample.step != self.clock_step:  # a robot's own row may share its step with a log row
             self.clock_step = sample.step
-            write(self.clock, ns, CLOCK_PACKER.pack(stamp))
+            messages.append((self.clock, CLOCK_PACKER.pack(stamp)))
         names = tuple(sample.states)
         for name in names:
             if name in self.arriving:
-                self._arrive(name, self.arriving.pop(name), sample.states[name], ns, stamp)
+                # Its connections go into the open chunk after what this sample wrote before it.
+                self.records.write(ns, messages)
+                messages.clear()
+                self._arrive(name, self.arriving.pop(name), sample.states[name], stamp, messages)
         tf_values: list[float] = []
         robots = self.robots
         for name, state in sample.states.items():
-            robots[name].write(write, ns, stamp, state, tf_values)
+            robots[name].write(messages, stamp, state, tf_values)
         packer = self.tf_packers.get(names)
         if packer is None:
             packer = self.tf_packers[names] = tf_layout([robots[name].messages.frames for name in names])
-        write(self.tf, ns, packer.pack(tf_values))
+        messages.append((self.tf, packer.pack(tf_values)))
+        self.records.write(ns, messages)
 
-    def _arrive(self, name: str, plan: RobotPlan, state: RobotState, ns: int, stamp: tuple[int, int]) -> None:
+    def _arrive(self, name: str, plan: RobotPlan, state: RobotState, stamp: tuple[int, int],
+                messages: list[tuple[object, bytes]]) -> None:
         """A robot's first sample: its topics (reused for a name seen before), static frames and
         description."""
         same_ns = [r for r in self.robots.values() if r.plan.namespace == plan.namespace]
         robot = self.robots[name] = _RobotTopics(self, plan, state, reuse=same_ns[0] if same_ns else None)
-        self.writer.write(robot.description, ns, robot.messages.description())
-        self.writer.write(self.tf_static, ns, tf_static(stamp, robot.messages.statics(state)))
+        messages.append((robot.description, robot.messages.description()))
+        messages.append((self.tf_static, tf_static(stamp, robot.messages.statics(state))))
 
     def _flush(self) -> None:
         """Close the open MCAP chunk and push it to the OS, so a killed run keeps it."""
@@ -163,7 +172,7 @@ class BagSink(Sink):
         storage = getattr(self.writer, "storage", None)
         try:
             if storage.chunk.bio.tell():
-                storage.close_chunk()
+                self.records.close_chunk()
             storage.bio.flush()
         except AttributeError:
             pass
@@ -211,17 +220,18 @@ class _RobotTopics:
             self.description = sink.topic(f"{ns}/robot_description", STRING, latched=True)
         self.sensor_connections = {spec.name: _sensor_topic(sink, plan, spec) for spec in plan.sensors}
 
-    def write_reading(self, write, reading: Reading, rate: int) -> None:
+    def write_reading(self, records: Records, reading: Reading, rate: int) -> None:
         """One sensor reading as its ROS message."""
         ns, stamp = stamp_of(reading.step, rate)
-        write(self.sensor_connections[reading.sensor.name], ns, self.messages.reading(stamp, reading))
+        records.write(ns, [(self.sensor_connections[reading.sensor.name], self.messages.reading(stamp, reading))])
 
-    def write(self, write, ns: int, stamp: tuple[int, int], state: RobotState, tf_values: list[float]) -> None:
-        """This robot's messages of one sample; its /tf transforms go to ``tf_values``."""
+    def write(self, out: list[tuple[object, bytes]], stamp: tuple[int, int], state: RobotState,
+              tf_values: list[float]) -> None:
+        """This robot's messages of one sample, to ``out``; its /tf transforms go to ``tf_values``."""
         messages = self.messages
-        write(self.odom, ns, messages.odom(stamp, state))
-        write(self.cmd_vel, ns, messages.cmd_vel(state))
-        write(self.joint_states, ns, messages.joint_states(stamp, state))
+        out.append((self.odom, messages.odom(stamp, state)))
+        out.append((self.cmd_vel, messages.cmd_vel(state)))
+        out.append((self.joint_states, messages.joint_states(stamp, state)))
         messages.tf_values(stamp, state, tf_values)
 
 

@@ -11,6 +11,7 @@ A name used again after its robot was deleted (a live world) is recorded as ``<n
 
 from __future__ import annotations
 
+import functools
 import math
 import platform
 import time
@@ -114,7 +115,7 @@ class Recording:
         try:
             out_dir.mkdir(parents=True, exist_ok=True)
             (out_dir / SUMMARY).unlink(missing_ok=True)  # a reused folder must not look finished early
-            write_text_atomic(out_dir / "scenario.yaml", resolved_yaml)
+            write_text_atomic(out_dir / "scenario.yaml", resolved_yaml, durable=False)  # summary.json is
             self.sinks = make_sinks(plan, out_dir, self.checker.sweeps)
         except OSError as exc:
             failure = self._failed(exc)
@@ -270,7 +271,9 @@ def _command(index: int) -> int | None:
     return index if index >= 0 else None
 
 
+@functools.lru_cache(maxsize=None)
 def _version(package: str) -> str | None:
+    """An installed package's version, looked up once per process (a sweep worker's runs)."""
     try:
         return metadata.version(package)
     except metadata.PackageNotFoundError:

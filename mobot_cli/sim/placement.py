@@ -30,12 +30,38 @@ BOUNDS_REACH = 100.0  # m
 LOOSE_AABB = 0.005  # m
 
 
-def lowest_points(cid: int, body: int, probe: int, probe_z: float = 0.0) -> dict[int, float]:
-    """World z of each link's lowest collision point, measured against ``probe``, a horizontal
-    plane at ``probe_z``."""
+class Probes:
+    """Plane collision shapes, without bodies, that measure a robot: made once per world.
+
+    PyBullet takes ~7 ms to create a body (it serialises each one), a spawn measured with
+    six temporary half-space bodies, twice; getClosestPoints between a body and a shape placed
+    in the query costs microseconds and gives the same points to the last bit.
+    """
+
+    def __init__(self, cid: int):
+        self.cid = cid
+        self._shapes: dict[tuple[float, float, float], int] = {}
+
+    def closest(self, body: int, normal: tuple[float, float, float], at, distance: float) -> list:
+        """getClosestPoints between ``body`` and a plane through ``at`` facing ``normal``."""
+        shape = self._shapes.get(normal)
+        if shape is None:
+            shape = self._shapes[normal] = p.createCollisionShape(p.GEOM_PLANE, planeNormal=list(normal),
+                                                                  physicsClientId=self.cid)
+        return p.getClosestPoints(body, -1, distance, collisionShapeB=shape, collisionShapePositionB=list(at),
+                                  physicsClientId=self.cid)
+
+
+def lowest_points(probes: Probes, body: int, ground: int | None, probe_z: float = 0.0) -> dict[int, float]:
+    """World z of each link's lowest collision point, measured against the ``ground`` body, or
+    without one against a horizontal plane at ``probe_z``."""
     lowest: dict[int, float] = {}
     reach = 2.0 * PARKING_HEIGHT + abs(probe_z)
-    for pt in p.getClosestPoints(body, probe, reach, physicsClientId=cid):
+    if ground is not None:
+        points = p.getClosestPoints(body, ground, reach, physicsClientId=probes.cid)
+    else:
+        points = probes.closest(body, (0.0, 0.0, 1.0), (0.0, 0.0, probe_z), reach)
+    for pt in points:
         link, height = pt[3], pt[8] + probe_z
         if height < lowest.get(link, float("inf")):
             lowest[link] = height
@@ -45,7 +71,7 @@ def lowest_points(cid: int, body: int, probe: int, probe_z: float = 0.0) -> dict
 Bounds = tuple[tuple[float, float, float], tuple[float, float, float]]
 
 
-def body_bounds(cid: int, body: int) -> Bounds:
+def body_bounds(probes: Probes, body: int) -> Bounds:
     """Exact world bounds (lo, hi) of a body's collision shapes.
 
     PyBullet's AABBs are loose for a link whose inertial frame is rotated (an <inertial>
@@ -53,7 +79,7 @@ def body_bounds(cid: int, body: int) -> Bounds:
     that frame and their box is turned with it. Half-spaces on each side, with PyBullet's
     closest points, give the true extremes whatever the frames.
     """
-    pos = p.getBasePositionAndOrientation(body, physicsClientId=cid)[0]
+    pos = p.getBasePositionAndOrientation(body, physicsClientId=probes.cid)[0]
     lo, hi = list(pos), list(pos)
     for axis in range(3):
         for side, out in ((-1.0, lo), (1.0, hi)):
@@ -61,12 +87,7 @@ def body_bounds(cid: int, body: int) -> Bounds:
             normal[axis] = -side  # the half-space's surface faces the robot
             at = list(pos)
             at[axis] += side * BOUNDS_REACH
-            shape = p.createCollisionShape(p.GEOM_PLANE, planeNormal=normal, physicsClientId=cid)
-            plane = p.createMultiBody(0.0, shape, basePosition=at, physicsClientId=cid)
-            try:
-                points = p.getClosestPoints(body, plane, 2.0 * BOUNDS_REACH, physicsClientId=cid)
-            finally:
-                p.removeBody(plane, physicsClientId=cid)
+            points = probes.closest(body, (normal[0], normal[1], normal[2]), at, 2.0 * BOUNDS_REACH)
             if points:
                 out[axis] = at[axis] - side * min(pt[8] for pt in points)
     return (lo[0], lo[1], lo[2]), (hi[0], hi[1], hi[2])
@@ -90,18 +111,19 @@ def floor_height(cid: int, box: Bounds, floors: set[int], top: float, name: str)
     return max(hits)
 
 
-def rest_on_floor(cid: int, body: int, probe: int, floors: set[int], xyz, quat,
+def rest_on_floor(probes: Probes, body: int, ground: int | None, floors: set[int], xyz, quat,
                   name: str, probe_z: float = 0.0) -> tuple[float, float, float]:
     """Move the robot so its lowest collision point touches the floor below (x, y); return xyz.
 
     The robot is parked high above with its URDF link frame (not its inertial frame, which may
     be rotated) at the asked orientation, and measured there.
     """
+    cid = probes.cid
     _place(cid, body, (xyz[0], xyz[1], PARKING_HEIGHT), quat)
     base_z = link_frame_z(cid, body)
     # Its world z, parked; a robot without collision geometry rests its base frame on the floor.
-    lowest = min(lowest_points(cid, body, probe, probe_z).values(), default=base_z)
-    box = _probe_box(cid, body)
+    lowest = min(lowest_points(probes, body, ground, probe_z).values(), default=base_z)
+    box = _probe_box(probes, body)
     floor = floor_height(cid, box, floors, box[1][2] - lowest + FLOOR_PROBE_CLEARANCE, name)
     z = floor + (base_z - lowest)
     _place(cid, body, (xyz[0], xyz[1], z), quat)
@@ -146,7 +168,7 @@ def check_clear(cid: int, body: int, others: dict[int, str], name: str, xyz, z_a
 
 
 
-def _probe_box(cid: int, body: int) -> Bounds:
+def _probe_box(probes: Probes, body: int) -> Bounds:
     """The box floor rays start from: PyBullet's link AABBs where they are tight, else exact.
 
     Rays started from the AABBs before exact bounds existed; where those are tight (within
@@ -154,7 +176,8 @@ def _probe_box(cid: int, body: int) -> Bounds:
     started a few nanometres higher hits a mesh floor a few attometres apart, and contacts
     amplify that). Where they are loose (a rotated inertial frame) the exact bounds are used.
     """
-    exact = body_bounds(cid, body)
+    cid = probes.cid
+    exact = body_bounds(probes, body)
     lo, hi = p.getAABB(body, -1, physicsClientId=cid)
     for link in range(p.getNumJoints(body, physicsClientId=cid)):
         a, b = p.getAABB(body, link, physicsClientId=cid)

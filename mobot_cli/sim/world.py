@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 
 from mobot_cli.errors import SimulationFault, SpawnError, WorldError, did_you_mean
 from mobot_cli.sim import clearance, entity, placement, static_shapes, surroundings
+from mobot_cli.sim.clients import Stage, connect, release
 from mobot_cli.sim.bullet import p
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, ContactCounter
 from mobot_cli.sim.plan import Physics, RobotPlan, SpawnPose, WorldPlan
@@ -70,7 +71,10 @@ class World:
         self.physics = physics
         self.plan = world
         self.seed = seed  # handed in like every source of randomness; PyBullet itself draws none
-        self._cid = p.connect(p.DIRECT)
+        self._cid, stage = connect((physics, world))
+        # The static world stays for the next World only when nothing but this run's robots
+        # came and went: a body removed on the way, or a fault, and the client is reset instead.
+        self._pristine = True
         self._steps = 0
         self._robots: dict[str, SimRobot] = {}
         self._ramping: list[SimRobot] = []
@@ -80,9 +84,15 @@ class World:
         self._contact_every = max(1, round(physics.rate_hz / CONTACT_RATE_HZ))
         self._sensing: Sensing | None = None  # made when the first robot with sensors arrives
         self._clearance: dict[str, float] = {}  # robot -> how far its clearance is measured (m)
+        if stage is not None:
+            self._probes, self._statics, self._solids, self._ground = \
+                stage.probes, stage.statics, stage.solids, stage.ground
+            return
+        self._probes = placement.Probes(self._cid)
         try:
             self._build(world)
         except BaseException:
+            self._pristine = False
             self.close()
             raise
 
@@ -92,6 +102,8 @@ class World:
         for name in list(self._robots):
             self.remove(name)
         p.resetSimulation(physicsClientId=self._cid)
+        self._probes = placement.Probes(self._cid)  # the reset removed its shapes too
+        self._pristine = False  # not a client to keep its static world for another run
         self._steps = 0
         self._ramping = []
         self._contacts = ContactCounter()
@@ -191,6 +203,7 @@ class World:
                 self._sensors().add(robot.name, uid, sim_robot.links, robot.sensors)
         except BaseException:
             p.removeBody(uid, physicsClientId=cid)
+            self._pristine = False
             raise
         self._robots[robot.name] = sim_robot
 
@@ -198,16 +211,11 @@ class World:
         """Place the robot (z: auto), refuse overlaps, set contact and damping defaults."""
         cid, pose = self._cid, robot.pose
         probe_z = 0.0 if self._ground is not None else placement.PROBE_Z
-        probe = self._ground if self._ground is not None else self._plane(probe_z)
-        try:
-            lowest = placement.lowest_points(cid, uid, probe, probe_z)
-            if pose.z_auto:
-                floors = set(self._statics)  # the ground plane is among them, a probe is not
-                placement.rest_on_floor(cid, uid, probe, floors, pose.xyz, pose.quat, robot.name,
-                                        probe_z)
-        finally:
-            if probe != self._ground:
-                p.removeBody(probe, physicsClientId=cid)
+        lowest = placement.lowest_points(self._probes, uid, self._ground, probe_z)
+        if pose.z_auto:
+            floors = set(self._statics)  # the ground plane is among them
+            placement.rest_on_floor(self._probes, uid, self._ground, floors, pose.xyz, pose.quat, robot.name,
+                                    probe_z)
         self._check_placed(uid, robot.name, pose.z_auto)
         bottom = min(lowest.values(), default=0.0)
         wheels = _wheel_links(cid, uid, robot)
@@ -232,21 +240,16 @@ class World:
         others = dict(self._statics)
         others.update({r.body: f"robot '{n}'" for n, r in self._robots.items() if r.body != uid})
         placement.check_clear(cid, uid, others, name, xyz, z_auto=z_auto)
-        box = placement.body_bounds(cid, uid)
+        box = placement.body_bounds(self._probes, uid)
         surroundings.check_not_inside(cid, {b: self._statics[b] for b in self._solids}, name, xyz, box)
         if not z_auto:
             surroundings.check_above_floor(cid, self._statics, name, xyz, box)
 
     def _rest(self, uid: int, pose: SpawnPose, name: str) -> None:
         """Rest a body at (x, y) on the floor below (z: auto), as a spawn does."""
-        cid = self._cid
         probe_z = 0.0 if self._ground is not None else placement.PROBE_Z
-        probe = self._ground if self._ground is not None else self._plane(probe_z)
-        try:
-            placement.rest_on_floor(cid, uid, probe, set(self._statics), pose.xyz, pose.quat, name, probe_z)
-        finally:
-            if probe != self._ground:
-                p.removeBody(probe, physicsClientId=cid)
+        placement.rest_on_floor(self._probes, uid, self._ground, set(self._statics), pose.xyz, pose.quat, name,
+                                probe_z)
 
     def kinematics(self, name: str) -> entity.Kinematics:
         """The root link's world pose and velocity (of its origin) now."""
@@ -272,6 +275,7 @@ class World:
         """Delete a robot from the world."""
         robot = self._robot(name)
         p.removeBody(robot.body, physicsClientId=self._cid)
+        self._pristine = False
         del self._robots[name]
         self._contacts.forget(name)
         if self._sensing is not None:
@@ -313,6 +317,7 @@ class World:
         # One comparison chain on the hot path; NaN and inf fail it, then we look closer.
         if FLOOR_OF_THE_WORLD < pos[2] < math.inf and abs(pos[0]) + abs(pos[1]) < math.inf:
             return
+        self._pristine = False  # a faulted world is not kept for the next run
         if not all(math.isfinite(v) for v in pos):
             raise SimulationFault(
                 f"robot '{robot.name}' has a non-finite state at step {self._steps}",
@@ -366,9 +371,11 @@ class World:
             raise KeyError(f"no robot named '{name}'. {hint}".strip()) from None
 
     def close(self) -> None:
-        """Disconnect from PyBullet; the world is unusable afterwards."""
+        """Let go of the PyBullet client (see clients.keep_clients); the world is unusable afterwards."""
         if self._cid >= 0:
-            p.disconnect(physicsClientId=self._cid)
+            stage = Stage((self.physics, self.plan), self._statics, self._solids, self._ground, self._probes) \
+                if self._pristine else None
+            release(self._cid, stage, [robot.body for robot in self._robots.values()])
             self._cid = -1
 
     def __enter__(self) -> World:

@@ -6,7 +6,7 @@ bad run. Here each worker is a process with a pipe: the parent waits on the pipe
 processes themselves, and a worker that dies or overruns its timeout is killed, its run is
 marked failed, and a fresh worker takes its place. A worker dies with its sweep, even with one
 killed by SIGKILL (guard.die_with_sweep). Workers stay alive for the whole sweep,
-so imports and in-process caches are paid once per worker, not once per run. They come from
+so imports, in-process caches and the PyBullet client are paid once per worker, not once per run. They come from
 multiprocessing's fork server with mobot and PyBullet imported once (never forked from the
 parent, which may run threads such as the progress bar), so a replacement is ready in
 milliseconds instead of the 0.5 s a spawned one needs; spawn where there is no fork server.
@@ -39,6 +39,9 @@ def _worker_main(conn: Connection, runner: Runner, sweep_pid: int) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     die_with_sweep(sweep_pid)  # a sweep killed with SIGKILL cannot stop its workers itself
     import mobot_cli.run.execute  # noqa: F401  (warm up before the first task)
+    from mobot_cli.sim.clients import keep_clients
+
+    keep_clients(1)  # one run after another: each takes the PyBullet client the last one reset
 
     conn.send(READY)
     while True:

@@ -22,8 +22,9 @@ ROBOT_FIELDS = ("distance", "x", "y", "yaw", "collisions")
 
 def columns(keys: Iterable[str], robots: Iterable[str]) -> list[str]:
     """run, status, failure, seed, the swept keys, expectations, wall time, per robot figures,
-    folder and reason (free text last)."""
-    head = ["run", "status", "failure", "seed", *keys, "expect_passed", "expect_failed", "wall_time"]
+    folder and reason (free text last). A swept seed is the seed column, not a second one."""
+    head = ["run", "status", "failure", "seed", *(k for k in keys if k != "seed"), "expect_passed",
+            "expect_failed", "wall_time"]
     per_robot = [f"{name}.{f}" for name in robots for f in ROBOT_FIELDS]
     return head + per_robot + ["folder", "reason"]
 
@@ -34,7 +35,7 @@ def row(variant: Variant, outcome: Outcome, folder: str) -> dict[str, str]:
            "seed": str(variant.seed), "expect_passed": str(outcome.expect_passed),
            "expect_failed": str(outcome.expect_failed), "wall_time": f"{outcome.wall_time:.3f}",
            "folder": folder, "reason": outcome.reason}
-    out.update(dict(variant.params))
+    out.update((key, value) for key, value in variant.params if key != "seed")  # the run's seed is there
     for name, figures in outcome.robots.items():
         for f in ROBOT_FIELDS:
             value = figures[f]

@@ -213,6 +213,20 @@ def test_random_draws_are_seeded_and_in_bounds(scenario):
     assert first.prepared[2].plan.robots[0].pose.xyz[0] == float(values[2]["robots.mobot.pose.x"])
 
 
+def test_sweeping_the_seed_writes_one_seed_column(scenario, tmp_path):
+    out = tmp_path / "seeds"
+    # 0x10 is YAML for 16: the column holds the seed the run used, not the text swept.
+    assert invoke(["sweep", scenario, "--grid", "seed=3,0x10", "--grid", "robots.mobot.commands.0.for=1.0",
+                   "--jobs", "1", "--out", out, "--quiet"]) == Outcome(0, "", "")
+    header = (out / "results.csv").read_text().splitlines()[0].split(",")
+    assert header.count("seed") == 1
+    assert header[:5] == ["run", "status", "failure", "seed", "robots.mobot.commands.0.for"]
+    table = rows(out)
+    assert [(r["seed"], r["robots.mobot.commands.0.for"]) for r in table] == [("3", "1.0"), ("16", "1.0")]
+    for r in table:
+        assert json.loads((out / r["folder"] / "summary.json").read_text())["seed"] == int(r["seed"])
+
+
 def test_seeds_and_value_splitting_are_stable():
     assert derive_seed(0, 0) == 1578226896  # changing this changes every recorded sweep's seeds
     assert derive_seed(0, 1) != derive_seed(1, 0)
