@@ -1,0 +1,251 @@
+"""The kinematic engine: robots follow their commanded twist; nothing is simulated by PyBullet.
+
+``physics: {engine: kinematic}``. The World's interface, records and checks are the physics
+engine's (sim/world.py): robots are loaded, placed and checked the same way, sensors read the
+same PyBullet bodies. What differs is ``step``: each robot's wheel rates ramp toward its
+command (sim/kinematic_body.py) and the body moves along the exact arc they give, unless
+its collision shapes would then overlap a static body or another robot more than
+``PENETRATION``; then it makes the largest part of the step that does not (found by
+bisection), or stays put. It rests on the highest floor under its footprint (it climbs what
+its contacts count as support, sim/kinematic_collide.py) and keeps its spawn roll and pitch.
+Touching counts as a collision exactly as in the physics engine (sim/contacts.py).
+
+Cost: a robot in open space costs a few microseconds a step: the clearance measured at its
+last query lets it move that far before PyBullet is asked again, and its PyBullet body is
+moved only when something looks at it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mobot_cli.errors import SimulationFault, SpawnError
+from mobot_cli.sim import clearance as clearance_mod
+from mobot_cli.sim.contacts import CONTACT_RATE_HZ, CONTACT_SLOP, RELEASE_SAMPLES, ContactCounter
+from mobot_cli.sim.kinematic_body import Mover
+from mobot_cli.sim.kinematic_collide import CLIMB, NEAR_MARGIN, QUERY_REACH, Floor, Near, distances
+from mobot_cli.sim.placement import body_bounds
+from mobot_cli.sim.plan import Physics, RobotPlan, WorldPlan
+from mobot_cli.sim.state import RobotState
+from mobot_cli.sim.world import World
+
+# How far a robot may end up inside another body (m): the bisection stops within this.
+PENETRATION = 0.001
+BISECTIONS = 10  # a 0.1 m step is resolved to 0.1 mm
+
+
+class KinematicWorld(World):
+    """A World whose robots move kinematically (see the module's docstring)."""
+
+    def __init__(self, physics: Physics, world: WorldPlan, seed: int = 0):
+        super().__init__(physics, world, seed)
+        self._movers: dict[str, Mover] = {}
+        self._near: dict[str, Near] = {}
+        self._floor = Floor(self._cid, world)
+        self._flat = self._floor.flat and world.ground_plane  # the floor is z = 0 everywhere
+        self._obstacles = [uid for uid in self._statics if uid != self._ground]
+        self._contact_every = max(1, round(physics.rate_hz / CONTACT_RATE_HZ))
+        sample_hz = physics.rate_hz / self._contact_every
+        # A pair must be apart 0.1 s before touching again counts again, at any rate.
+        self._contacts = ContactCounter(max(1, round(RELEASE_SAMPLES * sample_hz / CONTACT_RATE_HZ)))
+
+    def spawn(self, robot: RobotPlan) -> None:
+        """Load and check the robot as the physics engine does, then stand it on the floor."""
+        self._sync_all()  # a spawn is checked against the other robots where they are
+        super().spawn(robot)
+        sim = self._robots[robot.name]
+        try:
+            (lo, hi) = body_bounds(self._cid, sim.body)
+            x, y, z = sim.link_pose()[0]
+            reach = max(abs(v) for v in (lo[0] - x, hi[0] - x, lo[1] - y, hi[1] - y)) * 2 ** 0.5
+            footprint = robot.footprint or _box_footprint(lo, hi, x, y, sim.spawn_xy_yaw[2])
+            mover = Mover(sim, self.physics.dt, lo[2], reach, footprint)
+            floor = self._floor_under([mover], mover.floor + CLIMB)[0]
+            if not np.isfinite(floor):
+                raise SpawnError(f"robot '{robot.name}' has no floor under it",
+                                 hint="Spawn it above the ground or a floor of the world.")
+            mover.floor, mover.z = floor, floor + mover.height
+            mover.sync()
+        except BaseException:
+            super().remove(robot.name)
+            raise
+        self._movers[robot.name] = mover
+        self._near[robot.name] = Near(self._cid, self._obstacles)
+
+    def remove(self, name: str) -> None:
+        """Delete a robot from the world."""
+        super().remove(name)
+        self._movers.pop(name, None)
+        self._near.pop(name, None)
+
+    def set_command(self, name: str, linear: float, angular: float) -> None:
+        """Command a body twist (m/s, rad/s); ValueError for a robot without a drive."""
+        robot = self._robot(name)
+        if robot.drive is None:
+            raise ValueError(f"robot '{robot.name}' has no drive: it cannot take velocity commands")
+        robot.cmd = (float(linear), float(angular))
+        self._movers[name].command(float(linear), float(angular))
+
+    def step(self) -> None:
+        """Move every robot one step along its twist, as far as nothing is in the way."""
+        # Runs every step for every robot: a robot in open space costs one motion() and one move().
+        self._steps += 1
+        moves = [(mover, motion) for mover in self._movers.values()
+                 if (motion := mover.motion()) is not None or mover.touches]
+        if moves:
+            near = self._robot_pairs(moves) if len(self._movers) > 1 else {}
+            move = self._move
+            moved = [mover for mover, motion in moves if move(mover, motion, near.get(mover, ()))]
+            if moved and not self._flat:
+                self._lift(moved)
+        if self._steps % self._contact_every == 0:
+            self._count()
+
+    def _robot_pairs(self, moves) -> dict[Mover, list[Mover]]:
+        """The robots each moving robot might touch this step: circles around their reach, grown
+        by the largest step any robot takes, that overlap (one numpy pass over all robots)."""
+        everyone = list(self._movers.values())
+        xy = np.array([(m.x, m.y) for m in everyone])
+        reach = np.array([m.reach for m in everyone])
+        step = max((abs(mo[0]) + abs(mo[1]) * m.reach for m, mo in moves if mo is not None), default=0.0)
+        index = {m: i for i, m in enumerate(everyone)}
+        out: dict[Mover, list[Mover]] = {}
+        for mover, _ in moves:
+            i = index[mover]
+            gap = np.hypot(xy[:, 0] - xy[i, 0], xy[:, 1] - xy[i, 1]) - reach - reach[i]
+            close = np.flatnonzero(gap < 2.0 * step + CONTACT_SLOP)
+            if len(close) > 1:
+                out[mover] = [everyone[j] for j in close if j != i]
+        return out
+
+    def _move(self, mover: Mover, motion, others: list[Mover]) -> bool:
+        """One robot's step; True when it moved."""
+        distance, turn = motion if motion is not None else (0.0, 0.0)
+        bound = abs(distance) + abs(turn) * mover.reach
+        if not others and not mover.touches and mover.used + bound < mover.clear - CONTACT_SLOP:
+            mover.used += bound
+            mover.move(distance, turn, 1.0)
+            return True
+        for other in others:
+            other.sync()
+        bodies = [other.robot.body for other in others]
+        fraction, (static, _, touching) = self._fit(mover, distance, turn, bodies)
+        if not bodies and not self._near[mover.robot.name].bodies:
+            # Nothing static within the box Near looked in: none within NEAR_MARGIN / 2 either.
+            static = QUERY_REACH + NEAR_MARGIN / 2.0
+        mover.clear, mover.used, mover.touches = static, 0.0, touching
+        if motion is None:
+            return False
+        mover.move(distance, turn, fraction)
+        mover.synced = True  # _fit left the body at the pose it moved to
+        return fraction > 0.0
+
+    def _fit(self, mover: Mover, distance: float, turn: float, robots: list[int]):
+        """The largest part of the step (1.0 when all of it) that does not push the robot into
+        anything deeper than PENETRATION (or than it already is), and the distances there."""
+        statics = self._near[mover.robot.name].around(mover.x, mover.y, mover.z, mover.reach, mover.height)
+        body, z = mover.robot.body, mover.z
+
+        def at(fraction: float):
+            x, y, yaw = mover.target(distance, turn, fraction)
+            mover.place(x, y, z, yaw)
+            return distances(self._cid, body, statics, robots, QUERY_REACH)
+
+        full = at(1.0)
+        if min(full[0], full[1]) >= -PENETRATION or (distance == 0.0 and turn == 0.0):
+            return 1.0, full
+        here = at(0.0)
+        floor = min(-PENETRATION, here[0], here[1])  # already deeper: it may not go deeper still
+        if min(full[0], full[1]) >= floor:
+            at(1.0)
+            return 1.0, full
+        lo, hi, best = 0.0, 1.0, here
+        for _ in range(BISECTIONS):
+            mid = (lo + hi) / 2.0
+            found = at(mid)
+            if min(found[0], found[1]) >= floor:
+                lo, best = mid, found
+            else:
+                hi = mid
+        x, y, yaw = mover.target(distance, turn, lo)
+        mover.place(x, y, z, yaw)
+        return lo, best
+
+    def _lift(self, moved: list[Mover]) -> None:
+        """Stand the robots that moved on the floor now under them (one ray batch for all)."""
+        tops = [m.floor + max(CLIMB, abs(m.v) * self.physics.dt) for m in moved]
+        floors = self._floor_under(moved, np.array(tops))
+        for mover, floor in zip(moved, floors):
+            if not np.isfinite(floor):
+                raise SimulationFault(
+                    f"robot '{mover.robot.name}' drove off the floor (nothing under it) at step {self._steps}",
+                    hint="Keep it on the world's floor, or give the world a ground plane.")
+            if floor != mover.floor:
+                mover.used += abs(floor - mover.floor)
+                mover.floor, mover.z = floor, floor + mover.height
+                mover.synced = False
+
+    def _floor_under(self, movers: list[Mover], tops) -> np.ndarray:
+        """The highest floor under each robot's footprint, below ``tops``."""
+        if self._flat:
+            return np.zeros(len(movers))
+        points, top = [], []
+        for mover, t in zip(movers, np.broadcast_to(tops, (len(movers),))):
+            c, s = np.cos(mover.yaw), np.sin(mover.yaw)
+            points.extend((mover.x + c * fx - s * fy, mover.y + s * fx + c * fy) for fx, fy in mover.feet)
+            top.extend([t] * len(mover.feet))
+        heights = self._floor.heights(np.array(points), np.array(top))
+        return heights.reshape(len(movers), -1).max(axis=1)
+
+    def _count(self) -> None:
+        """One contact sample from the touches the robots' last queries found."""
+        if not any(m.touches for m in self._movers.values()):
+            self._contacts.record(())
+            return
+        by_body = {m.robot.body: m.robot for m in self._movers.values()}
+        pairs = set()
+        for mover in self._movers.values():
+            robot = mover.robot
+            for other in mover.touches:
+                hit = by_body.get(other)
+                if hit is None:
+                    pairs.add((robot, ("body", other)))
+                elif hit is not robot:
+                    pairs.add((robot, ("robot", hit.name)))
+                    pairs.add((hit, ("robot", robot.name)))
+        self._contacts.record(pairs)
+
+    def _sync_all(self, full: bool = False) -> None:
+        for mover in self._movers.values():
+            mover.sync(full)
+
+    def sense(self, due: list[tuple[str, str]]) -> list[object]:
+        """Readings due now: the robots' bodies are put where they are first."""
+        self._sync_all(full=True)
+        rigs = self._sensors().rigs
+        if any(rigs[robot][sensor].spec.kind == "contact" for robot, sensor in due):
+            from mobot_cli.sim.bullet import p
+
+            p.performCollisionDetection(physicsClientId=self._cid)  # contact sensors read its points
+        return super().sense(due)
+
+    def read(self, name: str) -> RobotState:
+        """The robot's command, odometry and ground truth now (and its clearance when watched)."""
+        state = self._movers[name].state() if name in self._movers else self._robot(name).state()
+        if self._clearance and name in self._clearance:
+            self._sync_all()
+            state.clearance, state.nearest = clearance_mod.nearest(
+                self._cid, self._robot(name).body, self._clearance[name],
+                [r.body for r in self._robots.values()], self.label)
+        return state
+
+
+def _box_footprint(lo, hi, x: float, y: float, yaw: float) -> tuple[float, float, float, float]:
+    """A footprint (root frame) that covers the robot's world bounds at spawn."""
+    r = max(abs(lo[0] - x), abs(hi[0] - x), abs(lo[1] - y), abs(hi[1] - y))
+    if abs(np.sin(2.0 * yaw)) < 1e-9:  # axis-aligned: the box itself, turned into the root frame
+        c, s = round(np.cos(yaw)), round(np.sin(yaw))
+        xs = [c * (lo[0] - x) + s * (lo[1] - y), c * (hi[0] - x) + s * (hi[1] - y)]
+        ys = [-s * (lo[0] - x) + c * (lo[1] - y), -s * (hi[0] - x) + c * (hi[1] - y)]
+        return min(xs), max(xs), min(ys), max(ys)
+    return -r, r, -r, r

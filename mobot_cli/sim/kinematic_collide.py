@@ -1,0 +1,117 @@
+"""What the kinematic engine asks PyBullet: how far a robot is from things, and where the floor is.
+
+A robot's collision shapes are tested where it would move with ``getClosestPoints`` against
+the static bodies near it and the robots whose circles come close; nothing is stepped. A
+contact is support, not an obstacle, by the rule sim/contacts.py counts collisions with: its
+normal points steeply up into the robot from a static body (a floor, a ramp, the edge of a
+step low enough for a wheel to roll onto).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from mobot_cli.sim.bullet import p
+from mobot_cli.sim.contacts import CONTACT_SLOP, SUPPORT_NORMAL_Z
+from mobot_cli.sim.plan import WorldPlan
+
+# Static bodies are looked up in a box this much wider than the robot's reach around it and
+# looked up again once the robot has gone half of it.
+NEAR_MARGIN = 0.5  # m
+# Closest points are asked for this far out: the measured clearance lets the robot move
+# this far without asking again (conservative advancement).
+QUERY_REACH = 0.25  # m
+# Floor rays start this far above the current floor (or as far as the robot moves in a step,
+# if more: a 45 degree ramp) and look down this far.
+CLIMB = 0.05  # m
+FLOOR_DEPTH = 100.0  # m
+STATIC_GROUP = 2  # PyBullet's collision filter group of static bodies (robots are 1, see sim/lidar.py)
+
+
+class Near:
+    """The static bodies near a robot, cached until it has moved NEAR_MARGIN / 2."""
+
+    def __init__(self, cid: int, statics: list[int]):
+        self.cid, self.statics = cid, set(statics)
+        self.centre: tuple[float, float] | None = None
+        self.bodies: list[int] = []
+
+    def around(self, x: float, y: float, z: float, reach: float, height: float) -> list[int]:
+        """Static bodies whose boxes come within reach of a robot at (x, y, z)."""
+        if self.centre is not None and math.hypot(x - self.centre[0], y - self.centre[1]) < NEAR_MARGIN / 2.0:
+            return self.bodies
+        r = reach + QUERY_REACH + NEAR_MARGIN
+        found = p.getOverlappingObjects((x - r, y - r, z - height - r), (x + r, y + r, z + height + r),
+                                        physicsClientId=self.cid) or ()
+        self.bodies = sorted({uid for uid, _ in found if uid in self.statics})
+        self.centre = (x, y)
+        return self.bodies
+
+
+def distances(cid: int, body: int, statics: list[int], robots: list[int], reach: float):
+    """(nearest static obstacle, nearest robot, bodies touched within ``slop``): distances in m,
+    negative when overlapping, ``reach`` when nothing is that near; support does not count."""
+    low_static, touching = reach, set()
+    for other in statics:
+        for c in p.getClosestPoints(body, other, reach, physicsClientId=cid):
+            # contactNormalOnB points from the static body into the robot: up is support.
+            if c[7][2] > SUPPORT_NORMAL_Z:
+                continue
+            d = c[8]
+            if d < low_static:
+                low_static = d
+            if d <= CONTACT_SLOP:
+                touching.add(other)
+    low_robot = reach
+    for other in robots:
+        for c in p.getClosestPoints(body, other, reach, physicsClientId=cid):
+            d = c[8]
+            if d < low_robot:
+                low_robot = d
+            if d <= CONTACT_SLOP:
+                touching.add(other)
+    return low_static, low_robot, touching
+
+
+class Floor:
+    """Heights of the floor under points: the world's triangles cast with Embree (as lidars
+    are), PyBullet's rays for worlds it cannot triangulate, nothing at all for a bare plane."""
+
+    def __init__(self, cid: int, world: WorldPlan):
+        self.cid, self.world = cid, world
+        self.flat = not world.bodies  # the ground plane alone (or nothing): the floor is z = 0
+        self._scene = None
+        self._built = False
+
+    @property
+    def scene(self):
+        """The static world's ray scene (None when PyBullet must cast)."""
+        if not self._built:
+            from mobot_cli.sim.raycast import StaticScene, embree_available
+
+            scene = StaticScene(self.world) if embree_available() else None
+            self._scene = scene if scene is not None and scene.complete else None
+            self._built = True
+        return self._scene
+
+    def heights(self, points: np.ndarray, tops: np.ndarray) -> np.ndarray:
+        """The highest floor below each (x, y) point under its ``top`` (-inf where none)."""
+        n = len(points)
+        if self.flat:
+            return np.where(tops >= 0.0, 0.0, -np.inf) if self.world.ground_plane else np.full(n, -np.inf)
+        origins = np.column_stack([points, tops])
+        scene = self.scene
+        if scene is not None:
+            down = np.broadcast_to(np.array([0.0, 0.0, -1.0]), (n, 3))
+            t = scene.cast(origins, down, np.full(n, FLOOR_DEPTH)).astype(float)
+            return tops - t
+        ends = origins - np.array([0.0, 0.0, FLOOR_DEPTH])
+        out = np.full(n, -np.inf)
+        hits = p.rayTestBatch(origins.tolist(), ends.tolist(), collisionFilterMask=STATIC_GROUP,
+                              physicsClientId=self.cid)  # static bodies only: never a robot
+        for i, hit in enumerate(hits):
+            if hit[0] >= 0:
+                out[i] = tops[i] - hit[2] * FLOOR_DEPTH
+        return out
