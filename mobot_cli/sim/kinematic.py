@@ -23,7 +23,7 @@ from mobot_cli.errors import SimulationFault, SpawnError
 from mobot_cli.sim import clearance as clearance_mod
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, CONTACT_SLOP, RELEASE_SAMPLES, ContactCounter
 from mobot_cli.sim.kinematic_body import Mover
-from mobot_cli.sim.kinematic_collide import CLIMB, NEAR_MARGIN, QUERY_REACH, Floor, Near, distances
+from mobot_cli.sim.kinematic_collide import NEAR_MARGIN, QUERY_REACH, SUPPORT_BAND, Floor, Near, distances
 from mobot_cli.sim.placement import body_bounds
 from mobot_cli.sim.plan import Physics, RobotPlan, WorldPlan
 from mobot_cli.sim.state import RobotState
@@ -32,6 +32,11 @@ from mobot_cli.sim.world import World
 # How far a robot may end up inside another body (m): the bisection stops within this.
 PENETRATION = 0.001
 BISECTIONS = 10  # a 0.1 m step is resolved to 0.1 mm
+# The floor under a robot changes only by more than this (rays in float32 jitter below it).
+FLOOR_TOLERANCE = 1e-6  # m
+# Points no higher than this above a robot's lowest point carry it (wheels, casters): the
+# floor is looked for under them.
+FOOT_BAND = 0.005  # m, as sim/world.py's CASTER_BAND
 
 
 class KinematicWorld(World):
@@ -58,9 +63,8 @@ class KinematicWorld(World):
             (lo, hi) = body_bounds(self._cid, sim.body)
             x, y, z = sim.link_pose()[0]
             reach = max(abs(v) for v in (lo[0] - x, hi[0] - x, lo[1] - y, hi[1] - y)) * 2 ** 0.5
-            footprint = robot.footprint or _box_footprint(lo, hi, x, y, sim.spawn_xy_yaw[2])
-            mover = Mover(sim, self.physics.dt, lo[2], reach, footprint)
-            floor = self._floor_under([mover], mover.floor + CLIMB)[0]
+            mover = Mover(sim, self.physics.dt, lo[2], reach, _feet(self._cid, sim.body, lo, (x, y, sim.spawn_xy_yaw[2])))
+            floor = self._floor_under([mover], mover.floor + SUPPORT_BAND)[0]
             if not np.isfinite(floor):
                 raise SpawnError(f"robot '{robot.name}' has no floor under it",
                                  hint="Spawn it above the ground or a floor of the world.")
@@ -149,7 +153,7 @@ class KinematicWorld(World):
         def at(fraction: float):
             x, y, yaw = mover.target(distance, turn, fraction)
             mover.place(x, y, z, yaw)
-            return distances(self._cid, body, statics, robots, QUERY_REACH)
+            return distances(self._cid, body, statics, robots, QUERY_REACH, mover.floor)
 
         full = at(1.0)
         if min(full[0], full[1]) >= -PENETRATION or (distance == 0.0 and turn == 0.0):
@@ -173,14 +177,13 @@ class KinematicWorld(World):
 
     def _lift(self, moved: list[Mover]) -> None:
         """Stand the robots that moved on the floor now under them (one ray batch for all)."""
-        tops = [m.floor + max(CLIMB, abs(m.v) * self.physics.dt) for m in moved]
-        floors = self._floor_under(moved, np.array(tops))
+        floors = self._floor_under(moved, np.array([m.floor + SUPPORT_BAND for m in moved]))
         for mover, floor in zip(moved, floors):
             if not np.isfinite(floor):
                 raise SimulationFault(
                     f"robot '{mover.robot.name}' drove off the floor (nothing under it) at step {self._steps}",
                     hint="Keep it on the world's floor, or give the world a ground plane.")
-            if floor != mover.floor:
+            if abs(floor - mover.floor) > FLOOR_TOLERANCE:  # not the rays' rounding
                 mover.used += abs(floor - mover.floor)
                 mover.floor, mover.z = floor, floor + mover.height
                 mover.synced = False
@@ -240,12 +243,20 @@ class KinematicWorld(World):
         return state
 
 
-def _box_footprint(lo, hi, x: float, y: float, yaw: float) -> tuple[float, float, float, float]:
-    """A footprint (root frame) that covers the robot's world bounds at spawn."""
-    r = max(abs(lo[0] - x), abs(hi[0] - x), abs(lo[1] - y), abs(hi[1] - y))
-    if abs(np.sin(2.0 * yaw)) < 1e-9:  # axis-aligned: the box itself, turned into the root frame
-        c, s = round(np.cos(yaw)), round(np.sin(yaw))
-        xs = [c * (lo[0] - x) + s * (lo[1] - y), c * (hi[0] - x) + s * (hi[1] - y)]
-        ys = [-s * (lo[0] - x) + c * (lo[1] - y), -s * (hi[0] - x) + c * (hi[1] - y)]
-        return min(xs), max(xs), min(ys), max(ys)
-    return -r, r, -r, r
+def _feet(cid: int, body: int, lo, pose: tuple[float, float, float]) -> list[tuple[float, float]]:
+    """Where the robot stands on the floor, in its root frame: the lowest points of its links
+    (wheels, casters), found against a plane put under it for the moment."""
+    from mobot_cli.sim.bullet import p
+
+    plane = p.createMultiBody(0.0, p.createCollisionShape(p.GEOM_PLANE, physicsClientId=cid),
+                              basePosition=(0.0, 0.0, lo[2] - 1.0), physicsClientId=cid)
+    try:
+        points = [(c[5], c[8]) for c in p.getClosestPoints(body, plane, 2.0, physicsClientId=cid)]
+    finally:
+        p.removeBody(plane, physicsClientId=cid)
+    low = min(d for _, d in points)
+    x, y, yaw = pose
+    c, s = np.cos(yaw), np.sin(yaw)
+    feet = {(round(c * (q[0] - x) + s * (q[1] - y), 6), round(-s * (q[0] - x) + c * (q[1] - y), 6))
+            for q, d in points if d - low <= FOOT_BAND}
+    return sorted(feet)

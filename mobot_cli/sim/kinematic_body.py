@@ -20,7 +20,7 @@ class Mover:
     the exact arc those rates give over one step (diff_drive_controller's integrateExact)."""
 
     def __init__(self, robot: SimRobot, dt: float, bottom: float, reach: float,
-                 footprint: tuple[float, float, float, float]):
+                 feet: list[tuple[float, float]]):
         self.robot, self.dt = robot, dt
         inertial = p.getDynamicsInfo(robot.body, -1, physicsClientId=robot.cid)
         self.link_to_com = (inertial[3], inertial[4])
@@ -32,10 +32,7 @@ class Mover:
         self.height = z - bottom  # the link origin above the robot's lowest point
         self.floor = bottom
         self.reach = reach  # m: farthest collision point from the link origin, horizontally
-        xmin, xmax, ymin, ymax = footprint
-        xm, ym = (xmin + xmax) / 2.0, (ymin + ymax) / 2.0
-        # Where the floor is looked for: the footprint's corners, edge midpoints and middle.
-        self.feet = [(fx, fy) for fx in (xmin, xm, xmax) for fy in (ymin, ym, ymax)]
+        self.feet = feet  # where it stands (root frame): the floor is looked for under them
         self.v = self.w = 0.0  # the body twist of the last step, as it moved
         self.positions = robot.joint_positions()
         self.velocities = dict.fromkeys(self.positions, 0.0)

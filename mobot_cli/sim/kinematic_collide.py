@@ -23,9 +23,10 @@ NEAR_MARGIN = 0.5  # m
 # Closest points are asked for this far out: the measured clearance lets the robot move
 # this far without asking again (conservative advancement).
 QUERY_REACH = 0.25  # m
-# Floor rays start this far above the current floor (or as far as the robot moves in a step,
-# if more: a 45 degree ramp) and look down this far.
-CLIMB = 0.05  # m
+# A contact counts as support only this close above the robot's lowest point: a wheel rolls
+# onto a low step, but a floor rising into the chassis is in the way.
+SUPPORT_BAND = 0.02  # m
+# Floor rays start SUPPORT_BAND above the current floor and look down this far.
 FLOOR_DEPTH = 100.0  # m
 STATIC_GROUP = 2  # PyBullet's collision filter group of static bodies (robots are 1, see sim/lidar.py)
 
@@ -50,14 +51,16 @@ class Near:
         return self.bodies
 
 
-def distances(cid: int, body: int, statics: list[int], robots: list[int], reach: float):
-    """(nearest static obstacle, nearest robot, bodies touched within ``slop``): distances in m,
-    negative when overlapping, ``reach`` when nothing is that near; support does not count."""
+def distances(cid: int, body: int, statics: list[int], robots: list[int], reach: float, floor: float):
+    """(nearest static obstacle, nearest robot, bodies touched within CONTACT_SLOP): distances in
+    m, negative when overlapping, ``reach`` when nothing is that near; support (at the bottom of
+    a robot whose lowest point is at ``floor``) does not count."""
     low_static, touching = reach, set()
+    band = floor + SUPPORT_BAND
     for other in statics:
         for c in p.getClosestPoints(body, other, reach, physicsClientId=cid):
             # contactNormalOnB points from the static body into the robot: up is support.
-            if c[7][2] > SUPPORT_NORMAL_Z:
+            if c[7][2] > SUPPORT_NORMAL_Z and c[5][2] <= band:
                 continue
             d = c[8]
             if d < low_static:
@@ -112,6 +115,6 @@ class Floor:
         hits = p.rayTestBatch(origins.tolist(), ends.tolist(), collisionFilterMask=STATIC_GROUP,
                               physicsClientId=self.cid)  # static bodies only: never a robot
         for i, hit in enumerate(hits):
-            if hit[0] >= 0:
+            if hit[0] >= 0 and hit[2] > 0.0:  # a ray that starts inside a body is not on a floor
                 out[i] = tops[i] - hit[2] * FLOOR_DEPTH
         return out
