@@ -14,6 +14,7 @@ import pytest
 from mobot_cli.cli import invoke
 from mobot_cli.run.prepare import prepare
 from mobot_cli.sim.world import World
+from mobot_cli.sim.plan import SensorSpec
 from tests.sim.sensor_world import lidar, one_robot, planned, room_distance
 
 REPO = Path(__file__).resolve().parents[2]
@@ -111,3 +112,43 @@ def test_a_lidar_reads_the_same_ranges_in_both_engines(tmp_path):
     exact = room_distance(moved.position, moved.beams.directions)
     near = exact <= 6.0
     assert np.max(np.abs(moved.ranges.reshape(-1)[near] - exact[near])) < 0.01
+
+
+def kinematic_world(plan):
+    plan = dataclasses.replace(plan, physics=dataclasses.replace(plan.physics, engine="kinematic"))
+    world = World(plan.physics, plan.world, seed=plan.seed)
+    for robot in plan.robots:
+        world.spawn(robot)
+    return world
+
+
+def test_an_imu_reads_the_kinematic_turn_rate_and_centripetal_acceleration(tmp_path):
+    """Spinning in place at 1 rad/s with the IMU 0.2 m ahead of the axle: w = 1, a_x = -0.2 m/s^2."""
+    imu = SensorSpec(name="imu", kind="imu", link="base_link", every=12, xyz=(0.2, 0.0, 0.0))
+    plan, _ = planned(one_robot(tmp_path, x=0.0, y=0.0, yaw=0.0), "mobot", imu)
+    with kinematic_world(plan) as world:
+        world.set_command("mobot", 0.0, 1.0)
+        readings = []
+        for step in range(1, 481):
+            world.step()
+            if step % 12 == 0:
+                readings.extend(world.sense([("mobot", "imu")]))
+    late = readings[-10:]
+    assert all(r.angular_velocity[2] == pytest.approx(1.0, abs=1e-9) for r in late)
+    assert all(r.linear_acceleration[0] == pytest.approx(-0.2, abs=0.01) for r in late)
+    assert all(r.linear_acceleration[2] == pytest.approx(9.81, abs=1e-9) for r in late)
+
+
+def test_a_bumper_feels_the_wall_the_robot_stopped_at(tmp_path):
+    bumper = SensorSpec(name="bumper", kind="contact", link="base_link", every=12)
+    plan, _ = planned(one_robot(tmp_path, x=2.5, y=0.0, yaw=0.0), "mobot", bumper)
+    with kinematic_world(plan) as world:
+        (standing,) = world.sense([("mobot", "bumper")])
+        world.set_command("mobot", 0.4, 0.0)
+        for _ in range(480):
+            world.step()
+        (pushing,) = world.sense([("mobot", "bumper")])
+        assert world.read("mobot").collisions == 1
+    assert standing.contacts == ()
+    assert pushing.contacts and all("walls" in c.other for c in pushing.contacts)
+    assert all(c.normal[0] < -0.9 for c in pushing.contacts)  # the wall's normal (-x); no forces here
