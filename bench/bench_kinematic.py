@@ -90,11 +90,11 @@ def house_poses(count: int) -> list[tuple[float, float, float]]:
     """``count`` places in the bundled house where the bundled robot may spawn."""
     from mobot_cli.errors import MobotError
     from mobot_cli.run.prepare import prepare
-    from mobot_cli.sim.world import World
+    from mobot_cli.sim.engine import open_world
 
     plan = prepare(REPO / "scenarios" / "house.yaml", ["physics.engine=kinematic"]).plan
     robot, found = plan.robots[0], []
-    with World(plan.physics, plan.world) as world:
+    with open_world(plan.physics, plan.world) as world:
         for j in range(40):
             for i in range(40):
                 x, y = -7.0 + 0.55 * i, -4.5 + 0.55 * j
@@ -124,10 +124,10 @@ def mobot_rtf(path: Path) -> tuple[float, int]:
     """The loop's real-time factor for a scenario file (spawns excluded) and the collisions."""
     from mobot_cli.run.prepare import prepare
     from mobot_cli.run.timeline import Timeline
-    from mobot_cli.sim.world import World
+    from mobot_cli.sim.engine import open_world
 
     plan = prepare(path).plan
-    with World(plan.physics, plan.world, seed=plan.seed) as world:
+    with open_world(plan.physics, plan.world, seed=plan.seed) as world:
         timeline = Timeline(plan, world)
         timeline.attach(lambda record: None)
         timeline.start()

@@ -66,15 +66,6 @@ URDF_FLAGS = p.URDF_USE_INERTIA_FROM_FILE | p.URDF_USE_IMPLICIT_CYLINDER
 class World:
     """A headless physics world built from a plan; robots come and go by name."""
 
-    def __new__(cls, physics: Physics, world: WorldPlan, seed: int = 0):
-        # Every door (run, serve, the API, sweeps) builds ``World(plan.physics, ...)``: the
-        # engine is picked here, from the plan, so none of them needs to know there are two.
-        if cls is World and physics.engine == "kinematic":
-            from mobot_cli.sim.kinematic import KinematicWorld  # the physics engine never loads it
-
-            cls = KinematicWorld
-        return super().__new__(cls)
-
     def __init__(self, physics: Physics, world: WorldPlan, seed: int = 0):
         self.physics = physics
         self.plan = world

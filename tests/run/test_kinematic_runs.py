@@ -13,6 +13,7 @@ import pytest
 
 from mobot_cli.cli import invoke
 from mobot_cli.run.prepare import prepare
+from mobot_cli.sim.engine import open_world
 from mobot_cli.sim.world import World
 from mobot_cli.sim.plan import SensorSpec
 from tests.sim.sensor_world import lidar, one_robot, planned, room_distance
@@ -96,7 +97,7 @@ def test_a_lidar_reads_the_same_ranges_in_both_engines(tmp_path):
     kin = dataclasses.replace(plan, physics=dataclasses.replace(plan.physics, engine="kinematic"))
     robot = plan.robots[0]
     robot = dataclasses.replace(robot, drive=dataclasses.replace(robot.drive, max_wheel_acceleration=None))
-    with World(kin.physics, kin.world) as world:
+    with open_world(kin.physics, kin.world) as world:
         world.spawn(robot)
         world.set_command("mobot", 0.5, 0.0)
         for _ in range(2 * kin.physics.rate_hz):
@@ -116,7 +117,7 @@ def test_a_lidar_reads_the_same_ranges_in_both_engines(tmp_path):
 
 def kinematic_world(plan):
     plan = dataclasses.replace(plan, physics=dataclasses.replace(plan.physics, engine="kinematic"))
-    world = World(plan.physics, plan.world, seed=plan.seed)
+    world = open_world(plan.physics, plan.world, seed=plan.seed)
     for robot in plan.robots:
         world.spawn(robot)
     return world

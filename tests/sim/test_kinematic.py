@@ -12,6 +12,7 @@ from mobot_cli.run.prepare import prepare
 from mobot_cli.sim.bullet import p
 from mobot_cli.sim.kinematic import PENETRATION, KinematicWorld
 from mobot_cli.sim.plan import Physics, SpawnPose, StaticBody, StaticShape, WorldPlan
+from mobot_cli.sim.engine import open_world
 from mobot_cli.sim.world import World
 
 from tests.sim.test_contacts import box
@@ -46,15 +47,15 @@ def gap(world: World, a: str, b: int) -> float:
 
 
 def test_the_plan_picks_the_engine():
-    with World(kinematic(), WorldPlan()) as world:
+    with open_world(kinematic(), WorldPlan()) as world:
         assert isinstance(world, KinematicWorld)
-    with World(Physics(), WorldPlan()) as world:
+    with open_world(Physics(), WorldPlan()) as world:
         assert type(world) is World
 
 
 @pytest.mark.parametrize("rate", [10, 50, 240, 1000])
 def test_straight_two_metres_lands_at_two_metres(bundled, rate):
-    with World(kinematic(rate), WorldPlan()) as world:
+    with open_world(kinematic(rate), WorldPlan()) as world:
         world.spawn(bundled)
         start = world.read("mobot")
         run(world, "mobot", 0.5, 0.0, 4.0)
@@ -72,7 +73,7 @@ def test_straight_two_metres_lands_at_two_metres(bundled, rate):
 
 @pytest.mark.parametrize("rate", [10, 240])
 def test_a_quarter_turn_in_place_is_exact(bundled, rate):
-    with World(kinematic(rate), WorldPlan()) as world:
+    with open_world(kinematic(rate), WorldPlan()) as world:
         world.spawn(bundled)
         run(world, "mobot", 0.0, math.pi / 4.0, 2.0)
         end = world.read("mobot")
@@ -83,7 +84,7 @@ def test_a_quarter_turn_in_place_is_exact(bundled, rate):
 
 def test_an_arc_matches_the_closed_form(bundled):
     # 0.4 m/s at 0.5 rad/s for 2 s: a circle of radius 0.8 m through 1 rad.
-    with World(kinematic(10), WorldPlan()) as world:
+    with open_world(kinematic(10), WorldPlan()) as world:
         world.spawn(bundled)
         run(world, "mobot", 0.4, 0.5, 2.0)
         end = world.read("mobot")
@@ -96,7 +97,7 @@ def test_acceleration_limit_ramps_the_speed(bundled):
     alpha = 4.0  # rad/s^2 at the wheel
     robot = replace(bundled, drive=replace(bundled.drive, max_wheel_acceleration=alpha))
     rate, radius = 50, bundled.drive.wheel_radius
-    with World(kinematic(rate), WorldPlan()) as world:
+    with open_world(kinematic(rate), WorldPlan()) as world:
         world.spawn(robot)
         world.set_command("mobot", 0.5, 0.0)
         speeds = []
@@ -114,7 +115,7 @@ def test_acceleration_limit_ramps_the_speed(bundled):
 
 def test_the_urdf_wheel_velocity_limit_caps_the_speed(bundled):
     radius = bundled.drive.wheel_radius
-    with World(kinematic(10), WorldPlan()) as world:
+    with open_world(kinematic(10), WorldPlan()) as world:
         world.spawn(bundled)
         run(world, "mobot", 100.0, 0.0, 1.0)  # the bundled robot's wheels allow 30 rad/s
         assert world.read("mobot").true_x == pytest.approx(30.0 * radius, rel=1e-9)
@@ -122,7 +123,7 @@ def test_the_urdf_wheel_velocity_limit_caps_the_speed(bundled):
 
 def test_driving_into_a_wall_stops_at_the_wall_and_counts_once(bundled):
     wall = box("wall", (0.1, 2.0, 0.5), (1.0, 0.0, 0.25))
-    with World(kinematic(10), WorldPlan(bodies=(wall,))) as world:
+    with open_world(kinematic(10), WorldPlan(bodies=(wall,))) as world:
         world.spawn(bundled)
         wall_id = next(uid for uid, label in world._statics.items() if "wall" in label)
         run(world, "mobot", 0.5, 0.0, 6.0)
@@ -144,7 +145,7 @@ def test_two_robots_driving_into_each_other_stop(bundled):
     a = replace(bundled, name="a", namespace="/a", frame_prefix="a/", pose=SpawnPose((-1.0, 0.0, 0.0), z_auto=True))
     b = replace(bundled, name="b", namespace="/b", frame_prefix="b/",
                 pose=SpawnPose((1.0, 0.0, 0.0), (0.0, 0.0, 1.0, 0.0), z_auto=True))  # facing -x
-    with World(kinematic(10), WorldPlan()) as world:
+    with open_world(kinematic(10), WorldPlan()) as world:
         world.spawn(a)
         world.spawn(b)
         world.set_command("a", 0.4, 0.0)
@@ -160,7 +161,7 @@ def test_two_robots_driving_into_each_other_stop(bundled):
 
 
 def test_standing_and_driving_on_the_floor_is_not_a_collision(bundled):
-    with World(kinematic(10), WorldPlan()) as world:
+    with open_world(kinematic(10), WorldPlan()) as world:
         world.spawn(bundled)
         run(world, "mobot", 0.5, 0.3, 5.0)
         assert world.read("mobot").collisions == 0
@@ -187,7 +188,7 @@ def ramp_world(shapes: bool) -> tuple[WorldPlan, float]:
 @pytest.mark.parametrize("shapes", [True, False], ids=["embree-floor", "pybullet-floor"])
 def test_the_floor_is_followed_up_a_ramp_onto_a_deck(bundled, shapes):
     world_plan, height = ramp_world(shapes)
-    with World(kinematic(10), world_plan) as world:
+    with open_world(kinematic(10), world_plan) as world:
         world.spawn(bundled)
         z0 = world.read("mobot").true_z
         run(world, "mobot", 0.5, 0.0, 5.0)  # 2.5 m: up the ramp and along the deck
@@ -200,7 +201,7 @@ def test_the_floor_is_followed_up_a_ramp_onto_a_deck(bundled, shapes):
 
 def test_a_step_too_high_to_roll_onto_is_a_wall(bundled):
     step = box("step", (1.0, 2.0, 0.06), (1.5, 0.0, 0.03))
-    with World(kinematic(10), WorldPlan(bodies=(step,))) as world:
+    with open_world(kinematic(10), WorldPlan(bodies=(step,))) as world:
         world.spawn(bundled)
         run(world, "mobot", 0.5, 0.0, 4.0)
         state = world.read("mobot")
@@ -213,7 +214,7 @@ def test_the_house_mesh_floor_carries_the_robot_through_the_door():
                        ["physics.engine=kinematic", "physics.rate_hz=20", "log.rate_hz=20"])
     plan = prepared.plan
     robot = plan.robots[0]
-    with World(plan.physics, plan.world) as world:
+    with open_world(plan.physics, plan.world) as world:
         world.spawn(replace(robot, drive=replace(robot.drive, max_wheel_acceleration=None)))
         z0 = world.read("mobot").true_z
         run(world, "mobot", 0.5, 0.0, 9.6)  # 4.8 m east, through the doorway
@@ -224,5 +225,5 @@ def test_the_house_mesh_floor_carries_the_robot_through_the_door():
 
 def test_a_robot_without_a_floor_under_it_is_refused(bundled):
     with pytest.raises(Exception, match="no floor under it|fell|floor"):
-        with World(kinematic(10), WorldPlan(ground_plane=False)) as world:
+        with open_world(kinematic(10), WorldPlan(ground_plane=False)) as world:
             world.spawn(replace(bundled, pose=SpawnPose((0.0, 0.0, 1.0))))
