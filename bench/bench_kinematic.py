@@ -86,7 +86,7 @@ def one_robot(engine: str, rate: int, lidar: bool = False) -> str:
             f"robots:\n  - name: r\n    description: mobot\n{sensors}    commands: [{commands}]\n")
 
 
-def house_poses(count: int) -> list[tuple[float, float, float]]:
+def house_poses(count: int, spacing: float = 0.8) -> list[tuple[float, float, float]]:
     """``count`` places in the bundled house where the bundled robot may spawn."""
     from mobot_cli.errors import MobotError
     from mobot_cli.run.prepare import prepare
@@ -97,7 +97,7 @@ def house_poses(count: int) -> list[tuple[float, float, float]]:
     with open_world(plan.physics, plan.world) as world:
         for j in range(40):
             for i in range(40):
-                x, y = -7.0 + 0.55 * i, -4.5 + 0.55 * j
+                x, y = -6.0 + spacing * i, -4.8 + spacing * j
                 pose = type(robot.pose)((x, y, 0.0), z_auto=True)
                 name = f"p{len(found)}"
                 try:

@@ -23,7 +23,7 @@ from mobot_cli.errors import SimulationFault, SpawnError
 from mobot_cli.sim import clearance as clearance_mod
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, CONTACT_SLOP, RELEASE_SAMPLES, ContactCounter
 from mobot_cli.sim.kinematic_body import Mover
-from mobot_cli.sim.kinematic_collide import NEAR_MARGIN, QUERY_REACH, SUPPORT_BAND, Floor, Near, distances
+from mobot_cli.sim.kinematic_collide import NEAR_MARGIN, QUERY_REACH, SUPPORT_BAND, Floor, Near, distances, nearest
 from mobot_cli.sim.placement import body_bounds
 from mobot_cli.sim.plan import Physics, RobotPlan, WorldPlan
 from mobot_cli.sim.state import RobotState
@@ -31,7 +31,9 @@ from mobot_cli.sim.world import World
 
 # How far a robot may end up inside another body (m): the bisection stops within this.
 PENETRATION = 0.001
-BISECTIONS = 10  # a 0.1 m step is resolved to 0.1 mm
+BISECTIONS = 8  # a 0.1 m step is resolved to 0.4 mm
+# A blocked robot makes no move shorter than this (it would creep into the tolerance forever).
+MIN_MOVE = 1e-4  # m
 # The floor under a robot changes only by more than this (rays in float32 jitter below it).
 FLOOR_TOLERANCE = 1e-6  # m
 # Points no higher than this above a robot's lowest point carry it (wheels, casters): the
@@ -45,10 +47,14 @@ class KinematicWorld(World):
     def __init__(self, physics: Physics, world: WorldPlan, seed: int = 0):
         super().__init__(physics, world, seed)
         self._movers: dict[str, Mover] = {}
+        self._order: list[Mover] = []
+        # robot i, j -> their distance when last measured plus both travels then (-inf: never)
+        self._measured = np.zeros((0, 0))
         self._near: dict[str, Near] = {}
         self._floor = Floor(self._cid, world)
         self._flat = self._floor.flat and world.ground_plane  # the floor is z = 0 everywhere
-        self._obstacles = [uid for uid in self._statics if uid != self._ground]
+        # static body -> the top of its box: one no higher than a robot's support band is floor
+        self._tops = {uid: _top(self._cid, uid) for uid in self._statics if uid != self._ground}
         self._contact_every = max(1, round(physics.rate_hz / CONTACT_RATE_HZ))
         sample_hz = physics.rate_hz / self._contact_every
         # A pair must be apart 0.1 s before touching again counts again, at any rate.
@@ -62,7 +68,7 @@ class KinematicWorld(World):
         try:
             (lo, hi) = body_bounds(self._cid, sim.body)
             x, y, z = sim.link_pose()[0]
-            reach = max(abs(v) for v in (lo[0] - x, hi[0] - x, lo[1] - y, hi[1] - y)) * 2 ** 0.5
+            reach = float(np.hypot(max(x - lo[0], hi[0] - x), max(y - lo[1], hi[1] - y)))
             mover = Mover(sim, self.physics.dt, lo[2], reach, _feet(self._cid, sim.body, lo, (x, y, sim.spawn_xy_yaw[2])))
             floor = self._floor_under([mover], mover.floor + SUPPORT_BAND)[0]
             if not np.isfinite(floor):
@@ -74,13 +80,29 @@ class KinematicWorld(World):
             super().remove(robot.name)
             raise
         self._movers[robot.name] = mover
-        self._near[robot.name] = Near(self._cid, self._obstacles)
+        self._reindex()
+        self._near[robot.name] = Near(self._cid, self._tops)
 
     def remove(self, name: str) -> None:
         """Delete a robot from the world."""
         super().remove(name)
-        self._movers.pop(name, None)
+        gone = self._movers.pop(name, None)
+        if gone is not None:
+            keep = [m.index for m in self._movers.values()]
+            self._measured = self._measured[np.ix_(keep, keep)]
+            self._reindex(grown=False)
         self._near.pop(name, None)
+
+    def _reindex(self, grown: bool = True) -> None:
+        """Robots in spawn order, each knowing its row in the pair matrix (a new one: unmeasured)."""
+        self._order = list(self._movers.values())
+        for index, mover in enumerate(self._order):
+            mover.index = index
+        if grown:
+            n = len(self._order)
+            measured = np.full((n, n), -np.inf)
+            measured[:n - 1, :n - 1] = self._measured
+            self._measured = measured
 
     def set_command(self, name: str, linear: float, angular: float) -> None:
         """Command a body twist (m/s, rad/s); ValueError for a robot without a drive."""
@@ -106,20 +128,29 @@ class KinematicWorld(World):
             self._count()
 
     def _robot_pairs(self, moves) -> dict[Mover, list[Mover]]:
-        """The robots each moving robot might touch this step: circles around their reach, grown
-        by the largest step any robot takes, that overlap (one numpy pass over all robots)."""
-        everyone = list(self._movers.values())
+        """The robots each moving robot might touch this step, in one numpy pass over all pairs:
+        not those whose circles (reach) stay apart by more than both their steps, nor those
+        whose distance, last measured, is more than both have travelled since (and this step)."""
+        everyone = self._order
+        n = len(everyone)
         xy = np.array([(m.x, m.y) for m in everyone])
         reach = np.array([m.reach for m in everyone])
-        step = max((abs(mo[0]) + abs(mo[1]) * m.reach for m, mo in moves if mo is not None), default=0.0)
-        index = {m: i for i, m in enumerate(everyone)}
+        travel = np.array([m.travel for m in everyone])
+        bound = np.zeros(n)
+        for mover, motion in moves:
+            if motion is not None:
+                bound[mover.index] = abs(motion[0]) + abs(motion[1]) * mover.reach
+        margin = bound[:, None] + bound[None, :] + CONTACT_SLOP
+        gap = np.hypot(xy[:, None, 0] - xy[None, :, 0], xy[:, None, 1] - xy[None, :, 1]) \
+            - reach[:, None] - reach[None, :]
+        left = self._measured - travel[:, None] - travel[None, :]
+        close = (gap <= margin) & (left <= margin)
+        np.fill_diagonal(close, False)
+        rows = np.zeros(n, dtype=bool)
+        rows[[mover.index for mover, _ in moves]] = True
         out: dict[Mover, list[Mover]] = {}
-        for mover, _ in moves:
-            i = index[mover]
-            gap = np.hypot(xy[:, 0] - xy[i, 0], xy[:, 1] - xy[i, 1]) - reach - reach[i]
-            close = np.flatnonzero(gap < 2.0 * step + CONTACT_SLOP)
-            if len(close) > 1:
-                out[mover] = [everyone[j] for j in close if j != i]
+        for i, j in zip(*np.nonzero(close & rows[:, None])):
+            out.setdefault(everyone[i], []).append(everyone[j])
         return out
 
     def _move(self, mover: Mover, motion, others: list[Mover]) -> bool:
@@ -129,25 +160,39 @@ class KinematicWorld(World):
         if not others and not mover.touches and mover.used + bound < mover.clear - CONTACT_SLOP:
             mover.used += bound
             mover.move(distance, turn, 1.0)
+            mover.moved, mover.travel = self._steps, mover.travel + bound
             return True
+        stuck = mover.stuck
+        if stuck is not None and motion == stuck[0] and all(o.moved <= stuck[1] for o in others):
+            mover.move(distance, turn, 0.0)  # blocked by the same things from the same pose
+            return False
+        if motion is None and mover.moved <= mover.queried and all(o.moved <= mover.queried for o in others):
+            return False  # touching, and nothing moved since: the same touches
         for other in others:
             other.sync()
         bodies = [other.robot.body for other in others]
-        fraction, (static, _, touching) = self._fit(mover, distance, turn, bodies)
+        fraction, (static, apart, touching) = self._fit(mover, distance, turn, bodies)
         if not bodies and not self._near[mover.robot.name].bodies:
             # Nothing static within the box Near looked in: none within NEAR_MARGIN / 2 either.
             static = QUERY_REACH + NEAR_MARGIN / 2.0
-        mover.clear, mover.used, mover.touches = static, 0.0, touching
-        if motion is None:
-            return False
-        mover.move(distance, turn, fraction)
-        mover.synced = True  # _fit left the body at the pose it moved to
-        return fraction > 0.0
+        mover.clear, mover.used, mover.touches, mover.queried = static, 0.0, touching, self._steps
+        if motion is not None:
+            mover.stuck = (motion, self._steps) if fraction == 0.0 else None
+            mover.move(distance, turn, fraction)
+            if fraction > 0.0:
+                mover.moved, mover.travel = self._steps, mover.travel + bound * fraction
+            mover.synced = True  # _fit left the body at the pose it moved to
+        for other in others:  # distance now, plus both travels so far: see _robot_pairs
+            i, j = mover.index, other.index
+            self._measured[i, j] = self._measured[j, i] = \
+                apart.get(other.robot.body, QUERY_REACH) + mover.travel + other.travel
+        return motion is not None and fraction > 0.0
 
     def _fit(self, mover: Mover, distance: float, turn: float, robots: list[int]):
         """The largest part of the step (1.0 when all of it) that does not push the robot into
         anything deeper than PENETRATION (or than it already is), and the distances there."""
-        statics = self._near[mover.robot.name].around(mover.x, mover.y, mover.z, mover.reach, mover.height)
+        statics = self._near[mover.robot.name].around(mover.x, mover.y, mover.z, mover.reach, mover.height,
+                                                      mover.floor)
         body, z = mover.robot.body, mover.z
 
         def at(fraction: float):
@@ -156,18 +201,32 @@ class KinematicWorld(World):
             return distances(self._cid, body, statics, robots, QUERY_REACH, mover.floor)
 
         full = at(1.0)
-        if min(full[0], full[1]) >= -PENETRATION or (distance == 0.0 and turn == 0.0):
+        if nearest(full) >= -PENETRATION or (distance == 0.0 and turn == 0.0):
             return 1.0, full
         here = at(0.0)
-        floor = min(-PENETRATION, here[0], here[1])  # already deeper: it may not go deeper still
-        if min(full[0], full[1]) >= floor:
+        floor = min(-PENETRATION, nearest(here))  # already deeper: it may not go deeper still
+        if nearest(full) >= floor:
             at(1.0)
             return 1.0, full
         lo, hi, best = 0.0, 1.0, here
+        # Conservative advancement first: no point of the robot moves more than ``bound`` over
+        # the whole step, so the part of it within the clearance here (and the tolerance) is
+        # safe. Approaching a wall or a robot head-on, that is all the way: one query.
+        bound = abs(distance) + abs(turn) * mover.reach
+        safe = (nearest(here) - floor) / bound if bound > 0.0 else 0.0
+        if safe * bound < MIN_MOVE:  # pressed against it already: stay put (and be stuck)
+            mover.place(mover.x, mover.y, z, mover.yaw)
+            return 0.0, here
+        if safe < 1.0:
+            found = at(safe)
+            if nearest(found) >= floor:
+                mover.place(*_xy_z_yaw(mover.target(distance, turn, safe), z))
+                return safe, found
+            hi = safe
         for _ in range(BISECTIONS):
             mid = (lo + hi) / 2.0
             found = at(mid)
-            if min(found[0], found[1]) >= floor:
+            if nearest(found) >= floor:
                 lo, best = mid, found
             else:
                 hi = mid
@@ -184,6 +243,7 @@ class KinematicWorld(World):
                     f"robot '{mover.robot.name}' drove off the floor (nothing under it) at step {self._steps}",
                     hint="Keep it on the world's floor, or give the world a ground plane.")
             if abs(floor - mover.floor) > FLOOR_TOLERANCE:  # not the rays' rounding
+                mover.moved, mover.travel = self._steps, mover.travel + abs(floor - mover.floor)
                 mover.used += abs(floor - mover.floor)
                 mover.floor, mover.z = floor, floor + mover.height
                 mover.synced = False
@@ -241,6 +301,18 @@ class KinematicWorld(World):
                 self._cid, self._robot(name).body, self._clearance[name],
                 [r.body for r in self._robots.values()], self.label)
         return state
+
+
+def _xy_z_yaw(pose: tuple[float, float, float], z: float) -> tuple[float, float, float, float]:
+    return pose[0], pose[1], z, pose[2]
+
+
+def _top(cid: int, uid: int) -> float:
+    """The highest point of a static body's collision box."""
+    from mobot_cli.sim.bullet import p
+
+    return max(p.getAABB(uid, link, physicsClientId=cid)[1][2]
+               for link in range(-1, p.getNumJoints(uid, physicsClientId=cid)))
 
 
 def _feet(cid: int, body: int, lo, pose: tuple[float, float, float]) -> list[tuple[float, float]]:

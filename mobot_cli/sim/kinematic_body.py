@@ -39,6 +39,11 @@ class Mover:
         self.clear = 0.0  # m to the nearest static body (not floor) when last measured
         self.used = 0.0  # m the robot's points may have moved since: query again past ``clear``
         self.touches: set[int] = set()  # bodies it touched at the last query
+        self.stuck: tuple | None = None  # (motion, step): that motion was blocked entirely at that step
+        self.moved = 0  # the last step its pose changed: a robot stuck against it stays stuck till then
+        self.queried = -1  # the step of its last collision query
+        self.travel = 0.0  # m its collision points may have moved in all, summed over its steps
+        self.index = -1  # its row in the World's pair matrix
         self.synced = False  # the PyBullet body is at this pose
         self.rates = self.goal = (0.0, 0.0)  # left, right wheel rates (rad/s, forward positive)
         drive = robot.drive
@@ -96,6 +101,7 @@ class Mover:
         if fraction > 0.0:
             self.x, self.y, self.yaw = arc(self.x, self.y, self.yaw, distance, turn)
             self.synced = False
+            self.stuck = None
         dt = self.dt
         self.v, self.w = distance / dt, turn / dt
         left, right = self.rates

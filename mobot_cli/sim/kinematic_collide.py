@@ -32,50 +32,62 @@ STATIC_GROUP = 2  # PyBullet's collision filter group of static bodies (robots a
 
 
 class Near:
-    """The static bodies near a robot, cached until it has moved NEAR_MARGIN / 2."""
+    """The static bodies near a robot that can be in its way, cached until it has moved
+    NEAR_MARGIN / 2 (or its floor changed); a body wholly below its support band is floor."""
 
-    def __init__(self, cid: int, statics: list[int]):
-        self.cid, self.statics = cid, set(statics)
-        self.centre: tuple[float, float] | None = None
+    def __init__(self, cid: int, tops: dict[int, float]):
+        self.cid, self.tops = cid, tops
+        self.key: tuple[float, float, float] | None = None
         self.bodies: list[int] = []
 
-    def around(self, x: float, y: float, z: float, reach: float, height: float) -> list[int]:
+    def around(self, x: float, y: float, z: float, reach: float, height: float, floor: float) -> list[int]:
         """Static bodies whose boxes come within reach of a robot at (x, y, z)."""
-        if self.centre is not None and math.hypot(x - self.centre[0], y - self.centre[1]) < NEAR_MARGIN / 2.0:
+        key = self.key
+        if key is not None and key[2] == floor and math.hypot(x - key[0], y - key[1]) < NEAR_MARGIN / 2.0:
             return self.bodies
         r = reach + QUERY_REACH + NEAR_MARGIN
         found = p.getOverlappingObjects((x - r, y - r, z - height - r), (x + r, y + r, z + height + r),
                                         physicsClientId=self.cid) or ()
-        self.bodies = sorted({uid for uid, _ in found if uid in self.statics})
-        self.centre = (x, y)
+        tops, low = self.tops, floor + SUPPORT_BAND
+        self.bodies = sorted({uid for uid, _ in found if uid in tops and tops[uid] > low})
+        self.key = (x, y, floor)
         return self.bodies
 
 
 def distances(cid: int, body: int, statics: list[int], robots: list[int], reach: float, floor: float):
-    """(nearest static obstacle, nearest robot, bodies touched within CONTACT_SLOP): distances in
-    m, negative when overlapping, ``reach`` when nothing is that near; support (at the bottom of
-    a robot whose lowest point is at ``floor``) does not count."""
+    """(nearest static obstacle, {robot body: its distance}, bodies touched within CONTACT_SLOP):
+    distances in m, negative when overlapping, ``reach`` when nothing is that near; support (at
+    the bottom of a robot whose lowest point is at ``floor``) does not count."""
     low_static, touching = reach, set()
     band = floor + SUPPORT_BAND
     for other in statics:
         for c in p.getClosestPoints(body, other, reach, physicsClientId=cid):
-            # contactNormalOnB points from the static body into the robot: up is support.
-            if c[7][2] > SUPPORT_NORMAL_Z and c[5][2] <= band:
-                continue
+            # contactNormalOnB points from the static body into the robot: up is a floor, under
+            # the robot (not in its way) or holding it up; it is in the way only where it rises
+            # into the robot above its lowest band.
             d = c[8]
+            if c[7][2] > SUPPORT_NORMAL_Z and (d > 0.0 or c[5][2] <= band):
+                continue
             if d < low_static:
                 low_static = d
             if d <= CONTACT_SLOP:
                 touching.add(other)
-    low_robot = reach
+    apart = {}
     for other in robots:
+        low = reach
         for c in p.getClosestPoints(body, other, reach, physicsClientId=cid):
             d = c[8]
-            if d < low_robot:
-                low_robot = d
+            if d < low:
+                low = d
             if d <= CONTACT_SLOP:
                 touching.add(other)
-    return low_static, low_robot, touching
+        apart[other] = low
+    return low_static, apart, touching
+
+
+def nearest(found) -> float:
+    """The smallest distance of a ``distances`` answer, static or robot."""
+    return min(found[0], min(found[1].values(), default=found[0]))
 
 
 class Floor:
