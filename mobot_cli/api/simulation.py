@@ -27,7 +27,7 @@ from mobot_cli.scenario.goals import goal_step
 from mobot_cli.scenario.units import steps
 from mobot_cli.sim.plan import Plan
 from mobot_cli.sim.state import RobotState
-from mobot_cli.sim.world import World
+from mobot_cli.sim.engine import open_world
 
 
 class Simulation:
@@ -35,7 +35,7 @@ class Simulation:
 
     def __init__(self, prepared: Prepared, out: Path | str | None = None):
         self.plan: Plan = prepared.plan
-        self._world = World(self.plan.physics, self.plan.world, seed=self.plan.seed)
+        self._world = open_world(self.plan.physics, self.plan.world, seed=self.plan.seed)
         try:
             self._timeline = Timeline(self.plan, self._world)
             self._timeline.start()  # the robots are placed and checked before any file is written

@@ -34,7 +34,7 @@ from mobot_cli.live.session import Session
 from mobot_cli.run.record import LiveInfo, Status
 from mobot_cli.run.timeline import Attachment, Timeline
 from mobot_cli.sim.plan import Plan
-from mobot_cli.sim.world import World
+from mobot_cli.sim.engine import open_world
 
 # In --fast mode requests get at most as much wall time between two steps as the last step
 # took (so a flood of requests at least halves, never stops, the world), within these bounds.
@@ -88,7 +88,7 @@ class LiveServer:
         """Run until `stop`, SIGINT/SIGTERM or ``stop_after`` steps; returns status and counts."""
         restore = _catch_signals(self)
         try:
-            with World(self.plan.physics, self.plan.world, seed=self.plan.seed) as world:
+            with open_world(self.plan.physics, self.plan.world, seed=self.plan.seed) as world:
                 self._bind()
                 self._loader.start()
                 self.session = Session(self.plan, world, self.out_dir, self.resolved_yaml)

@@ -12,7 +12,7 @@ from mobot_cli.run.record import RunRecord, Status
 from mobot_cli.run.recording import Recording
 from mobot_cli.run.timeline import Attachment, Timeline
 from mobot_cli.sim.plan import Plan
-from mobot_cli.sim.world import World
+from mobot_cli.sim.engine import open_world
 
 Progress = Callable[[int, int], None]
 
@@ -34,7 +34,7 @@ def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | 
     ``attachments`` (the ROS 2 bridge) open after the robots are placed and close at the end;
     ``watch`` is called with the timeline once its robots are spawned, to attach more consumers
     (a live view)."""
-    with World(plan.physics, plan.world, seed=plan.seed) as world:
+    with open_world(plan.physics, plan.world, seed=plan.seed) as world:
         # The robots are spawned and checked before the folder is made: a spawn refused
         # (inside furniture, below the floor) leaves no run folder behind.
         timeline = Timeline(plan, world)

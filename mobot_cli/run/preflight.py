@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from mobot_cli.sim.plan import Physics, Plan, WorldPlan
+from mobot_cli.sim.engine import open_world
 from mobot_cli.sim.world import World
 
 
@@ -14,6 +15,6 @@ def check_world(world: WorldPlan) -> None:
 
 def check_spawns(plan: Plan) -> None:
     """Build the plan's world and spawn its robots as a run would; SpawnError when one is refused."""
-    with World(plan.physics, plan.world, seed=plan.seed) as world:
+    with open_world(plan.physics, plan.world, seed=plan.seed) as world:
         for robot in plan.robots:
             world.spawn(robot)

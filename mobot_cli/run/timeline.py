@@ -23,6 +23,7 @@ from mobot_cli.run.goals import Driver, GoalEnded, GoalStarted
 from mobot_cli.sim.clearance import REACH_MARGIN
 from mobot_cli.sim.plan import CommandStep, Event, GoalStep, Plan, RobotPlan, SensorSpec
 from mobot_cli.sim.state import RobotState
+from mobot_cli.sim.engine import open_world
 from mobot_cli.sim.world import World
 
 
@@ -350,7 +351,7 @@ class Timeline:
 
 def simulate(plan: Plan) -> Iterator[Record]:
     """Play ``plan`` in a world of its own from start to end, yielding its records as they come."""
-    with World(plan.physics, plan.world, seed=plan.seed) as world:
+    with open_world(plan.physics, plan.world, seed=plan.seed) as world:
         records: list[Record] = []
         timeline = Timeline(plan, world)
         timeline.attach(records.append)

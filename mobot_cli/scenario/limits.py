@@ -14,7 +14,7 @@ from typing import Annotated, Any
 
 from pydantic import AfterValidator, BeforeValidator, Field
 
-from mobot_cli.errors import shown
+from mobot_cli.errors import did_you_mean, shown
 
 MAX_SECONDS = 1e6  # any time or duration: about 11.6 days of simulated time
 MAX_RATE_HZ = 10_000  # physics.rate_hz and log.rate_hz
@@ -67,6 +67,19 @@ def gravity_length(vector: tuple[float, float, float]) -> tuple[float, float, fl
         raise ValueError(f"gravity of length {math.hypot(*vector):g} m/s^2 is above the limit of "
                          f"{MAX_GRAVITY:g} m/s^2 (Earth's is 9.81)")
     return vector
+
+
+ENGINES = ("bullet", "kinematic")  # physics.engine: see sim/plan.py Physics
+
+
+def check_engine(name: str) -> str:
+    """Refuse an engine mobot does not have, with the closest name."""
+    if name not in ENGINES:
+        close = did_you_mean(name, ENGINES)
+        close = close + " " if close.startswith("Did") else ""
+        raise ValueError(f"unknown engine {shown(name)}. {close}The engines are 'bullet' (the "
+                         "default: wheels driven by torques) and 'kinematic' (robots follow the twist).")
+    return name
 
 
 Float = Annotated[float, BeforeValidator(_number)]

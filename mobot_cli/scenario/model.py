@@ -19,7 +19,7 @@ from mobot_cli.scenario.goal_model import GoalFields
 from mobot_cli.scenario.limits import NAME_RE  # noqa: F401 - live/schema.py imports the name rule from here
 from mobot_cli.scenario.limits import (FLEET_NAME_RE, MAX_NAMESPACE_LENGTH, MAX_RATE_HZ, MIN_LOG_RATE_HZ,
                                        NAMESPACE_RE, SCENARIO_NAME_RE, Coordinate, Duration, Float, Int, PositiveFloat, Reference, Seconds, Vector3,
-                                       check_name, gravity_length)
+                                       check_engine, check_name, gravity_length)
 
 
 class Strict(BaseModel):
@@ -32,6 +32,7 @@ class PhysicsSpec(Strict):
     rate_hz: Annotated[Int, Field(gt=0, le=MAX_RATE_HZ)] = 240
     gravity: Annotated[Vector3, AfterValidator(gravity_length)] = (0.0, 0.0, -9.81)
     solver_iterations: Annotated[Int, Field(gt=0, le=1000)] = 50
+    engine: Annotated[str, AfterValidator(check_engine)] = "bullet"
 
 
 class LogSpec(Strict):

@@ -36,7 +36,7 @@ def resolve(scenario: Scenario, source: Source) -> Plan:
         notices.append(f"log.rate_hz {scenario.log.rate_hz:g} is not a whole number of physics steps at "
                        f"{rate} Hz: logging every {log_every} steps ({rate / log_every:.4g} Hz)")
     physics = Physics(rate_hz=rate, gravity=tuple(scenario.physics.gravity),
-                      solver_iterations=scenario.physics.solver_iterations)
+                      solver_iterations=scenario.physics.solver_iterations, engine=scenario.physics.engine)
     base_dir = source.file.parent.resolve() if source.file else Path.cwd()
     world = _world(scenario, source, base_dir)
     notices.extend(world.notices)

@@ -37,8 +37,9 @@ class Counted(Protocol):
 class ContactCounter:
     """Counts collision events per robot; call ``sample`` at a fixed rate."""
 
-    def __init__(self) -> None:
+    def __init__(self, release_samples: int = RELEASE_SAMPLES) -> None:
         self._samples = 0
+        self._release = release_samples
         self._last_touch: dict[tuple[str, Hashable], int] = {}
 
     def sample(self, cid: int, robots: Iterable[Counted]) -> None:
@@ -64,10 +65,19 @@ class ContactCounter:
             if up > SUPPORT_NORMAL_Z:
                 continue
             touching.add((robot, ("body", other)))
+        self._count(touching)
+
+    def record(self, touching: Iterable[tuple[Counted, Hashable]]) -> None:
+        """One sample of pairs found touching by other means (the kinematic engine's queries):
+        (robot, ("body", uid)) or (robot, ("robot", name)), both sides of a robot pair given."""
+        self._samples += 1
+        self._count(touching)
+
+    def _count(self, touching: Iterable[tuple[Counted, Hashable]]) -> None:
         for robot, other in touching:
             key = (robot.name, other)
             last = self._last_touch.get(key)
-            if last is None or self._samples - last > RELEASE_SAMPLES:
+            if last is None or self._samples - last > self._release:
                 robot.collisions += 1
             self._last_touch[key] = self._samples
 

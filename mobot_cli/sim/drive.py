@@ -69,18 +69,19 @@ class Odometry:
 
     def integrate(self, distance: float, turn: float) -> None:
         """Exact arc integration of a (distance, heading change) step (integrateExact)."""
-        if abs(turn) < 1e-6:
-            # Second-order Runge-Kutta, as the controller does, avoids dividing by ~0.
-            mid = self.yaw + turn / 2.0
-            self.x += distance * math.cos(mid)
-            self.y += distance * math.sin(mid)
-            self.yaw += turn
-            return
-        radius = distance / turn
-        old = self.yaw
-        self.yaw += turn
-        self.x += radius * (math.sin(self.yaw) - math.sin(old))
-        self.y -= radius * (math.cos(self.yaw) - math.cos(old))
+        self.x, self.y, self.yaw = arc(self.x, self.y, self.yaw, distance, turn)
+
+
+def arc(x: float, y: float, yaw: float, distance: float, turn: float) -> tuple[float, float, float]:
+    """The planar pose after driving ``distance`` along an arc that turns by ``turn`` (exact)."""
+    if abs(turn) < 1e-6:
+        # Second-order Runge-Kutta, as the controller does, avoids dividing by ~0.
+        mid = yaw + turn / 2.0
+        return x + distance * math.cos(mid), y + distance * math.sin(mid), yaw + turn
+    radius = distance / turn
+    end = yaw + turn
+    return (x + radius * (math.sin(end) - math.sin(yaw)),
+            y - radius * (math.cos(end) - math.cos(yaw)), end)
 
 
 def wrap_angle(angle: float) -> float:

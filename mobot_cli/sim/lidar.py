@@ -24,8 +24,9 @@ from mobot_cli.sim.bullet import p
 from mobot_cli.sim.plan import RayAxis, SensorSpec
 from mobot_cli.sim.raycast import StaticScene
 
-# PyBullet refuses larger batches ("Number of rays exceed the maximum batch size").
-MAX_BATCH = 16384
+# PyBullet refuses larger batches ("Number of rays exceed the maximum batch size"): measured,
+# 16383 rays come back and 16384 give an empty answer.
+MAX_BATCH = 16383
 ROBOT_GROUP = 1  # PyBullet's collision filter group of dynamic bodies; static ones are 2
 # m: a ray that met its own robot goes on from this far beyond the hit. A ray starting within
 # a shape's collision margin is reported as hitting it at once (measured: up to ~4 mm inside
@@ -207,6 +208,8 @@ def _batch(cid: int, starts: np.ndarray, ends: np.ndarray, mask: int) -> np.ndar
     for i in range(0, len(starts), MAX_BATCH):
         result = p.rayTestBatch(starts[i:i + MAX_BATCH], ends[i:i + MAX_BATCH], numThreads=0,
                                 collisionFilterMask=mask, physicsClientId=cid)
+        if len(result) != min(MAX_BATCH, len(starts) - i):
+            raise RuntimeError(f"rayTestBatch answered {len(result)} of {min(MAX_BATCH, len(starts) - i)} rays")
         rows.extend((h[0], h[2]) for h in result)
     return np.array(rows, dtype=float).reshape(-1, 2)
 

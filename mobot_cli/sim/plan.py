@@ -16,6 +16,9 @@ class Physics:
     rate_hz: int = 240
     gravity: tuple[float, float, float] = (0.0, 0.0, -9.81)
     solver_iterations: int = 50
+    # "bullet": wheels driven by torques through PyBullet's solver (sim/world.py);
+    # "kinematic": robots follow their commanded twist (sim/kinematic.py)
+    engine: str = "bullet"
 
     @property
     def dt(self) -> float:
