@@ -25,7 +25,7 @@ from mobot_cli.sim.contacts import CONTACT_RATE_HZ, CONTACT_SLOP, RELEASE_SAMPLE
 from mobot_cli.sim.kinematic_body import Mover
 from mobot_cli.sim.kinematic_collide import NEAR_MARGIN, QUERY_REACH, SUPPORT_BAND, Floor, Near, distances, nearest
 from mobot_cli.sim.placement import body_bounds
-from mobot_cli.sim.plan import Physics, RobotPlan, WorldPlan
+from mobot_cli.sim.plan import Physics, RobotPlan, SpawnPose, WorldPlan
 from mobot_cli.sim.state import RobotState
 from mobot_cli.sim.world import World
 
@@ -46,6 +46,11 @@ class KinematicWorld(World):
 
     def __init__(self, physics: Physics, world: WorldPlan, seed: int = 0):
         super().__init__(physics, world, seed)
+        self._start_kinematics()
+
+    def _start_kinematics(self) -> None:
+        """The engine's own state for the world as built, with no robots yet."""
+        physics, world = self.physics, self.plan
         self._movers: dict[str, Mover] = {}
         self._order: list[Mover] = []
         # robot i, j -> their distance when last measured plus both travels then (-inf: never)
@@ -60,16 +65,37 @@ class KinematicWorld(World):
         # A pair must be apart 0.1 s before touching again counts again, at any rate.
         self._contacts = ContactCounter(max(1, round(RELEASE_SAMPLES * sample_hz / CONTACT_RATE_HZ)))
 
+    def reset(self) -> None:
+        """Back to the world as built, at step 0, with no robots (see World.reset)."""
+        super().reset()
+        self._start_kinematics()
+
+    def teleport(self, name: str, pose: SpawnPose, linear=(0.0, 0.0, 0.0), angular=(0.0, 0.0, 0.0)) -> None:
+        """Move a robot, checked like a spawn (World.teleport); it goes on from there at its wheels'
+        rates: the twist given is not kept, the robot follows its command."""
+        self._sync_all()  # checked against the other robots where they are
+        super().teleport(name, pose, linear, angular)
+        mover = self._movers[name]
+        mover.relocate(self._steps)
+        self._measured[mover.index, :] = -np.inf  # its distances to the others: measure again
+        self._measured[:, mover.index] = -np.inf
+
+    def kinematics(self, name: str):
+        """The root link's world pose and velocity now (its body put where it is first)."""
+        if name in self._movers:
+            self._movers[name].sync(full=True)
+        return super().kinematics(name)
+
     def spawn(self, robot: RobotPlan) -> None:
         """Load and check the robot as the physics engine does, then stand it on the floor."""
         self._sync_all()  # a spawn is checked against the other robots where they are
         super().spawn(robot)
         sim = self._robots[robot.name]
         try:
-            (lo, hi) = body_bounds(self._cid, sim.body)
+            (lo, hi) = body_bounds(self._probes, sim.body)
             x, y, z = sim.link_pose()[0]
             reach = float(np.hypot(max(x - lo[0], hi[0] - x), max(y - lo[1], hi[1] - y)))
-            mover = Mover(sim, self.physics.dt, lo[2], reach, _feet(self._cid, sim.body, lo, (x, y, sim.spawn_xy_yaw[2])))
+            mover = Mover(sim, self.physics.dt, lo[2], reach, _feet(self._probes, sim.body, lo, (x, y, sim.spawn_xy_yaw[2])))
             floor = self._floor_under([mover], mover.floor + SUPPORT_BAND)[0]
             if not np.isfinite(floor):
                 raise SpawnError(f"robot '{robot.name}' has no floor under it",
@@ -315,17 +341,10 @@ def _top(cid: int, uid: int) -> float:
                for link in range(-1, p.getNumJoints(uid, physicsClientId=cid)))
 
 
-def _feet(cid: int, body: int, lo, pose: tuple[float, float, float]) -> list[tuple[float, float]]:
+def _feet(probes, body: int, lo, pose: tuple[float, float, float]) -> list[tuple[float, float]]:
     """Where the robot stands on the floor, in its root frame: the lowest points of its links
-    (wheels, casters), found against a plane put under it for the moment."""
-    from mobot_cli.sim.bullet import p
-
-    plane = p.createMultiBody(0.0, p.createCollisionShape(p.GEOM_PLANE, physicsClientId=cid),
-                              basePosition=(0.0, 0.0, lo[2] - 1.0), physicsClientId=cid)
-    try:
-        points = [(c[5], c[8]) for c in p.getClosestPoints(body, plane, 2.0, physicsClientId=cid)]
-    finally:
-        p.removeBody(plane, physicsClientId=cid)
+    (wheels, casters), found against a plane under it (the world's probe shape, no body)."""
+    points = [(c[5], c[8]) for c in probes.closest(body, (0.0, 0.0, 1.0), (0.0, 0.0, lo[2] - 1.0), 2.0)]
     low = min(d for _, d in points)
     x, y, yaw = pose
     c, s = np.cos(yaw), np.sin(yaw)

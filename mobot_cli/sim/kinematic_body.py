@@ -116,6 +116,16 @@ class Mover:
             travel = self.radius * dt
             self.odometry.integrate(*body_twist(left * travel, right * travel, self.separation))
 
+    def relocate(self, step: int) -> None:
+        """Take the PyBullet body's pose as the robot's (after a teleport): the floor under it is
+        where it stands now, and nothing near it is known any more."""
+        x, y, z, roll, pitch, yaw = self.robot.link_pose_rpy()
+        self.x, self.y, self.z, self.yaw = x, y, z, yaw
+        self.tilt, self.level = (roll, pitch), roll == 0.0 and pitch == 0.0
+        self.floor = z - self.height
+        self.clear = self.used = 0.0
+        self.touches, self.stuck, self.moved, self.synced = set(), None, step, True
+
     def link_pose(self, x: float, y: float, z: float, yaw: float):
         """The root link's world position and quaternion at this planar pose."""
         if self.level:

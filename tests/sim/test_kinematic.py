@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from mobot_cli.errors import SpawnError
 from mobot_cli.run.prepare import prepare
 from mobot_cli.sim.bullet import p
 from mobot_cli.sim.kinematic import PENETRATION, KinematicWorld
@@ -227,3 +228,37 @@ def test_a_robot_without_a_floor_under_it_is_refused(bundled):
     with pytest.raises(Exception, match="no floor under it|fell|floor"):
         with open_world(kinematic(10), WorldPlan(ground_plane=False)) as world:
             world.spawn(replace(bundled, pose=SpawnPose((0.0, 0.0, 1.0))))
+
+
+def test_a_teleported_robot_goes_on_from_where_it_was_put(bundled):
+    """set_state in the kinematic engine: the robot stays where it was put, drives on from there,
+    reads its new pose back, and a teleport into a wall is refused and leaves it where it was."""
+    wall = box("wall", (0.1, 2.0, 0.5), (3.0, 0.0, 0.25))
+    with open_world(kinematic(10), WorldPlan(bodies=(wall,))) as world:
+        world.spawn(bundled)
+        run(world, "mobot", 0.5, 0.0, 1.0)
+        world.teleport("mobot", SpawnPose((1.0, 1.0, 0.0), (0.0, 0.0, math.sin(0.25), math.cos(0.25)), z_auto=True))
+        world.step()  # standing still: it stays where it was put
+        state = world.read("mobot")
+        assert (state.true_x, state.true_y, state.true_yaw) == pytest.approx((1.0, 1.0, 0.5), abs=1e-6)
+        assert world.kinematics("mobot").position[:2] == pytest.approx((1.0, 1.0), abs=1e-9)
+        run(world, "mobot", 0.5, 0.0, 2.0)  # 1 m along its new heading
+        state = world.read("mobot")
+        assert (state.true_x, state.true_y) == pytest.approx((1.0 + math.cos(0.5), 1.0 + math.sin(0.5)), abs=1e-6)
+        before = (state.true_x, state.true_y)
+        with pytest.raises(SpawnError):
+            world.teleport("mobot", SpawnPose((3.0, 0.0, 0.0), z_auto=True))
+        world.step()
+        assert (world.read("mobot").true_x, world.read("mobot").true_y) == pytest.approx(before, abs=1e-9)
+
+
+def test_a_reset_kinematic_world_replays_the_same_motion(bundled):
+    wall = box("wall", (0.1, 2.0, 0.5), (1.0, 0.0, 0.25))
+    with open_world(kinematic(10), WorldPlan(bodies=(wall,))) as world:
+        runs = []
+        for _ in range(2):
+            world.spawn(bundled)
+            run(world, "mobot", 0.5, 0.0, 6.0)  # into the wall: stopped and counted
+            runs.append((world.step_count, world.read("mobot")))
+            world.reset()
+        assert runs[0] == runs[1] and runs[0][1].collisions == 1
