@@ -19,6 +19,15 @@ ENDPOINT = typer.Option(None, "--endpoint", "-e", metavar="ENDPOINT",
                              "ipc://$XDG_RUNTIME_DIR/mobot/mobot.sock].")
 TIMEOUT_HELP = "Seconds to wait for the reply (exit 4 when nothing answers)."
 
+# A pose as spawn_entity.py takes it: shared by `mobot spawn` and `mobot teleport`.
+X = typer.Option(0.0, "-x", help="Position, m.")
+Y = typer.Option(0.0, "-y", help="Position, m.")
+Z = typer.Option(None, "-z", help="Height, m [default: rest on the floor].")
+ROLL = typer.Option(0.0, "-R", help="Roll, rad.")
+PITCH = typer.Option(0.0, "-P", help="Pitch, rad.")
+YAW = typer.Option(0.0, "-Y", help="Yaw, rad.")
+QUAT = typer.Option(None, "--quat", metavar="X Y Z W", help="Orientation as a quaternion instead of -R -P -Y.")
+
 
 def client(endpoint: Optional[str], timeout: float):
     """A Client of the live world (ZeroMQ is imported only when a command runs)."""
