@@ -229,7 +229,9 @@ def engines_table() -> list[str]:
 
 
 def fmt(value: float | None) -> str:
-    return "-" if value is None else f"{value:,.0f}x"
+    if value is None:
+        return "-"
+    return f"{value:,.0f}x" if value >= 10 else f"{value:.2g}x"  # a slow row must not print as 0x
 
 
 def main() -> None:
