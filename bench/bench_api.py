@@ -85,8 +85,8 @@ def api_loop(path: Path, out: Path, lidar: bool) -> tuple[float, float]:
 def gym_vs_physics(periods: int, lidar: bool, room: Path) -> tuple[float, float, float, float]:
     """Wall and CPU seconds of ``periods`` gym steps and of as many bare 24-step advances of the
     same world, alternating: (gym wall, bare wall, gym CPU, bare CPU). A bare period ends by
-    taking the readings due (``sim.reading``), as a gym step does for its observation, so that
-    each side pays for one lidar scan a period. (Not two twin worlds: in one profile PyBullet's
+    taking the scan due (``sim.scan``, which casts its rays), as a gym step does for its
+    observation, so that each side pays for one lidar scan a period. (Not two twin worlds: in one profile PyBullet's
     stepSimulation took 20 % longer in one world than in its twin, more than the gym costs.)"""
     import numpy as np
 
@@ -105,7 +105,7 @@ def gym_vs_physics(periods: int, lidar: bool, room: Path) -> tuple[float, float,
         w1, c1 = wall(), cpu()
         sim.step(PERIOD)
         if lidar:
-            sim.reading(env.robot)
+            sim.scan(env.robot)  # the scan as arrays: its rays cast (a reading alone may wait to be)
         w2, c2 = wall(), cpu()
         sums[0] += w1 - w0
         sums[1] += w2 - w1
@@ -117,8 +117,8 @@ def gym_vs_physics(periods: int, lidar: bool, room: Path) -> tuple[float, float,
 
 def gym_own_work(periods: int, lidar: bool, room: Path) -> tuple[float, float]:
     """(µs of the gym's own work per step, µs of the physics and sensing it advances), from one
-    world: the time inside ``Simulation.step`` and the readings taken at the observation's step
-    is the physics; the rest of ``env.step`` is the gym's. Timed within each call, so a change of
+    world: the time inside ``Simulation.step`` and ``Simulation.scan`` (the scan taken, its rays
+    cast, at the observation's step) is the physics and sensing; the rest of ``env.step`` is the gym's. Timed within each call, so a change of
     load between two calls does not enter."""
     import numpy as np
 
@@ -135,7 +135,7 @@ def gym_own_work(periods: int, lidar: bool, room: Path) -> tuple[float, float]:
             inner[0] += time.perf_counter() - started
         return call
 
-    sim.step, sim._sense_now = clocked(sim.step), clocked(sim._sense_now)
+    sim.step, sim.scan = clocked(sim.step), clocked(sim.scan)  # sim.scan: the sensing, rays cast
     action = np.array([0.05, 0.2], dtype=np.float32)
     started = time.perf_counter()
     for _ in range(periods):
