@@ -38,7 +38,7 @@ MIN_MOVE = 1e-4  # m
 FLOOR_TOLERANCE = 1e-6  # m
 # Points no higher than this above a robot's lowest point carry it (wheels, casters): the
 # floor is looked for under them.
-FOOT_BAND = 0.005  # m, as sim/world.py's CASTER_BAND
+FOOT_BAND = 0.005  # m, as sim/friction.py's CASTER_BAND
 
 
 class KinematicWorld(World):

@@ -11,7 +11,7 @@ from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from mobot_cli.errors import SimulationFault, SpawnError, WorldError, did_you_mean
-from mobot_cli.sim import clearance, entity, placement, static_shapes, surroundings
+from mobot_cli.sim import clearance, entity, friction, placement, static_shapes, surroundings
 from mobot_cli.sim.clients import Stage, connect, release
 from mobot_cli.sim.bullet import p
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, ContactCounter
@@ -25,29 +25,6 @@ if TYPE_CHECKING:
 
 __all__ = ["World", "RobotState"]
 
-# Friction a link gets when its URDF does not set one. Gazebo's default mu is 1 and it
-# combines with min(); PyBullet multiplies, so the floor has 1.0 and a link keeps its own
-# value as the pair's friction, as in Gazebo. PyBullet's own default (0.5) made every
-# robot in the corpus slip on turns.
-DEFAULT_FRICTION = 1.0
-FLOOR_FRICTION = 1.0
-# A caster that URDF models as a fixed sphere or box cannot roll or swivel here, so it would
-# scrape the floor with full friction, which a real caster does not. Rigidly attached links
-# (only fixed joints up to the root, not drive wheels) whose lowest point is within CASTER_BAND
-# of the robot's lowest point, and which set no friction themselves, get CASTER_FRICTION: the
-# value linorobot2 gives its casters. gz_ros2_control's test_diff_drive (a fixed caster
-# sphere, no friction given) turns 90 deg in place to -0.06 deg with it, -0.36 deg at 1.0.
-CASTER_FRICTION = 0.01
-CASTER_BAND = 0.005  # m
-# PyBullet's multibody solver (like Gazebo's ODE) uses a friction pyramid whose sides follow
-# the world axes. Its "cone" mode is worse here: skid-steer yaw rates swung 0.07..0.5 of the
-# command with heading and speed (jackal), so mobot uses the pyramid, as Gazebo does.
-CONE_FRICTION = 0
-# Skid-steer wheels must scrub sideways to turn. With full sideways friction the turn rate
-# depended on heading, speed and (husky) the off-centre mass, 0..0.3 of the command at
-# multiplier 1.0. Halving the friction along the wheel axis (as Gazebo skid-steer models do
-# with mu2 < mu1) made it steady across 0.3..1.5 rad/s; see drive.default_separation_multiplier.
-SKID_AXIAL_FRICTION = 0.5  # fraction of the rolling-direction friction
 # Encoder odometry is folded in at this rate (diff_drive_controller's default update rate);
 # reads bring it up to date as well, so no reader sees stale odometry.
 ODOMETRY_RATE_HZ = 50
@@ -115,7 +92,7 @@ class World:
         cid, physics = self._cid, self.physics
         p.setPhysicsEngineParameter(
             fixedTimeStep=physics.dt, numSolverIterations=physics.solver_iterations,
-            numSubSteps=0, deterministicOverlappingPairs=1, enableConeFriction=CONE_FRICTION,
+            numSubSteps=0, deterministicOverlappingPairs=1, enableConeFriction=friction.CONE_FRICTION,
             physicsClientId=cid)
         p.setGravity(*physics.gravity, physicsClientId=cid)
         self._statics: dict[int, str] = {}
@@ -128,14 +105,14 @@ class World:
             if body.shapes:
                 uids = static_shapes.create(cid, body)
                 for uid in uids:
-                    p.changeDynamics(uid, -1, lateralFriction=DEFAULT_FRICTION if body.friction is None
-                                     else body.friction, physicsClientId=cid)
+                    p.changeDynamics(uid, -1, physicsClientId=cid, lateralFriction=friction.DEFAULT_FRICTION
+                                     if body.friction is None else body.friction)
             else:
                 uids = [self._load(body.urdf, body.xyz, body.quat, fixed=True)]
                 if uids[0] < 0:
                     raise WorldError(f"PyBullet could not load static body '{body.name}'",
                                      hint="Check its geometry: meshes must exist and be readable.")
-                _set_friction(cid, uids[0], links_with_friction(body.urdf), {}, DEFAULT_FRICTION)
+                friction.set_friction(cid, uids[0], links_with_friction(body.urdf), {}, friction.DEFAULT_FRICTION)
             for uid in uids:
                 self._statics[uid] = body.label or f"static body '{body.name}'"
                 if not any(shape.kind == "plane" for shape in body.shapes):
@@ -154,7 +131,7 @@ class World:
         cid = self._cid
         shape = p.createCollisionShape(p.GEOM_PLANE, physicsClientId=cid)
         uid = p.createMultiBody(0.0, shape, basePosition=(0.0, 0.0, z), physicsClientId=cid)
-        p.changeDynamics(uid, -1, lateralFriction=FLOOR_FRICTION, physicsClientId=cid)
+        p.changeDynamics(uid, -1, lateralFriction=friction.FLOOR_FRICTION, physicsClientId=cid)
         return uid
 
     @property
@@ -218,15 +195,15 @@ class World:
                                     probe_z)
         self._check_placed(uid, robot.name, pose.z_auto)
         bottom = min(lowest.values(), default=0.0)
-        wheels = _wheel_links(cid, uid, robot)
+        wheels = friction.wheel_links(cid, uid, robot)
         casters = {link for link, h in lowest.items()
-                   if h - bottom <= CASTER_BAND and link not in wheels and _rigid(cid, uid, link)}
+                   if h - bottom <= friction.CASTER_BAND and link not in wheels and friction.rigid(cid, uid, link)}
         if robot.drive is not None and max(len(robot.drive.left_joints),
                                            len(robot.drive.right_joints)) > 1:
-            _soften_axial_friction(cid, uid, wheels, SKID_AXIAL_FRICTION)
+            friction.soften_axial_friction(cid, uid, wheels, friction.SKID_AXIAL_FRICTION)
         explicit = links_with_friction(robot.urdf)
-        _set_friction(cid, uid, explicit, {link: CASTER_FRICTION for link in casters},
-                      DEFAULT_FRICTION)
+        friction.set_friction(cid, uid, explicit, {link: friction.CASTER_FRICTION for link in casters},
+                              friction.DEFAULT_FRICTION)
         for link in range(-1, p.getNumJoints(uid, physicsClientId=cid)):
             # PyBullet damps every body (0.04) by default; Gazebo does not, and it slows robots.
             p.changeDynamics(uid, link, linearDamping=0.0, angularDamping=0.0,
@@ -383,42 +360,3 @@ class World:
 
     def __exit__(self, *exc) -> None:
         self.close()
-
-
-def _wheel_links(cid: int, uid: int, robot: RobotPlan) -> set[int]:
-    """Link indices of the drive wheels (a joint's index is its child link's index)."""
-    if robot.drive is None:
-        return set()
-    names = set(robot.drive.left_joints) | set(robot.drive.right_joints)
-    return {j for j in range(p.getNumJoints(uid, physicsClientId=cid))
-            if p.getJointInfo(uid, j, physicsClientId=cid)[1].decode() in names}
-
-
-def _rigid(cid: int, uid: int, link: int) -> bool:
-    """True when only fixed joints lie between ``link`` and the base (it cannot roll)."""
-    while link >= 0:
-        info = p.getJointInfo(uid, link, physicsClientId=cid)
-        if info[2] != p.JOINT_FIXED:
-            return False
-        link = info[16]
-    return True
-
-
-def _soften_axial_friction(cid: int, uid: int, wheels: set[int], fraction: float) -> None:
-    """Scale each wheel's friction along its own axle (its joint axis, in the link frame)."""
-    for link in sorted(wheels):
-        axis = p.getJointInfo(uid, link, physicsClientId=cid)[13]
-        scale = [1.0 - (1.0 - fraction) * abs(a) for a in axis]
-        p.changeDynamics(uid, link, anisotropicFriction=scale, physicsClientId=cid)
-
-
-def _set_friction(cid: int, uid: int, explicit: frozenset[str], chosen: dict[int, float],
-                  default: float) -> None:
-    """Give links without a URDF friction ``chosen`` or ``default`` friction."""
-    names = {-1: p.getBodyInfo(uid, physicsClientId=cid)[0].decode()}
-    for j in range(p.getNumJoints(uid, physicsClientId=cid)):
-        names[j] = p.getJointInfo(uid, j, physicsClientId=cid)[12].decode()
-    for link, name in names.items():
-        if name not in explicit:
-            p.changeDynamics(uid, link, lateralFriction=chosen.get(link, default),
-                             physicsClientId=cid)
