@@ -12,7 +12,7 @@ from typing import Any, Callable, Optional
 import typer
 
 from mobot_cli.cli.environment import Environment
-from mobot_cli.errors import ExitCode, RequestRefused
+from mobot_cli.errors import ExitCode, RequestRefused, UsageError
 
 ENDPOINT = typer.Option(None, "--endpoint", "-e", metavar="ENDPOINT",
                         help="Where the live world listens [default: $MOBOT_ENDPOINT, else "
@@ -27,6 +27,17 @@ ROLL = typer.Option(0.0, "-R", help="Roll, rad.")
 PITCH = typer.Option(0.0, "-P", help="Pitch, rad.")
 YAW = typer.Option(0.0, "-Y", help="Yaw, rad.")
 QUAT = typer.Option(None, "--quat", metavar="X Y Z W", help="Orientation as a quaternion instead of -R -P -Y.")
+
+
+def pose_fields(x: float, y: float, z: Optional[float], roll: float, pitch: float, yaw: float,
+                quat: Optional[tuple[float, float, float, float]]) -> dict:
+    """The request's pose from the pose options (z None: rest on the floor); UsageError for both
+    a quaternion and roll/pitch/yaw."""
+    if quat is not None and (roll or pitch or yaw):
+        raise UsageError("give the orientation either as --quat or as -R -P -Y, not both")
+    pose: dict = {"xyz": [x, y, "auto" if z is None else z]}
+    pose.update({"quat": list(quat)} if quat is not None else {"rpy": [roll, pitch, yaw]})
+    return pose
 
 
 def client(endpoint: Optional[str], timeout: float):

@@ -14,6 +14,8 @@ from mobot_cli.errors import ExitCode, UsageError
 
 JSON = typer.Option(False, "--json", help="Print the reply as JSON.")
 TIMEOUT = typer.Option(5.0, "--timeout", help=live_common.TIMEOUT_HELP)
+REFERENCE_FRAME = typer.Option(None, "--reference-frame", metavar="ENTITY",
+                               help="Give pose and twist relative to this robot [default: world].")
 
 
 def pause(ctx: typer.Context, endpoint: Optional[str] = live_common.ENDPOINT, timeout: float = TIMEOUT,
@@ -58,8 +60,7 @@ def reset(ctx: typer.Context, endpoint: Optional[str] = live_common.ENDPOINT, ti
 def state(
     ctx: typer.Context,
     name: str = typer.Argument(..., help="The robot to read."),
-    reference_frame: Optional[str] = typer.Option(None, "--reference-frame", metavar="ENTITY",
-                                                  help="Give pose and twist relative to this robot [default: world]."),
+    reference_frame: Optional[str] = REFERENCE_FRAME,
     endpoint: Optional[str] = live_common.ENDPOINT,
     timeout: float = TIMEOUT,
     json_: bool = JSON,
@@ -83,20 +84,16 @@ def teleport(
                                                       help="Linear velocity afterwards, m/s [default: at rest]."),
     angular: tuple[float, float, float] = typer.Option((0.0, 0.0, 0.0), "--angular", metavar="WX WY WZ",
                                                        help="Angular velocity afterwards, rad/s."),
-    reference_frame: Optional[str] = typer.Option(None, "--reference-frame", metavar="ENTITY",
-                                                  help="Give pose and twist relative to this robot [default: world]."),
+    reference_frame: Optional[str] = REFERENCE_FRAME,
     endpoint: Optional[str] = live_common.ENDPOINT,
     timeout: float = TIMEOUT,
     json_: bool = JSON,
 ) -> int:
     """Move a robot to a pose (SetEntityState), checked for collisions like a spawn."""
-    if quat is not None and (roll or pitch or yaw):
-        raise UsageError("give the orientation either as --quat or as -R -P -Y, not both")
+    pose = live_common.pose_fields(x, y, z, roll, pitch, yaw, quat)
     numbers = [x, y, roll, pitch, yaw, *(quat or ()), *linear, *angular, *(() if z is None else (z,))]
     if not all(math.isfinite(v) for v in numbers):
         raise UsageError("teleport takes finite numbers: NaN and infinity are not a pose or a twist")
-    pose: dict[str, Any] = {"xyz": [x, y, "auto" if z is None else z]}
-    pose.update({"quat": list(quat)} if quat is not None else {"rpy": [roll, pitch, yaw]})
     fields: dict[str, Any] = {"name": name, "pose": pose, "twist": {"linear": dict(zip("xyz", linear)),
                                                                       "angular": dict(zip("xyz", angular))}}
     if reference_frame is not None:

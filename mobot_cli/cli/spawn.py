@@ -41,14 +41,8 @@ def spawn(
     if len(sources) != 1:
         raise UsageError("give exactly one of --file, --string and --stdin",
                          hint="For example: mobot spawn r1 --file mobot -x 1.0 -y 2.0")
-    if quat is not None and (roll or pitch or yaw):
-        raise UsageError("give the orientation either as --quat or as -R -P -Y, not both")
+    pose = live_common.pose_fields(x, y, z, roll, pitch, yaw, quat)
     text = env.stdin.read() if stdin else string
-    pose: dict = {"xyz": [x, y, "auto" if z is None else z]}
-    if quat is not None:
-        pose["quat"] = list(quat)
-    else:
-        pose["rpy"] = [roll, pitch, yaw]
     fields = {"description": file, "urdf": text, "pose": pose, "args": parse_mappings(mappings or []),
               "namespace": namespace, "reference_frame": reference_frame, "allow_renaming": allow_renaming,
               "base_dir": str(Path.cwd())}
