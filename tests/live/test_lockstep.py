@@ -290,6 +290,8 @@ def test_nan_and_infinity_are_invalid_requests(paused, raw):
     (["state", "nobody"], "NOT_FOUND: no robot named 'nobody'"),
     (["state", "mobot", "--reference-frame", "nowhere"], "NOT_FOUND: reference frame 'nowhere'"),
     (["teleport", "nobody", "-x", "1"], "NOT_FOUND: no robot named 'nobody'"),
+    (["teleport", "mobot", "-Y", "1", "--quat", "0", "0", "0", "1"], "either as --quat or as -R -P -Y, not both"),
+    (["spawn", "r2", "-f", "mobot", "-R", "1", "--quat", "0", "0", "0", "1"], "either as --quat or as -R -P -Y, not both"),
 ])
 def test_bad_cli_input_exits_2_with_one_line(paused, args, text):
     code, out, err = mobot(paused, *args)
