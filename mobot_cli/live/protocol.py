@@ -101,11 +101,17 @@ def encode_reply(answer: dict[str, Any]) -> bytes:
     return encode(reply(None, Result.OPERATION_FAILED, "the reply could not be encoded as JSON"))
 
 
-def decode(frame: bytes) -> dict[str, Any]:
-    """Parse one request; Refusal(INVALID_REQUEST) for anything but a JSON object with an op."""
+def check_size(frame: bytes) -> None:
+    """Refusal(INVALID_REQUEST) for a request larger than MAX_REQUEST_BYTES (the server's check,
+    which a client makes too: the server cannot read the id of a request it will not parse)."""
     if len(frame) > MAX_REQUEST_BYTES:
         raise Refusal(Result.INVALID_REQUEST, f"request of {len(frame)} bytes is larger than the "
                       f"limit of {MAX_REQUEST_BYTES} bytes")
+
+
+def decode(frame: bytes) -> dict[str, Any]:
+    """Parse one request; Refusal(INVALID_REQUEST) for anything but a JSON object with an op."""
+    check_size(frame)
     try:
         document = json.loads(frame.decode("utf-8"), parse_constant=_no_constant, parse_float=_finite)
     except _NotFinite as exc:

@@ -94,6 +94,18 @@ def test_oversized_requests(live, raw):
     still_serving(live)
 
 
+def test_the_client_refuses_an_oversized_request_as_the_world_would(live):
+    """The world cannot read the id of a request it will not parse, so its refusal would never
+    match: the client answers it with the same INVALID_REQUEST instead of waiting in vain."""
+    with live.client(timeout=5) as client:
+        started = time.monotonic()
+        reply = client.call("spawn", name="big", urdf="x" * (MAX_REQUEST_BYTES + 1))
+        assert time.monotonic() - started < 2.0
+        assert (reply["ok"], reply["result"], reply["code"]) == (False, "INVALID_REQUEST", 900)
+        assert f"larger than the limit of {MAX_REQUEST_BYTES} bytes" in reply["message"]
+    still_serving(live)
+
+
 def test_clients_that_vanish_mid_request(live):
     for request in (b'{"op": "spawn", "name": "orphan", "description": "mobot", "pose": {"x": 30}}',
                     b'{"op": "cmd", "name": "orphan", "linear": 0.1, "for": 5, "wait": true}',
