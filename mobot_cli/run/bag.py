@@ -28,6 +28,7 @@ import contextlib
 import shutil
 from pathlib import Path
 
+from mobot_cli.run import bag_metadata
 from mobot_cli.run.cdr import Packer
 from mobot_cli.run.mcap_records import Records
 from mobot_cli.run.ros_messages import (CLOCK, CLOCK_PACKER, JOINT_STATE, ODOMETRY, STRING, TF, TWIST,
@@ -43,20 +44,6 @@ from mobot_cli.sim.state import RobotState
 __all__ = ["BagSink", "file_uris"]
 CHUNK_EVERY_SAMPLES = 50  # as the CSV's flush: about one second at the default log rate
 CHUNK_BYTES = 8 << 20  # sensor data waiting before a chunk is closed anyway (3D lidars)
-
-
-def _latched_qos():
-    """Reliable, transient local, depth 1: how tf_static and robot_description are published.
-
-    ``ros2 bag play`` offers what the bag says, and rviz subscribes to these two transient
-    local; without it they would never connect. Other topics record no QoS, so the player uses
-    its reliable, volatile default (rosbags spends ~1.4 ms of YAML on every profile it stores).
-    """
-    from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
-
-    zero = QosTime(0, 0)
-    return [Qos(QosHistory.KEEP_LAST, 1, QosReliability.RELIABLE, QosDurability.TRANSIENT_LOCAL,
-                zero, zero, QosLiveliness.AUTOMATIC, zero, False)]
 
 
 class BagSink(Sink):
@@ -94,8 +81,8 @@ class BagSink(Sink):
     def topic(self, name: str, msgtype: str, latched: bool = False):
         """Add a connection, with its message definition and type hash embedded."""
         msgdef, rihs01 = MESSAGES[msgtype] if msgtype in MESSAGES else SENSOR_MESSAGES[msgtype]
-        return self.writer.add_connection(name, msgtype, msgdef=msgdef, rihs01=rihs01,
-                                          offered_qos_profiles=_latched_qos() if latched else ())
+        return bag_metadata.add_connection(self.writer, name, msgtype, msgdef, rihs01,
+                                           bag_metadata.latched_qos() if latched else ())
 
     def spawned(self, step: int, key: str, robot: RobotPlan) -> None:
         self.pending.append((key, robot))
@@ -184,7 +171,7 @@ class BagSink(Sink):
         try:
             if not self.broken:  # else writing more would fail again; what is on disk can be repaired
                 self._record()
-                self.writer.close()  # the MCAP summary and footer, then metadata.yaml
+                bag_metadata.close(self.writer)  # the MCAP summary and footer, then metadata.yaml
         except OSError as exc:
             failed = storage.path if self.writer.storage is not None else self.path / "metadata.yaml"
             with contextlib.suppress(OSError):

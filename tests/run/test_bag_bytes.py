@@ -12,8 +12,10 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from mobot_cli.run import bag, mcap_records
+from mobot_cli.run import bag, bag_metadata, mcap_records
 from mobot_cli.run.execute import execute
 from mobot_cli.run.prepare import prepare
 from mobot_cli.sim.plan import CommandStep, RayAxis
@@ -23,7 +25,22 @@ REPO = Path(__file__).resolve().parents[2]
 
 
 def _through_writer(monkeypatch) -> None:
+    """Every message, connection and the metadata through rosbags' own Writer: the reference bag."""
     monkeypatch.setattr(bag, "Records", lambda writer, direct=True: mcap_records.Records(writer, direct=False))
+    monkeypatch.setattr(bag_metadata, "add_connection",
+                        lambda writer, topic, msgtype, msgdef, rihs01, profiles=(): writer.add_connection(
+                            topic, msgtype, msgdef=msgdef, rihs01=rihs01, offered_qos_profiles=profiles))
+    monkeypatch.setattr(bag_metadata, "close", lambda writer: writer.close())
+
+
+def _without_ruamel(monkeypatch) -> None:
+    """Any YAML rosbags would dump through ruamel fails the test: the direct writer has none."""
+    from ruamel.yaml import YAML
+
+    def dump(*args, **kwargs):
+        raise AssertionError("ruamel.yaml dumped a document")
+
+    monkeypatch.setattr(YAML, "dump", dump)
 
 
 def _bag(folder: Path) -> dict[str, bytes]:
@@ -40,7 +57,9 @@ def _chunk_sizes(path: Path) -> list[int]:
 
 def test_robots_that_come_and_go_give_the_writers_bytes(tmp_path, monkeypatch):
     prepared = prepare(REPO / "scenarios" / "events.yaml", ["log.formats=[csv, mcap]"])
-    direct = execute(prepared.plan, prepared.resolved_yaml, tmp_path / "direct").out_dir
+    with monkeypatch.context() as patch:
+        _without_ruamel(patch)
+        direct = execute(prepared.plan, prepared.resolved_yaml, tmp_path / "direct").out_dir
     _through_writer(monkeypatch)
     written = execute(prepared.plan, prepared.resolved_yaml, tmp_path / "writer").out_dir
     assert _bag(direct) == _bag(written)
@@ -54,7 +73,9 @@ def test_sensor_scans_past_the_chunk_limit_give_the_writers_bytes(tmp_path, monk
                              lidar(xyz=(0.0, 0.0, 0.3), range_max=3.0, noise_stddev=0.01), velodyne,
                              formats=("csv", "mcap"))
     plan = replace(plan, robots=(replace(plan.robots[0], commands=(CommandStep(step=60, linear=0.5, angular=0.0),)),))
-    direct = execute(plan, resolved, tmp_path / "direct").out_dir
+    with monkeypatch.context() as patch:
+        _without_ruamel(patch)
+        direct = execute(plan, resolved, tmp_path / "direct").out_dir
     _through_writer(monkeypatch)
     written = execute(plan, resolved, tmp_path / "writer").out_dir
     assert _bag(direct) == _bag(written)
@@ -95,3 +116,98 @@ def test_records_keep_rosbags_counts_and_time_span(tmp_path, direct):
     assert (writer.counts[conn.id], writer.min_timestamp, writer.max_timestamp) == (3, 3, 5)
     writer.close()
     assert "message_count: 3" in (tmp_path / f"b{direct}" / "metadata.yaml").read_text()
+
+
+def test_a_namespace_long_enough_to_fold_the_metadata_gives_the_writers_bytes(tmp_path, monkeypatch):
+    # ruamel moves a plain value past column 80 to the next line: these topic names are folded
+    # in metadata.yaml (key at column 6) and some only in the MCAP file's copy (column 4).
+    namespace = "/" + "n" * 56  # its joint_states topic: 70 characters, folded at 6, not at 4
+    prepared = prepare(REPO / "scenarios" / "quickstart.yaml",
+                       ["log.formats=[csv, mcap]", "duration=0.5", f"robots.0.namespace={namespace}"])
+    with monkeypatch.context() as patch:
+        _without_ruamel(patch)
+        direct = execute(prepared.plan, prepared.resolved_yaml, tmp_path / "direct").out_dir
+    _through_writer(monkeypatch)
+    written = execute(prepared.plan, prepared.resolved_yaml, tmp_path / "writer").out_dir
+    assert _bag(direct) == _bag(written)
+    meta = _bag(direct)["metadata.yaml"].decode()
+    assert f"      name: \n        {namespace}/joint_states\n" in meta and f"      name: {namespace}/odom\n" in meta
+
+
+def _ruamel_text(document) -> str:
+    from io import StringIO
+
+    from ruamel.yaml import YAML
+
+    yaml = YAML(typ="safe")
+    yaml.default_flow_style = False
+    stream = StringIO()
+    yaml.dump(document, stream)
+    return stream.getvalue()
+
+
+_TOPIC = st.lists(st.from_regex(r"[A-Za-z_][A-Za-z0-9_]{0,30}", fullmatch=True), min_size=1, max_size=6).map(
+    lambda parts: "/" + "/".join(parts))
+
+
+@settings(max_examples=60, deadline=None)
+@given(topics=st.lists(st.tuples(_TOPIC, st.sampled_from(["", bag_metadata.LATCHED_QOS]),
+                                 st.integers(0, 2**40)), min_size=1, max_size=5),
+       start=st.integers(0, 2**62), duration=st.integers(0, 2**62))
+def test_metadata_text_is_what_ruamel_writes(topics, start, duration):
+    info = {"version": 8, "storage_identifier": "mcap", "relative_file_paths": ["bag.mcap"],
+            "duration": {"nanoseconds": duration}, "starting_time": {"nanoseconds_since_epoch": start},
+            "message_count": sum(n for _, _, n in topics),
+            "topics_with_message_count": [
+                {"topic_metadata": {"name": name, "type": "sensor_msgs/msg/JointState",
+                                    "serialization_format": "cdr", "offered_qos_profiles": qos,
+                                    "type_description_hash": bag.MESSAGES["sensor_msgs/msg/JointState"][1]},
+                 "message_count": n} for name, qos, n in topics],
+            "compression_format": "", "compression_mode": "", "custom_data": None,
+            "files": [{"path": "bag.mcap", "starting_time": {"nanoseconds_since_epoch": start},
+                       "duration": {"nanoseconds": duration}, "message_count": 1}],
+            "ros_distro": "rosbags"}
+    # The MCAP file's copy (the mapping alone, stripped) and metadata.yaml (under one key).
+    assert "\n".join(bag_metadata._mapping(info, 0)) == _ruamel_text(info).strip()
+    outer = {"rosbag2_bagfile_information": info}
+    assert "\n".join(bag_metadata._mapping(outer, 0)) + "\n" == _ruamel_text(outer)
+
+
+def test_latched_qos_text_is_rosbags_dump():
+    from rosbags.rosbag2.metadata import dump_qos_v8
+
+    assert bag_metadata.latched_qos_text(bag_metadata.latched_qos()) == dump_qos_v8(bag_metadata.latched_qos())
+    assert bag_metadata.latched_qos_text([]) == dump_qos_v8([]) == ""
+
+
+def test_what_the_metadata_writer_does_not_know_goes_through_rosbags(tmp_path):
+    from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
+    from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
+
+    zero = QosTime(0, 0)
+    best_effort = [Qos(QosHistory.KEEP_LAST, 5, QosReliability.BEST_EFFORT, QosDurability.VOLATILE,
+                       zero, zero, QosLiveliness.AUTOMATIC, zero, False)]
+    folders = []
+    for mine in (True, False):
+        writer = Writer(tmp_path / str(mine) / "bag", version=8, storage_plugin=StoragePlugin.MCAP)
+        writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
+        writer.open()
+        msgdef, rihs01 = bag.MESSAGES["std_msgs/msg/String"]
+        for topic, profiles in (("/true", ()), ("/x y", ()), ("/q", best_effort), ("/l", bag_metadata.latched_qos())):
+            if mine:
+                bag_metadata.add_connection(writer, topic, "std_msgs/msg/String", msgdef, rihs01, profiles)
+            else:
+                writer.add_connection(topic, "std_msgs/msg/String", msgdef=msgdef, rihs01=rihs01,
+                                      offered_qos_profiles=profiles)
+        if mine:
+            with pytest.raises(bag_metadata._Unknown):  # a custom QoS: rosbags writes the metadata
+                bag_metadata._information(writer)
+            bag_metadata.close(writer)
+        else:
+            writer.close()
+        folders.append(_bag(tmp_path / str(mine)))
+    assert folders[0] == folders[1]
+    with pytest.raises(bag_metadata._Unknown):
+        bag_metadata._scalar("/x y")
+    with pytest.raises(bag_metadata._Unknown):
+        bag_metadata._scalar("true")
