@@ -2,15 +2,12 @@
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 from typing import Optional
 
 import typer
 
-from mobot_cli.cli import output, ros2
-from mobot_cli.cli.args import default_out
-from mobot_cli.errors import ExitCode
+from mobot_cli.cli import ros2
 
 
 def run(
@@ -26,118 +23,13 @@ def run(
     skip_missing: bool = typer.Option(False, "--skip-missing",
                                       help="Leave out world models and robot visuals/collisions whose files "
                                            "are missing, with a warning."),
-    ros2_: bool = ros2.OPTION,
+    ros2_: bool = typer.Option(False, "--ros2", help=ros2.HELP),
     view: bool = typer.Option(False, "--view", help="Watch the run in a local 3D web page (extra 'view'); "
                               "when it ends the page replays it until Ctrl-C."),
     view_port: int = typer.Option(8080, "--view-port", help="Port of the --view page on 127.0.0.1 (0: any)."),
 ) -> int:
     """Run a scenario to its end and write odometry, a summary and the resolved scenario."""
-    from mobot_cli.common.files import check_out_folder
-    from mobot_cli.run.execute import execute
-    from mobot_cli.run.prepare import prepare
+    from mobot_cli.cli.runner import run_scenario
 
-    env = ctx.obj
-    overrides = list(set_)
-    if seed is not None:
-        overrides.append(f"seed={seed}")
-    if duration is not None:
-        overrides.append(f"duration={duration}")
-    if skip_missing:
-        overrides.append("skip_missing=true")
-    if view:
-        from mobot_cli.view.page import require_viser
-
-        require_viser()  # before the run, not after it
-    prepared = prepare(scenario, overrides)
-    output.notices(env, prepared.plan.notices, quiet=quiet or json_)
-    bridges = ros2.bridges(prepared.plan, ros2_)
-    out_dir = out or default_out("runs", prepared.plan.name)
-    check_out_folder(out_dir)  # a file, a path under a file, a read-only folder: before the run
-    bar = None if (quiet or json_) else output.progress_bar(env, prepared.plan.total_steps, prepared.plan.name)
-    progress = _progress(bar, realtime, prepared.plan.physics.rate_hz)
-    ros2.joined(env, bridges, quiet=quiet or json_)
-    watcher = _Watcher(env, prepared.plan, view_port) if view else None
-    if bar:
-        bar.start()
-    try:
-        result = execute(prepared.plan, prepared.resolved_yaml, out_dir, progress=progress, attachments=bridges,
-                         watch=watcher.watch if watcher else None)
-    except BaseException:
-        if watcher:
-            watcher.close()
-        raise
-    finally:
-        if bar:
-            bar.stop()
-        ros2.report(env, bridges, quiet=quiet or json_)
-    if json_:
-        output.emit_json(env, result.record.model_dump(mode="json"))
-    elif not quiet:
-        output.run_table(env, result.record, result.out_dir)
-    output.expectations(env, result.expectations, verbose=not (quiet or json_))
-    if watcher:
-        watcher.replay(result.out_dir)
-    if any(not r.passed for r in result.expectations):
-        return ExitCode.EXPECTATION_FAILED
-    return ExitCode.OK
-
-
-class _Watcher:
-    """--view: the live page during the run, then a replay of the run folder until Ctrl-C."""
-
-    def __init__(self, env, plan, port: int):
-        from mobot_cli.view.live import LiveView
-        from mobot_cli.view.page import open_page, url
-
-        self.env, self.server = env, open_page(port, label=f"mobot run: {plan.name}")
-        self.url = url(self.server)
-        self.live = LiveView(self.server, plan)
-        output.view_live(env, self.url)
-
-    def watch(self, timeline) -> None:
-        self.live.watch(timeline)
-
-    def replay(self, out_dir: Path) -> None:
-        """Turn the page into a replay of the finished run and wait for Ctrl-C."""
-        from mobot_cli.cli.view import wait_for_interrupt
-        from mobot_cli.view.replay import Replay
-        from mobot_cli.view.runfolder import read_run
-
-        self.live.close()
-        replay = None
-        try:
-            self.server.scene.reset()
-            self.live.clock.content = "the run finished: replay it below"
-            replay = Replay(self.server, [out_dir], read_run(out_dir),
-                            on_notice=lambda line: output.notices(self.env, [line]), robot_list=self.live.robot_list)
-            output.view_held(self.env, self.url, out_dir)
-            wait_for_interrupt()
-        except KeyboardInterrupt:
-            pass
-        finally:
-            if replay is not None:
-                replay.close()
-            self.close()
-
-    def close(self) -> None:
-        from mobot_cli.view.page import close_page
-
-        self.live.close()
-        close_page(self.server)
-
-
-def _progress(bar, realtime: bool, rate_hz: int):
-    """Advance the bar and, with --realtime, sleep so sim time never runs ahead of the clock."""
-    if bar is None and not realtime:
-        return None
-    start = time.perf_counter()
-
-    def update(step: int, total: int) -> None:
-        if bar is not None:
-            bar.update(bar.task_ids[0], completed=step)
-        if realtime:
-            ahead = step / rate_hz - (time.perf_counter() - start)
-            if ahead > 0:
-                time.sleep(ahead)
-
-    return update
+    return run_scenario(ctx.obj, scenario, out, set_, seed, duration, realtime, json_, quiet, skip_missing, ros2_,
+                        view, view_port)

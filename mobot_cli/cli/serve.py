@@ -29,7 +29,7 @@ def serve(
     load_memory: int = typer.Option(1024, "--load-memory", metavar="MIB",
                                     help="Memory limit of the process that loads spawned descriptions."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),
-    ros2_: bool = ros2.OPTION,
+    ros2_: bool = typer.Option(False, "--ros2", help=ros2.HELP),
     view: bool = typer.Option(False, "--view", help="Watch and drive the world in a local 3D web page "
                               "(extra 'view'): pause, resume, step, a teleop pad."),
     view_port: int = typer.Option(8080, "--view-port", help="Port of the --view page on 127.0.0.1 (0: any)."),
