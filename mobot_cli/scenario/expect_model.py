@@ -26,7 +26,7 @@ DEFAULT_MAX_TILT = math.radians(45.0)
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True, defer_build=True)
 
 
 class WithinSpec(_Strict):

@@ -25,7 +25,9 @@ from mobot_cli.scenario.limits import (FLEET_NAME_RE, MAX_NAMESPACE_LENGTH, MAX_
 class Strict(BaseModel):
     """Base: unknown keys and NaN/inf numbers are errors."""
 
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+    # defer_build: the validators are built once, for the whole Scenario, when the first scenario
+    # is validated, not model by model at import (~10 ms less of every run's start).
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True, defer_build=True)
 
 
 class PhysicsSpec(Strict):
@@ -96,7 +98,7 @@ class CommandSpec(GoalFields):
     angular: Float = 0.0
     for_: Optional[Duration] = Field(default=None, alias="for")
 
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True, populate_by_name=True)
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True, populate_by_name=True, defer_build=True)
 
     @model_validator(mode="after")
     def _twist_or_goal(self) -> "CommandSpec":

@@ -65,7 +65,7 @@ Distance = Annotated[NonNegativeFloat, Field(le=MAX_COORDINATE)]
 class SensorPose(BaseModel):
     """A sensor's pose in its link's frame: {xyz, rpy} or {xyz, quat: [x, y, z, w]}."""
 
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True, defer_build=True)
 
     xyz: Vector3 = (0.0, 0.0, 0.0)
     rpy: Optional[Vector3] = None
@@ -111,7 +111,7 @@ HINTS = {
 class SensorOverride(BaseModel):
     """What a scenario says about one sensor; None everywhere means 'as described'."""
 
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True, defer_build=True)
 
     enabled: Optional[StrictBool] = None
     type: Optional[Literal["ray", "gpu_ray", "lidar", "gpu_lidar", "imu", "contact"]] = None
