@@ -6,6 +6,7 @@ notes that it fired, so whatever it turned into ends as ``mobot: interrupted``, 
 Nothing heavy is imported before the handler is in place.
 """
 
+import gc
 import os
 import signal
 import sys
@@ -23,6 +24,7 @@ def _on_sigint(signum, frame):
 def entry() -> None:
     """Run the `mobot` command; a Ctrl-C anywhere prints ``mobot: interrupted`` and exits 130."""
     signal.signal(signal.SIGINT, _on_sigint)
+    gc.disable()  # until the command has loaded what it needs: mobot_cli/cli/startup.py
     # Pydantic looks for plugins in every installed distribution's entry points when it builds
     # mobot's first model (~10 ms a run); mobot's models have no use for them.
     os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")

@@ -18,6 +18,7 @@ from typing import Iterable
 
 from mobot_cli.cli import fastpath
 from mobot_cli.cli.environment import Environment
+from mobot_cli.cli.startup import collect_garbage
 from mobot_cli.cli.output import report_error
 from mobot_cli.errors import ExitCode, MobotError
 
@@ -61,7 +62,8 @@ def _execute(args: list[str], env: Environment) -> int:
         with contextlib.redirect_stdout(env.stdout), contextlib.redirect_stderr(env.stderr):
             command = fastpath.read(args)
             if command is not None:
-                return command(env)
+                return command(env)  # it starts the garbage collector once loaded
+            collect_garbage()
             from mobot_cli.cli.app import dispatch
 
             return dispatch(args, env)

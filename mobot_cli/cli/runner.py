@@ -10,6 +10,7 @@ from typing import Optional, Sequence
 from mobot_cli.cli import output, ros2
 from mobot_cli.cli.args import default_out
 from mobot_cli.cli.environment import Environment
+from mobot_cli.cli.startup import collect_garbage
 from mobot_cli.errors import ExitCode
 
 
@@ -34,6 +35,7 @@ def run_scenario(env: Environment, scenario: Path, out: Optional[Path] = None, s
 
         require_viser()  # before the run, not after it
     prepared = prepare(scenario, overrides)
+    collect_garbage()  # loaded: from here on garbage is made, and collected
     output.notices(env, prepared.plan.notices, quiet=quiet or json_)
     bridges = ros2.bridges(prepared.plan, ros2_)
     out_dir = out or default_out("runs", prepared.plan.name)
