@@ -2,7 +2,9 @@
 
 Written with rosbags: storage plugin mcap with zstd chunks, metadata version 8 (Iron's; Jazzy
 reads it, and its QoS profiles are YAML strings as Humble's reader expects), CDR encoded, every
-message definition embedded. Topics, per sample at the log rate unless noted:
+message definition embedded. Its connections and metadata.yaml are written as its Writer writes
+them, without ruamel.yaml (run/bag_metadata.py), and messages go into its open MCAP chunk
+directly (run/mcap_records.py). Topics, per sample at the log rate unless noted:
 
 * ``/clock`` (rosgraph_msgs/Clock): the sim time;
 * ``/tf`` (tf2_msgs/TFMessage): per robot ``<prefix>odom -> <prefix><root link>`` from its
