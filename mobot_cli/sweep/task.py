@@ -11,11 +11,13 @@ import tempfile
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from mobot_cli.errors import MobotError, SimulationFault
-from mobot_cli.run.record import RobotRecord
-from mobot_cli.sim.plan import Plan
+
+if TYPE_CHECKING:  # the sweep starts its workers before it imports these (executor_local.prestart)
+    from mobot_cli.run.record import RobotRecord
+    from mobot_cli.sim.plan import Plan
 
 PASSED, FAILED = "passed", "failed"
 
