@@ -84,9 +84,11 @@ def render(tracks: list[Track], floor: list[Polygon], out: Path, title: str, sub
 
 
 def preload() -> None:
-    """Load the fonts a picture uses (13 and 20 points), ahead of the first picture."""
+    """Load the fonts a picture uses (13 and 20 points) and what encoding imports, ahead of the
+    first picture."""
     for size in (13, 20):
         _font(size)
+    encode_rgb(Image.new("RGB", (1, 1)))
 
 
 @functools.lru_cache(maxsize=None)

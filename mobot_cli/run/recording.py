@@ -272,6 +272,11 @@ def _command(index: int) -> int | None:
     return index if index >= 0 else None
 
 
+def preload() -> None:
+    """Look up what every summary records, once (a sweep's fork server, for all its workers)."""
+    _version("pybullet")
+
+
 @functools.lru_cache(maxsize=None)
 def _version(package: str) -> str | None:
     """An installed package's version, looked up once per process (a sweep worker's runs)."""
