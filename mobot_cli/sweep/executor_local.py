@@ -70,7 +70,7 @@ class _Worker:
     def __init__(self, ctx, runner: Runner):
         self.conn, child = ctx.Pipe()
         self.process = ctx.Process(target=_worker_main, args=(child, runner, os.getpid()), daemon=True)
-        with _sigint_ignored():
+        with _sigint_held():
             self.process.start()
         child.close()
         self.task: Task | None = None
@@ -114,7 +114,7 @@ class LocalExecutor:
             return  # a spawned worker started from a thread could not ignore Ctrl-C while it imports
         from multiprocessing import forkserver
 
-        with _sigint_ignored():
+        with _sigint_held():
             forkserver.ensure_running()  # not blocking: the server imports in the background
         if count is None or self._starter is not None or self._early:
             return
@@ -242,18 +242,29 @@ class LocalExecutor:
 
 
 @contextlib.contextmanager
-def _sigint_ignored():
-    """Ctrl-C ignored while a worker (and the fork server, with the first) is started: a new
-    Python inherits that through exec, so an interrupt cannot kill it mid-import with a
-    traceback on the terminal. The sweep itself handles Ctrl-C once the start is done."""
-    if threading.current_thread() is not threading.main_thread():
+def _sigint_held():
+    """Ctrl-C held back while a process (the fork server, or a spawned worker) is started.
+
+    SIGINT is blocked in this thread while it forks, so the new Python inherits it blocked
+    through exec and an interrupt cannot kill it mid-import with a traceback on the terminal
+    (the fork server ignores it for good once its imports are done; a worker ignores it first
+    thing). A Ctrl-C that comes meanwhile is noted, not lost, and raised once the start is done.
+    """
+    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "pthread_sigmask"):
         yield
         return
-    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    came: list = []
+    old = signal.signal(signal.SIGINT, lambda signum, frame: came.append(frame))
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, old)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # one held back is noted now
+        signal.signal(signal.SIGINT, old)  # (signal.signal runs pending handlers first)
+    if came and callable(old):
+        old(signal.SIGINT, came[-1])  # the sweep's own handler: KeyboardInterrupt
+    elif came and old != signal.SIG_IGN:
+        raise KeyboardInterrupt
 
 
 def _context():
