@@ -111,7 +111,7 @@ class LocalExecutor:
         ``run`` did not use."""
         ctx = _context()
         if ctx.get_start_method() != "forkserver":
-            return  # a spawned worker started from a thread could not ignore Ctrl-C while it imports
+            return  # a spawned worker started from a thread would not inherit SIGINT held back (_sigint_held)
         from multiprocessing import forkserver
 
         with _sigint_held():
