@@ -114,8 +114,11 @@ class LocalExecutor:
             return  # a spawned worker started from a thread would not inherit SIGINT held back (_sigint_held)
         from multiprocessing import forkserver
 
-        with _sigint_held():
-            forkserver.ensure_running()  # not blocking: the server imports in the background
+        try:
+            with _sigint_held():
+                forkserver.ensure_running()  # not blocking: the server imports in the background
+        except OSError:
+            return  # run() starts the workers, and says what stops them
         if count is None or self._starter is not None or self._early:
             return
         self._starter = threading.Thread(target=self._start_early, args=(ctx, min(self.jobs, count)),
