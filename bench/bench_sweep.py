@@ -11,14 +11,27 @@
    loop alone (``simulate(plan)`` from its first record to its last, nothing written) is
    subtracted.
 
+3. ``--command``: the whole ``mobot sweep one.yaml --grid seed=0,...,31 --jobs 2 --quiet`` command
+   of bench_kinematic.py's scenario (one bundled robot, a 60 s script, kinematic engine at 10 Hz,
+   logged at 10 Hz), start-up included: wall time, runs per second (goal >= 30), the CPU time of
+   every process it starts (the sweep, the fork server, the workers: reaped here as a
+   subreaper) and the median wall time of one run in its worker. ``--trees A,B`` runs the
+   command with each source tree first on PYTHONPATH in turn (e.g. a checkout of the code
+   before a change, and this one), so that both see the same load.
+
     python3 bench/bench_sweep.py [--seconds 10] [--repeat 3] [--runs 16|32]
+    python3 bench/bench_sweep.py --command [--repeat 5] [--trees /tmp/base,.]
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
+import ctypes
 import os
+import resource
 import shutil
+import subprocess
 import statistics
 import sys
 import tempfile
@@ -75,12 +88,64 @@ def loop_only(plans) -> float:
     return statistics.median(times)
 
 
+def whole_command(tree: Path, scenario: Path, out: Path, runs: int) -> tuple[float, float, float, float]:
+    """(wall s, CPU s of every process, CPU s of the sweep process alone, median in-worker wall s
+    of one run) of one whole ``mobot sweep --jobs 2`` with ``tree`` first on the path."""
+    shutil.rmtree(out, ignore_errors=True)
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    started = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "mobot_cli", "sweep", str(scenario), "--grid",
+                    "seed=" + ",".join(str(i) for i in range(runs)), "--jobs", "2", "--out", str(out), "--quiet"],
+                   check=True, cwd=scenario.parent, env={**os.environ, "PYTHONPATH": str(tree)})
+    wall = time.perf_counter() - started
+    mid = resource.getrusage(resource.RUSAGE_CHILDREN)
+    while True:  # the fork server and its workers outlive the sweep by a moment: reap them too
+        try:
+            os.wait()
+        except ChildProcessError:
+            break
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    with (out / "results.csv").open() as f:
+        per_run = statistics.median(float(r["wall_time"]) for r in csv.DictReader(f))
+    return (wall, after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime,
+            mid.ru_utime + mid.ru_stime - before.ru_utime - before.ru_stime, per_run)
+
+
+def command_main(trees: list[Path], repeat: int, runs: int) -> None:
+    sys.path.insert(0, str(REPO / "bench"))
+    from bench_kinematic import one_robot
+
+    ctypes.CDLL(None).prctl(36, 1, 0, 0, 0)  # PR_SET_CHILD_SUBREAPER: orphaned workers come to us
+    work = Path(tempfile.mkdtemp(prefix="mobot-bench-sweep-cmd-"))
+    try:
+        scenario = work / "one.yaml"
+        scenario.write_text(one_robot("kinematic", 10))
+        figures: dict[Path, list[tuple[float, float, float, float]]] = {t: [] for t in trees}
+        load = os.getloadavg()[0]
+        for _ in range(repeat):  # interleaved: every tree sees the same load
+            for i, tree in enumerate(trees):
+                figures[tree].append(whole_command(tree, scenario, work / f"out{i}", runs))
+        print(f"{runs}-run `mobot sweep --jobs 2` of the kinematic 60 s script, whole command, medians of "
+              f"{repeat} (load average {load:.1f} before, {os.getloadavg()[0]:.1f} after)")
+        print(f"{'tree':<40} {'wall s':>7} {'runs/s':>7} {'CPU s':>6} {'sweep CPU s':>11} {'one run ms':>10}")
+        for tree, rows in figures.items():
+            wall, cpu, parent, per_run = (statistics.median(r[k] for r in rows) for k in range(4))
+            print(f"{str(tree):<40} {wall:>7.3f} {runs / wall:>7.1f} {cpu:>6.2f} {parent:>11.2f} {per_run * 1000:>10.0f}"
+                  f"   (walls {', '.join(f'{r[0]:.2f}' for r in rows)})")
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=10.0, help="simulated seconds per run")
     parser.add_argument("--repeat", type=int, default=3, help="sweeps per figure (the median is shown)")
     parser.add_argument("--runs", type=int, default=16, choices=(16, 32), help="runs per sweep")
+    parser.add_argument("--command", action="store_true", help="time the whole sweep command (32 runs)")
+    parser.add_argument("--trees", default=str(REPO), help="with --command: source trees to compare, a,b,...")
     args = parser.parse_args()
+    if args.command:
+        return command_main([Path(t).resolve() for t in args.trees.split(",")], args.repeat, 32)
     grid, runs = (GRID32 if args.runs == 32 else GRID), args.runs
     work = Path(tempfile.mkdtemp(prefix="mobot-bench-sweep-"))
     try:

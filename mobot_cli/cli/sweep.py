@@ -38,33 +38,29 @@ def sweep(
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),
 ) -> int:
     """Run variants of a scenario (grid, zip or random values); exit 1 when any run fails."""
-    from mobot_cli.sweep.expand import expand
-    from mobot_cli.sweep.runner import check_out_dir, run_sweep
-    from mobot_cli.sweep.spec import build_spec
-
     env = ctx.obj
     jobs = _check_args(jobs, executor, address, timeout, out, resume)
     runner = _executor(executor, jobs, timeout, address)
-    spec = build_spec(path, grid, zip_, random, samples, seed, set_)
-    prepared = expand(spec)  # every run prepared (and so checked) before any starts
-    out_dir = out or default_out("sweeps", prepared.name)
-    done = check_out_dir(prepared, out_dir, resume)
-    runner.start()  # e.g. join the Ray cluster: a failure here leaves no sweep folder behind
-    total = len(prepared.variants)
-    bar = None if (quiet or json_) else output.sweep_progress(env, total, prepared.name)
-    started = time.perf_counter()
-    if bar:
-        bar.start()
+    # The fork server, then the workers, start now: their imports take the second core while
+    # this process imports the scenario models and prepares the runs.
+    runner.prestart()
     try:
-        report = run_sweep(prepared, out_dir, runner, done, progress=_progress(bar))
-    except KeyboardInterrupt:
-        if bar:
-            bar.stop()
-        output.sweep_interrupted(env, out_dir)
-        raise
+        from mobot_cli.sweep.spec import build_spec, run_count
+
+        spec = build_spec(path, grid, zip_, random, samples, seed, set_)
+        runner.prestart(run_count(spec))
+        from mobot_cli.sweep.expand import expand
+        from mobot_cli.sweep.runner import check_out_dir
+
+        prepared = expand(spec)  # every run prepared (and so checked) before any starts
+        out_dir = out or default_out("sweeps", prepared.name)
+        done = check_out_dir(prepared, out_dir, resume)
+        runner.start()  # e.g. join the Ray cluster: a failure here leaves no sweep folder behind
+        started = time.perf_counter()
+        report = _run(env, runner, prepared, out_dir, done, quiet or json_)
     finally:
-        if bar:
-            bar.stop()
+        runner.close()
+    total = len(prepared.variants)
     rows = [r for _, r in sorted(report.rows.items())]
     if json_:
         output.emit_json(env, {**report.document, "results": rows})
@@ -74,6 +70,25 @@ def sweep(
         output.sweep_summary(env, out_dir, rows, list(prepared.keys), total, report.skipped,
                              time.perf_counter() - started)
     return ExitCode.EXPECTATION_FAILED if report.failed else ExitCode.OK
+
+
+def _run(env, runner, prepared, out_dir: Path, done: dict, silent: bool):
+    """The runs, with a progress bar unless ``silent``; Ctrl-C says where the finished rows are."""
+    from mobot_cli.sweep.runner import run_sweep
+
+    bar = None if silent else output.sweep_progress(env, len(prepared.variants), prepared.name)
+    if bar:
+        bar.start()
+    try:
+        return run_sweep(prepared, out_dir, runner, done, progress=_progress(bar))
+    except KeyboardInterrupt:
+        if bar:
+            bar.stop()
+        output.sweep_interrupted(env, out_dir)
+        raise
+    finally:
+        if bar:
+            bar.stop()
 
 
 def _check_args(jobs: int | None, executor: str, address: str | None, timeout: float | None,

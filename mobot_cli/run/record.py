@@ -160,9 +160,9 @@ class RunRecord(_Model):
         """The file's text: two-space indents, keys in declaration order, no NaN."""
         return json.dumps(self.model_dump(mode="json"), indent=2, allow_nan=False) + "\n"
 
-    def save(self, folder: Path) -> None:
-        """Write ``folder/summary.json`` atomically."""
-        write_text_atomic(folder / SUMMARY, self.to_json())
+    def save(self, folder: Path, durable: bool = True) -> None:
+        """Write ``folder/summary.json`` atomically, flushed to disk unless not ``durable``."""
+        write_text_atomic(folder / SUMMARY, self.to_json(), durable)
 
     @classmethod
     def load(cls, folder: Path) -> Optional["RunRecord"]:

@@ -99,8 +99,9 @@ class Recording:
     summary.json with status ``error`` and that message, where it can.
     """
 
-    def __init__(self, plan: Plan, out_dir: Path, resolved_yaml: str):
+    def __init__(self, plan: Plan, out_dir: Path, resolved_yaml: str, durable: bool = True):
         self.plan, self.out_dir = plan, out_dir
+        self.durable = durable  # summary.json flushed to disk here (a sweep flushes it itself)
         self.checker = Checker(plan)
         self.sinks: list[Sink] = []
         self.failure: OutputError | None = None  # the first write that failed
@@ -219,7 +220,7 @@ class Recording:
     def _save(self, record: RunRecord) -> None:
         """Write summary.json; when even that fails, the failure is the error to report."""
         try:
-            record.save(self.out_dir)
+            record.save(self.out_dir, self.durable)
         except OSError as exc:
             self._failed(exc)
 
@@ -269,6 +270,11 @@ def _remove_if_empty(folder: Path) -> None:
 def _command(index: int) -> int | None:
     """A goal's command index in the record; None for a goal a live request gave (index < 0)."""
     return index if index >= 0 else None
+
+
+def preload() -> None:
+    """Look up what every summary records, once (a sweep's fork server, for all its workers)."""
+    _version("pybullet")
 
 
 @functools.lru_cache(maxsize=None)

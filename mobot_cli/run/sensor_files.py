@@ -26,7 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
-from mobot_cli.run.sinks import Sink, number
+from mobot_cli.common.numbers import number
+from mobot_cli.run.sinks import Sink
 from mobot_cli.run.timeline import Reading
 from mobot_cli.run import sensor_topics
 from mobot_cli.sim.lidar import angle_step, axis_angles

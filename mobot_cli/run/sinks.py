@@ -38,12 +38,6 @@ class Sink:
         """Finish every file."""
 
 
-def number(value: float) -> str:
-    """Fixed six decimals, so that files compare byte for byte; never '-0.000000'."""
-    text = f"{value:.6f}"
-    return "0.000000" if text == "-0.000000" else text
-
-
 _ROW = ",".join(["%.6f"] * len(CSV_COLUMNS)) + "\n"
 
 

@@ -92,6 +92,13 @@ class _Points:
         return [tuple(xy) for xy in points[::max(1, len(points) // MAX_SCAN_POINTS), :2].tolist()]
 
 
+def preload() -> None:
+    """Import the drawing code and load its fonts now (a sweep's fork server, once for its workers)."""
+    from mobot_cli.plot.render import preload as preload_render
+
+    preload_render()
+
+
 def draw(tracks: list, world: WorldPlan | None, out: Path, title: str, subtitle: str) -> None:
     """Render ``tracks`` (objects with label, true, odom, start_z, and maybe scan and swept:
     run.sweep.Sweep) over ``world``'s floor plan to ``out``; the plan's height band is measured

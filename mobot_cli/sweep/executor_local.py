@@ -7,9 +7,14 @@ processes themselves, and a worker that dies or overruns its timeout is killed, 
 marked failed, and a fresh worker takes its place. A worker dies with its sweep, even with one
 killed by SIGKILL (guard.die_with_sweep). Workers stay alive for the whole sweep,
 so imports, in-process caches and the PyBullet client are paid once per worker, not once per run. They come from
-multiprocessing's fork server with mobot and PyBullet imported once (never forked from the
-parent, which may run threads such as the progress bar), so a replacement is ready in
-milliseconds instead of the 0.5 s a spawned one needs; spawn where there is no fork server.
+multiprocessing's fork server with everything a run needs imported once (sweep.preload; never
+forked from the parent, which may run threads such as the progress bar), so a replacement is
+ready in milliseconds instead of the 0.5 s a spawned one needs; spawn where there is no fork server.
+
+``prestart`` starts the fork server and the workers before the runs are prepared: their
+imports (~0.4 s) then take the second core while the sweep reads and checks the scenario,
+instead of following it. A thread waits for the workers, since a fork server answers only
+once its imports are done.
 """
 
 from __future__ import annotations
@@ -38,10 +43,11 @@ def _worker_main(conn: Connection, runner: Runner, sweep_pid: int) -> None:
     # Ctrl-C reaches the whole process group; the parent decides what stops, not each worker.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     die_with_sweep(sweep_pid)  # a sweep killed with SIGKILL cannot stop its workers itself
-    import mobot_cli.run.execute  # noqa: F401  (warm up before the first task)
-    from mobot_cli.sim.clients import keep_clients
+    import mobot_cli.sweep.preload  # noqa: F401  (imported by the fork server already, but for spawn)
+    from mobot_cli.sim.clients import connect, keep_clients, release
 
     keep_clients(1)  # one run after another: each takes the PyBullet client the last one reset
+    release(*connect())  # connected now, while the sweep still prepares its runs
 
     conn.send(READY)
     while True:
@@ -64,10 +70,11 @@ class _Worker:
     def __init__(self, ctx, runner: Runner):
         self.conn, child = ctx.Pipe()
         self.process = ctx.Process(target=_worker_main, args=(child, runner, os.getpid()), daemon=True)
-        with _sigint_ignored():
+        with _sigint_held():
             self.process.start()
         child.close()
         self.task: Task | None = None
+        self.stopping = False  # told to stop (sent None)
         self.ready = False
         self.started: float | None = None  # when the task started; None until the worker is ready
 
@@ -94,18 +101,66 @@ class LocalExecutor:
         self.jobs = max(1, jobs)
         self.timeout = timeout
         self.runner = runner
+        self._early: list[_Worker] = []  # started by prestart, not yet given to run
+        self._starter: threading.Thread | None = None
+        self._closed = threading.Event()
+
+    def prestart(self, count: int | None = None) -> None:
+        """Start the fork server now and, given the number of runs, ``min(jobs, count)`` workers
+        from a thread, so that they get ready while the runs are prepared. ``close`` stops what
+        ``run`` did not use."""
+        ctx = _context()
+        if ctx.get_start_method() != "forkserver":
+            return  # a spawned worker started from a thread would not inherit SIGINT held back (_sigint_held)
+        from multiprocessing import forkserver
+
+        try:
+            with _sigint_held():
+                forkserver.ensure_running()  # not blocking: the server imports in the background
+        except OSError:
+            return  # run() starts the workers, and says what stops them
+        if count is None or self._starter is not None or self._early:
+            return
+        self._starter = threading.Thread(target=self._start_early, args=(ctx, min(self.jobs, count)),
+                                         name="mobot-sweep-prestart", daemon=True)
+        self._starter.start()
+
+    def _start_early(self, ctx, count: int) -> None:
+        for _ in range(count):
+            if self._closed.is_set():
+                return
+            try:
+                worker = _Worker(ctx, self.runner)  # waits until the fork server has imported
+            except Exception:  # noqa: BLE001  (run starts what is missing, and reports what fails)
+                return
+            self._early.append(worker)  # close() stops it, if run() does not take it
 
     def start(self) -> None:
-        """Nothing to set up: workers start with the first tasks."""
+        """Nothing to set up: workers start with prestart or with the first tasks."""
+
+    def close(self) -> None:
+        """Stop workers that prestart started and run did not take (the sweep ended early)."""
+        self._closed.set()
+        self._stop_all(self._take_early())
+
+    def _take_early(self) -> list[_Worker]:
+        if self._starter is not None:
+            self._starter.join()
+            self._starter = None
+        workers, self._early = self._early, []
+        return workers
 
     def run(self, tasks: Iterable[Task], on_done: OnDone) -> None:
         """Run every task, calling ``on_done`` in the parent as each one ends."""
         pending = deque(tasks)
+        early = self._take_early()
+        slots = min(self.jobs, len(pending))
+        self._stop_all(early[slots:])
         if not pending:
             return
         ctx = _context()
         # A slot holds None after its worker was killed, until a task needs a new one.
-        workers: list[_Worker | None] = [_Worker(ctx, self.runner) for _ in range(min(self.jobs, len(pending)))]
+        workers: list[_Worker | None] = early[:slots] + [_Worker(ctx, self.runner) for _ in range(slots - len(early))]
         try:
             while True:
                 for i, worker in enumerate(workers):
@@ -119,9 +174,7 @@ class LocalExecutor:
                     if worker is not None and worker.task is not None:
                         workers[i] = self._collect(worker, on_done)
         finally:
-            for worker in workers:
-                if worker is not None:
-                    self._stop(worker)
+            self._stop_all([w for w in workers if w is not None])
 
     def _give(self, ctx, worker: _Worker | None, task: Task) -> _Worker:
         """Hand a task over; a missing worker, or one that died while idle, is replaced first."""
@@ -166,37 +219,62 @@ class LocalExecutor:
         on_done(outcome)
         return None
 
+    @classmethod
+    def _stop_all(cls, workers: list[_Worker]) -> None:
+        """Tell every idle worker to stop first, then wait for each: they leave side by side."""
+        for worker in workers:
+            cls._tell_stop(worker)
+        for worker in workers:
+            cls._stop(worker)
+
     @staticmethod
-    def _stop(worker: _Worker) -> None:
+    def _tell_stop(worker: _Worker) -> None:
         try:
-            if worker.task is None:
+            if worker.task is None and not worker.stopping:
                 worker.conn.send(None)
-                worker.process.join(timeout=2)
+                worker.stopping = True
         except (BrokenPipeError, OSError):
             pass
+
+    @classmethod
+    def _stop(cls, worker: _Worker) -> None:
+        cls._tell_stop(worker)
+        if worker.stopping:
+            worker.process.join(timeout=2)
         worker.kill()
 
 
 @contextlib.contextmanager
-def _sigint_ignored():
-    """Ctrl-C ignored while a worker (and the fork server, with the first) is started: a new
-    Python inherits that through exec, so an interrupt cannot kill it mid-import with a
-    traceback on the terminal. The sweep itself handles Ctrl-C once the start is done."""
-    if threading.current_thread() is not threading.main_thread():
+def _sigint_held():
+    """Ctrl-C held back while a process (the fork server, or a spawned worker) is started.
+
+    SIGINT is blocked in this thread while it forks, so the new Python inherits it blocked
+    through exec and an interrupt cannot kill it mid-import with a traceback on the terminal
+    (the fork server ignores it for good once its imports are done; a worker ignores it first
+    thing). A Ctrl-C that comes meanwhile is noted, not lost, and raised once the start is done.
+    """
+    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "pthread_sigmask"):
         yield
         return
-    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    came: list = []
+    old = signal.signal(signal.SIGINT, lambda signum, frame: came.append(frame))
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, old)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # one held back is noted now
+        signal.signal(signal.SIGINT, old)  # (signal.signal runs pending handlers first)
+    if came and callable(old):
+        old(signal.SIGINT, came[-1])  # the sweep's own handler: KeyboardInterrupt
+    elif came and old != signal.SIG_IGN:
+        raise KeyboardInterrupt
 
 
 def _context():
     """The fork server with mobot imported where the platform has one, else plain spawn."""
     if "forkserver" in multiprocessing.get_all_start_methods():
         ctx = multiprocessing.get_context("forkserver")
-        ctx.set_forkserver_preload(["mobot_cli.run.execute"])
+        ctx.set_forkserver_preload(["mobot_cli.sweep.preload"])
         return ctx
     return multiprocessing.get_context("spawn")
 

@@ -31,6 +31,12 @@ class RayExecutor:
         self.jobs, self.timeout, self.address, self.runner = max(1, jobs), timeout, address, runner
         self._started_here: bool | None = None  # None: not connected yet
 
+    def prestart(self, count: int | None = None) -> None:
+        """Nothing to start ahead: joining the cluster waits for ``start``."""
+
+    def close(self) -> None:
+        """Nothing is left running between ``run`` and the end of the sweep."""
+
     def start(self) -> None:
         """Join the cluster (or start a local Ray) before the sweep folder is made."""
         ray = require_ray()

@@ -10,12 +10,15 @@ import hashlib
 import itertools
 import json
 import random
-from dataclasses import dataclass
+import re
+from dataclasses import dataclass, replace
 from typing import Iterable
 
 from mobot_cli.errors import Location, MobotError
 from mobot_cli.run.prepare import Prepared, prepare
 from mobot_cli.sweep.spec import Axis, SweepSpec
+
+_PLAIN_SEED = re.compile(r"0|[1-9][0-9]*")  # what YAML reads as that whole number, and nothing else
 
 
 @dataclass(frozen=True)
@@ -86,15 +89,43 @@ def expand(spec: SweepSpec) -> Sweep:
         for row in axis.rows:
             origins.update({f"{k}={v}": w for k, v, w in zip(axis.keys, row, axis.where)})
     variants, prepared = [], []
+    done = {_without_seed(sets): base}  # runs that differ only in their seed share one preparation
     for index, combo in enumerate(itertools.product(*(a.rows for a in axes))):
         params = tuple(zip(keys, (v for row in combo for v in row)))
         seed = derive_seed(sweep_seed, index)
         overrides = sets + [f"{k}={v}" for k, v in params] + ([] if seed_swept else [f"seed={seed}"])
-        run = _prepare(spec, overrides, origins, note=f"run {index}: " + ", ".join(f"{k}={v}" for k, v in params))
+        run = _reseeded(done.get(_without_seed(overrides)), overrides)
+        if run is None:
+            run = _prepare(spec, overrides, origins, note=f"run {index}: " + ", ".join(f"{k}={v}" for k, v in params))
+            done.setdefault(_without_seed(overrides), run)
         variants.append(Variant(index, params, run.plan.seed))
         prepared.append(run)
     name = spec.name or base.plan.name
     return Sweep(spec, name, sweep_seed, keys, tuple(variants), tuple(prepared))
+
+
+def _is_seed(override: str) -> bool:
+    return override.partition("=")[0].strip() == "seed"
+
+
+def _without_seed(overrides: Iterable[str]) -> tuple[str, ...]:
+    return tuple(o for o in overrides if not _is_seed(o))
+
+
+def _reseeded(prepared: Prepared | None, overrides: list[str]) -> Prepared | None:
+    """``prepared`` (made with the same overrides but for the seed) with the seed these overrides
+    set, without preparing the scenario again (~4 ms a run): a scenario's seed changes its plan's
+    seed and one line of the resolved YAML, nothing else. None when that cannot be sure: no
+    prepared twin, no seed given, a seed written other than as a plain whole number in range (the full
+    preparation then checks it and names the flag), or a resolved YAML without one such line."""
+    texts = [o.partition("=")[2].strip() for o in overrides if _is_seed(o)]
+    if prepared is None or not texts or not _PLAIN_SEED.fullmatch(texts[-1]) or int(texts[-1]) >= 2**32:
+        return None
+    seed, old = int(texts[-1]), f"\nseed: {prepared.plan.seed}\n"
+    if prepared.resolved_yaml.count(old) != 1:
+        return None
+    return Prepared(prepared.scenario.model_copy(update={"seed": seed}), replace(prepared.plan, seed=seed),
+                    prepared.resolved_yaml.replace(old, f"\nseed: {seed}\n"))
 
 
 def _prepare(spec: SweepSpec, overrides: Iterable[str], origins: dict[str, Location],

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from mobot_cli.common.files import write_json_atomic, write_text_atomic
-from mobot_cli.run.sinks import number
+from mobot_cli.common.numbers import number  # not run.sinks: that imports PyBullet into the sweep
 from mobot_cli.sweep.expand import Sweep, Variant
 from mobot_cli.sweep.task import Outcome
 

@@ -9,11 +9,13 @@ from pathlib import Path
 from typing import Any, Callable, Protocol
 
 from mobot_cli.common.files import check_out_folder
+from mobot_cli.run.record import SUMMARY
 from mobot_cli.errors import UsageError, cannot_write
 from mobot_cli.sweep.expand import Sweep
 from mobot_cli.sweep.guard import LOCK_FILE, FolderLock, check_unlocked
 from mobot_cli.sweep.results import (ResultsCsv, columns, folder, read_rows, rewrite_sorted, row,
                                      sweep_document, write_document)
+from mobot_cli.sweep.syncer import Syncer
 from mobot_cli.sweep.task import FAILED, Outcome, Task
 
 Progress = Callable[[int, int, int], None]  # (runs done, runs failed, runs in the sweep)
@@ -26,7 +28,11 @@ class Executor(Protocol):
     jobs: int
     timeout: float | None
 
+    def prestart(self, count: int | None = None) -> None: ...
+
     def start(self) -> None: ...
+
+    def close(self) -> None: ...
 
     def run(self, tasks: list[Task], on_done: Callable[[Outcome], None]) -> None: ...
 
@@ -99,11 +105,13 @@ def _run(sweep: Sweep, out_dir: Path, executor: Executor, done_rows: dict[int, d
     tasks = [Task(v.index, sweep.prepared[v.index].plan, sweep.prepared[v.index].resolved_yaml,
                   str((out_dir / folder(v.index, total)).resolve())) for v in todo]
     results = ResultsCsv(out_dir / "results.csv", header)
+    syncer = Syncer()  # each run's summary.json to disk, while the next runs go on
 
     def on_done(outcome: Outcome) -> None:
         run_dir = folder(outcome.index, total)
         if outcome.files is not None:
             _unpack(out_dir / run_dir, outcome.files)
+        syncer.add(out_dir / run_dir / SUMMARY)
         values = row(sweep.variants[outcome.index], outcome, run_dir)
         results.append(values)
         report.rows[outcome.index] = values
@@ -115,11 +123,16 @@ def _run(sweep: Sweep, out_dir: Path, executor: Executor, done_rows: dict[int, d
     status = "interrupted"
     try:
         executor.run(tasks, on_done)
+        syncer.close()
         status = "complete"
     except OSError:  # results.csv cannot be written (a full disk): the sweep stops
         status = "error"
         raise
     finally:
+        try:
+            syncer.close()  # an interrupted sweep's finished summaries are flushed too
+        except OSError:
+            pass  # the sweep is ending on another error already, or was interrupted
         results.close()
         rewrite_sorted(out_dir / "results.csv", header, report.rows)
         failed = len(report.failed)

@@ -167,7 +167,7 @@ def check_spec(spec: SweepSpec) -> SweepSpec:
     if spec.samples is not None and spec.samples < 1:
         raise UsageError(f"samples must be at least 1, got {spec.samples}: the sweep has no runs",
                          location=spec.where.get("samples"))
-    runs = math.prod(spec.samples if a.kind == "random" else len(a.rows) for a in spec.axes)
+    runs = run_count(spec)
     if runs > MAX_RUNS:
         where = next((a.where[0] for a in spec.axes if a.kind != "random"), spec.where.get("samples"))
         count = f"{runs:,}" if runs < 10**12 else "over 10^12"
@@ -184,6 +184,11 @@ def check_spec(spec: SweepSpec) -> SweepSpec:
                              hint="Each key may be swept once, or set once.")
         seen[key] = where
     return spec
+
+
+def run_count(spec: SweepSpec) -> int:
+    """How many runs the sweep has: the product of its axes' lengths."""
+    return math.prod((spec.samples or 0) if a.kind == "random" else len(a.rows) for a in spec.axes)
 
 
 def load_sweep_file(path: Path) -> SweepSpec:

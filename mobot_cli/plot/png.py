@@ -1,0 +1,36 @@
+"""An RGB image to PNG bytes: every row "Up"-filtered, one zlib stream at level 1.
+
+Pillow's PNG encoder tries all five filters on every row and keeps the best (libpng's
+heuristic): for trajectory.png, 1200 x 900, that took ~16 ms of a sweep run's ~45. A plot is
+mostly flat colour, where the Up filter alone (each byte minus the one above it, one numpy
+subtraction) leaves runs of zeros that zlib packs as well as the adaptive choice does (within
+1 % here), in a third of the time. The pixels are the same; only the compressed bytes differ.
+"""
+
+from __future__ import annotations
+
+import struct
+import zlib
+
+import numpy as np
+
+SIGNATURE = b"\x89PNG\r\n\x1a\n"
+UP = 2  # the PNG row filter: each byte minus the byte above it (the row above the first is zeros)
+
+
+def encode_rgb(image) -> bytes:
+    """A Pillow RGB image as PNG file bytes (8 bits per channel, no interlace, no other chunks)."""
+    if image.mode != "RGB":
+        raise ValueError(f"encode_rgb takes an RGB image, not {image.mode}")
+    width, height = image.size
+    rows = np.frombuffer(image.tobytes(), dtype=np.uint8).reshape(height, width * 3)
+    data = np.empty((height, width * 3 + 1), dtype=np.uint8)
+    data[:, 0] = UP
+    data[0, 1:] = rows[0]
+    np.subtract(rows[1:], rows[:-1], out=data[1:, 1:])  # modulo 256, as PNG's filters are
+    header = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)  # 8-bit RGB, deflate, no interlace
+    return SIGNATURE + _chunk(b"IHDR", header) + _chunk(b"IDAT", zlib.compress(data, 1)) + _chunk(b"IEND", b"")
+
+
+def _chunk(kind: bytes, body: bytes) -> bytes:
+    return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
