@@ -112,12 +112,7 @@ class LocalExecutor:
         ctx = _context()
         if ctx.get_start_method() != "forkserver":
             return  # a spawned worker started from a thread would not inherit SIGINT held back (_sigint_held)
-        from multiprocessing import forkserver
-
-        try:
-            with _sigint_held():
-                forkserver.ensure_running()  # not blocking: the server imports in the background
-        except OSError:
+        if not start_fork_server():
             return  # run() starts the workers, and says what stops them
         if count is None or self._starter is not None or self._early:
             return
@@ -268,6 +263,22 @@ def _sigint_held():
         old(signal.SIGINT, came[-1])  # the sweep's own handler: KeyboardInterrupt
     elif came and old != signal.SIG_IGN:
         raise KeyboardInterrupt
+
+
+def start_fork_server() -> bool:
+    """Start the fork server, with everything a run needs imported, if it is not running; False
+    where there is none or it cannot start. It returns at once: the server imports in the
+    background. `mobot sweep` calls it first thing (mobot_cli.__main__), before its own imports."""
+    if _context().get_start_method() != "forkserver":
+        return False
+    from multiprocessing import forkserver
+
+    try:
+        with _sigint_held():
+            forkserver.ensure_running()
+    except OSError:
+        return False
+    return True
 
 
 def _context():
