@@ -15,7 +15,7 @@ Embree works in float32: a few micrometres at 100 m.
 A level 2D lidar's rays stay within millimetres of its height, and most of a house's triangles
 (table tops, shelves, roofs) lie above or below that. Rays that all keep to a narrow band of
 heights are cast at a slice of the scene, the triangles that reach into the band (a margin
-around it, so that one slice serves a robot driving on): a smaller BVH, about 15 % less of
+around it, so that one slice serves a robot driving on): a smaller BVH, about 20 % less of
 Embree's work in the bundled house and 25 % in the AWS small house. A ray can meet only a triangle that reaches
 its height, so the answers are those of the whole scene, bit for bit
 (tests/sim/test_scene_slices.py).
