@@ -99,6 +99,7 @@ def house_share(seconds: float, repeat: int, work: Path) -> None:
     plans = {"no sensors": replace(prepared.plan, robots=(replace(prepared.plan.robots[0], sensors=()),)),
              "2D lidar 10 Hz": prepared.plan}
     results = {name: [] for name in plans}
+    load = os.getloadavg()[0]  # a shared machine: ratios move with the load beside them
     for i in range(repeat):
         for name, plan in plans.items():
             results[name].append(timed(execute, plan, prepared.resolved_yaml, work / f"house-{i}-{len(name)}"))
@@ -114,7 +115,8 @@ def house_share(seconds: float, repeat: int, work: Path) -> None:
     pairs = sorted(c / b for (_, b), (_, c) in zip(results["no sensors"], results["2D lidar 10 Hz"]))
     quarter = len(pairs) // 4
     print(f"  lidar / no sensors, CPU, run by run: median x{statistics.median(pairs):5.3f}, middle half "
-          f"x{pairs[quarter]:5.3f}-x{pairs[-1 - quarter]:5.3f}, all x{pairs[0]:5.3f}-x{pairs[-1]:5.3f} ({len(pairs)} pairs)")
+          f"x{pairs[quarter]:5.3f}-x{pairs[-1 - quarter]:5.3f}, all x{pairs[0]:5.3f}-x{pairs[-1]:5.3f} ({len(pairs)} pairs; "
+          f"load average {load:.1f} before, {os.getloadavg()[0]:.1f} after, on {os.cpu_count()} cores)")
 
 
 def jackal_plan(seconds: float, formats: tuple[str, ...]):

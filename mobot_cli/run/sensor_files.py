@@ -57,15 +57,18 @@ class NpyRows:
     chunk is written, so that their ranges are read (and cast, sim/sensors.py) a chunk at a time."""
 
     def __init__(self, path: Path, dtype: np.dtype):
-        self.dtype, self.rows, self._pending = dtype, 0, []
+        self.dtype, self.rows = dtype, 0
+        self._times: list[float] = []
+        self._scans: list = []
         self._buffered = 0
+        self._header_text = repr({"descr": np.lib.format.dtype_to_descr(dtype), "fortran_order": False,
+                                  "shape": (0,)}).rsplit("(0,)", 1)  # the row count goes between the parts
         self._file = path.open("wb")
         self._file.write(self._header(0))
         self._file.flush()
 
     def _header(self, rows: int) -> bytes:
-        text = repr({"descr": np.lib.format.dtype_to_descr(self.dtype), "fortran_order": False, "shape": (rows,)})
-        body = text.encode("latin1")
+        body = f"({rows},)".join(self._header_text).encode("latin1")
         room = NPY_HEADER - len(NPY_MAGIC) - 2 - 1
         if len(body) > room:
             raise ValueError(f"a .npy header of {len(body)} bytes does not fit in {room}")
@@ -73,20 +76,25 @@ class NpyRows:
 
     def append(self, t: float, scan) -> None:
         """One scan (sim.sensors.ScanData) read at ``t`` seconds."""
-        self._pending.append((t, scan))
-        self._buffered += 8 + scan.nbytes
-        if len(self._pending) >= FLUSH_EVERY or self._buffered >= FLUSH_BYTES:
+        self._times.append(t)
+        self._scans.append(scan)
+        self._buffered += self.dtype.itemsize
+        if len(self._scans) >= FLUSH_EVERY or self._buffered >= FLUSH_BYTES:
             self.flush()
 
     def flush(self) -> None:
         """Write the waiting rows, then the header that counts them."""
-        if not self._pending:
+        if not self._scans:
             return
+        rows = np.empty(len(self._scans), self.dtype)  # the file's own layout: one write
+        rows["t"] = self._times
+        ranges = rows["ranges"].reshape(len(rows), -1)
+        for i, scan in enumerate(self._scans):
+            ranges[i] = scan.ranges.reshape(-1)
         f = self._file
-        f.write(b"".join(struct.pack("<d", t) + scan.ranges.astype("<f4", copy=False).tobytes()
-                         for t, scan in self._pending))
-        self.rows += len(self._pending)
-        self._pending, self._buffered = [], 0
+        f.write(rows.data)
+        self.rows += len(rows)
+        self._times, self._scans, self._buffered = [], [], 0
         f.flush()
         f.seek(0)
         f.write(self._header(self.rows))

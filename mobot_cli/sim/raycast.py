@@ -11,6 +11,14 @@ Shapes become triangles as PyBullet collides with them: boxes exactly, cylinders
 and spheres as polygons whose faces lie within ``ROUND_TOLERANCE`` of the true surface,
 meshes as their triangles. Planes (the ground, SDF ``<plane>``) are intersected exactly.
 Embree works in float32: a few micrometres at 100 m.
+
+A level 2D lidar's rays stay within millimetres of its height, and most of a house's triangles
+(table tops, shelves, roofs) lie above or below that. Rays that all keep to a narrow band of
+heights are cast at a slice of the scene, the triangles that reach into the band (a margin
+around it, so that one slice serves a robot driving on): a smaller BVH, about 20 % less of
+Embree's work in the bundled house and 25 % in the AWS small house. A ray can meet only a triangle that reaches
+its height, so the answers are those of the whole scene, bit for bit
+(tests/sim/test_scene_slices.py).
 """
 
 from __future__ import annotations
@@ -23,6 +31,11 @@ from mobot_cli.common.transforms import compose_poses, quat_matrix
 from mobot_cli.sim.plan import StaticShape, WorldPlan
 
 ROUND_TOLERANCE = 0.0005  # m: largest gap between a round surface and its polygon
+SLICE_BAND = 0.5  # m: rays spanning more height than this are cast at the whole scene
+SLICE_MARGIN = 0.05  # m added below and above the rays' heights when a slice is cut
+SLICE_SHARE = 0.8  # a slice holding more of the triangles than this is not worth its BVH
+MAX_SLICES = 4  # slices kept per scene (a robot on a ramp cuts new ones as it climbs)
+FLOAT_SLACK = 0.001  # m: a slice also keeps triangles this close to its band (Embree rounds in float32)
 MIN_SEGMENTS, MAX_SEGMENTS = 16, 512
 _BOX = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
                  [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
@@ -63,33 +76,67 @@ class StaticScene:
                     triangles.append(local @ rot.T + np.array(xyz))
         self.triangles = np.concatenate(triangles) if triangles else np.zeros((0, 3, 3))
         self._planes32 = [(point.astype(np.float32), normal.astype(np.float32)) for point, normal in self.planes]
-        self._scene = None
-        if len(self.triangles):
-            from embreex import rtcore_scene
-            from embreex.mesh_construction import TriangleMesh
+        self._heights = (self.triangles[:, :, 2].min(axis=1), self.triangles[:, :, 2].max(axis=1))
+        self._slices: list[tuple[float, float, object]] = []  # (low, high, Embree scene), newest last
+        self._scene = _embree(self.triangles) if len(self.triangles) else None
 
-            self._scene = rtcore_scene.EmbreeScene()
-            TriangleMesh(self._scene, np.ascontiguousarray(self.triangles, dtype=np.float32))
-
-    def cast(self, origins: np.ndarray, directions: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    def cast(self, origins: np.ndarray, directions: np.ndarray, lengths: np.ndarray,
+             heights: tuple[float, float] | None = None) -> np.ndarray:
         """Distance (float32) along each ray (unit ``directions``) to the first static surface
-        within its length; +inf where there is none."""
+        within its length; +inf where there is none. ``heights``: (low, high) z that every
+        ray stays within, when the caller knows it (else it is found from the rays)."""
         origins = np.ascontiguousarray(origins, dtype=np.float32)
         directions = np.ascontiguousarray(directions, dtype=np.float32)
         lengths = np.ascontiguousarray(lengths, dtype=np.float32)
         if self._scene is not None and len(origins):
             # DISTANCE answers the ray's own length where it meets nothing.
-            out = self._scene.run(origins, directions, dists=lengths.copy(), query="DISTANCE")
-            out[out >= lengths] = np.inf
+            scene = self._scene_for(heights or _heights(origins, directions, lengths))
+            out = scene.run(origins, directions, dists=lengths.copy(), query="DISTANCE")
+            np.putmask(out, out >= lengths, np.inf)  # twice as fast as out[out >= lengths] = inf
         else:
             out = np.full(len(origins), np.inf, dtype=np.float32)
         for point, normal in self._planes32:
             along = directions @ normal
             t = np.full(len(origins), np.inf, dtype=np.float32)
             np.divide((point - origins) @ normal, along, out=t, where=along != 0.0)  # parallel: no hit
-            t[(t < 0.0) | (t >= lengths)] = np.inf
+            np.putmask(t, (t < 0.0) | (t >= lengths), np.inf)
             np.minimum(out, t, out=out)
         return out
+
+    def _scene_for(self, heights: tuple[float, float]):
+        """The Embree scene to cast rays within these heights at: a slice of the triangles that
+        reach into them, when they span little, else the whole scene."""
+        low, high = heights
+        if high - low > SLICE_BAND:
+            return self._scene
+        for lo, hi, scene in self._slices:
+            if lo <= low and high <= hi:
+                return scene
+        lo, hi = low - SLICE_MARGIN, high + SLICE_MARGIN
+        bottom, top = self._heights
+        keep = (top >= lo - FLOAT_SLACK) & (bottom <= hi + FLOAT_SLACK)
+        # Not worth a BVH of its own: the whole scene is kept for this band too.
+        scene = self._scene if keep.sum() > SLICE_SHARE * len(keep) else _embree(self.triangles[keep])
+        self._slices = [*self._slices[1 - MAX_SLICES:], (lo, hi, scene)]
+        return scene
+
+
+def _heights(origins: np.ndarray, directions: np.ndarray, lengths: np.ndarray) -> tuple[float, float]:
+    """The lowest and highest z the rays reach (from their origins to their ends)."""
+    z = origins[:, 2]
+    end = z + directions[:, 2] * lengths
+    return float(min(z.min(), end.min())), float(max(z.max(), end.max()))
+
+
+def _embree(triangles: np.ndarray):
+    """An Embree scene of triangles (n, 3, 3); an empty slice is a scene no ray meets."""
+    from embreex import rtcore_scene
+    from embreex.mesh_construction import TriangleMesh
+
+    scene = rtcore_scene.EmbreeScene()
+    if len(triangles):
+        TriangleMesh(scene, np.ascontiguousarray(triangles, dtype=np.float32))
+    return scene
 
 
 def shape_triangles(shape: StaticShape) -> np.ndarray:
