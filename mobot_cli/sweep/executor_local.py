@@ -251,6 +251,12 @@ def _sigint_held():
     if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "pthread_sigmask"):
         yield
         return
+    # multiprocessing's resource tracker unblocks SIGINT in this thread right after it starts
+    # (resource_tracker.ensure_running), which would undo the hold for the fork server the same
+    # call then starts: it is started first, and blocks SIGINT for its own start.
+    from multiprocessing import resource_tracker
+
+    resource_tracker.ensure_running()
     came: list = []
     old = signal.signal(signal.SIGINT, lambda signum, frame: came.append(frame))
     signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})

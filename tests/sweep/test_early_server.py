@@ -34,3 +34,31 @@ def test_the_early_server_is_the_one_the_sweep_uses():
     assert first is not None
     executor_local.start_fork_server()  # prestart's call finds it running
     assert forkserver._forkserver._forkserver_pid == first
+
+
+def test_a_ctrl_c_while_the_server_imports_does_not_kill_it():
+    """Ctrl-C reaches the fork server too (one process group); it must neither die nor print a
+    traceback while it imports, although multiprocessing's resource tracker, started by the same
+    call, unblocks SIGINT behind the hold."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import textwrap
+
+    script = textwrap.dedent("""
+        import os, signal, sys, time
+        from multiprocessing import forkserver
+        from mobot_cli.sweep import executor_local
+        executor_local.start_fork_server()
+        pid = forkserver._forkserver._forkserver_pid
+        for _ in range(20):  # Ctrl-C while it starts and imports
+            os.kill(pid, signal.SIGINT)
+            time.sleep(0.02)
+        time.sleep(0.5)
+        print(os.waitpid(pid, os.WNOHANG)[0] == 0)
+    """)
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60,
+                          env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert done.stdout.strip() == "True", done.stderr
+    assert "Traceback" not in done.stderr
