@@ -142,12 +142,17 @@ class KinematicWorld(World):
         """Move every robot one step along its twist, as far as nothing is in the way."""
         # Runs every step for every robot: a robot in open space costs one motion() and one move().
         self._steps += 1
-        moves = [(mover, motion) for mover in self._movers.values()
-                 if (motion := mover.motion()) is not None or mover.touches]
+        moves = []
+        for mover in self._order:
+            motion = mover.motion()
+            if motion is not None or mover.touches:
+                moves.append((mover, motion))
         if moves:
-            near = self._robot_pairs(moves) if len(self._movers) > 1 else {}
-            move = self._move
-            moved = [mover for mover, motion in moves if move(mover, motion, near.get(mover, ()))]
+            near = self._robot_pairs(moves) if len(self._order) > 1 else {}
+            move, moved = self._move, []
+            for mover, motion in moves:
+                if move(mover, motion, near.get(mover, ())):
+                    moved.append(mover)
             if moved and not self._flat:
                 self._lift(moved)
         if self._steps % self._contact_every == 0:
@@ -288,7 +293,10 @@ class KinematicWorld(World):
 
     def _count(self) -> None:
         """One contact sample from the touches the robots' last queries found."""
-        if not any(m.touches for m in self._movers.values()):
+        for mover in self._order:
+            if mover.touches:
+                break
+        else:
             self._contacts.record(())
             return
         by_body = {m.robot.body: m.robot for m in self._movers.values()}
@@ -317,6 +325,16 @@ class KinematicWorld(World):
 
             p.performCollisionDetection(physicsClientId=self._cid)  # contact sensors read its points
         return super().sense(due)
+
+    def states(self, names) -> dict[str, RobotState]:
+        """``read`` of each robot named, by name."""
+        if self._clearance:
+            return super().states(names)
+        movers = self._movers
+        try:
+            return {name: movers[name].state() for name in names}  # a log row: this is hot
+        except KeyError:  # one of them is not a Mover (yet): read() it
+            return super().states(names)
 
     def read(self, name: str) -> RobotState:
         """The robot's command, odometry and ground truth now (and its clearance when watched)."""
