@@ -108,6 +108,7 @@ class Timeline:
         self._inputs: list[Callable[[], None]] = []
         self._on_refused = on_refused  # None: a refused scripted event ends the run
         self.resets = 0
+        self.advance = world.step  # what ``advance`` does, one call less on every step
         self._schedule()
 
     def _schedule(self) -> None:

@@ -17,6 +17,8 @@ moved only when something looks at it.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from mobot_cli.errors import SimulationFault, SpawnError
@@ -53,6 +55,7 @@ class KinematicWorld(World):
         physics, world = self.physics, self.plan
         self._movers: dict[str, Mover] = {}
         self._order: list[Mover] = []
+        self._by_body: dict[int, object] = {}  # body id -> SimRobot, of the robots in _order
         # robot i, j -> their distance when last measured plus both travels then (-inf: never)
         self._measured = np.zeros((0, 0))
         self._near: dict[str, Near] = {}
@@ -122,6 +125,8 @@ class KinematicWorld(World):
     def _reindex(self, grown: bool = True) -> None:
         """Robots in spawn order, each knowing its row in the pair matrix (a new one: unmeasured)."""
         self._order = list(self._movers.values())
+        self._by_body = {m.robot.body: m.robot for m in self._order}
+        self._reach = np.array([m.reach for m in self._order])
         for index, mover in enumerate(self._order):
             mover.index = index
         if grown:
@@ -149,9 +154,17 @@ class KinematicWorld(World):
                 moves.append((mover, motion))
         if moves:
             near = self._robot_pairs(moves) if len(self._order) > 1 else {}
-            move, moved = self._move, []
+            steps, move, moved = self._steps, self._move, []
             for mover, motion in moves:
-                if move(mover, motion, near.get(mover, ())):
+                bound = mover.bound
+                if mover not in near and not mover.touches and mover.used + bound < mover.clear - CONTACT_SLOP:
+                    # Nothing static within reach of this step (the clearance last measured) and
+                    # no robot near: the whole step, no query.
+                    mover.used += bound
+                    mover.move(motion[0], motion[1], 1.0)
+                    mover.moved, mover.travel = steps, mover.travel + bound
+                    moved.append(mover)
+                elif move(mover, motion, near.get(mover, ())):
                     moved.append(mover)
             if moved and not self._flat:
                 self._lift(moved)
@@ -164,46 +177,43 @@ class KinematicWorld(World):
         whose distance, last measured, is more than both have travelled since (and this step)."""
         everyone = self._order
         n = len(everyone)
-        xy = np.array([(m.x, m.y) for m in everyone])
-        reach = np.array([m.reach for m in everyone])
-        travel = np.array([m.travel for m in everyone])
+        x = np.fromiter([m.x for m in everyone], float, n)
+        y = np.fromiter([m.y for m in everyone], float, n)
+        travel = np.fromiter([m.travel for m in everyone], float, n)
         bound = np.zeros(n)
-        for mover, motion in moves:
-            if motion is not None:
-                bound[mover.index] = abs(motion[0]) + abs(motion[1]) * mover.reach
+        rows = [mover.index for mover, _ in moves]
+        bound[rows] = [mover.bound for mover, _ in moves]
         margin = bound[:, None] + bound[None, :] + CONTACT_SLOP
-        gap = np.hypot(xy[:, None, 0] - xy[None, :, 0], xy[:, None, 1] - xy[None, :, 1]) \
-            - reach[:, None] - reach[None, :]
-        left = self._measured - travel[:, None] - travel[None, :]
-        close = (gap <= margin) & (left <= margin)
+        reach = self._reach
+        gap = np.hypot(x[:, None] - x[None, :], y[:, None] - y[None, :]) - reach[:, None] - reach[None, :]
+        close = gap <= margin
+        close &= self._measured - travel[:, None] - travel[None, :] <= margin
         np.fill_diagonal(close, False)
-        rows = np.zeros(n, dtype=bool)
-        rows[[mover.index for mover, _ in moves]] = True
+        if len(rows) < n:  # only the moving robots' rows
+            close &= np.isin(np.arange(n), rows)[:, None]
         out: dict[Mover, list[Mover]] = {}
-        for i, j in zip(*np.nonzero(close & rows[:, None])):
+        found = np.nonzero(close)
+        for i, j in zip(found[0].tolist(), found[1].tolist()):
             out.setdefault(everyone[i], []).append(everyone[j])
         return out
 
     def _move(self, mover: Mover, motion, others: list[Mover]) -> bool:
-        """One robot's step; True when it moved."""
+        """One robot's step, asking PyBullet what is in its way (step() makes a step in open
+        space itself); True when it moved."""
         distance, turn = motion if motion is not None else (0.0, 0.0)
-        bound = abs(distance) + abs(turn) * mover.reach
-        if not others and not mover.touches and mover.used + bound < mover.clear - CONTACT_SLOP:
-            mover.used += bound
-            mover.move(distance, turn, 1.0)
-            mover.moved, mover.travel = self._steps, mover.travel + bound
-            return True
+        bound = mover.bound
         stuck = mover.stuck
-        if stuck is not None and motion == stuck[0] and all(o.moved <= stuck[1] for o in others):
+        if stuck is not None and motion == stuck[0] and _still(others, stuck[1]):
             mover.move(distance, turn, 0.0)  # blocked by the same things from the same pose
             return False
-        if motion is None and mover.moved <= mover.queried and all(o.moved <= mover.queried for o in others):
+        if motion is None and mover.moved <= mover.queried and _still(others, mover.queried):
             return False  # touching, and nothing moved since: the same touches
         for other in others:
             other.sync()
-        bodies = [other.robot.body for other in others]
-        fraction, (static, apart, touching) = self._fit(mover, distance, turn, bodies)
-        if not bodies and not self._near[mover.robot.name].bodies:
+        fraction, (static, apart, touching) = self._fit(mover, distance, turn, others)
+        if not self._tops:  # no static body but the ground: nothing static is ever in the way
+            static = math.inf
+        elif not others and not self._near[mover.robot.name].bodies:
             # Nothing static within the box Near looked in: none within NEAR_MARGIN / 2 either.
             static = QUERY_REACH + NEAR_MARGIN / 2.0
         mover.clear, mover.used, mover.touches, mover.queried = static, 0.0, touching, self._steps
@@ -219,12 +229,13 @@ class KinematicWorld(World):
                 apart.get(other.robot.body, QUERY_REACH) + mover.travel + other.travel
         return motion is not None and fraction > 0.0
 
-    def _fit(self, mover: Mover, distance: float, turn: float, robots: list[int]):
+    def _fit(self, mover: Mover, distance: float, turn: float, others: list[Mover]):
         """The largest part of the step (1.0 when all of it) that does not push the robot into
         anything deeper than PENETRATION (or than it already is), and the distances there."""
         statics = self._near[mover.robot.name].around(mover.x, mover.y, mover.z, mover.reach, mover.height,
                                                       mover.floor)
         body, z = mover.robot.body, mover.z
+        robots = [other.robot.body for other in others]
 
         def at(fraction: float):
             x, y, yaw = mover.target(distance, turn, fraction)
@@ -299,9 +310,11 @@ class KinematicWorld(World):
         else:
             self._contacts.record(())
             return
-        by_body = {m.robot.body: m.robot for m in self._movers.values()}
+        by_body = self._by_body
         pairs = set()
-        for mover in self._movers.values():
+        for mover in self._order:
+            if not mover.touches:
+                continue
             robot = mover.robot
             for other in mover.touches:
                 hit = by_body.get(other)
@@ -345,6 +358,14 @@ class KinematicWorld(World):
                 self._cid, self._robot(name).body, self._clearance[name],
                 [r.body for r in self._robots.values()], self.label)
         return state
+
+
+def _still(movers: list[Mover], since: int) -> bool:
+    """None of ``movers`` has moved after step ``since``."""
+    for mover in movers:
+        if mover.moved > since:
+            return False
+    return True
 
 
 def _xy_z_yaw(pose: tuple[float, float, float], z: float) -> tuple[float, float, float, float]:

@@ -50,6 +50,10 @@ class Mover:
         # this step's (distance, turn) or None, and each wheel's (name, angle step, rate).
         self._motion_of: tuple | None = None
         self._motion: tuple[float, float] | None = None
+        self.bound = 0.0  # m: how far any point of the robot may move in this step's motion()
+        # The rates of the last move, when it was none of the step (blocked): another changes
+        # nothing (it adds the same zeros again), so it is not made.
+        self._stayed: tuple | None = None
         self._wheels_of: tuple | None = None
         self._wheel_steps: list[tuple[str, float]] = []
         self.encoder = False
@@ -88,8 +92,10 @@ class Mover:
             rates = self.rates = (ramp(rates[0], goal[0], step), ramp(rates[1], goal[1], step))
         if rates is not self._motion_of:
             self._motion_of, self._motion = rates, self._twist(rates)
+            self.bound = abs(self._motion[0]) + abs(self._motion[1]) * self.reach if self._motion else 0.0
         motion = self._motion
         if motion is None and (self.v or self.w):
+            self._stayed = None
             self.v = self.w = 0.0
             self.velocities = dict.fromkeys(self.velocities, 0.0)
             self.synced = False
@@ -114,7 +120,7 @@ class Mover:
         if fraction == 1.0:
             self.x, self.y, self.yaw = arc(self.x, self.y, self.yaw, distance, turn)
             self.synced = False
-            self.stuck = None
+            self.stuck = self._stayed = None
             dt = self.dt
             self.v, self.w = distance / dt, turn / dt
             if self.rates is not self._wheels_of:
@@ -126,6 +132,12 @@ class Mover:
                 odo = self.odometry
                 odo.x, odo.y, odo.yaw = arc(odo.x, odo.y, odo.yaw, distance, turn)
             return
+        if fraction == 0.0:
+            if self._stayed is self.rates:  # blocked again at the same rates: see _stayed
+                return
+            self._stayed = self.rates
+        else:
+            self._stayed = None
         distance, turn = distance * fraction, turn * fraction
         if fraction > 0.0:
             self.x, self.y, self.yaw = arc(self.x, self.y, self.yaw, distance, turn)
@@ -165,6 +177,7 @@ class Mover:
         self.floor = z - self.height
         self.clear = self.used = 0.0
         self.touches, self.stuck, self.moved, self.synced = set(), None, step, True
+        self._stayed = None
 
     def link_pose(self, x: float, y: float, z: float, yaw: float):
         """The root link's world position and quaternion at this planar pose."""

@@ -42,6 +42,8 @@ class Near:
 
     def around(self, x: float, y: float, z: float, reach: float, height: float, floor: float) -> list[int]:
         """Static bodies whose boxes come within reach of a robot at (x, y, z)."""
+        if not self.tops:  # a world of nothing but ground
+            return self.bodies
         key = self.key
         if key is not None and key[2] == floor and math.hypot(x - key[0], y - key[1]) < NEAR_MARGIN / 2.0:
             return self.bodies
