@@ -67,6 +67,7 @@ class KinematicWorld(World):
         sample_hz = physics.rate_hz / self._contact_every
         # A pair must be apart 0.1 s before touching again counts again, at any rate.
         self._contacts = ContactCounter(max(1, round(RELEASE_SAMPLES * sample_hz / CONTACT_RATE_HZ)))
+        self._idle = 0  # samples without touches not yet told to _contacts
 
     def reset(self) -> None:
         """Back to the world as built, at step 0, with no robots (see World.reset)."""
@@ -179,22 +180,31 @@ class KinematicWorld(World):
         n = len(everyone)
         x = np.fromiter([m.x for m in everyone], float, n)
         y = np.fromiter([m.y for m in everyone], float, n)
-        travel = np.fromiter([m.travel for m in everyone], float, n)
         bound = np.zeros(n)
         rows = [mover.index for mover, _ in moves]
         bound[rows] = [mover.bound for mover, _ in moves]
-        margin = bound[:, None] + bound[None, :] + CONTACT_SLOP
         reach = self._reach
-        gap = np.hypot(x[:, None] - x[None, :], y[:, None] - y[None, :]) - reach[:, None] - reach[None, :]
-        close = gap <= margin
-        close &= self._measured - travel[:, None] - travel[None, :] <= margin
+        dx, dy = x[:, None] - x[None, :], y[:, None] - y[None, :]
+        # First the pairs no farther apart along x and y than any pair's circles and steps can
+        # reach (most are farther), then the test itself on them alone, as numbers computed the
+        # same way for every pair would give.
+        limit = 2.0 * (bound.max() + reach.max()) + CONTACT_SLOP + 1e-9
+        close = np.abs(dx) <= limit
+        close &= np.abs(dy) <= limit
         np.fill_diagonal(close, False)
         if len(rows) < n:  # only the moving robots' rows
             close &= np.isin(np.arange(n), rows)[:, None]
+        i, j = np.nonzero(close)
+        if not len(i):
+            return {}
+        travel = np.fromiter([m.travel for m in everyone], float, n)
+        margin = bound[i] + bound[j] + CONTACT_SLOP
+        gap = np.hypot(dx[i, j], dy[i, j]) - reach[i] - reach[j]
+        left = self._measured[i, j] - travel[i] - travel[j]
+        keep = (gap <= margin) & (left <= margin)
         out: dict[Mover, list[Mover]] = {}
-        found = np.nonzero(close)
-        for i, j in zip(found[0].tolist(), found[1].tolist()):
-            out.setdefault(everyone[i], []).append(everyone[j])
+        for a, b in zip(i[keep].tolist(), j[keep].tolist()):
+            out.setdefault(everyone[a], []).append(everyone[b])
         return out
 
     def _move(self, mover: Mover, motion, others: list[Mover]) -> bool:
@@ -295,10 +305,11 @@ class KinematicWorld(World):
         if self._flat:
             return np.zeros(len(movers))
         points, top = [], []
-        for mover, t in zip(movers, np.broadcast_to(tops, (len(movers),))):
-            c, s = np.cos(mover.yaw), np.sin(mover.yaw)
-            points.extend((mover.x + c * fx - s * fy, mover.y + s * fx + c * fy) for fx, fy in mover.feet)
-            top.extend([t] * len(mover.feet))
+        for mover, t in zip(movers, np.broadcast_to(tops, (len(movers),)).tolist()):
+            # numpy's cosine as ever, taken out as a float: the same numbers, at Python's speed
+            c, s, x, y = float(np.cos(mover.yaw)), float(np.sin(mover.yaw)), mover.x, mover.y
+            points += [(x + c * fx - s * fy, y + s * fx + c * fy) for fx, fy in mover.feet]
+            top += [t] * len(mover.feet)
         heights = self._floor.heights(np.array(points), np.array(top))
         return heights.reshape(len(movers), -1).max(axis=1)
 
@@ -308,8 +319,11 @@ class KinematicWorld(World):
             if mover.touches:
                 break
         else:
-            self._contacts.record(())
+            self._idle += 1  # told to the counter before the next sample with touches
             return
+        if self._idle:
+            self._contacts.idle(self._idle)
+            self._idle = 0
         by_body = self._by_body
         pairs = set()
         for mover in self._order:
