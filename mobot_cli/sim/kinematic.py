@@ -25,7 +25,8 @@ from mobot_cli.errors import SimulationFault, SpawnError
 from mobot_cli.sim import clearance as clearance_mod
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, CONTACT_SLOP, RELEASE_SAMPLES, ContactCounter
 from mobot_cli.sim.kinematic_body import Mover
-from mobot_cli.sim.kinematic_collide import NEAR_MARGIN, QUERY_REACH, SUPPORT_BAND, Floor, Near, distances, nearest
+from mobot_cli.sim.kinematic_collide import (NEAR_MARGIN, QUERY_REACH, SUPPORT_BAND, Floor, Near, distances, nearest,
+                                             static_boxes)
 from mobot_cli.sim.placement import body_bounds
 from mobot_cli.sim.plan import Physics, RobotPlan, SpawnPose, WorldPlan
 from mobot_cli.sim.state import RobotState
@@ -63,6 +64,7 @@ class KinematicWorld(World):
         self._flat = self._floor.flat and world.ground_plane  # the floor is z = 0 everywhere
         # static body -> the top of its box: one no higher than a robot's support band is floor
         self._tops = {uid: _top(self._cid, uid) for uid in self._statics if uid != self._ground}
+        self._boxes = static_boxes(self._cid, world, [uid for uid in self._statics if uid != self._ground])
         self._contact_every = max(1, round(physics.rate_hz / CONTACT_RATE_HZ))
         sample_hz = physics.rate_hz / self._contact_every
         # A pair must be apart 0.1 s before touching again counts again, at any rate.
@@ -100,6 +102,7 @@ class KinematicWorld(World):
             x, y, z = sim.link_pose()[0]
             reach = float(np.hypot(max(x - lo[0], hi[0] - x), max(y - lo[1], hi[1] - y)))
             mover = Mover(sim, self.physics.dt, lo[2], reach, _feet(self._probes, sim.body, lo, (x, y, sim.spawn_xy_yaw[2])))
+            mover.above = hi[2] - z  # its highest point above its link origin
             floor = self._floor_under([mover], mover.floor + SUPPORT_BAND)[0]
             if not np.isfinite(floor):
                 raise SpawnError(f"robot '{robot.name}' has no floor under it",
@@ -111,7 +114,7 @@ class KinematicWorld(World):
             raise
         self._movers[robot.name] = mover
         self._reindex()
-        self._near[robot.name] = Near(self._cid, self._tops)
+        self._near[robot.name] = Near(self._cid, self._tops, self._boxes)
 
     def remove(self, name: str) -> None:
         """Delete a robot from the world."""
@@ -242,15 +245,15 @@ class KinematicWorld(World):
     def _fit(self, mover: Mover, distance: float, turn: float, others: list[Mover]):
         """The largest part of the step (1.0 when all of it) that does not push the robot into
         anything deeper than PENETRATION (or than it already is), and the distances there."""
-        statics = self._near[mover.robot.name].around(mover.x, mover.y, mover.z, mover.reach, mover.height,
-                                                      mover.floor)
-        body, z = mover.robot.body, mover.z
+        near = self._near[mover.robot.name]
+        near.around(mover.x, mover.y, mover.z, mover.reach, mover.height, mover.floor, mover.z + mover.above)
+        body, z, reach = mover.robot.body, mover.z, mover.reach + QUERY_REACH
         robots = [other.robot.body for other in others]
 
         def at(fraction: float):
             x, y, yaw = mover.target(distance, turn, fraction)
             mover.place(x, y, z, yaw)
-            return distances(self._cid, body, statics, robots, QUERY_REACH, mover.floor)
+            return distances(self._cid, body, near.within(x, y, reach), robots, QUERY_REACH, mover.floor)
 
         full = at(1.0)
         if nearest(full) >= -PENETRATION or (distance == 0.0 and turn == 0.0):

@@ -32,6 +32,7 @@ class Mover:
         self.height = z - bottom  # the link origin above the robot's lowest point
         self.floor = bottom
         self.reach = reach  # m: farthest collision point from the link origin, horizontally
+        self.above = math.inf  # m: its highest collision point above the link origin
         self.feet = feet  # where it stands (root frame): the floor is looked for under them
         self.v = self.w = 0.0  # the body twist of the last step, as it moved
         self.positions = robot.joint_positions()
@@ -173,6 +174,8 @@ class Mover:
         where it stands now, and nothing near it is known any more."""
         x, y, z, roll, pitch, yaw = self.robot.link_pose_rpy()
         self.x, self.y, self.z, self.yaw = x, y, z, yaw
+        if (roll, pitch) != self.tilt:  # turned about z, its top stays as high; tipped, not
+            self.above = math.inf
         self.tilt, self.level = (roll, pitch), roll == 0.0 and pitch == 0.0
         self.floor = z - self.height
         self.clear = self.used = 0.0

@@ -230,3 +230,28 @@ def test_the_states_of_a_log_row_are_each_robots_read(bundled, engine):
         assert list(states) == names
         assert states == {name: world.read(name) for name in names}
         assert states["r2"].true_y == pytest.approx(2.0, abs=0.1) and states["r2"].true_vx > 0.0
+
+
+def test_static_bodies_left_out_of_a_query_are_those_it_would_find_nothing_of():
+    from mobot_cli.sim.kinematic_collide import QUERY_REACH, distances
+
+    plan = prepare(REPO / "scenarios" / "house.yaml", ["physics.engine=kinematic"]).plan
+    rng = np.random.default_rng(5)
+    asked = kept = 0
+    with open_world(plan.physics, plan.world) as world:
+        world.spawn(plan.robots[0])
+        mover, near = world._movers[plan.robots[0].name], world._near[plan.robots[0].name]
+        for _ in range(300):
+            x, y, yaw = rng.uniform(-5.8, 5.8), rng.uniform(-4.8, 4.8), rng.uniform(-math.pi, math.pi)
+            # Near's box is taken up to NEAR_MARGIN / 2 away from where the robot is asked about.
+            kx, ky = x + rng.uniform(-0.17, 0.17), y + rng.uniform(-0.17, 0.17)
+            near.key = None
+            near.around(kx, ky, mover.z, mover.reach, mover.height, mover.floor, mover.z + mover.above)
+            mover.place(x, y, mover.z, yaw)
+            within = near.within(x, y, mover.reach + QUERY_REACH)
+            every = distances(world.client_id, mover.robot.body, near.bodies, [], QUERY_REACH, mover.floor)
+            assert distances(world.client_id, mover.robot.body, within, [], QUERY_REACH, mover.floor) == every
+            assert set(within) <= set(near.bodies)
+            asked, kept = asked + len(near.bodies), kept + len(within)
+        mover.sync()
+    assert asked > 300 and kept < 0.6 * asked  # most bodies near enough to look at are too far to ask
