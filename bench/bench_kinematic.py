@@ -242,6 +242,8 @@ def main() -> None:
     parser.add_argument("--physics-fleet-seconds", type=float, default=1.0,
                         help="simulated seconds of the physics engine's fleet run (it is slow)")
     parser.add_argument("--skip-table", action="store_true")
+    parser.add_argument("--rows", default="", help="only these rows, e.g. kin,pyrobosim,fleet-kin (keys of "
+                        "`jobs`; the sweep then too only when 'sweep' is among them)")
     parser.add_argument("--peer", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.peer:
@@ -272,6 +274,9 @@ def main() -> None:
             ("fleet-kin", lambda: mobot_rtf(files["fleet-kin"])),
             ("fleet-kin-lidar", lambda: mobot_rtf(files["fleet-kin-lidar"])),
             ("fleet-phys", lambda: mobot_rtf(files["fleet-phys"]))]
+    rows_asked = set(filter(None, args.rows.split(",")))
+    if rows_asked:
+        jobs = [(key, job) for key, job in jobs if key in rows_asked]
     for _ in range(args.repeat):  # interleaved: every figure sees the same load
         for key, job in jobs:
             rtf, n = job()
@@ -297,6 +302,8 @@ def main() -> None:
               ("kinematic+lidar / IR-SIM+lidar", get("kin-lidar"), get("irsim-lidar")),
               ("fleet kinematic / physics", get("fleet-kin"), get("fleet-phys"))]
     print("\n" + "; ".join(f"{name}: {a / b:.1f}x" for name, a, b in ratios if a and b))
+    if rows_asked and "sweep" not in rows_asked:
+        return
     runs_per_s, per_run = sweep_rate(work)
     print(f"\n32-run `mobot sweep --jobs 2` of the kinematic script: {runs_per_s:.1f} runs/s whole process; "
           f"median wall time of one run in its worker {per_run * 1000:.0f} ms")

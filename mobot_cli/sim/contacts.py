@@ -73,6 +73,11 @@ class ContactCounter:
         self._samples += 1
         self._count(touching)
 
+    def idle(self, samples: int = 1) -> None:
+        """``samples`` samples in which nothing touched (the kinematic engine tells them in a lump,
+        before its next sample that has touches)."""
+        self._samples += samples
+
     def _count(self, touching: Iterable[tuple[Counted, Hashable]]) -> None:
         for robot, other in touching:
             key = (robot.name, other)

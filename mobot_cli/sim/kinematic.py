@@ -17,13 +17,16 @@ moved only when something looks at it.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from mobot_cli.errors import SimulationFault, SpawnError
 from mobot_cli.sim import clearance as clearance_mod
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, CONTACT_SLOP, RELEASE_SAMPLES, ContactCounter
 from mobot_cli.sim.kinematic_body import Mover
-from mobot_cli.sim.kinematic_collide import NEAR_MARGIN, QUERY_REACH, SUPPORT_BAND, Floor, Near, distances, nearest
+from mobot_cli.sim.kinematic_collide import (NEAR_MARGIN, QUERY_REACH, SUPPORT_BAND, Floor, Near, distances, nearest,
+                                             static_boxes)
 from mobot_cli.sim.placement import body_bounds
 from mobot_cli.sim.plan import Physics, RobotPlan, SpawnPose, WorldPlan
 from mobot_cli.sim.state import RobotState
@@ -53,6 +56,7 @@ class KinematicWorld(World):
         physics, world = self.physics, self.plan
         self._movers: dict[str, Mover] = {}
         self._order: list[Mover] = []
+        self._by_body: dict[int, object] = {}  # body id -> SimRobot, of the robots in _order
         # robot i, j -> their distance when last measured plus both travels then (-inf: never)
         self._measured = np.zeros((0, 0))
         self._near: dict[str, Near] = {}
@@ -60,10 +64,12 @@ class KinematicWorld(World):
         self._flat = self._floor.flat and world.ground_plane  # the floor is z = 0 everywhere
         # static body -> the top of its box: one no higher than a robot's support band is floor
         self._tops = {uid: _top(self._cid, uid) for uid in self._statics if uid != self._ground}
+        self._boxes = static_boxes(self._cid, world, [uid for uid in self._statics if uid != self._ground])
         self._contact_every = max(1, round(physics.rate_hz / CONTACT_RATE_HZ))
         sample_hz = physics.rate_hz / self._contact_every
         # A pair must be apart 0.1 s before touching again counts again, at any rate.
         self._contacts = ContactCounter(max(1, round(RELEASE_SAMPLES * sample_hz / CONTACT_RATE_HZ)))
+        self._idle = 0  # samples without touches not yet told to _contacts
 
     def reset(self) -> None:
         """Back to the world as built, at step 0, with no robots (see World.reset)."""
@@ -96,6 +102,7 @@ class KinematicWorld(World):
             x, y, z = sim.link_pose()[0]
             reach = float(np.hypot(max(x - lo[0], hi[0] - x), max(y - lo[1], hi[1] - y)))
             mover = Mover(sim, self.physics.dt, lo[2], reach, _feet(self._probes, sim.body, lo, (x, y, sim.spawn_xy_yaw[2])))
+            mover.above = hi[2] - z  # its highest point above its link origin
             floor = self._floor_under([mover], mover.floor + SUPPORT_BAND)[0]
             if not np.isfinite(floor):
                 raise SpawnError(f"robot '{robot.name}' has no floor under it",
@@ -107,7 +114,7 @@ class KinematicWorld(World):
             raise
         self._movers[robot.name] = mover
         self._reindex()
-        self._near[robot.name] = Near(self._cid, self._tops)
+        self._near[robot.name] = Near(self._cid, self._tops, self._boxes)
 
     def remove(self, name: str) -> None:
         """Delete a robot from the world."""
@@ -122,6 +129,8 @@ class KinematicWorld(World):
     def _reindex(self, grown: bool = True) -> None:
         """Robots in spawn order, each knowing its row in the pair matrix (a new one: unmeasured)."""
         self._order = list(self._movers.values())
+        self._by_body = {m.robot.body: m.robot for m in self._order}
+        self._reach = np.array([m.reach for m in self._order])
         for index, mover in enumerate(self._order):
             mover.index = index
         if grown:
@@ -142,12 +151,25 @@ class KinematicWorld(World):
         """Move every robot one step along its twist, as far as nothing is in the way."""
         # Runs every step for every robot: a robot in open space costs one motion() and one move().
         self._steps += 1
-        moves = [(mover, motion) for mover in self._movers.values()
-                 if (motion := mover.motion()) is not None or mover.touches]
+        moves = []
+        for mover in self._order:
+            motion = mover.motion()
+            if motion is not None or mover.touches:
+                moves.append((mover, motion))
         if moves:
-            near = self._robot_pairs(moves) if len(self._movers) > 1 else {}
-            move = self._move
-            moved = [mover for mover, motion in moves if move(mover, motion, near.get(mover, ()))]
+            near = self._robot_pairs(moves) if len(self._order) > 1 else {}
+            steps, move, moved = self._steps, self._move, []
+            for mover, motion in moves:
+                bound = mover.bound
+                if mover not in near and not mover.touches and mover.used + bound < mover.clear - CONTACT_SLOP:
+                    # Nothing static within reach of this step (the clearance last measured) and
+                    # no robot near: the whole step, no query.
+                    mover.used += bound
+                    mover.move(motion[0], motion[1], 1.0)
+                    mover.moved, mover.travel = steps, mover.travel + bound
+                    moved.append(mover)
+                elif move(mover, motion, near.get(mover, ())):
+                    moved.append(mover)
             if moved and not self._flat:
                 self._lift(moved)
         if self._steps % self._contact_every == 0:
@@ -159,46 +181,52 @@ class KinematicWorld(World):
         whose distance, last measured, is more than both have travelled since (and this step)."""
         everyone = self._order
         n = len(everyone)
-        xy = np.array([(m.x, m.y) for m in everyone])
-        reach = np.array([m.reach for m in everyone])
-        travel = np.array([m.travel for m in everyone])
+        x = np.fromiter([m.x for m in everyone], float, n)
+        y = np.fromiter([m.y for m in everyone], float, n)
         bound = np.zeros(n)
-        for mover, motion in moves:
-            if motion is not None:
-                bound[mover.index] = abs(motion[0]) + abs(motion[1]) * mover.reach
-        margin = bound[:, None] + bound[None, :] + CONTACT_SLOP
-        gap = np.hypot(xy[:, None, 0] - xy[None, :, 0], xy[:, None, 1] - xy[None, :, 1]) \
-            - reach[:, None] - reach[None, :]
-        left = self._measured - travel[:, None] - travel[None, :]
-        close = (gap <= margin) & (left <= margin)
+        rows = [mover.index for mover, _ in moves]
+        bound[rows] = [mover.bound for mover, _ in moves]
+        reach = self._reach
+        dx, dy = x[:, None] - x[None, :], y[:, None] - y[None, :]
+        # First the pairs no farther apart along x and y than any pair's circles and steps can
+        # reach (most are farther), then the test itself on them alone, as numbers computed the
+        # same way for every pair would give.
+        limit = 2.0 * (bound.max() + reach.max()) + CONTACT_SLOP + 1e-9
+        close = np.abs(dx) <= limit
+        close &= np.abs(dy) <= limit
         np.fill_diagonal(close, False)
-        rows = np.zeros(n, dtype=bool)
-        rows[[mover.index for mover, _ in moves]] = True
+        if len(rows) < n:  # only the moving robots' rows
+            close &= np.isin(np.arange(n), rows)[:, None]
+        i, j = np.nonzero(close)
+        if not len(i):
+            return {}
+        travel = np.fromiter([m.travel for m in everyone], float, n)
+        margin = bound[i] + bound[j] + CONTACT_SLOP
+        gap = np.hypot(dx[i, j], dy[i, j]) - reach[i] - reach[j]
+        left = self._measured[i, j] - travel[i] - travel[j]
+        keep = (gap <= margin) & (left <= margin)
         out: dict[Mover, list[Mover]] = {}
-        for i, j in zip(*np.nonzero(close & rows[:, None])):
-            out.setdefault(everyone[i], []).append(everyone[j])
+        for a, b in zip(i[keep].tolist(), j[keep].tolist()):
+            out.setdefault(everyone[a], []).append(everyone[b])
         return out
 
     def _move(self, mover: Mover, motion, others: list[Mover]) -> bool:
-        """One robot's step; True when it moved."""
+        """One robot's step, asking PyBullet what is in its way (step() makes a step in open
+        space itself); True when it moved."""
         distance, turn = motion if motion is not None else (0.0, 0.0)
-        bound = abs(distance) + abs(turn) * mover.reach
-        if not others and not mover.touches and mover.used + bound < mover.clear - CONTACT_SLOP:
-            mover.used += bound
-            mover.move(distance, turn, 1.0)
-            mover.moved, mover.travel = self._steps, mover.travel + bound
-            return True
+        bound = mover.bound
         stuck = mover.stuck
-        if stuck is not None and motion == stuck[0] and all(o.moved <= stuck[1] for o in others):
+        if stuck is not None and motion == stuck[0] and _still(others, stuck[1]):
             mover.move(distance, turn, 0.0)  # blocked by the same things from the same pose
             return False
-        if motion is None and mover.moved <= mover.queried and all(o.moved <= mover.queried for o in others):
+        if motion is None and mover.moved <= mover.queried and _still(others, mover.queried):
             return False  # touching, and nothing moved since: the same touches
         for other in others:
             other.sync()
-        bodies = [other.robot.body for other in others]
-        fraction, (static, apart, touching) = self._fit(mover, distance, turn, bodies)
-        if not bodies and not self._near[mover.robot.name].bodies:
+        fraction, (static, apart, touching) = self._fit(mover, distance, turn, others)
+        if not self._tops:  # no static body but the ground: nothing static is ever in the way
+            static = math.inf
+        elif not others and not self._near[mover.robot.name].bodies:
             # Nothing static within the box Near looked in: none within NEAR_MARGIN / 2 either.
             static = QUERY_REACH + NEAR_MARGIN / 2.0
         mover.clear, mover.used, mover.touches, mover.queried = static, 0.0, touching, self._steps
@@ -214,17 +242,18 @@ class KinematicWorld(World):
                 apart.get(other.robot.body, QUERY_REACH) + mover.travel + other.travel
         return motion is not None and fraction > 0.0
 
-    def _fit(self, mover: Mover, distance: float, turn: float, robots: list[int]):
+    def _fit(self, mover: Mover, distance: float, turn: float, others: list[Mover]):
         """The largest part of the step (1.0 when all of it) that does not push the robot into
         anything deeper than PENETRATION (or than it already is), and the distances there."""
-        statics = self._near[mover.robot.name].around(mover.x, mover.y, mover.z, mover.reach, mover.height,
-                                                      mover.floor)
-        body, z = mover.robot.body, mover.z
+        near = self._near[mover.robot.name]
+        near.around(mover.x, mover.y, mover.z, mover.reach, mover.height, mover.floor, mover.z + mover.above)
+        body, z, reach = mover.robot.body, mover.z, mover.reach + QUERY_REACH
+        robots = [other.robot.body for other in others]
 
         def at(fraction: float):
             x, y, yaw = mover.target(distance, turn, fraction)
             mover.place(x, y, z, yaw)
-            return distances(self._cid, body, statics, robots, QUERY_REACH, mover.floor)
+            return distances(self._cid, body, near.within(x, y, reach), robots, QUERY_REACH, mover.floor)
 
         full = at(1.0)
         if nearest(full) >= -PENETRATION or (distance == 0.0 and turn == 0.0):
@@ -279,21 +308,30 @@ class KinematicWorld(World):
         if self._flat:
             return np.zeros(len(movers))
         points, top = [], []
-        for mover, t in zip(movers, np.broadcast_to(tops, (len(movers),))):
-            c, s = np.cos(mover.yaw), np.sin(mover.yaw)
-            points.extend((mover.x + c * fx - s * fy, mover.y + s * fx + c * fy) for fx, fy in mover.feet)
-            top.extend([t] * len(mover.feet))
+        for mover, t in zip(movers, np.broadcast_to(tops, (len(movers),)).tolist()):
+            # numpy's cosine as ever, taken out as a float: the same numbers, at Python's speed
+            c, s, x, y = float(np.cos(mover.yaw)), float(np.sin(mover.yaw)), mover.x, mover.y
+            points += [(x + c * fx - s * fy, y + s * fx + c * fy) for fx, fy in mover.feet]
+            top += [t] * len(mover.feet)
         heights = self._floor.heights(np.array(points), np.array(top))
         return heights.reshape(len(movers), -1).max(axis=1)
 
     def _count(self) -> None:
         """One contact sample from the touches the robots' last queries found."""
-        if not any(m.touches for m in self._movers.values()):
-            self._contacts.record(())
+        for mover in self._order:
+            if mover.touches:
+                break
+        else:
+            self._idle += 1  # told to the counter before the next sample with touches
             return
-        by_body = {m.robot.body: m.robot for m in self._movers.values()}
+        if self._idle:
+            self._contacts.idle(self._idle)
+            self._idle = 0
+        by_body = self._by_body
         pairs = set()
-        for mover in self._movers.values():
+        for mover in self._order:
+            if not mover.touches:
+                continue
             robot = mover.robot
             for other in mover.touches:
                 hit = by_body.get(other)
@@ -318,6 +356,16 @@ class KinematicWorld(World):
             p.performCollisionDetection(physicsClientId=self._cid)  # contact sensors read its points
         return super().sense(due)
 
+    def states(self, names) -> dict[str, RobotState]:
+        """``read`` of each robot named, by name."""
+        if self._clearance:
+            return super().states(names)
+        movers = self._movers
+        try:
+            return {name: movers[name].state() for name in names}  # a log row: this is hot
+        except KeyError:  # one of them is not a Mover (yet): read() it
+            return super().states(names)
+
     def read(self, name: str) -> RobotState:
         """The robot's command, odometry and ground truth now (and its clearance when watched)."""
         state = self._movers[name].state() if name in self._movers else self._robot(name).state()
@@ -327,6 +375,14 @@ class KinematicWorld(World):
                 self._cid, self._robot(name).body, self._clearance[name],
                 [r.body for r in self._robots.values()], self.label)
         return state
+
+
+def _still(movers: list[Mover], since: int) -> bool:
+    """None of ``movers`` has moved after step ``since``."""
+    for mover in movers:
+        if mover.moved > since:
+            return False
+    return True
 
 
 def _xy_z_yaw(pose: tuple[float, float, float], z: float) -> tuple[float, float, float, float]:

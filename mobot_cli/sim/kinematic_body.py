@@ -32,6 +32,7 @@ class Mover:
         self.height = z - bottom  # the link origin above the robot's lowest point
         self.floor = bottom
         self.reach = reach  # m: farthest collision point from the link origin, horizontally
+        self.above = math.inf  # m: its highest collision point above the link origin
         self.feet = feet  # where it stands (root frame): the floor is looked for under them
         self.v = self.w = 0.0  # the body twist of the last step, as it moved
         self.positions = robot.joint_positions()
@@ -46,6 +47,17 @@ class Mover:
         self.index = -1  # its row in the World's pair matrix
         self.synced = False  # the PyBullet body is at this pose
         self.rates = self.goal = (0.0, 0.0)  # left, right wheel rates (rad/s, forward positive)
+        # What the rates give, worked out once per change of ``rates`` (they are a new tuple then):
+        # this step's (distance, turn) or None, and each wheel's (name, angle step, rate).
+        self._motion_of: tuple | None = None
+        self._motion: tuple[float, float] | None = None
+        self.bound = 0.0  # m: how far any point of the robot may move in this step's motion()
+        # The rates of the last move, when it was none of the step (blocked): another changes
+        # nothing (it adds the same zeros again), so it is not made.
+        self._stayed: tuple | None = None
+        self._wheels_of: tuple | None = None
+        self._wheel_steps: list[tuple[str, float]] = []
+        self.encoder = False
         drive = robot.drive
         self.drive = drive
         if drive is None:
@@ -75,29 +87,59 @@ class Mover:
 
     def motion(self) -> tuple[float, float] | None:
         """This step's (distance, turn) from the wheel rates, ramped first; None: standing still."""
-        if self.rates != self.goal:
-            step = self.max_step
-            self.rates = (ramp(self.rates[0], self.goal[0], step), ramp(self.rates[1], self.goal[1], step))
-        left, right = self.rates
+        rates = self.rates
+        if rates != self.goal:
+            step, goal = self.max_step, self.goal
+            rates = self.rates = (ramp(rates[0], goal[0], step), ramp(rates[1], goal[1], step))
+        if rates is not self._motion_of:
+            self._motion_of, self._motion = rates, self._twist(rates)
+            self.bound = abs(self._motion[0]) + abs(self._motion[1]) * self.reach if self._motion else 0.0
+        motion = self._motion
+        if motion is None and (self.v or self.w):
+            self._stayed = None
+            self.v = self.w = 0.0
+            self.velocities = dict.fromkeys(self.velocities, 0.0)
+            self.synced = False
+        return motion
+
+    def _twist(self, rates: tuple[float, float]) -> tuple[float, float] | None:
+        left, right = rates
         if left == 0.0 and right == 0.0:
-            if self.v or self.w:
-                self.v = self.w = 0.0
-                self.velocities = dict.fromkeys(self.velocities, 0.0)
-                self.synced = False
             return None
         r = self.radius * self.dt
-        distance, turn = body_twist(left * r, right * r, self.separation)
-        return distance, turn
+        return body_twist(left * r, right * r, self.separation)
 
     def target(self, distance: float, turn: float, fraction: float) -> tuple[float, float, float]:
         """Where ``fraction`` of this step's arc takes the robot: x, y, yaw."""
         return arc(self.x, self.y, self.yaw, distance * fraction, turn * fraction)
 
     def move(self, distance: float, turn: float, fraction: float) -> None:
-        """Make ``fraction`` of this step's motion: pose, wheel angles, encoder odometry."""
-        # Runs every step for every moving robot: plain arithmetic, no temporaries.
-        if fraction != 1.0:
-            distance, turn = distance * fraction, turn * fraction
+        """Make ``fraction`` of this step's motion (``motion()``'s): pose, wheel angles, encoder
+        odometry."""
+        # Runs every step for every moving robot: a whole step is plain arithmetic on numbers
+        # worked out when the rates last changed.
+        if fraction == 1.0:
+            self.x, self.y, self.yaw = arc(self.x, self.y, self.yaw, distance, turn)
+            self.synced = False
+            self.stuck = self._stayed = None
+            dt = self.dt
+            self.v, self.w = distance / dt, turn / dt
+            if self.rates is not self._wheels_of:
+                self._whole_wheel_steps()
+            positions = self.positions
+            for name, angle in self._wheel_steps:
+                positions[name] += angle
+            if self.encoder:  # the wheels' arc is the body's: motion() worked it out from them
+                odo = self.odometry
+                odo.x, odo.y, odo.yaw = arc(odo.x, odo.y, odo.yaw, distance, turn)
+            return
+        if fraction == 0.0:
+            if self._stayed is self.rates:  # blocked again at the same rates: see _stayed
+                return
+            self._stayed = self.rates
+        else:
+            self._stayed = None
+        distance, turn = distance * fraction, turn * fraction
         if fraction > 0.0:
             self.x, self.y, self.yaw = arc(self.x, self.y, self.yaw, distance, turn)
             self.synced = False
@@ -105,26 +147,40 @@ class Mover:
         dt = self.dt
         self.v, self.w = distance / dt, turn / dt
         left, right = self.rates
-        if fraction != 1.0:
-            left, right = left * fraction, right * fraction
-        positions, velocities = self.positions, self.velocities
+        left, right = left * fraction, right * fraction
+        positions, velocities = self.positions, {}
         for name, sign, side in self.wheels:
             rate = sign * (right if side else left)
             positions[name] += rate * dt
             velocities[name] = rate
+        self.velocities, self._wheels_of = {**self.velocities, **velocities}, None
         if self.encoder:
             travel = self.radius * dt
             self.odometry.integrate(*body_twist(left * travel, right * travel, self.separation))
+
+    def _whole_wheel_steps(self) -> None:
+        """Each wheel's angle step and rate at the current rates; ``velocities`` is a new dict
+        (states hand it out as it is: it is never changed in place)."""
+        left, right = self._wheels_of = self.rates
+        dt, steps, velocities = self.dt, [], dict(self.velocities)
+        for name, sign, side in self.wheels:
+            rate = sign * (right if side else left)
+            steps.append((name, rate * dt))
+            velocities[name] = rate
+        self._wheel_steps, self.velocities = steps, velocities
 
     def relocate(self, step: int) -> None:
         """Take the PyBullet body's pose as the robot's (after a teleport): the floor under it is
         where it stands now, and nothing near it is known any more."""
         x, y, z, roll, pitch, yaw = self.robot.link_pose_rpy()
         self.x, self.y, self.z, self.yaw = x, y, z, yaw
+        if (roll, pitch) != self.tilt:  # turned about z, its top stays as high; tipped, not
+            self.above = math.inf
         self.tilt, self.level = (roll, pitch), roll == 0.0 and pitch == 0.0
         self.floor = z - self.height
         self.clear = self.used = 0.0
         self.touches, self.stuck, self.moved, self.synced = set(), None, step, True
+        self._stayed = None
 
     def link_pose(self, x: float, y: float, z: float, yaw: float):
         """The root link's world position and quaternion at this planar pose."""
@@ -163,16 +219,16 @@ class Mover:
 
     def state(self) -> RobotState:
         """Command, odometry and truth now, from the robot's own numbers (no PyBullet call)."""
-        robot = self.robot
-        if self.drive is not None and self.encoder:
+        # Runs for every robot on every log row.
+        robot, v, w = self.robot, self.v, self.w
+        if self.encoder:
             odo = self.odometry
-            odom = (odo.x, odo.y, wrap_angle(odo.yaw), self.v, self.w)
+            odom_x, odom_y, odom_yaw = odo.x, odo.y, wrap_angle(odo.yaw)
         else:
             x0, y0, yaw0 = robot.spawn_xy_yaw
             dx, dy = self.x - x0, self.y - y0
             c, s = math.cos(yaw0), math.sin(yaw0)
-            odom = (c * dx + s * dy, -s * dx + c * dy, wrap_angle(self.yaw - yaw0), self.v, self.w)
-        return RobotState(robot.cmd[0], robot.cmd[1], *odom, self.x, self.y, self.z, self.tilt[0],
-                          self.tilt[1], wrap_angle(self.yaw), self.v, self.w,
-                          joint_positions=dict(self.positions), collisions=robot.collisions,
-                          joint_velocities=dict(self.velocities))
+            odom_x, odom_y, odom_yaw = c * dx + s * dy, -s * dx + c * dy, wrap_angle(self.yaw - yaw0)
+        cmd, tilt = robot.cmd, self.tilt
+        return RobotState(cmd[0], cmd[1], odom_x, odom_y, odom_yaw, v, w, self.x, self.y, self.z, tilt[0], tilt[1],
+                          wrap_angle(self.yaw), v, w, dict(self.positions), robot.collisions, self.velocities)

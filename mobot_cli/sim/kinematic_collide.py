@@ -31,17 +31,28 @@ FLOOR_DEPTH = 100.0  # m
 STATIC_GROUP = 2  # PyBullet's collision filter group of static bodies (robots are 1, see sim/lidar.py)
 
 
+# A static body near a robot is asked about only when one of its shapes' boxes, widened by this
+# (round shapes' polygons, rounding), comes within the query's reach. PyBullet's margins lie
+# inside its boxes, cylinders and spheres; its own boxes (of meshes) hold theirs.
+BOX_SLACK = 0.02  # m
+
+
 class Near:
     """The static bodies near a robot that can be in its way, cached until it has moved
     NEAR_MARGIN / 2 (or its floor changed); a body wholly below its support band is floor."""
 
-    def __init__(self, cid: int, tops: dict[int, float]):
-        self.cid, self.tops = cid, tops
+    def __init__(self, cid: int, tops: dict[int, float], boxes: dict[int, list[tuple[float, ...]]]):
+        self.cid, self.tops, self.boxes = cid, tops, boxes
         self.key: tuple[float, float, float] | None = None
         self.bodies: list[int] = []
+        self.gaps: list[tuple[int, float]] = []  # (body, how far its boxes are from the key's x, y)
 
-    def around(self, x: float, y: float, z: float, reach: float, height: float, floor: float) -> list[int]:
-        """Static bodies whose boxes come within reach of a robot at (x, y, z)."""
+    def around(self, x: float, y: float, z: float, reach: float, height: float, floor: float,
+               top: float = math.inf) -> list[int]:
+        """Static bodies whose boxes come within reach of a robot at (x, y, z) (its lowest point
+        at ``floor``, its highest at ``top``)."""
+        if not self.tops:  # a world of nothing but ground
+            return self.bodies
         key = self.key
         if key is not None and key[2] == floor and math.hypot(x - key[0], y - key[1]) < NEAR_MARGIN / 2.0:
             return self.bodies
@@ -50,8 +61,65 @@ class Near:
                                         physicsClientId=self.cid) or ()
         tops, low = self.tops, floor + SUPPORT_BAND
         self.bodies = sorted({uid for uid, _ in found if uid in tops and tops[uid] > low})
+        low, high = floor - QUERY_REACH, top + QUERY_REACH  # shapes wholly above or below: out of reach
+        self.gaps = [(uid, _gap(self.boxes.get(uid), x, y, low, high)) for uid in self.bodies]
         self.key = (x, y, floor)
         return self.bodies
+
+    def within(self, x: float, y: float, reach: float) -> list[int]:
+        """Of the bodies ``around`` found last, those whose boxes may come within ``reach`` of
+        (x, y): the others have no point that near, and a query of them would find none."""
+        if self.key is None:
+            return self.bodies
+        limit = reach + math.hypot(x - self.key[0], y - self.key[1])  # how far it is from the key
+        return [uid for uid, gap in self.gaps if gap <= limit]
+
+
+def _gap(boxes: list[tuple[float, ...]] | None, x: float, y: float, low: float, high: float) -> float:
+    """How far the nearest of the boxes reaching between heights ``low`` and ``high`` is from
+    (x, y) in x and y (+inf: none does; -inf: no boxes known)."""
+    if not boxes:
+        return -math.inf
+    return min((math.hypot(max(x0 - x, 0.0, x - x1), max(y0 - y, 0.0, y - y1))
+                for x0, y0, z0, x1, y1, z1 in boxes if z0 <= high and z1 >= low), default=math.inf)
+
+
+def static_boxes(cid: int, world: WorldPlan, uids: list[int]) -> dict[int, list[tuple[float, ...]]]:
+    """Each static body's shapes as boxes (x0, y0, z0, x1, y1, z1), widened by BOX_SLACK, given
+    the world's static bodies' ids in the order they were made (sim/world.py): a body of boxes,
+    cylinders, capsules and spheres has one box a shape; any other (a mesh, a plane, URDF
+    text) one box, PyBullet's own."""
+    from mobot_cli.common.transforms import compose_poses, quat_matrix
+    from mobot_cli.sim.raycast import shape_triangles
+    from mobot_cli.sim.static_shapes import MAX_SHAPES_PER_BODY
+
+    chunks = []  # each static body's shapes, as static_shapes.create split them
+    for body in world.bodies:
+        shapes = body.shapes
+        chunks += [(body, shapes[i:i + MAX_SHAPES_PER_BODY]) for i in range(0, len(shapes), MAX_SHAPES_PER_BODY)] \
+            if shapes else [(body, ())]
+    boxes = {}
+    for uid, (body, shapes) in zip(uids, chunks if len(chunks) == len(uids) else [(None, ())] * len(uids)):
+        if shapes and all(shape.kind in ("box", "cylinder", "capsule", "sphere") for shape in shapes):
+            boxes[uid] = []
+            for shape in shapes:
+                xyz, quat = compose_poses((body.xyz, body.quat), (shape.xyz, shape.quat))
+                corners = shape_triangles(shape).reshape(-1, 3) @ np.array(quat_matrix(quat)).T + np.array(xyz)
+                boxes[uid].append(_widened(corners.min(axis=0).tolist(), corners.max(axis=0).tolist()))
+            continue
+        boxes[uid] = [_widened(*_aabb(cid, uid))]
+    return boxes
+
+
+def _widened(lo, hi) -> tuple[float, ...]:
+    return (lo[0] - BOX_SLACK, lo[1] - BOX_SLACK, lo[2] - BOX_SLACK, hi[0] + BOX_SLACK, hi[1] + BOX_SLACK,
+            hi[2] + BOX_SLACK)
+
+
+def _aabb(cid: int, uid: int):
+    """PyBullet's box around all of a body's links."""
+    found = [p.getAABB(uid, link, physicsClientId=cid) for link in range(-1, p.getNumJoints(uid, physicsClientId=cid))]
+    return [min(b[0][i] for b in found) for i in range(3)], [max(b[1][i] for b in found) for i in range(3)]
 
 
 def distances(cid: int, body: int, statics: list[int], robots: list[int], reach: float, floor: float):

@@ -336,6 +336,10 @@ class World:
                 self._cid, robot.body, self._clearance[name], [r.body for r in self._robots.values()], self.label)
         return state
 
+    def states(self, names) -> dict[str, RobotState]:
+        """``read`` of each robot named, by name."""
+        return {name: self.read(name) for name in names}
+
     def watch_clearance(self, name: str, reach: float) -> None:
         """Measure the robot's clearance (up to ``reach`` m) whenever its state is read."""
         self._clearance[name] = max(reach, self._clearance.get(name, 0.0))
