@@ -201,6 +201,7 @@ def test_a_package_with_includes_and_yaml_loads_confined(live, tmp_path):
     (package / "urdf" / "parts.xacro").write_text(
         HEAD.replace('name="r" ', "") + '<xacro:macro name="box" params="n"><link name="${n}">'
         '<inertial><mass value="1"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial>'
+        '<collision><geometry><box size="0.2 0.2 0.2"/></geometry></collision>'  # rests, never falls
         "</link></xacro:macro></robot>")
     (package / "urdf" / "bot.urdf.xacro").write_text(robot(
         '<xacro:include filename="parts.xacro"/>\n'
@@ -216,8 +217,12 @@ def test_a_package_with_includes_and_yaml_loads_confined(live, tmp_path):
 
 def test_the_request_base_dir_widens_what_a_text_spawn_may_read(live, tmp_path):
     (tmp_path / "dims.yaml").write_text("size: 7\n")
+    # A collision box: a link with none falls through the floor and, in a --fast world, out of it
+    # (a fault that removes it) within a fraction of a second, which a busy machine's next
+    # request may not beat.
     body = (f"""<link name="part_${{xacro.load_yaml('{tmp_path}/dims.yaml')['size']}}"><inertial><mass value="1"/>"""
-            '<inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>')
+            '<inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial>'
+            '<collision><geometry><box size="0.2 0.2 0.2"/></geometry></collision></link>')
     with live.client(timeout=90) as client:  # a cold load on a busy machine
         refused = client.call("spawn", name="dims", urdf=robot(body))
         client.spawn("dims", urdf=robot(body), base_dir=str(tmp_path), pose={"x": 48.0})
