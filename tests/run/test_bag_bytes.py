@@ -47,6 +47,16 @@ def _bag(folder: Path) -> dict[str, bytes]:
     return {name: (folder / "bag" / name).read_bytes() for name in ("bag.mcap", "metadata.yaml")}
 
 
+def _both_ways(monkeypatch, plan, resolved: str, out: Path) -> tuple[Path, Path]:
+    """The run folders of ``plan`` recorded directly (ruamel made to fail) and through rosbags'
+    own Writer: the bag under test and its reference."""
+    with monkeypatch.context() as patch:
+        _without_ruamel(patch)
+        direct = execute(plan, resolved, out / "direct").out_dir
+    _through_writer(monkeypatch)
+    return direct, execute(plan, resolved, out / "writer").out_dir
+
+
 def _chunk_sizes(path: Path) -> list[int]:
     """Uncompressed sizes of the file's chunks, from its summary (the independent mcap reader)."""
     from mcap.reader import make_reader
@@ -57,11 +67,7 @@ def _chunk_sizes(path: Path) -> list[int]:
 
 def test_robots_that_come_and_go_give_the_writers_bytes(tmp_path, monkeypatch):
     prepared = prepare(REPO / "scenarios" / "events.yaml", ["log.formats=[csv, mcap]"])
-    with monkeypatch.context() as patch:
-        _without_ruamel(patch)
-        direct = execute(prepared.plan, prepared.resolved_yaml, tmp_path / "direct").out_dir
-    _through_writer(monkeypatch)
-    written = execute(prepared.plan, prepared.resolved_yaml, tmp_path / "writer").out_dir
+    direct, written = _both_ways(monkeypatch, prepared.plan, prepared.resolved_yaml, tmp_path)
     assert _bag(direct) == _bag(written)
     assert len(_bag(direct)["bag.mcap"]) > 100_000  # a real bag, several chunks
 
@@ -73,11 +79,7 @@ def test_sensor_scans_past_the_chunk_limit_give_the_writers_bytes(tmp_path, monk
                              lidar(xyz=(0.0, 0.0, 0.3), range_max=3.0, noise_stddev=0.01), velodyne,
                              formats=("csv", "mcap"))
     plan = replace(plan, robots=(replace(plan.robots[0], commands=(CommandStep(step=60, linear=0.5, angular=0.0),)),))
-    with monkeypatch.context() as patch:
-        _without_ruamel(patch)
-        direct = execute(plan, resolved, tmp_path / "direct").out_dir
-    _through_writer(monkeypatch)
-    written = execute(plan, resolved, tmp_path / "writer").out_dir
+    direct, written = _both_ways(monkeypatch, plan, resolved, tmp_path)
     assert _bag(direct) == _bag(written)
     # Each 3D scan's PointCloud2 is ~150 kB: a chunk was closed at rosbags' limit, mid-batch.
     sizes = _chunk_sizes(direct / "bag" / "bag.mcap")
@@ -124,11 +126,7 @@ def test_a_namespace_long_enough_to_fold_the_metadata_gives_the_writers_bytes(tm
     namespace = "/" + "n" * 56  # its joint_states topic: 70 characters, folded at 6, not at 4
     prepared = prepare(REPO / "scenarios" / "quickstart.yaml",
                        ["log.formats=[csv, mcap]", "duration=0.5", f"robots.0.namespace={namespace}"])
-    with monkeypatch.context() as patch:
-        _without_ruamel(patch)
-        direct = execute(prepared.plan, prepared.resolved_yaml, tmp_path / "direct").out_dir
-    _through_writer(monkeypatch)
-    written = execute(prepared.plan, prepared.resolved_yaml, tmp_path / "writer").out_dir
+    direct, written = _both_ways(monkeypatch, prepared.plan, prepared.resolved_yaml, tmp_path)
     assert _bag(direct) == _bag(written)
     meta = _bag(direct)["metadata.yaml"].decode()
     assert f"      name: \n        {namespace}/joint_states\n" in meta and f"      name: {namespace}/odom\n" in meta
