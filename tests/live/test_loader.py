@@ -96,16 +96,21 @@ def test_the_documented_defaults(seconds, memory):
     assert Limits() == Limits(seconds=seconds, memory=memory, workers=2) and Limits().wall == 30.0
 
 
+def _endless_load(pool: LoaderPool):
+    """Start ``pool`` with a load named 'slow' that never ends; (its job, its worker) once it runs."""
+    pool.start()
+    job = Job(spawn("slow", urdf=HEAD + '<link name="${python.sum(python.range(10**12))}"/></robot>'), 240)
+    pool.submit(job)
+    while job.started is None:
+        pool.poll()
+        time.sleep(0.01)
+    return job, next(w for w in pool._workers if w.job is job)
+
+
 def test_a_long_load_drops_to_the_lowest_priority():
     pool = LoaderPool(Limits(seconds=30, memory=512 * 2**20))
     try:
-        pool.start()
-        slow = Job(spawn("slow", urdf=HEAD + '<link name="${python.sum(python.range(10**12))}"/></robot>'), 240)
-        pool.submit(slow)
-        while slow.started is None:
-            pool.poll()
-            time.sleep(0.01)
-        worker = next(w for w in pool._workers if w.job is slow)
+        slow, worker = _endless_load(pool)
         assert os.getpriority(os.PRIO_PROCESS, worker.process.pid) == 0  # quick loads are not held back
         # Demoted once the load has used DEMOTE_AFTER s of CPU (however long that takes on a busy machine).
         deadline = time.monotonic() + 60
@@ -123,13 +128,7 @@ def test_a_load_waiting_for_the_cpu_is_not_demoted():
     """Wall time alone (a busy machine) never demotes a load: only the CPU time it used does."""
     pool = LoaderPool(Limits(seconds=30, memory=512 * 2**20))
     try:
-        pool.start()
-        job = Job(spawn("slow", urdf=HEAD + '<link name="${python.sum(python.range(10**12))}"/></robot>'), 240)
-        pool.submit(job)
-        while job.started is None:
-            pool.poll()
-            time.sleep(0.01)
-        worker = next(w for w in pool._workers if w.job is job)
+        job, worker = _endless_load(pool)
         os.kill(worker.process.pid, signal.SIGSTOP)  # it gets no CPU, as on a machine busy with others
         try:
             while time.monotonic() < job.started + loader.DEMOTE_AFTER + 0.5:
