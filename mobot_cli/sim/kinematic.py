@@ -25,8 +25,8 @@ from mobot_cli.errors import SimulationFault, SpawnError
 from mobot_cli.sim import clearance as clearance_mod
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, CONTACT_SLOP, RELEASE_SAMPLES, ContactCounter
 from mobot_cli.sim.kinematic_body import Mover
-from mobot_cli.sim.kinematic_collide import (NEAR_MARGIN, QUERY_REACH, SUPPORT_BAND, Floor, Near, distances, nearest,
-                                             static_boxes)
+from mobot_cli.sim.kinematic_collide import (NEAR_MARGIN, QUERY_REACH, SUPPORT_BAND, Floor, Near, body_top, distances,
+                                             feet, nearest, static_boxes)
 from mobot_cli.sim.placement import body_bounds
 from mobot_cli.sim.plan import Physics, RobotPlan, SpawnPose, WorldPlan
 from mobot_cli.sim.state import RobotState
@@ -39,9 +39,6 @@ BISECTIONS = 8  # a 0.1 m step is resolved to 0.4 mm
 MIN_MOVE = 1e-4  # m
 # The floor under a robot changes only by more than this (rays in float32 jitter below it).
 FLOOR_TOLERANCE = 1e-6  # m
-# Points no higher than this above a robot's lowest point carry it (wheels, casters): the
-# floor is looked for under them.
-FOOT_BAND = 0.005  # m, as sim/friction.py's CASTER_BAND
 
 
 class KinematicWorld(World):
@@ -63,7 +60,7 @@ class KinematicWorld(World):
         self._floor = Floor(self._cid, world)
         self._flat = self._floor.flat and world.ground_plane  # the floor is z = 0 everywhere
         # static body -> the top of its box: one no higher than a robot's support band is floor
-        self._tops = {uid: _top(self._cid, uid) for uid in self._statics if uid != self._ground}
+        self._tops = {uid: body_top(self._cid, uid) for uid in self._statics if uid != self._ground}
         self._boxes = static_boxes(self._cid, world, [uid for uid in self._statics if uid != self._ground])
         self._contact_every = max(1, round(physics.rate_hz / CONTACT_RATE_HZ))
         sample_hz = physics.rate_hz / self._contact_every
@@ -101,7 +98,7 @@ class KinematicWorld(World):
             (lo, hi) = body_bounds(self._probes, sim.body)
             x, y, z = sim.link_pose()[0]
             reach = float(np.hypot(max(x - lo[0], hi[0] - x), max(y - lo[1], hi[1] - y)))
-            mover = Mover(sim, self.physics.dt, lo[2], reach, _feet(self._probes, sim.body, lo, (x, y, sim.spawn_xy_yaw[2])))
+            mover = Mover(sim, self.physics.dt, lo[2], reach, feet(self._probes, sim.body, lo, (x, y, sim.spawn_xy_yaw[2])))
             mover.above = hi[2] - z  # its highest point above its link origin
             floor = self._floor_under([mover], mover.floor + SUPPORT_BAND)[0]
             if not np.isfinite(floor):
@@ -388,22 +385,3 @@ def _still(movers: list[Mover], since: int) -> bool:
 def _xy_z_yaw(pose: tuple[float, float, float], z: float) -> tuple[float, float, float, float]:
     return pose[0], pose[1], z, pose[2]
 
-
-def _top(cid: int, uid: int) -> float:
-    """The highest point of a static body's collision box."""
-    from mobot_cli.sim.bullet import p
-
-    return max(p.getAABB(uid, link, physicsClientId=cid)[1][2]
-               for link in range(-1, p.getNumJoints(uid, physicsClientId=cid)))
-
-
-def _feet(probes, body: int, lo, pose: tuple[float, float, float]) -> list[tuple[float, float]]:
-    """Where the robot stands on the floor, in its root frame: the lowest points of its links
-    (wheels, casters), found against a plane under it (the world's probe shape, no body)."""
-    points = [(c[5], c[8]) for c in probes.closest(body, (0.0, 0.0, 1.0), (0.0, 0.0, lo[2] - 1.0), 2.0)]
-    low = min(d for _, d in points)
-    x, y, yaw = pose
-    c, s = np.cos(yaw), np.sin(yaw)
-    feet = {(round(c * (q[0] - x) + s * (q[1] - y), 6), round(-s * (q[0] - x) + c * (q[1] - y), 6))
-            for q, d in points if d - low <= FOOT_BAND}
-    return sorted(feet)

@@ -26,6 +26,9 @@ QUERY_REACH = 0.25  # m
 # A contact counts as support only this close above the robot's lowest point: a wheel rolls
 # onto a low step, but a floor rising into the chassis is in the way.
 SUPPORT_BAND = 0.02  # m
+# Points no higher than this above a robot's lowest point carry it (wheels, casters): the
+# floor is looked for under them.
+FOOT_BAND = 0.005  # m, as sim/friction.py's CASTER_BAND
 # Floor rays start SUPPORT_BAND above the current floor and look down this far.
 FLOOR_DEPTH = 100.0  # m
 STATIC_GROUP = 2  # PyBullet's collision filter group of static bodies (robots are 1, see sim/lidar.py)
@@ -198,3 +201,21 @@ class Floor:
             if hit[0] >= 0 and hit[2] > 0.0:  # a ray that starts inside a body is not on a floor
                 out[i] = tops[i] - hit[2] * FLOOR_DEPTH
         return out
+
+
+def body_top(cid: int, uid: int) -> float:
+    """The highest point of a static body's collision box."""
+    return max(p.getAABB(uid, link, physicsClientId=cid)[1][2]
+               for link in range(-1, p.getNumJoints(uid, physicsClientId=cid)))
+
+
+def feet(probes, body: int, lo, pose: tuple[float, float, float]) -> list[tuple[float, float]]:
+    """Where the robot stands on the floor, in its root frame: the lowest points of its links
+    (wheels, casters), found against a plane under it (the world's probe shape, no body)."""
+    points = [(c[5], c[8]) for c in probes.closest(body, (0.0, 0.0, 1.0), (0.0, 0.0, lo[2] - 1.0), 2.0)]
+    low = min(d for _, d in points)
+    x, y, yaw = pose
+    c, s = np.cos(yaw), np.sin(yaw)
+    found = {(round(c * (q[0] - x) + s * (q[1] - y), 6), round(-s * (q[0] - x) + c * (q[1] - y), 6))
+             for q, d in points if d - low <= FOOT_BAND}
+    return sorted(found)
