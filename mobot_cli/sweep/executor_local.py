@@ -109,11 +109,11 @@ class LocalExecutor:
         """Start the fork server now and, given the number of runs, ``min(jobs, count)`` workers
         from a thread, so that they get ready while the runs are prepared. ``close`` stops what
         ``run`` did not use."""
-        ctx = _context()
-        if ctx.get_start_method() != "forkserver":
-            return  # a spawned worker started from a thread would not inherit SIGINT held back (_sigint_held)
+        # Without a fork server (spawn), run() starts the workers: one spawned from a thread would
+        # not inherit SIGINT held back (_sigint_held). One that cannot start, run() reports.
         if not start_fork_server():
-            return  # run() starts the workers, and says what stops them
+            return
+        ctx = _context()
         if count is None or self._starter is not None or self._early:
             return
         self._starter = threading.Thread(target=self._start_early, args=(ctx, min(self.jobs, count)),
