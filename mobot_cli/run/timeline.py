@@ -108,7 +108,9 @@ class Timeline:
         self._inputs: list[Callable[[], None]] = []
         self._on_refused = on_refused  # None: a refused scripted event ends the run
         self.resets = 0
-        self.advance = world.step  # what ``advance`` does, one call less on every step
+        # ``advance()``: one physics step. The world's own step, bound once: no call in between on
+        # every step (the world of a timeline is never replaced).
+        self.advance: Callable[[], None] = world.step
         self._schedule()
 
     def _schedule(self) -> None:
@@ -248,10 +250,6 @@ class Timeline:
                 driver.tick(step)
             if driver.finished:
                 del self._drivers[name]
-
-    def advance(self) -> None:
-        """One physics step."""
-        self.world.step()
 
     def log(self) -> None:
         """A complete sample now, once per step."""
