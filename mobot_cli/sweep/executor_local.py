@@ -10,6 +10,8 @@ so imports, in-process caches and the PyBullet client are paid once per worker, 
 multiprocessing's fork server with everything a run needs imported once (sweep.preload; never
 forked from the parent, which may run threads such as the progress bar), so a replacement is
 ready in milliseconds instead of the 0.5 s a spawned one needs; spawn where there is no fork server.
+The fork server itself is forked from `mobot sweep` before its imports, while it has no thread,
+rather than started as a new interpreter (_forked_helpers).
 
 ``prestart`` starts the fork server and the workers before the runs are prepared: their
 imports (~0.4 s) then take the second core while the sweep reads and checks the scenario,
@@ -20,6 +22,7 @@ once its imports are done.
 from __future__ import annotations
 
 import contextlib
+import gc
 import multiprocessing
 import os
 import signal
@@ -280,11 +283,59 @@ def start_fork_server() -> bool:
     from multiprocessing import forkserver
 
     try:
-        with _sigint_held():
+        with _forked_helpers(), _sigint_held():
             forkserver.ensure_running()
     except OSError:
         return False
     return True
+
+
+@contextlib.contextmanager
+def _forked_helpers():
+    """The fork server and its resource tracker forked from this process instead of started as
+    new interpreters, while this process has no other thread (`mobot sweep` before its imports).
+
+    multiprocessing starts each as ``python -c CODE`` (util.spawnv_passfds): an interpreter's
+    start, ~0.1 s here, before the fork server's first import, and a third process on two cores.
+    A fork runs the same CODE at once, with the same file descriptors kept, stdin left to CODE
+    to close, and the garbage collector on as in a new interpreter. Anything other than that
+    ``-c`` form, or a process with threads (a fork could copy a lock another thread holds), is
+    started as multiprocessing would."""
+    from multiprocessing import util
+
+    spawn = util.spawnv_passfds
+
+    def forked(path, args, passfds):
+        if threading.active_count() > 1 or len(args) < 2 or args[-2] != "-c":
+            return spawn(path, args, passfds)
+        pid = os.fork()
+        if pid:
+            return pid
+        code = 1
+        try:
+            _close_fds_but({0, 1, 2, *map(int, passfds)})
+            gc.enable()
+            exec(args[-1], {"__name__": "__main__"})
+            code = 0
+        except SystemExit as exc:
+            code = exc.code if isinstance(exc.code, int) else int(exc.code is not None)
+        finally:
+            os._exit(code)
+
+    util.spawnv_passfds = forked
+    try:
+        yield
+    finally:
+        util.spawnv_passfds = spawn
+
+
+def _close_fds_but(keep: set[int]) -> None:
+    """Close every file descriptor but ``keep``, as spawning a new program with those passed would."""
+    low = 0
+    for fd in sorted(keep) + [os.sysconf("SC_OPEN_MAX")]:
+        if low < fd:  # closerange(n, n) would close everything from n: it takes n - 1 unsigned
+            os.closerange(low, fd)
+        low = fd + 1
 
 
 def _context():

@@ -62,3 +62,72 @@ def test_a_ctrl_c_while_the_server_imports_does_not_kill_it():
                           env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
     assert done.stdout.strip() == "True", done.stderr
     assert "Traceback" not in done.stderr
+
+
+def _in_fresh_python(script: str) -> str:
+    """Run ``script`` in a new interpreter (no pytest threads) and return what it printed."""
+    import os
+    import subprocess
+    import sys
+    import textwrap
+
+    done = subprocess.run([sys.executable, "-c", textwrap.dedent(script)], capture_output=True, text=True,
+                          timeout=60, env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
+    return done.stdout
+
+
+SERVER_COMMAND = """
+    import os, select, threading, time
+    from multiprocessing import forkserver, resource_tracker
+    from mobot_cli.sweep import executor_local
+    THREADS
+    read, write = os.pipe()  # a pipe this process writes to: its reader waits for every writer
+    executor_local.start_fork_server()
+    os.close(write)
+    eof = bool(select.select([read], [], [], 5.0)[0]) and os.read(read, 1) == b""
+    for pid in (forkserver._forkserver._forkserver_pid, resource_tracker._resource_tracker._pid):
+        with open(f"/proc/{pid}/cmdline", "rb") as f:
+            print(f.read() != open("/proc/self/cmdline", "rb").read(), end=" ")  # a command of its own
+    print(eof)
+"""
+
+
+def test_the_server_and_its_tracker_are_forked_without_a_new_interpreter():
+    """A sweep forks them before its imports (no second interpreter to start), and they keep
+    none of the sweep's other files open, as new programs would not: a pipe's reader still
+    sees its end when the sweep closes it."""
+    out = _in_fresh_python(SERVER_COMMAND.replace("THREADS", ""))
+    assert out.split() == ["False", "False", "True"]  # neither has a command of its own; the pipe ended
+
+
+def test_a_process_with_threads_starts_them_as_new_interpreters():
+    """Forking while another thread may hold a lock could copy it held for good: spawned then."""
+    threads = "stop = threading.Event(); threading.Thread(target=stop.wait, daemon=True).start()"
+    out = _in_fresh_python(SERVER_COMMAND.replace("THREADS", threads))
+    assert out.split() == ["True", "True", "True"]
+
+
+def test_closing_all_but_some_descriptors_keeps_those(tmp_path):
+    import os
+
+    opened = [os.open(tmp_path / f"f{i}", os.O_CREAT | os.O_WRONLY) for i in range(4)]
+    pid = os.fork()
+    if pid == 0:  # the child reports, through its exit code, which of them it still has
+        executor_local._close_fds_but({0, 1, 2, opened[1], opened[3]})
+        alive = [_is_open(fd) for fd in (0, 1, 2, *opened)]
+        os._exit(sum(1 << i for i, up in enumerate(alive) if up))
+    _, status = os.waitpid(pid, 0)
+    for fd in opened:
+        os.close(fd)
+    assert os.waitstatus_to_exitcode(status) == 0b1010111  # 0, 1, 2 and the 2nd and 4th file
+
+
+def _is_open(fd: int) -> bool:
+    import os
+
+    try:
+        os.fstat(fd)
+        return True
+    except OSError:
+        return False
