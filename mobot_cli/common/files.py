@@ -13,7 +13,6 @@ import errno
 import json
 import math
 import os
-import secrets
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +22,7 @@ from mobot_cli.errors import OutputError, cannot_write
 def write_bytes_atomic(path: Path, data: bytes, durable: bool = True) -> None:
     """Write bytes to a temporary sibling, flush it to disk (``durable``) and rename it into place."""
     path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.{os.urandom(4).hex()}.tmp")
     # os.open with 0o666 (not mkstemp's 0o600): the file gets the permissions the umask gives.
     fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
     try:
