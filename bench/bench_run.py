@@ -33,7 +33,7 @@ from mobot_cli.run.execute import execute  # noqa: E402
 from mobot_cli.run.prepare import prepare  # noqa: E402
 from mobot_cli.run.timeline import simulate  # noqa: E402
 
-from common import process_seconds, timed  # noqa: E402  (bench/common.py)
+from common import bytecode_state, process_seconds, timed  # noqa: E402  (bench/common.py)
 from raw_run import raw_loop  # noqa: E402  (bench/raw_run.py)
 
 
@@ -78,19 +78,6 @@ def loop_seconds(plan) -> float:
     for _ in records:
         pass
     return time.perf_counter() - started
-
-
-def bytecode_state() -> str:
-    """Whether this checkout's modules load from cached bytecode, which decides ~0.1 s of start-up."""
-    import importlib.util
-    import os
-
-    cached = Path(importlib.util.cache_from_source(str(REPO / "mobot_cli" / "run" / "execute.py"))).exists()
-    state = "compiled bytecode cached (as after `pip install .` or any earlier run)" if cached else \
-        "no cached bytecode: every process compiles them again"
-    if os.environ.get("PYTHONDONTWRITEBYTECODE"):
-        state += "; PYTHONDONTWRITEBYTECODE is set (`python3 -m compileall -q mobot_cli` caches it)"
-    return state
 
 
 def main() -> None:
@@ -150,7 +137,7 @@ def main() -> None:
         extra = statistics.median((w - lp) - (rw - rlp) for (w, lp), (rw, rlp) in zip(mobot_out, raw_out))
         print(f"mobot's time outside the loop beyond the raw script's: {extra:.3f} s "
               f"(the issue's goal: <= 0.25 s outside when the raw script's was 0.15 s, so <= 0.10 s beyond it)")
-        print(f"mobot's own modules: {bytecode_state()}")
+        print(f"mobot's own modules: {bytecode_state(REPO)}")
     finally:
         shutil.rmtree(work, ignore_errors=True)
 

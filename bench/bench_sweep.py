@@ -114,6 +114,7 @@ def whole_command(tree: Path, scenario: Path, out: Path, runs: int) -> tuple[flo
 def command_main(trees: list[Path], repeat: int, runs: int) -> None:
     sys.path.insert(0, str(REPO / "bench"))
     from bench_kinematic import one_robot
+    from common import bytecode_state
 
     ctypes.CDLL(None).prctl(36, 1, 0, 0, 0)  # PR_SET_CHILD_SUBREAPER: orphaned workers come to us
     work = Path(tempfile.mkdtemp(prefix="mobot-bench-sweep-cmd-"))
@@ -132,6 +133,7 @@ def command_main(trees: list[Path], repeat: int, runs: int) -> None:
             wall, cpu, parent, per_run = (statistics.median(r[k] for r in rows) for k in range(4))
             print(f"{str(tree):<40} {wall:>7.3f} {runs / wall:>7.1f} {cpu:>6.2f} {parent:>11.2f} {per_run * 1000:>10.0f}"
                   f"   (walls {', '.join(f'{r[0]:.2f}' for r in rows)})")
+            print(f"{'':<40} {bytecode_state(tree)}")
     finally:
         shutil.rmtree(work, ignore_errors=True)
 

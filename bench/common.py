@@ -5,6 +5,7 @@ from __future__ import annotations
 import statistics
 import subprocess
 import time
+from pathlib import Path
 
 
 def timed(fn, *args) -> tuple[float, float]:
@@ -22,3 +23,17 @@ def process_seconds(args: list[str], repeat: int) -> float:
         subprocess.run(args, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         times.append(time.perf_counter() - started)
     return statistics.median(times)
+
+
+def bytecode_state(tree: Path) -> str:
+    """Whether ``tree``'s mobot modules load from cached bytecode, which decides ~0.1 s of a
+    process's start: a wheel's install compiles them, and so does any run without
+    PYTHONDONTWRITEBYTECODE; a checkout on a machine that sets it compiles them in every process."""
+    import importlib.util
+    import os
+
+    cached = Path(importlib.util.cache_from_source(str(Path(tree) / "mobot_cli" / "run" / "execute.py"))).exists()
+    state = "bytecode cached" if cached else "no cached bytecode: every process compiles them again"
+    if os.environ.get("PYTHONDONTWRITEBYTECODE"):
+        state += "; PYTHONDONTWRITEBYTECODE is set (`python3 -m compileall -q mobot_cli` caches it)"
+    return state
