@@ -7,9 +7,11 @@ furniture and each other. Every figure is the loop's real-time factor (simulated
 wall second of stepping, world building and spawns excluded), the median of ``--repeat`` runs
 taken in turn (kinematic, physics, raw, peers, kinematic, ...), since the machine may be shared.
 The peers (IR-SIM, PyRoboSim) run in their own virtual environment, made on first use with
-``--peers-venv`` (pip install ir-sim pyrobosim); without it their rows are skipped. Then a
-32-run ``mobot sweep --jobs 2`` of the kinematic script, and the engines side by side on every
-bundled scenario: the README's table of final pose differences.
+``--peers-venv`` (pip install ir-sim pyrobosim); without it their rows are skipped. Then
+batches, whole processes timed from outside, interleaved: a 32-run ``mobot sweep --jobs 2`` of
+the kinematic script against each peer running the same 32 runs one after the other in one
+process (the issue's goal: mobot's runs per second >= 2x the faster peer's); and the engines
+side by side on every bundled scenario: the README's table of final pose differences.
 
     python3 bench/bench_kinematic.py [--repeat 3] [--peers-venv ~/.cache/mobot-bench/peers]
 """
@@ -20,6 +22,7 @@ import argparse
 import csv
 import json
 import math
+import shutil
 import statistics
 import subprocess
 import sys
@@ -70,10 +73,18 @@ def pyrobosim_rtf() -> float:
     return SECONDS / (time.perf_counter() - started)
 
 
+PEERS = {"irsim": lambda: irsim_rtf(False), "irsim-lidar": lambda: irsim_rtf(True), "pyrobosim": pyrobosim_rtf}
+
+
 def peer_main(which: str) -> None:
-    rtf = {"irsim": lambda: irsim_rtf(False), "irsim-lidar": lambda: irsim_rtf(True),
-           "pyrobosim": pyrobosim_rtf}[which]()
-    print(json.dumps({"rtf": rtf}))
+    print(json.dumps({"rtf": PEERS[which]()}))
+
+
+def peer_batch_main(which: str, runs: int) -> None:
+    """A batch as a peer's user runs one: ``runs`` runs of the script one after the other in one
+    process, each with its world made afresh."""
+    for _ in range(runs):
+        PEERS[which]()
 
 
 # -- mobot ------------------------------------------------------------------------------------
@@ -186,11 +197,26 @@ def peer_rtf(venv: Path | None, which: str) -> float | None:
     return json.loads(done.stdout.strip().splitlines()[-1])["rtf"]
 
 
+def peer_batch_rate(venv: Path | None, which: str, runs: int = 32) -> float | None:
+    """Runs per second of a peer's whole batch process (its start and imports included, as the
+    sweep's are), one core."""
+    if venv is None:
+        return None
+    started = time.perf_counter()
+    done = subprocess.run([str(venv / "bin" / "python"), __file__, "--peer-batch", which, "--runs", str(runs)],
+                          capture_output=True, text=True)
+    if done.returncode != 0:
+        print(f"  ({which} batch failed: {done.stderr.strip().splitlines()[-1:]})")
+        return None
+    return runs / (time.perf_counter() - started)
+
+
 def sweep_rate(work: Path, runs: int = 32) -> tuple[float, float]:
     """(runs per second of a whole `mobot sweep --jobs 2`, median in-worker wall time of one run)."""
     path = work / "sweep.yaml"
     path.write_text(one_robot("kinematic", 10))
     seeds = ",".join(str(i) for i in range(runs))
+    shutil.rmtree(work / "sweep", ignore_errors=True)
     started = time.perf_counter()
     subprocess.run([sys.executable, "-m", "mobot_cli", "sweep", str(path), "--grid", f"seed={seeds}",
                     "--jobs", "2", "--out", str(work / "sweep"), "--quiet"], check=True, cwd=REPO)
@@ -245,9 +271,13 @@ def main() -> None:
     parser.add_argument("--rows", default="", help="only these rows, e.g. kin,pyrobosim,fleet-kin (keys of "
                         "`jobs`; the sweep then too only when 'sweep' is among them)")
     parser.add_argument("--peer", help=argparse.SUPPRESS)
+    parser.add_argument("--peer-batch", help=argparse.SUPPRESS)
+    parser.add_argument("--runs", type=int, default=32, help="runs of the sweep and of the peers' batches")
     args = parser.parse_args()
     if args.peer:
         return peer_main(args.peer)
+    if args.peer_batch:
+        return peer_batch_main(args.peer_batch, args.runs)
     sys.path.insert(0, str(REPO))
     work = Path(tempfile.mkdtemp(prefix="mobot-bench-kin-"))
     files = {}
@@ -304,9 +334,23 @@ def main() -> None:
     print("\n" + "; ".join(f"{name}: {a / b:.1f}x" for name, a, b in ratios if a and b))
     if rows_asked and "sweep" not in rows_asked:
         return
-    runs_per_s, per_run = sweep_rate(work)
-    print(f"\n32-run `mobot sweep --jobs 2` of the kinematic script: {runs_per_s:.1f} runs/s whole process; "
-          f"median wall time of one run in its worker {per_run * 1000:.0f} ms")
+    batches: dict[str, list[float]] = {}
+    for _ in range(args.repeat):  # interleaved, as above
+        for key, job in (("sweep", lambda: sweep_rate(work, args.runs)),
+                         ("irsim", lambda: (peer_batch_rate(args.peers_venv, "irsim", args.runs), 0.0)),
+                         ("pyrobosim", lambda: (peer_batch_rate(args.peers_venv, "pyrobosim", args.runs), 0.0))):
+            rate, per_run = job()
+            if rate is not None:
+                batches.setdefault(key, []).append(rate)
+                batches.setdefault(key + "-run", []).append(per_run)
+    batch = {key: statistics.median(values) for key, values in batches.items()}
+    print(f"\n{args.runs}-run batches, whole processes, medians of {args.repeat}: `mobot sweep --jobs 2` of the "
+          f"kinematic script {batch['sweep']:.1f} runs/s (one run {batch['sweep-run'] * 1000:.0f} ms in its "
+          f"worker); one process, one core: IR-SIM {batch.get('irsim', 0):.1f} runs/s, PyRoboSim "
+          f"{batch.get('pyrobosim', 0):.1f} runs/s")
+    best = max(batch.get("irsim", 0), batch.get("pyrobosim", 0))
+    if best:
+        print(f"mobot's sweep / the faster peer's batch: {batch['sweep'] / best:.2f}x (goal >= 2x)")
     if not args.skip_table:
         print("\nEvery bundled scenario in both engines (final true pose):\n")
         print("\n".join(engines_table()))
