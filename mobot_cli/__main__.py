@@ -53,7 +53,7 @@ def _start_sweep_pool(args: list[str]) -> None:
         args = args[1:]
     if args[:1] != ["sweep"] or {"--help", "-h", "ray", "--executor=ray"} & set(args):
         return
-    from mobot_cli.sweep.executor_local import start_fork_server
+    from mobot_cli.sweep.server import start_fork_server
 
     start_fork_server()
 

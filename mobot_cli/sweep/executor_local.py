@@ -8,10 +8,9 @@ marked failed, and a fresh worker takes its place. A worker dies with its sweep,
 killed by SIGKILL (guard.die_with_sweep). Workers stay alive for the whole sweep,
 so imports, in-process caches and the PyBullet client are paid once per worker, not once per run. They come from
 multiprocessing's fork server with everything a run needs imported once (sweep.preload; never
-forked from the parent, which may run threads such as the progress bar), so a replacement is
-ready in milliseconds instead of the 0.5 s a spawned one needs; spawn where there is no fork server.
-The fork server itself is forked from `mobot sweep` before its imports, while it has no thread,
-rather than started as a new interpreter (_forked_helpers).
+forked from the parent itself, which may run threads such as the progress bar), so a
+replacement is ready in milliseconds instead of the 0.5 s a spawned one needs; spawn where
+there is no fork server. How the fork server starts: sweep/server.py.
 
 ``prestart`` starts the fork server and the workers before the runs are prepared: their
 imports (~0.4 s) then take the second core while the sweep reads and checks the scenario,
@@ -21,9 +20,6 @@ once its imports are done.
 
 from __future__ import annotations
 
-import contextlib
-import gc
-import multiprocessing
 import os
 import signal
 import threading
@@ -33,6 +29,7 @@ from multiprocessing.connection import Connection, wait
 from typing import Callable, Iterable
 
 from mobot_cli.sweep.guard import die_with_sweep
+from mobot_cli.sweep.server import context, sigint_held, start_fork_server
 from mobot_cli.sweep.task import Outcome, Task, failed, run_task
 
 Runner = Callable[[Task], Outcome]
@@ -73,7 +70,7 @@ class _Worker:
     def __init__(self, ctx, runner: Runner):
         self.conn, child = ctx.Pipe()
         self.process = ctx.Process(target=_worker_main, args=(child, runner, os.getpid()), daemon=True)
-        with _sigint_held():
+        with sigint_held():
             self.process.start()
         child.close()
         self.task: Task | None = None
@@ -113,10 +110,10 @@ class LocalExecutor:
         from a thread, so that they get ready while the runs are prepared. ``close`` stops what
         ``run`` did not use."""
         # Without a fork server (spawn), run() starts the workers: one spawned from a thread would
-        # not inherit SIGINT held back (_sigint_held). One that cannot start, run() reports.
+        # not inherit SIGINT held back (server.sigint_held). One that cannot start, run() reports.
         if not start_fork_server():
             return
-        ctx = _context()
+        ctx = context()
         if count is None or self._starter is not None or self._early:
             return
         self._starter = threading.Thread(target=self._start_early, args=(ctx, min(self.jobs, count)),
@@ -156,7 +153,7 @@ class LocalExecutor:
         self._stop_all(early[slots:])
         if not pending:
             return
-        ctx = _context()
+        ctx = context()
         # A slot holds None after its worker was killed, until a task needs a new one.
         workers: list[_Worker | None] = early[:slots] + [_Worker(ctx, self.runner) for _ in range(slots - len(early))]
         try:
@@ -240,111 +237,6 @@ class LocalExecutor:
         if worker.stopping:
             worker.process.join(timeout=2)
         worker.kill()
-
-
-@contextlib.contextmanager
-def _sigint_held():
-    """Ctrl-C held back while a process (the fork server, or a spawned worker) is started.
-
-    SIGINT is blocked in this thread while it forks, so the new Python inherits it blocked
-    through exec and an interrupt cannot kill it mid-import with a traceback on the terminal
-    (the fork server ignores it for good once its imports are done; a worker ignores it first
-    thing). A Ctrl-C that comes meanwhile is noted, not lost, and raised once the start is done.
-    """
-    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "pthread_sigmask"):
-        yield
-        return
-    # multiprocessing's resource tracker unblocks SIGINT in this thread right after it starts
-    # (resource_tracker.ensure_running), which would undo the hold for the fork server the same
-    # call then starts: it is started first, and blocks SIGINT for its own start.
-    from multiprocessing import resource_tracker
-
-    resource_tracker.ensure_running()
-    came: list = []
-    old = signal.signal(signal.SIGINT, lambda signum, frame: came.append(frame))
-    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # one held back is noted now
-        signal.signal(signal.SIGINT, old)  # (signal.signal runs pending handlers first)
-    if came and callable(old):
-        old(signal.SIGINT, came[-1])  # the sweep's own handler: KeyboardInterrupt
-    elif came and old != signal.SIG_IGN:
-        raise KeyboardInterrupt
-
-
-def start_fork_server() -> bool:
-    """Start the fork server, with everything a run needs imported, if it is not running; False
-    where there is none or it cannot start. It returns at once: the server imports in the
-    background. `mobot sweep` calls it first thing (mobot_cli.__main__), before its own imports."""
-    if _context().get_start_method() != "forkserver":
-        return False
-    from multiprocessing import forkserver
-
-    try:
-        with _forked_helpers(), _sigint_held():
-            forkserver.ensure_running()
-    except OSError:
-        return False
-    return True
-
-
-@contextlib.contextmanager
-def _forked_helpers():
-    """The fork server and its resource tracker forked from this process instead of started as
-    new interpreters, while this process has no other thread (`mobot sweep` before its imports).
-
-    multiprocessing starts each as ``python -c CODE`` (util.spawnv_passfds): an interpreter's
-    start, ~0.1 s here, before the fork server's first import, and a third process on two cores.
-    A fork runs the same CODE at once, with the same file descriptors kept, stdin left to CODE
-    to close, and the garbage collector on as in a new interpreter. Anything other than that
-    ``-c`` form, or a process with threads (a fork could copy a lock another thread holds), is
-    started as multiprocessing would."""
-    from multiprocessing import util
-
-    spawn = util.spawnv_passfds
-
-    def forked(path, args, passfds):
-        if threading.active_count() > 1 or len(args) < 2 or args[-2] != "-c":
-            return spawn(path, args, passfds)
-        pid = os.fork()
-        if pid:
-            return pid
-        code = 1
-        try:
-            _close_fds_but({0, 1, 2, *map(int, passfds)})
-            gc.enable()
-            exec(args[-1], {"__name__": "__main__"})
-            code = 0
-        except SystemExit as exc:
-            code = exc.code if isinstance(exc.code, int) else int(exc.code is not None)
-        finally:
-            os._exit(code)
-
-    util.spawnv_passfds = forked
-    try:
-        yield
-    finally:
-        util.spawnv_passfds = spawn
-
-
-def _close_fds_but(keep: set[int]) -> None:
-    """Close every file descriptor but ``keep``, as spawning a new program with those passed would."""
-    low = 0
-    for fd in sorted(keep) + [os.sysconf("SC_OPEN_MAX")]:
-        if low < fd:  # closerange(n, n) would close everything from n: it takes n - 1 unsigned
-            os.closerange(low, fd)
-        low = fd + 1
-
-
-def _context():
-    """The fork server with mobot imported where the platform has one, else plain spawn."""
-    if "forkserver" in multiprocessing.get_all_start_methods():
-        ctx = multiprocessing.get_context("forkserver")
-        ctx.set_forkserver_preload(["mobot_cli.sweep.preload"])
-        return ctx
-    return multiprocessing.get_context("spawn")
 
 
 def _death(exitcode: int | None) -> str:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 import mobot_cli.__main__ as entry
-from mobot_cli.sweep import executor_local
+from mobot_cli.sweep import server
 
 
 @pytest.mark.parametrize("args, starts", [
@@ -21,7 +21,7 @@ from mobot_cli.sweep import executor_local
 ])
 def test_only_a_local_sweep_starts_the_server_early(monkeypatch, args, starts):
     calls = []
-    monkeypatch.setattr(executor_local, "start_fork_server", lambda: calls.append(1) or True)
+    monkeypatch.setattr(server, "start_fork_server", lambda: calls.append(1) or True)
     entry._start_sweep_pool(args)
     assert calls == ([1] if starts else [])
 
@@ -29,10 +29,10 @@ def test_only_a_local_sweep_starts_the_server_early(monkeypatch, args, starts):
 def test_the_early_server_is_the_one_the_sweep_uses():
     from multiprocessing import forkserver
 
-    assert executor_local.start_fork_server() is True
+    assert server.start_fork_server() is True
     first = forkserver._forkserver._forkserver_pid
     assert first is not None
-    executor_local.start_fork_server()  # prestart's call finds it running
+    server.start_fork_server()  # prestart's call finds it running
     assert forkserver._forkserver._forkserver_pid == first
 
 
@@ -49,8 +49,8 @@ def test_a_ctrl_c_while_the_server_imports_does_not_kill_it():
     script = textwrap.dedent("""
         import os, signal, sys, time
         from multiprocessing import forkserver
-        from mobot_cli.sweep import executor_local
-        executor_local.start_fork_server()
+        from mobot_cli.sweep import server
+        server.start_fork_server()
         pid = forkserver._forkserver._forkserver_pid
         for _ in range(20):  # Ctrl-C while it starts and imports
             os.kill(pid, signal.SIGINT)
@@ -80,10 +80,10 @@ def _in_fresh_python(script: str) -> str:
 SERVER_COMMAND = """
     import os, select, threading, time
     from multiprocessing import forkserver, resource_tracker
-    from mobot_cli.sweep import executor_local
+    from mobot_cli.sweep import server
     THREADS
     read, write = os.pipe()  # a pipe this process writes to: its reader waits for every writer
-    executor_local.start_fork_server()
+    server.start_fork_server()
     os.close(write)
     eof = bool(select.select([read], [], [], 5.0)[0]) and os.read(read, 1) == b""
     for pid in (forkserver._forkserver._forkserver_pid, resource_tracker._resource_tracker._pid):
@@ -114,7 +114,7 @@ def test_closing_all_but_some_descriptors_keeps_those(tmp_path):
     opened = [os.open(tmp_path / f"f{i}", os.O_CREAT | os.O_WRONLY) for i in range(4)]
     pid = os.fork()
     if pid == 0:  # the child reports, through its exit code, which of them it still has
-        executor_local._close_fds_but({0, 1, 2, opened[1], opened[3]})
+        server._close_fds_but({0, 1, 2, opened[1], opened[3]})
         alive = [_is_open(fd) for fd in (0, 1, 2, *opened)]
         os._exit(sum(1 << i for i, up in enumerate(alive) if up))
     _, status = os.waitpid(pid, 0)
