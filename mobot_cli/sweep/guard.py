@@ -12,7 +12,6 @@
 from __future__ import annotations
 
 import ctypes
-import ctypes.util
 import fcntl
 import os
 import select
@@ -89,7 +88,9 @@ def die_with_sweep(sweep_pid: int) -> None:
 def _parent_death_signal(sig: int) -> bool:
     """Linux only: the kernel sends ``sig`` when the parent process ends."""
     try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
+        # The C library this process already has (dlopen(NULL)): ctypes.util.find_library would
+        # run `ldconfig -p` in a subprocess, in every worker as it starts.
+        libc = ctypes.CDLL(None, use_errno=True)
         return libc.prctl(_PR_SET_PDEATHSIG, int(sig), 0, 0, 0) == 0
     except (OSError, AttributeError):
         return False
