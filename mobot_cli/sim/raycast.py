@@ -140,10 +140,10 @@ class StaticScene:
         reach into them, when they span little, else the whole scene."""
         low, high = heights
         if high - low > SLICE_BAND:
-            return self._scene
+            return self._ready(self._scene)
         for lo, hi, scene in self._slices:
             if lo <= low and high <= hi:
-                return scene
+                return self._ready(scene)
         with self._lock:
             cut = next((kept for kept in reversed(self._cut) if kept[0] <= low and high <= kept[1]), None)
             if cut is None:
@@ -154,7 +154,17 @@ class StaticScene:
                 cut = (lo, hi, self._scene if keep.sum() > SLICE_SHARE * len(keep) else _embree(self.triangles[keep]))
                 self._cut[:] = [*self._cut[1 - 2 * MAX_SLICES:], cut]  # in place: the copies share it
         self._slices = [*self._slices[1 - MAX_SLICES:], cut]
-        return cut[2]
+        return self._ready(cut[2])
+
+    def _ready(self, scene):
+        """``scene`` with its BVH built: embreex builds it at the first cast, which two threads
+        casting at a kept scene must not both do."""
+        if not scene.is_committed:
+            with self._lock:
+                if not scene.is_committed:
+                    scene.run(np.zeros((1, 3), np.float32), np.array([[0.0, 0.0, 1.0]], np.float32),
+                              dists=np.ones(1, np.float32), query="DISTANCE")
+        return scene
 
 
 def _heights(origins: np.ndarray, directions: np.ndarray, lengths: np.ndarray) -> tuple[float, float]:
@@ -172,10 +182,7 @@ def _embree(triangles: np.ndarray):
     scene = rtcore_scene.EmbreeScene()
     if len(triangles):
         TriangleMesh(scene, np.ascontiguousarray(triangles, dtype=np.float32))
-    # embreex builds the BVH at the first cast; built here, no two threads can build it at once.
-    scene.run(np.zeros((1, 3), np.float32), np.array([[0.0, 0.0, 1.0]], np.float32),
-              dists=np.ones(1, np.float32), query="DISTANCE")
-    return scene
+    return scene  # its BVH is built at its first cast (_ready): a level lidar never builds the whole scene's
 
 
 def shape_triangles(shape: StaticShape) -> np.ndarray:
