@@ -88,9 +88,9 @@ class NpyRows:
             return
         rows = np.empty(len(self._scans), self.dtype)  # the file's own layout: one write
         rows["t"] = self._times
-        ranges = rows["ranges"].reshape(len(rows), -1)
-        for i, scan in enumerate(self._scans):
-            ranges[i] = scan.ranges.reshape(-1)
+        field = rows["ranges"]  # (scans, beams) for a 2D lidar, (scans, rows, beams) for a 3D one
+        # One copy of every scan's (rows, beams) ranges into the file's rows (views: the copy lands in them).
+        np.stack([scan.ranges for scan in self._scans], out=field[:, None] if field.ndim == 2 else field)
         f = self._file
         f.write(rows.data)
         self.rows += len(rows)
