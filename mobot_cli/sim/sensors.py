@@ -150,7 +150,8 @@ class _Waiting:
             for scans in by_rig.values():
                 rig = scans[0][0]
                 positions = np.array([data.position for _, data in scans], dtype=np.float32)
-                rotations = lidar.rotations([data.quat for _, data in scans]).astype(np.float32)
+                rotations = np.array([p.getMatrixFromQuaternion(data.quat) for _, data in scans],
+                                     dtype=np.float32).reshape(-1, 3, 3)
                 ranges = _lidar_noise(rig, lidar.cast_scans(self.scene, rig.spec, rig.beams, positions, rotations))
                 for (_, data), values in zip(scans, ranges):
                     data._ranges = values
@@ -245,9 +246,10 @@ class Sensing:
             return
         if waiting:
             waiting.cast()  # scans taken before come first: noise is drawn in order
-        turns = lidar.rotations([data.quat for _, data in scans]).astype(np.float32)
-        jobs = [lidar.ScanJob(rig.spec, rig.beams, np.array(data.position), rotation, rig.body)
-                for (rig, data), rotation in zip(scans, turns)]
+        jobs = []
+        for rig, data in scans:
+            rotation = np.array(p.getMatrixFromQuaternion(data.quat), dtype=np.float32).reshape(3, 3)
+            jobs.append(lidar.ScanJob(rig.spec, rig.beams, np.array(data.position), rotation, rig.body))
         boxes = {body: _aabb(self.cid, body) for body in bodies} if len(bodies) > 1 else {}
         ranges = lidar.cast(self.cid, self.scene, jobs, boxes)
         for (rig, data), values in zip(scans, ranges):

@@ -6,8 +6,6 @@ import dataclasses
 import threading
 
 import numpy as np
-from hypothesis import given, settings
-from hypothesis import strategies as st
 
 from mobot_cli.sim import raycast
 from mobot_cli.sim.plan import StaticBody, StaticShape, WorldPlan
@@ -75,14 +73,3 @@ def test_threads_cutting_slices_of_a_kept_scene_get_the_same_answers():
     hit = alone[0][np.abs(angles) < 0.5]
     assert np.allclose(hit, 2.9 / np.cos(angles[np.abs(angles) < 0.5]), atol=1e-4)  # the wall's face at x = 2.9
 
-
-@settings(max_examples=300, deadline=None)
-@given(st.lists(st.tuples(*[st.floats(-2.0, 2.0, allow_nan=False, allow_subnormal=False)] * 4)
-                .filter(lambda q: sum(v * v for v in q) > 1e-6), min_size=1, max_size=8))
-def test_rotations_are_pybullets_bit_for_bit(quats):
-    """Scans are turned by these matrices: a bit off would move a ray, so they must be PyBullet's."""
-    from mobot_cli.sim.bullet import p
-    from mobot_cli.sim.lidar import rotations
-
-    expected = np.array([p.getMatrixFromQuaternion(q) for q in quats]).reshape(-1, 3, 3)
-    assert rotations(np.array(quats)).tobytes() == expected.tobytes()
