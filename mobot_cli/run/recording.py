@@ -111,6 +111,7 @@ class Recording:
         self._lives: dict[str, _Life] = {}  # record name -> life, in order of arrival
         self._renamed = False
         self._sensor_files = False
+        self._readers: list[Sink] = []  # the sinks that take readings (not Sink's no-op), made at the first
         self._started = time.perf_counter()
         made = not out_dir.exists()
         try:
@@ -131,6 +132,8 @@ class Recording:
         try:
             if isinstance(record, Sample):
                 self._sample(record)
+            elif isinstance(record, Reading):  # the two kinds that come many times a second first
+                self._reading(record)
             elif isinstance(record, Spawned):
                 self._spawned(record)
             elif isinstance(record, GoalStarted):
@@ -139,8 +142,6 @@ class Recording:
                 key = self._keys[record.robot]
                 self._lives[key].ended(record, self.plan.physics.rate_hz)
                 self.checker.goal_ended(key, record)
-            elif isinstance(record, Reading):
-                self._reading(record)
             elif isinstance(record, Deleted):
                 key = self._keys.pop(record.name)
                 self._lives[key].deleted_at = record.step / self.plan.physics.rate_hz
@@ -180,7 +181,8 @@ class Recording:
                 files.spawned(0, known.name, known.plan)
             self.sinks.insert(0, files)
             self._sensor_files = True
-        for sink in self.sinks:
+            self._readers = [sink for sink in self.sinks if type(sink).reading is not Sink.reading]
+        for sink in self._readers:
             sink.reading(key, record)
 
     def _sample(self, sample: Sample) -> None:

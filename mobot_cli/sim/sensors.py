@@ -206,9 +206,9 @@ class Sensing:
     def scene(self):
         """The static world's ray scene, built at the first scan (None without embreex)."""
         if not self._scene_built:
-            from mobot_cli.sim.raycast import StaticScene, embree_available
+            from mobot_cli.sim.raycast import embree_available, static_scene
 
-            self._scene = StaticScene(self.world) if embree_available() else None
+            self._scene = static_scene(self.world) if embree_available() else None
             self._scene_built = True
         return self._scene
 
@@ -216,14 +216,14 @@ class Sensing:
         """The readings of ``(robot, sensor)`` pairs due at ``step``, in order."""
         out: list[object] = []
         scans: list[tuple[_Rig, ScanData]] = []
+        rigs = self.rigs
         for robot, sensor in due:
-            rig = self.rigs[robot][sensor]
+            rig = rigs[robot][sensor]
             position, quat = self._pose(rig)
-            kind = rig.spec.kind
-            if kind == "lidar":
+            if rig.beams is not None:  # a lidar
                 data = ScanData(None, rig.beams, position, quat)
                 scans.append((rig, data))
-            elif kind == "imu":
+            elif rig.spec.kind == "imu":
                 data = self._imu(step, rig, position, quat)
             else:
                 data = self._contacts(rig)
@@ -257,18 +257,16 @@ class Sensing:
 
     def _pose(self, rig: _Rig) -> tuple[tuple[float, ...], tuple[float, ...]]:
         """The sensor frame's world pose: its link's URDF frame composed with the sensor pose."""
-        pos, orn = self._link_frame(rig)
-        if rig.at_link:
-            return tuple(pos), tuple(orn)
-        pos, orn = p.multiplyTransforms(pos, orn, rig.spec.xyz, rig.spec.quat)
-        return tuple(pos), tuple(orn)
-
-    def _link_frame(self, rig: _Rig):
+        # Once per reading: PyBullet answers tuples (kept as they are), a link's state at once.
         if rig.link >= 0:
             state = p.getLinkState(rig.body, rig.link, computeForwardKinematics=1, physicsClientId=self.cid)
-            return state[4], state[5]
-        com, orn = p.getBasePositionAndOrientation(rig.body, physicsClientId=self.cid)
-        return p.multiplyTransforms(com, orn, rig.to_link[0], rig.to_link[1])
+            pos, orn = state[4], state[5]
+        else:
+            com, orn = p.getBasePositionAndOrientation(rig.body, physicsClientId=self.cid)
+            pos, orn = p.multiplyTransforms(com, orn, rig.to_link[0], rig.to_link[1])
+        if not rig.at_link:
+            pos, orn = p.multiplyTransforms(pos, orn, rig.spec.xyz, rig.spec.quat)
+        return tuple(pos), tuple(orn)
 
     def _velocity(self, rig: _Rig, position) -> tuple[np.ndarray, np.ndarray]:
         """World linear velocity of the sensor's origin and the link's angular velocity."""
@@ -326,10 +324,8 @@ def _lidar_noise(rig: _Rig, ranges: np.ndarray) -> np.ndarray:
     spec = rig.spec
     if spec.noise_stddev > 0.0 or spec.noise_mean != 0.0:
         returns = np.isfinite(ranges)
-        noisy = rig.rng.normal(spec.noise_mean, spec.noise_stddev, ranges.shape).astype(np.float32)
-        noisy += ranges
-        np.clip(noisy, spec.range_min, spec.range_max, out=noisy)
-        np.copyto(ranges, noisy, where=returns)
+        ranges += rig.rng.normal(spec.noise_mean, spec.noise_stddev, ranges.shape).astype(np.float32)  # inf stays
+        np.clip(ranges, spec.range_min, spec.range_max, out=ranges, where=returns)
     if spec.range_resolution > 0.0:  # +inf stays +inf
         step = np.float32(spec.range_resolution)
         ranges /= step

@@ -307,7 +307,7 @@ class World:
 
     def sense(self, due: list[tuple[str, str]]) -> list[object]:
         """Readings of the (robot, sensor name) pairs due now, computed together (sim/sensors.py)."""
-        return self._sensors().read(self._steps, due)
+        return (self._sensing or self._sensors()).read(self._steps, due)
 
     def _sensors(self) -> Sensing:
         if self._sensing is None:
