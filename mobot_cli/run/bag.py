@@ -31,10 +31,9 @@ import shutil
 from pathlib import Path
 
 from mobot_cli.run import bag_metadata
-from mobot_cli.run.cdr import Packer
-from mobot_cli.run.mcap_records import Records
-from mobot_cli.run.ros_messages import (CLOCK, CLOCK_PACKER, JOINT_STATE, ODOMETRY, STRING, TF, TWIST,
-                                        RobotMessages, file_uris, stamp_of, tf_layout, tf_static)
+from mobot_cli.run.mcap_records import Records, Row
+from mobot_cli.run.ros_messages import (CLOCK, CLOCK_LAYOUT, CLOCK_PACKER, JOINT_STATE, ODOMETRY, STAMP_SOURCES,
+                                        STRING, TF, TWIST, RobotMessages, file_uris, stamp_of, tf_shape, tf_static)
 from mobot_cli.run import sensor_topics
 from mobot_cli.run.ros_msgs import MESSAGES
 from mobot_cli.run.ros_sensor_msgs import SENSOR_MESSAGES
@@ -73,7 +72,7 @@ class BagSink(Sink):
         self.tf_static = self.topic("/tf_static", TF, latched=True)
         self.robots: dict[str, _RobotTopics] = {}  # by record name; kept after a delete for its topics
         self.arriving: dict[str, RobotPlan] = {}  # spawned, waiting for their first sample
-        self.tf_packers: dict[tuple[str, ...], Packer] = {}  # the /tf shape for a set of robots
+        self.rows: dict[tuple[tuple[str, ...], bool], Row] = {}  # by the robots in it, and with /clock
         self.pending: list = []  # samples, arrivals (key, plan) and readings (key, Reading), in order
         self.waiting = 0  # samples in ``pending``
         self.waiting_bytes = 0  # sensor data in ``pending``
@@ -124,35 +123,49 @@ class BagSink(Sink):
 
     def _record_one(self, sample: Sample) -> None:
         ns, stamp = stamp_of(sample.step, self.rate)
-        messages: list[tuple[object, bytes]] = []  # every message of the sample, in order
-        if sample.step != self.clock_step:  # a robot's own row may share its step with a log row
-            self.clock_step = sample.step
-            messages.append((self.clock, CLOCK_PACKER.pack(stamp)))
+        clock = sample.step != self.clock_step  # a robot's own row may share its step with a log row
+        self.clock_step = sample.step
         names = tuple(sample.states)
-        for name in names:
-            if name in self.arriving:
-                # Its connections go into the open chunk after what this sample wrote before it.
-                self.records.write(ns, messages)
-                messages.clear()
-                self._arrive(name, self.arriving.pop(name), sample.states[name], stamp, messages)
-        tf_values: list[float] = []
+        if self.arriving and not self.arriving.keys().isdisjoint(names):
+            if clock:  # before the arrivals: their connections go into the open chunk after it
+                self.records.write(ns, [(self.clock, CLOCK_PACKER.pack(stamp))])
+                clock = False
+            for name in names:
+                if name in self.arriving:
+                    self.records.write(ns, self._arrive(name, self.arriving.pop(name), sample.states[name], stamp))
+        row = self.rows.get((names, clock))
+        if row is None:
+            row = self.rows[names, clock] = self._row(names, clock)
+        values = [ns, *stamp]
         robots = self.robots
         for name, state in sample.states.items():
-            robots[name].write(messages, stamp, state, tf_values)
-        packer = self.tf_packers.get(names)
-        if packer is None:
-            packer = self.tf_packers[names] = tf_layout([robots[name].messages.frames for name in names])
-        messages.append((self.tf, packer.pack(tf_values)))
-        self.records.write(ns, messages)
+            robots[name].messages.row_values(state, values)
+        self.records.write_row(ns, row, values)
 
-    def _arrive(self, name: str, plan: RobotPlan, state: RobotState, stamp: tuple[int, int],
-                messages: list[tuple[object, bytes]]) -> None:
-        """A robot's first sample: its topics (reused for a name seen before), static frames and
-        description."""
+    def _row(self, names: tuple[str, ...], clock: bool) -> Row:
+        """The messages of a sample of these robots: /clock (if new), each robot's odom, cmd_vel
+        and joint_states, then one /tf."""
+        row = Row()
+        if clock:
+            row.add(self.clock, CLOCK_LAYOUT, STAMP_SOURCES)
+        at, tf_sources = len(STAMP_SOURCES) + 1, []
+        for name in names:
+            robot = self.robots[name]
+            for connection, (layout, sources) in zip((robot.odom, robot.cmd_vel, robot.joint_states),
+                                                     robot.messages.row_messages(at)):
+                row.add(connection, layout, sources)
+            tf_sources += robot.messages.tf_sources(at)
+            at += robot.messages.row_width
+        return row.add(self.tf, tf_shape([self.robots[name].messages.frames for name in names]), tf_sources).build()
+
+    def _arrive(self, name: str, plan: RobotPlan, state: RobotState,
+                stamp: tuple[int, int]) -> list[tuple[object, bytes]]:
+        """A robot's first sample: its topics (reused for a name seen before), then its
+        description and static frames, the messages returned."""
         same_ns = [r for r in self.robots.values() if r.plan.namespace == plan.namespace]
         robot = self.robots[name] = _RobotTopics(self, plan, state, reuse=same_ns[0] if same_ns else None)
-        messages.append((robot.description, robot.messages.description()))
-        messages.append((self.tf_static, tf_static(stamp, robot.messages.statics(state))))
+        return [(robot.description, robot.messages.description()),
+                (self.tf_static, tf_static(stamp, robot.messages.statics(state)))]
 
     def _flush(self) -> None:
         """Close the open MCAP chunk and push it to the OS, so a killed run keeps it."""
@@ -213,15 +226,6 @@ class _RobotTopics:
         """One sensor reading as its ROS message."""
         ns, stamp = stamp_of(reading.step, rate)
         records.write(ns, [(self.sensor_connections[reading.sensor.name], self.messages.reading(stamp, reading))])
-
-    def write(self, out: list[tuple[object, bytes]], stamp: tuple[int, int], state: RobotState,
-              tf_values: list[float]) -> None:
-        """This robot's messages of one sample, to ``out``; its /tf transforms go to ``tf_values``."""
-        messages = self.messages
-        out.append((self.odom, messages.odom(stamp, state)))
-        out.append((self.cmd_vel, messages.cmd_vel(state)))
-        out.append((self.joint_states, messages.joint_states(stamp, state)))
-        messages.tf_values(stamp, state, tf_values)
 
 
 def _sensor_topic(sink: BagSink, plan: RobotPlan, spec):
