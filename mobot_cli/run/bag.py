@@ -29,6 +29,7 @@ from __future__ import annotations
 import contextlib
 import shutil
 from pathlib import Path
+from typing import Sequence
 
 from mobot_cli.run import bag_metadata
 from mobot_cli.run.mcap_records import Records, Row
@@ -143,20 +144,9 @@ class BagSink(Sink):
         self.records.write_row(ns, row, values)
 
     def _row(self, names: tuple[str, ...], clock: bool) -> Row:
-        """The messages of a sample of these robots: /clock (if new), each robot's odom, cmd_vel
-        and joint_states, then one /tf."""
-        row = Row()
-        if clock:
-            row.add(self.clock, CLOCK_LAYOUT, STAMP_SOURCES)
-        at, tf_sources = len(STAMP_SOURCES) + 1, []
-        for name in names:
-            robot = self.robots[name]
-            for connection, (layout, sources) in zip((robot.odom, robot.cmd_vel, robot.joint_states),
-                                                     robot.messages.row_messages(at)):
-                row.add(connection, layout, sources)
-            tf_sources += robot.messages.tf_sources(at)
-            at += robot.messages.row_width
-        return row.add(self.tf, tf_shape([self.robots[name].messages.frames for name in names]), tf_sources).build()
+        robots = [self.robots[name] for name in names]
+        return log_row(self.clock if clock else None,
+                       [((r.odom, r.cmd_vel, r.joint_states), r.messages) for r in robots], self.tf)
 
     def _arrive(self, name: str, plan: RobotPlan, state: RobotState,
                 stamp: tuple[int, int]) -> list[tuple[object, bytes]]:
@@ -226,6 +216,22 @@ class _RobotTopics:
         """One sensor reading as its ROS message."""
         ns, stamp = stamp_of(reading.step, rate)
         records.write(ns, [(self.sensor_connections[reading.sensor.name], self.messages.reading(stamp, reading))])
+
+
+def log_row(clock, robots: Sequence[tuple[Sequence, RobotMessages]], tf) -> Row:
+    """The messages of one sample: /clock (unless ``clock`` is None), each robot's odom,
+    cmd_vel and joint_states (to its three connections), then one /tf. Its values: the log
+    time (ns), the stamp, then each robot's ``row_values``."""
+    row = Row()
+    if clock is not None:
+        row.add(clock, CLOCK_LAYOUT, STAMP_SOURCES)
+    at, tf_sources = len(STAMP_SOURCES) + 1, []
+    for connections, messages in robots:
+        for connection, (layout, sources) in zip(connections, messages.row_messages(at)):
+            row.add(connection, layout, sources)
+        tf_sources += messages.tf_sources(at)
+        at += messages.row_width
+    return row.add(tf, tf_shape([messages.frames for _, messages in robots]), tf_sources).build()
 
 
 def _sensor_topic(sink: BagSink, plan: RobotPlan, spec):

@@ -61,7 +61,8 @@ class Layout:
 
     def include(self, other: "Layout", sources: Sequence[Source]) -> "Layout":
         """``other``'s bytes next, its i-th variable taken from value ``sources[i]`` (an int), or
-        fixed (a float); ``other`` aligns relative to its own start, as a message's payload does."""
+        fixed (a float, for a float field); ``other`` aligns relative to its own start, as a
+        message's payload does."""
         if len(sources) != other._vars:
             raise ValueError(f"expected {other._vars} sources, got {len(sources)}")
         for item in other._items:
