@@ -17,7 +17,6 @@ With a rosbags whose writer does not look as expected, every message goes throug
 from __future__ import annotations
 
 import struct
-import sys
 from collections import defaultdict
 from io import BytesIO
 from typing import Sequence
@@ -73,7 +72,6 @@ class Records:
             all(hasattr(storage.chunk, name) for name in ("bio", "msgs", "message_start_time", "message_end_time")) \
             and hasattr(writer, "counts") and hasattr(writer, "min_timestamp")
         self.rows: list[tuple[int, int, Row]] = []  # (log time, offset in the chunk, row) not yet settled
-        self.compress = reused_context(getattr(storage, "compressor", None))
 
     def write(self, timestamp: int, messages: Sequence[tuple[object, bytes]]) -> None:
         """Record ``messages``, in order, all logged (and published) at ``timestamp`` ns."""
@@ -163,7 +161,10 @@ class Records:
             return
         chunk, bio = storage.chunk, storage.bio
         data = chunk.bio.getvalue()
-        compressed = self.compress(data)
+        # A new zstd context per chunk, as rosbags' compressor makes: a context kept for every
+        # chunk runs a fifth fewer instructions but is slower in a run (measured, 1 and 10
+        # robots), its tables cold after the physics steps between chunks.
+        compressed = storage.compressor(data)
         compression = storage.compression.encode()
         start, end = chunk.message_start_time, chunk.message_end_time
         chunk_start = bio.tell()
@@ -183,20 +184,6 @@ class Records:
         index.write(struct.pack("<QQ", len(compressed), len(data)))
         storage.chunks.append(index)
         storage.chunk = type(chunk)(2**63 - 1, 0, BytesIO(), defaultdict(list))
-
-
-def reused_context(compress):
-    """``compress``, or when it is the zstd module's one-shot ``compress`` (rosbags' chunk
-    compressor) the same compression through one context kept for every chunk."""
-    # zstd.compress(data) is ZstdCompressor().compress(data, FLUSH_FRAME): a new context per
-    # chunk, whose tables are cleared when it starts (a third of the compression's instructions).
-    # A kept context starts every frame afresh and writes the same bytes (tests/run/test_bag_bytes.py).
-    module = sys.modules.get(getattr(compress, "__module__", None) or "")
-    if compress is None or getattr(module, "compress", None) is not compress \
-            or not hasattr(module, "ZstdCompressor"):
-        return compress
-    context, mode = module.ZstdCompressor(), module.ZstdCompressor.FLUSH_FRAME
-    return lambda data: context.compress(data, mode=mode)
 
 
 def _record(opcode: int, body: bytes) -> bytes:

@@ -1,11 +1,9 @@
 """A bag packs a log row at once (run/bag.py ``log_row``, run/mcap_records.py ``Row``): its
 messages must be the bytes the one-message packers give (what ``--ros2`` publishes, checked
-against rosbags' serializer in tests/ros2/test_wire.py), its records what rosbags' Writer writes,
-and its chunks what rosbags' zstd compression gives."""
+against rosbags' serializer in tests/ros2/test_wire.py), its records what rosbags' Writer writes."""
 
 from __future__ import annotations
 
-import math
 import struct
 from collections import namedtuple
 
@@ -165,23 +163,3 @@ def test_a_chunk_that_fills_within_a_row_closes_where_rosbags_closes_it(tmp_path
     with (tmp_path / "True" / "bag" / "bag.mcap").open("rb") as f:
         sizes = [c.uncompressed_size for c in make_reader(f).get_summary().chunk_indexes]
     assert len(sizes) == 2 and mcap_records.CHUNK_LIMIT < sizes[0] < mcap_records.CHUNK_LIMIT + 200_000, sizes
-
-
-@settings(max_examples=30, deadline=None)
-@given(chunks=st.lists(st.one_of(st.binary(max_size=3000), st.integers(0, 300_000).map(lambda n: bytes(n % 251) * (n // 251 + 1))),
-                       min_size=1, max_size=8))
-def test_one_zstd_context_compresses_every_chunk_as_a_new_one_would(chunks):
-    from rosbags.rosbag2.storage_mcap import zstd
-
-    compress = mcap_records.reused_context(zstd.compress)
-    assert compress is not zstd.compress
-    assert [compress(c) for c in chunks] == [zstd.compress(c) for c in chunks]
-
-
-def test_another_compressor_is_used_as_it_is():
-    def identity(data):
-        return data
-
-    assert mcap_records.reused_context(identity) is identity
-    assert mcap_records.reused_context(None) is None
-    assert mcap_records.reused_context(math.floor) is math.floor  # a module's function, not its compress
