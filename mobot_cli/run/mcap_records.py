@@ -19,6 +19,7 @@ from __future__ import annotations
 import struct
 from collections import defaultdict
 from io import BytesIO
+from itertools import chain
 from typing import Sequence
 
 from mobot_cli.run.cdr import Layout, Source
@@ -167,19 +168,22 @@ class Records:
         compressed = storage.compressor(data)
         compression = storage.compression.encode()
         start, end = chunk.message_start_time, chunk.message_end_time
+        # The chunk and its message indexes reach the file in one write (one system call).
+        parts = [_record(0x06, b"".join((struct.pack("<QQQII", start, end, len(data), 0, len(compression)),
+                                         compression, struct.pack("<Q", len(compressed)), compressed)))]
         chunk_start = bio.tell()
-        bio.write(_record(0x06, b"".join((struct.pack("<QQQII", start, end, len(data), 0, len(compression)),
-                                          compression, struct.pack("<Q", len(compressed)), compressed))))
-        chunk_end = bio.tell()
+        chunk_end = at = chunk_start + len(parts[0])
         offsets = []
         for cid, messages in chunk.msgs.items():
-            offsets.append((cid, bio.tell()))
-            flat = [value for pair in messages for value in pair]
-            bio.write(_record(0x07, struct.pack(f"<HI{len(flat)}Q", cid, 16 * len(messages), *flat)))
+            offsets.append((cid, at))
+            parts.append(_record(0x07, struct.pack(f"<HI{2 * len(messages)}Q", cid, 16 * len(messages),
+                                                   *chain.from_iterable(messages))))
+            at += len(parts[-1])
+        bio.write(b"".join(parts))
         index = BytesIO()  # the summary's chunk index, which rosbags writes when it closes
         index.write(struct.pack("<QQQQI", start, end, chunk_start, chunk_end - chunk_start, 10 * len(offsets)))
         index.write(struct.pack("<" + "HQ" * len(offsets), *(value for pair in offsets for value in pair)))
-        index.write(struct.pack("<QI", bio.tell() - chunk_end, len(compression)))
+        index.write(struct.pack("<QI", at - chunk_end, len(compression)))
         index.write(compression)
         index.write(struct.pack("<QQ", len(compressed), len(data)))
         storage.chunks.append(index)
