@@ -73,7 +73,8 @@ class BagSink(Sink):
         self.tf_static = self.topic("/tf_static", TF, latched=True)
         self.robots: dict[str, _RobotTopics] = {}  # by record name; kept after a delete for its topics
         self.arriving: dict[str, RobotPlan] = {}  # spawned, waiting for their first sample
-        self.rows: dict[tuple[tuple[str, ...], bool], Row] = {}  # by the robots in it, and with /clock
+        # Rows by the robots in them and whether /clock is in: the row, and each robot's row_values.
+        self.rows: dict[tuple[tuple[str, ...], bool], tuple[Row, list]] = {}
         self.pending: list = []  # samples, arrivals (key, plan) and readings (key, Reading), in order
         self.waiting = 0  # samples in ``pending``
         self.waiting_bytes = 0  # sensor data in ``pending``
@@ -134,25 +135,26 @@ class BagSink(Sink):
             for name in names:
                 if name in self.arriving:
                     self.records.write(ns, self._arrive(name, self.arriving.pop(name), sample.states[name], stamp))
-        row = self.rows.get((names, clock))
-        if row is None:
-            row = self.rows[names, clock] = self._row(names, clock)
+        row, fills = self.rows.get((names, clock)) or self._row(names, clock)
         values = [ns, *stamp]
-        robots = self.robots
-        for name, state in sample.states.items():
-            robots[name].messages.row_values(state, values)
+        for fill, state in zip(fills, sample.states.values()):
+            fill(state, values)
         self.records.write_row(ns, row, values)
 
-    def _row(self, names: tuple[str, ...], clock: bool) -> Row:
+    def _row(self, names: tuple[str, ...], clock: bool) -> tuple[Row, list]:
+        """The row of a sample of these robots, and the functions that give its values."""
         robots = [self.robots[name] for name in names]
-        return log_row(self.clock if clock else None,
-                       [((r.odom, r.cmd_vel, r.joint_states), r.messages) for r in robots], self.tf)
+        row = log_row(self.clock if clock else None,
+                      [((r.odom, r.cmd_vel, r.joint_states), r.messages) for r in robots], self.tf)
+        self.rows[names, clock] = row, [r.messages.row_values for r in robots]
+        return self.rows[names, clock]
 
     def _arrive(self, name: str, plan: RobotPlan, state: RobotState,
                 stamp: tuple[int, int]) -> list[tuple[object, bytes]]:
         """A robot's first sample: its topics (reused for a name seen before), then its
         description and static frames, the messages returned."""
         same_ns = [r for r in self.robots.values() if r.plan.namespace == plan.namespace]
+        self.rows = {key: row for key, row in self.rows.items() if name not in key[0]}  # a name seen before
         robot = self.robots[name] = _RobotTopics(self, plan, state, reuse=same_ns[0] if same_ns else None)
         return [(robot.description, robot.messages.description()),
                 (self.tf_static, tf_static(stamp, robot.messages.statics(state)))]
