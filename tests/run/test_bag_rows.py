@@ -163,3 +163,31 @@ def test_a_chunk_that_fills_within_a_row_closes_where_rosbags_closes_it(tmp_path
     with (tmp_path / "True" / "bag" / "bag.mcap").open("rb") as f:
         sizes = [c.uncompressed_size for c in make_reader(f).get_summary().chunk_indexes]
     assert len(sizes) == 2 and mcap_records.CHUNK_LIMIT < sizes[0] < mcap_records.CHUNK_LIMIT + 200_000, sizes
+
+
+def test_a_name_that_arrives_again_gets_rows_of_its_new_frames(tmp_path):
+    import dataclasses
+    from pathlib import Path
+
+    import mcap.reader as mcap_reader
+    import mcap_ros2.decoder as mcap_ros2
+
+    from mobot_cli.run.bag import BagSink
+    from mobot_cli.run.prepare import prepare
+    from mobot_cli.run.timeline import Sample, simulate
+
+    scenario = Path(__file__).resolve().parents[2] / "scenarios" / "quickstart.yaml"
+    plan = prepare(scenario, ["duration=0.5"]).plan
+    first = plan.robots[0]
+    sink = BagSink(dataclasses.replace(plan, robots=()), tmp_path)
+    samples = [r for r in simulate(plan) if isinstance(r, Sample)]
+    for k, prefix in enumerate(("one/", "two/")):
+        sink.spawned(0, "ghost", dataclasses.replace(first, name="ghost", namespace="/ghost", frame_prefix=prefix))
+        for sample in samples[k * 5:k * 5 + 5]:
+            sink.write(Sample(sample.step, {"ghost": sample.states[first.name]}))
+    sink.close()
+    with (tmp_path / "bag" / "bag.mcap").open("rb") as f:
+        reader = mcap_reader.make_reader(f, decoder_factories=[mcap_ros2.DecoderFactory()])
+        tf = [msg.transforms[0].child_frame_id for _, channel, _, msg in reader.iter_decoded_messages()
+              if channel.topic == "/tf"]
+    assert [name.split("/")[0] for name in tf] == ["one"] * 5 + ["two"] * 5, tf
