@@ -138,7 +138,6 @@ class Packer:
 
     def __init__(self, st: struct.Struct, args: list[bytes | int], count: int):
         self.count = count
-        self.size = st.size
         # One struct call per message: a small function that passes the constants and the
         # variables in field order, made once per shape (as dataclasses make __init__).
         names = {f"c{i}": arg for i, arg in enumerate(args) if isinstance(arg, bytes)}

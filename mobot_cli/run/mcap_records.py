@@ -37,7 +37,7 @@ class Row:
     def __init__(self) -> None:
         self._layout = Layout(encapsulation=b"")
         self.index: list[tuple[int, int]] = []  # (channel id, the record's offset in the row)
-        self.cids: list[int] = []
+        self.cids: list[int] = []  # the channel of each message, in order
         self.spans: list[tuple[object, int, int]] = []  # (connection, where its data starts, ends)
         self.pack = None  # values -> the row's bytes, once built
 
@@ -72,7 +72,9 @@ class Records:
             "chunk", "close_chunk", "channel_stats", "message_start_time", "message_end_time")) and \
             all(hasattr(storage.chunk, name) for name in ("bio", "msgs", "message_start_time", "message_end_time")) \
             and hasattr(writer, "counts") and hasattr(writer, "min_timestamp")
-        self.rows: list[tuple[int, int, Row]] = []  # (log time, offset in the chunk, row) not yet settled
+        # Rows written whose index entries, counts and times are not yet kept (``_settle``, before
+        # the next single message and when the chunk closes; a bag closes its chunk before its end).
+        self.rows: list[tuple[int, int, Row]] = []  # (log time, offset in the chunk, row)
 
     def write(self, timestamp: int, messages: Sequence[tuple[object, bytes]]) -> None:
         """Record ``messages``, in order, all logged (and published) at ``timestamp`` ns."""
