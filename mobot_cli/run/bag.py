@@ -29,12 +29,12 @@ from __future__ import annotations
 import contextlib
 import shutil
 from pathlib import Path
+from typing import Sequence
 
 from mobot_cli.run import bag_metadata
-from mobot_cli.run.cdr import Packer
-from mobot_cli.run.mcap_records import Records
-from mobot_cli.run.ros_messages import (CLOCK, CLOCK_PACKER, JOINT_STATE, ODOMETRY, STRING, TF, TWIST,
-                                        RobotMessages, file_uris, stamp_of, tf_layout, tf_static)
+from mobot_cli.run.mcap_records import Records, Row
+from mobot_cli.run.ros_messages import (CLOCK, CLOCK_LAYOUT, CLOCK_PACKER, JOINT_STATE, ODOMETRY, STAMP_SOURCES,
+                                        STRING, TF, TWIST, RobotMessages, file_uris, stamp_of, tf_shape, tf_static)
 from mobot_cli.run import sensor_topics
 from mobot_cli.run.ros_msgs import MESSAGES
 from mobot_cli.run.ros_sensor_msgs import SENSOR_MESSAGES
@@ -73,7 +73,8 @@ class BagSink(Sink):
         self.tf_static = self.topic("/tf_static", TF, latched=True)
         self.robots: dict[str, _RobotTopics] = {}  # by record name; kept after a delete for its topics
         self.arriving: dict[str, RobotPlan] = {}  # spawned, waiting for their first sample
-        self.tf_packers: dict[tuple[str, ...], Packer] = {}  # the /tf shape for a set of robots
+        # Rows by the robots in them and whether /clock is in: the row, and each robot's row_values.
+        self.rows: dict[tuple[tuple[str, ...], bool], tuple[Row, list]] = {}
         self.pending: list = []  # samples, arrivals (key, plan) and readings (key, Reading), in order
         self.waiting = 0  # samples in ``pending``
         self.waiting_bytes = 0  # sensor data in ``pending``
@@ -124,35 +125,39 @@ class BagSink(Sink):
 
     def _record_one(self, sample: Sample) -> None:
         ns, stamp = stamp_of(sample.step, self.rate)
-        messages: list[tuple[object, bytes]] = []  # every message of the sample, in order
-        if sample.step != self.clock_step:  # a robot's own row may share its step with a log row
-            self.clock_step = sample.step
-            messages.append((self.clock, CLOCK_PACKER.pack(stamp)))
+        clock = sample.step != self.clock_step  # a robot's own row may share its step with a log row
+        self.clock_step = sample.step
         names = tuple(sample.states)
-        for name in names:
-            if name in self.arriving:
-                # Its connections go into the open chunk after what this sample wrote before it.
-                self.records.write(ns, messages)
-                messages.clear()
-                self._arrive(name, self.arriving.pop(name), sample.states[name], stamp, messages)
-        tf_values: list[float] = []
-        robots = self.robots
-        for name, state in sample.states.items():
-            robots[name].write(messages, stamp, state, tf_values)
-        packer = self.tf_packers.get(names)
-        if packer is None:
-            packer = self.tf_packers[names] = tf_layout([robots[name].messages.frames for name in names])
-        messages.append((self.tf, packer.pack(tf_values)))
-        self.records.write(ns, messages)
+        if self.arriving and not self.arriving.keys().isdisjoint(names):
+            if clock:  # before the arrivals: their connections go into the open chunk after it
+                self.records.write(ns, [(self.clock, CLOCK_PACKER.pack(stamp))])
+                clock = False
+            for name in names:
+                if name in self.arriving:
+                    self.records.write(ns, self._arrive(name, self.arriving.pop(name), sample.states[name], stamp))
+        row, fills = self.rows.get((names, clock)) or self._row(names, clock)
+        values = [ns, *stamp]
+        for fill, state in zip(fills, sample.states.values()):
+            fill(state, values)
+        self.records.write_row(ns, row, values)
 
-    def _arrive(self, name: str, plan: RobotPlan, state: RobotState, stamp: tuple[int, int],
-                messages: list[tuple[object, bytes]]) -> None:
-        """A robot's first sample: its topics (reused for a name seen before), static frames and
-        description."""
+    def _row(self, names: tuple[str, ...], clock: bool) -> tuple[Row, list]:
+        """The row of a sample of these robots, and the functions that give its values."""
+        robots = [self.robots[name] for name in names]
+        row = log_row(self.clock if clock else None,
+                      [((r.odom, r.cmd_vel, r.joint_states), r.messages) for r in robots], self.tf)
+        self.rows[names, clock] = row, [r.messages.row_values for r in robots]
+        return self.rows[names, clock]
+
+    def _arrive(self, name: str, plan: RobotPlan, state: RobotState,
+                stamp: tuple[int, int]) -> list[tuple[object, bytes]]:
+        """A robot's first sample: its topics (reused for a name seen before), then its
+        description and static frames, the messages returned."""
         same_ns = [r for r in self.robots.values() if r.plan.namespace == plan.namespace]
+        self.rows = {key: row for key, row in self.rows.items() if name not in key[0]}  # a name seen before
         robot = self.robots[name] = _RobotTopics(self, plan, state, reuse=same_ns[0] if same_ns else None)
-        messages.append((robot.description, robot.messages.description()))
-        messages.append((self.tf_static, tf_static(stamp, robot.messages.statics(state))))
+        return [(robot.description, robot.messages.description()),
+                (self.tf_static, tf_static(stamp, robot.messages.statics(state)))]
 
     def _flush(self) -> None:
         """Close the open MCAP chunk and push it to the OS, so a killed run keeps it."""
@@ -214,14 +219,21 @@ class _RobotTopics:
         ns, stamp = stamp_of(reading.step, rate)
         records.write(ns, [(self.sensor_connections[reading.sensor.name], self.messages.reading(stamp, reading))])
 
-    def write(self, out: list[tuple[object, bytes]], stamp: tuple[int, int], state: RobotState,
-              tf_values: list[float]) -> None:
-        """This robot's messages of one sample, to ``out``; its /tf transforms go to ``tf_values``."""
-        messages = self.messages
-        out.append((self.odom, messages.odom(stamp, state)))
-        out.append((self.cmd_vel, messages.cmd_vel(state)))
-        out.append((self.joint_states, messages.joint_states(stamp, state)))
-        messages.tf_values(stamp, state, tf_values)
+
+def log_row(clock, robots: Sequence[tuple[Sequence, RobotMessages]], tf) -> Row:
+    """The messages of one sample: /clock (unless ``clock`` is None), each robot's odom,
+    cmd_vel and joint_states (to its three connections), then one /tf. Its values: the log
+    time (ns), the stamp, then each robot's ``row_values``."""
+    row = Row()
+    if clock is not None:
+        row.add(clock, CLOCK_LAYOUT, STAMP_SOURCES)
+    at, tf_sources = len(STAMP_SOURCES) + 1, []
+    for connections, messages in robots:
+        for connection, (layout, sources) in zip(connections, messages.row_messages(at)):
+            row.add(connection, layout, sources)
+        tf_sources += messages.tf_sources(at)
+        at += messages.row_width
+    return row.add(tf, tf_shape([messages.frames for _, messages in robots]), tf_sources).build()
 
 
 def _sensor_topic(sink: BagSink, plan: RobotPlan, spec):

@@ -5,44 +5,76 @@ change; only stamps, poses and joint values do. rosbags' serializer builds a mes
 and walks it for every message (~18 us for an Odometry); laying the bytes out once and
 filling in the numbers is ~1 us. tests/run/test_bag.py checks every layout byte for byte against
 rosbags' own serializer.
+
+Layouts also join end to end (``include``): a bag's log row, every message of it with its MCAP
+record header, is one layout packed in one call (run/mcap_records.py ``Row``), its messages'
+variables drawn from one list of values, so a stamp that five messages carry is passed once.
 """
 
 from __future__ import annotations
 
 import struct
-from typing import Sequence
+from typing import Sequence, Union
 
 ENCAPSULATION = b"\x00\x01\x00\x00"  # CDR, little endian: what rosbag2 stores for 'cdr'
-_SIZES = {"i": 4, "I": 4, "f": 4, "d": 8}
+_SIZES = {"i": 4, "I": 4, "f": 4, "d": 8, "Q": 8}
+Source = Union[int, float]  # where an included variable comes from: a value's index, or a constant
 
 
 class Layout:
     """Build a message shape field by field; constants are given now, variables when packing."""
 
-    def __init__(self) -> None:
-        self._fmt = ["<4s"]  # struct codes of the whole message, encapsulation header first
-        self._args: list[bytes | int] = [ENCAPSULATION]  # constants, or the index of a variable
-        self._size = 0  # payload bytes so far: CDR aligns relative to the payload
+    def __init__(self, encapsulation: bytes = ENCAPSULATION) -> None:
+        # Constant bytes (padding included), or (struct code, index of a variable) pairs.
+        self._items: list[bytes | tuple[str, int]] = [encapsulation] if encapsulation else []
+        self.size = 0  # payload bytes so far: CDR aligns relative to the payload
+        self.head = len(encapsulation)  # bytes before the payload
         self._vars = 0
 
     def _pad(self, size: int) -> None:
-        pad = -self._size % size
+        pad = -self.size % size
         if pad:
-            self._fmt.append(f"{pad}x")
-            self._size += pad
+            self._const(bytes(pad))
 
     def _const(self, data: bytes) -> None:
-        self._fmt.append(f"{len(data)}s")
-        self._args.append(data)
-        self._size += len(data)
+        self._items.append(data)
+        self.size += len(data)
 
     def var(self, code: str, count: int = 1) -> "Layout":
         """``count`` variable numbers of one type: 'i' int32, 'I' uint32, 'f' float32, 'd' float64."""
         self._pad(_SIZES[code])
-        self._fmt.append(f"{count}{code}")
-        self._args.extend(range(self._vars, self._vars + count))
-        self._vars += count
-        self._size += _SIZES[code] * count
+        for _ in range(count):
+            self.ref(code, self._vars)
+        return self
+
+    def ref(self, code: str, index: int) -> "Layout":
+        """A variable number, unaligned, that is value ``index`` when packing (several may share one)."""
+        self._items.append((code, index))
+        self._vars = max(self._vars, index + 1)
+        self.size += _SIZES[code]
+        return self
+
+    def raw(self, data: bytes) -> "Layout":
+        """Constant bytes, unaligned (an MCAP record header between messages)."""
+        self._const(data)
+        return self
+
+    def include(self, other: "Layout", sources: Sequence[Source]) -> "Layout":
+        """``other``'s bytes next, its i-th variable taken from value ``sources[i]`` (an int), or
+        fixed (a float, for a float field); ``other`` aligns relative to its own start, as a
+        message's payload does."""
+        if len(sources) != other._vars:
+            raise ValueError(f"expected {other._vars} sources, got {len(sources)}")
+        for item in other._items:
+            if isinstance(item, bytes):
+                self._const(item)
+                continue
+            code, index = item
+            source = sources[index]
+            if isinstance(source, int):
+                self.ref(code, source)
+            else:
+                self._const(struct.pack("<" + code, source))
         return self
 
     def u32(self, value: int) -> "Layout":
@@ -77,7 +109,28 @@ class Layout:
 
     def build(self) -> "Packer":
         """The finished shape."""
-        return Packer(struct.Struct("".join(self._fmt)), self._args, self._vars)
+        return Packer(*self._struct())
+
+    def pack(self, values: Sequence[float]) -> bytes:
+        """One message of this shape, packed without building a Packer (for a message sent once)."""
+        st, args, count = self._struct()
+        if len(values) != count:
+            raise ValueError(f"expected {count} values, got {len(values)}")
+        return st.pack(*(arg if isinstance(arg, bytes) else values[arg] for arg in args))
+
+    def _struct(self) -> tuple[struct.Struct, list[bytes | int], int]:
+        fmt, args = ["<"], []  # struct codes, and per argument its constant or its variable's index
+        for item in self._items:
+            if isinstance(item, tuple):
+                fmt.append(item[0])
+                args.append(item[1])
+            elif args and isinstance(args[-1], bytes):  # constants side by side: one argument
+                args[-1] += item
+                fmt[-1] = f"{len(args[-1])}s"
+            else:
+                fmt.append(f"{len(item)}s")
+                args.append(item)
+        return struct.Struct("".join(fmt)), args, self._vars
 
 
 class Packer:

@@ -4,11 +4,14 @@ One place builds them so that a recorded bag and a live ROS 2 topic carry the sa
 ``/clock``, ``/tf`` (every robot's odom -> base and moving joints in one message),
 ``/tf_static`` (``world -> <prefix>odom`` and the fixed joints) and per robot odom, cmd_vel,
 joint_states and robot_description. Shapes are laid out once per robot (run/cdr.py); a
-message is then one ``struct.pack``.
+message is then one ``struct.pack``. A bag packs a whole log row at once: each robot gives its
+numbers in one block (``RobotMessages.row_values``) and says where each message's variables
+are in it (``row_messages``, ``tf_sources``).
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 from typing import Sequence
@@ -27,7 +30,10 @@ ODOMETRY, TWIST = "nav_msgs/msg/Odometry", "geometry_msgs/msg/Twist"
 JOINT_STATE, STRING = "sensor_msgs/msg/JointState", "std_msgs/msg/String"
 LASER_SCAN = "sensor_msgs/msg/LaserScan"
 _MESH_PATH = re.compile(r'(<mesh\b[^>]*?\bfilename\s*=\s*")(/)')
-CLOCK_PACKER = Layout().var("i").var("I").build()
+CLOCK_LAYOUT = Layout().var("i").var("I")
+CLOCK_PACKER = CLOCK_LAYOUT.build()
+STAMP_SOURCES = (1, 2)  # a row's values start with its log time (ns), then the stamp: sec, nanosec
+_BLOCK = 8  # a robot's block: x, y, sin and cos of half the yaw, vx, wz, command linear and angular
 
 Stamp = tuple[int, int]  # (sec, nanosec)
 
@@ -50,9 +56,9 @@ class RobotMessages:
         self.plan = plan
         self.frames = RobotFrames(plan.urdf, plan.frame_prefix, plan.root_link)
         cov = self.frames.covariance
-        self.odom_packer = (Layout().header(self.frames.odom_frame).string(self.frames.base_frame)
-                            .var("d", 7).doubles(cov).var("d", 6).doubles(cov).build())
-        self.twist_packer = Layout().var("d", 6).build()
+        self.odom_layout = (Layout().header(self.frames.odom_frame).string(self.frames.base_frame)
+                            .var("d", 7).doubles(cov).var("d", 6).doubles(cov))
+        self.twist_layout = Layout().var("d", 6)
         self.joints = list(state.joint_positions)
         n = len(self.joints)
         joints = Layout().header("").strings(self.joints)
@@ -60,12 +66,29 @@ class RobotMessages:
             joints.u32(n).var("d", n).u32(n).var("d", n)
         else:
             joints.u32(0).u32(0)
-        self.joint_packer = joints.u32(0).build()  # effort: none
+        self.joint_layout = joints.u32(0)  # effort: none
+        self.row_width = _BLOCK + 2 * n + 7 * len(self.frames.moving)  # values in this robot's block
         self.sensor_frames = {spec.name: sensor_topics.sensor_frame(plan, spec) for spec in plan.sensors}
+
+    # Packers for one message at a time (the live publisher's); a bag packs whole rows instead.
+    @functools.cached_property
+    def odom_packer(self) -> Packer:
+        """Packs ``odom``'s values."""
+        return self.odom_layout.build()
+
+    @functools.cached_property
+    def twist_packer(self) -> Packer:
+        """Packs ``cmd_vel``'s values."""
+        return self.twist_layout.build()
+
+    @functools.cached_property
+    def joint_packer(self) -> Packer:
+        """Packs ``joint_states``' values."""
+        return self.joint_layout.build()
 
     def description(self) -> bytes:
         """std_msgs/String with the URDF, mesh paths as file:// URIs."""
-        return Layout().string(file_uris(self.plan.urdf)).build().pack(())
+        return Layout().string(file_uris(self.plan.urdf)).pack(())
 
     def odom(self, stamp: Stamp, state: RobotState) -> bytes:
         """nav_msgs/Odometry in the robot's odom frame."""
@@ -94,6 +117,39 @@ class RobotMessages:
         positions = state.joint_positions
         for joint in self.frames.moving:
             out.extend((*stamp, *joint.transform(positions)))
+
+    def row_values(self, state: RobotState, out: list[float]) -> None:
+        """This robot's block of a row's values, appended to ``out``: the numbers of its odom,
+        cmd_vel, joint_states and /tf transforms, each once."""
+        half = state.odom_yaw / 2.0
+        positions, velocities = state.joint_positions, state.joint_velocities
+        out += (state.odom_x, state.odom_y, math.sin(half), math.cos(half), state.odom_vx, state.odom_wz,
+                state.cmd_linear, state.cmd_angular)
+        if len(positions) == len(velocities) == len(self.joints):  # the same joints, in order
+            out += positions.values()
+            out += velocities.values()
+        else:
+            out += (positions.get(j, 0.0) for j in self.joints)
+            out += (velocities.get(j, 0.0) for j in self.joints)
+        for joint in self.frames.moving:
+            out += joint.transform(positions)
+
+    def row_messages(self, at: int) -> list[tuple[Layout, tuple]]:
+        """(layout, sources) of odom, cmd_vel and joint_states with this robot's block at value ``at``."""
+        x, y, sin, cos, vx, wz, linear, angular = range(at, at + _BLOCK)
+        joints = tuple(range(at + _BLOCK, at + _BLOCK + 2 * len(self.joints)))
+        return [(self.odom_layout, (*STAMP_SOURCES, x, y, 0.0, 0.0, 0.0, sin, cos, vx, 0.0, 0.0, 0.0, 0.0, wz)),
+                (self.twist_layout, (linear, 0.0, 0.0, 0.0, 0.0, angular)),
+                (self.joint_layout, (*STAMP_SOURCES, *joints))]
+
+    def tf_sources(self, at: int) -> tuple:
+        """Where this robot's part of /tf (``tf_shape``) takes its variables, its block at ``at``."""
+        x, y, sin, cos = range(at, at + 4)
+        sources = [*STAMP_SOURCES, x, y, 0.0, 0.0, 0.0, sin, cos]
+        first = at + _BLOCK + 2 * len(self.joints)
+        for k in range(len(self.frames.moving)):
+            sources += (*STAMP_SOURCES, *range(first + 7 * k, first + 7 * k + 7))
+        return tuple(sources)
 
     def statics(self, state: RobotState) -> list[Transform]:
         """``world -> <prefix>odom`` where odometry (0, 0, 0) is (always first), then every fixed
@@ -124,6 +180,11 @@ class RobotMessages:
 
 def tf_layout(robots: Sequence[RobotFrames]) -> Packer:
     """The /tf message shape for this set of robots: odom -> base, then every moving joint."""
+    return tf_shape(robots).build()
+
+
+def tf_shape(robots: Sequence[RobotFrames]) -> Layout:
+    """``tf_layout``, not yet built: its variables are each robot's ``tf_values``, in turn."""
     pairs = []
     for frames in robots:
         pairs.append((frames.odom_frame, frames.base_frame))
@@ -131,7 +192,7 @@ def tf_layout(robots: Sequence[RobotFrames]) -> Packer:
     layout = Layout().u32(len(pairs))
     for parent, child in pairs:
         layout.header(parent).string(child).var("d", 7)
-    return layout.build()
+    return layout
 
 
 def tf_static(stamp: Stamp, transforms: Sequence[Transform]) -> bytes:
@@ -141,7 +202,7 @@ def tf_static(stamp: Stamp, transforms: Sequence[Transform]) -> bytes:
     for t in transforms:
         layout.header(t.parent).string(t.child).var("d", 7)
         values.extend((*stamp, *t.xyz, *t.quat))
-    return layout.build().pack(values)
+    return layout.pack(values)
 
 
 def laser_scan_layout(frame_id: str, rays: int, intensities: bool = False) -> Packer:
