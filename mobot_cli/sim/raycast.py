@@ -29,6 +29,7 @@ their BVHs again cost a few ms a run (~10 % of what a 10 Hz lidar adds to a 60 s
 from __future__ import annotations
 
 import math
+import os
 import threading
 
 import numpy as np
@@ -47,19 +48,34 @@ _BOX = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1
                  [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
 
 
-_kept: list[tuple[WorldPlan, "StaticScene"]] = []  # the last world's scene, for the next World of it
+_kept: list[tuple[tuple, "StaticScene"]] = []  # the last world's scene, for the next World of it
 _kept_lock = threading.Lock()  # Worlds may be made in several threads
 
 
 def static_scene(world: WorldPlan) -> "StaticScene":
-    """The ray scene of ``world``: the one the last World of an equal plan used, else a new one."""
+    """The ray scene of ``world``: the one the last World of an equal plan used, its mesh files
+    unchanged on disk, else a new one."""
+    key = (world, _mesh_files(world))
     with _kept_lock:
-        if _kept and (_kept[0][0] is world or _kept[0][0] == world):
+        if _kept and _kept[0][0] == key:
             return _kept[0][1].again()
     scene = StaticScene(world)
     with _kept_lock:
-        _kept[:] = [(world, scene)]
+        _kept[:] = [(key, scene)]
     return scene
+
+
+def _mesh_files(world: WorldPlan) -> tuple:
+    """Each mesh file a world's shapes read, as it is now (size, modification time): a file
+    rewritten between two Worlds of one process (the Python API's) is read again."""
+    files = []
+    for mesh in sorted({shape.mesh for body in world.bodies for shape in body.shapes if shape.mesh}):
+        try:
+            stat = os.stat(mesh)
+            files.append((mesh, stat.st_size, stat.st_mtime_ns))
+        except OSError:
+            files.append((mesh, None, None))
+    return tuple(files)
 
 
 def embree_available() -> bool:

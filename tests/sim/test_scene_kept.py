@@ -73,3 +73,24 @@ def test_threads_cutting_slices_of_a_kept_scene_get_the_same_answers():
     hit = alone[0][np.abs(angles) < 0.5]
     assert np.allclose(hit, 2.9 / np.cos(angles[np.abs(angles) < 0.5]), atol=1e-4)  # the wall's face at x = 2.9
 
+
+
+def _wall(path, x: float) -> None:
+    """An OBJ wall, 2 m wide and 1 m high, across the x axis at ``x``."""
+    path.write_text(f"v {x} -1 0\nv {x} 1 0\nv {x} 1 1\nv {x} -1 1\nf 1 2 3\nf 1 3 4\n")
+
+
+def test_a_mesh_file_rewritten_between_two_worlds_is_read_again(tmp_path):
+    """The Python API may rewrite a world's mesh between two Worlds of one plan: the next scene
+    must see the file as it is now, as PyBullet does."""
+    mesh = tmp_path / "wall.obj"
+    _wall(mesh, 2.0)
+    world = WorldPlan(name="walls", bodies=(StaticBody(name="wall", shapes=(StaticShape("mesh", (1, 1, 1), mesh=str(mesh)),)),))
+    ray = (np.array([[0.0, 0.0, 0.5]], np.float32), np.array([[1.0, 0.0, 0.0]], np.float32), np.array([10.0], np.float32))
+    first = raycast.static_scene(world)
+    assert raycast.static_scene(world)._scene is first._scene  # kept while the file is the same
+    assert first.cast(*ray)[0] == 2.0
+    _wall(mesh, 3.25)  # another size, and a later modification time
+    moved = raycast.static_scene(world)
+    assert moved._scene is not first._scene
+    assert moved.cast(*ray)[0] == 3.25
