@@ -35,7 +35,7 @@ from mobot_cli.run.prepare import prepare  # noqa: E402
 from mobot_cli.sim import lidar  # noqa: E402
 from mobot_cli.sim.bullet import p  # noqa: E402
 from mobot_cli.sim.plan import Physics, RayAxis, SensorSpec  # noqa: E402
-from mobot_cli.sim.raycast import StaticScene  # noqa: E402
+from mobot_cli.sim.raycast import StaticScene, forget_kept  # noqa: E402
 from mobot_cli.sim.world import World  # noqa: E402
 
 from common import timed  # noqa: E402  (bench/common.py)
@@ -102,6 +102,7 @@ def house_share(seconds: float, repeat: int, work: Path) -> None:
     load = os.getloadavg()[0]  # a shared machine: ratios move with the load beside them
     for i in range(repeat):
         for name, plan in plans.items():
+            forget_kept()  # each run builds its ray scene, as a `mobot run` does (a sweep's next run would not)
             results[name].append(timed(execute, plan, prepared.resolved_yaml, work / f"house-{i}-{len(name)}"))
     base_wall = statistics.median(w for w, _ in results["no sensors"])
     base_cpu = statistics.median(c for _, c in results["no sensors"])

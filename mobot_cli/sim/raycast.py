@@ -65,6 +65,12 @@ def static_scene(world: WorldPlan) -> "StaticScene":
     return scene
 
 
+def forget_kept() -> None:
+    """Drop the kept scene: the next World builds its own, as a fresh process's first does."""
+    with _kept_lock:
+        _kept.clear()
+
+
 def _mesh_files(world: WorldPlan) -> tuple:
     """Each mesh file a world's shapes read, as it is now (size, modification time): a file
     rewritten between two Worlds of one process (the Python API's) is read again."""
