@@ -94,3 +94,12 @@ def test_a_mesh_file_rewritten_between_two_worlds_is_read_again(tmp_path):
     moved = raycast.static_scene(world)
     assert moved._scene is not first._scene
     assert moved.cast(*ray)[0] == 3.25
+
+
+def test_a_forgotten_scene_is_built_again(tmp_path):
+    mesh = tmp_path / "wall.obj"
+    _wall(mesh, 2.0)
+    world = WorldPlan(name="walls", bodies=(StaticBody(name="wall", shapes=(StaticShape("mesh", (1, 1, 1), mesh=str(mesh)),)),))
+    first = raycast.static_scene(world)
+    raycast.forget_kept()
+    assert raycast.static_scene(world)._scene is not first._scene
