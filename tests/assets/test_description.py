@@ -238,3 +238,54 @@ def test_warm_load_is_identical_and_never_imports_yourdfpy(tmp_path, corpus):
     assert runs[0][:3] == runs[1][:3] and runs[0][0] == "0.16"
     assert runs[0][3:] == ["True", "True", "True"]  # cold: the checks ran
     assert runs[1][3:] == ["False", "False", "False"]  # warm: read from the cache
+
+
+def test_a_new_folder_reuses_the_checked_description_while_its_meshes_lead_to_the_same_files(
+        corpus, tmp_path, monkeypatch):
+    """The scenario's folder is a search path, but it matters only through where the mesh URIs
+    lead: another folder reuses the cached checks, unless a package there shadows the meshes."""
+    import shutil
+
+    from mobot_cli.assets.description import robot as robot_module
+
+    monkeypatch.setenv("MOBOT_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setenv("MOBOT_RESOURCE_PATH", str(corpus / "turtlebot3"))
+    checks = []
+    real_check = robot_module.check_with_yourdfpy
+    monkeypatch.setattr(robot_module, "check_with_yourdfpy", lambda *a: checks.append(1) or real_check(*a))
+    burger = str(corpus / "turtlebot3/turtlebot3_description/urdf/turtlebot3_burger.urdf.xacro")
+    folders = [tmp_path / name for name in ("a", "b", "shadowed")]
+    for folder in folders:
+        folder.mkdir()
+    shutil.copytree(corpus / "turtlebot3/turtlebot3_description", folders[2] / "copy" / "turtlebot3_description")
+
+    first = load_robot(burger, base_dir=folders[0])
+    again = load_robot(burger, base_dir=folders[1])
+    assert len(checks) == 1 and again.urdf == first.urdf  # the same files: not checked again
+    assert load_robot(burger, base_dir=folders[1]).urdf == first.urdf and len(checks) == 1
+    shadowed = load_robot(burger, base_dir=folders[2])
+    assert len(checks) == 2  # its package comes first in the search: other files, checked
+    meshes = [m.get("filename") for m in ET.fromstring(shadowed.urdf).iter("mesh")]
+    assert len(meshes) == 4 and all(m.startswith(str(folders[2])) for m in meshes)
+    assert load_robot(burger, base_dir=folders[0]).urdf == first.urdf  # and back: the first files
+
+
+def test_a_mesh_left_out_is_looked_for_again_from_a_folder_that_has_it(corpus, tmp_path, monkeypatch):
+    """skip_missing leaves out a mesh nothing finds; from a folder whose package has it, the
+    cached description without it must not be served."""
+    import shutil
+
+    monkeypatch.setenv("MOBOT_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setenv("MOBOT_RESOURCE_PATH", str(corpus / "turtlebot3__main"))  # its meshes are missing
+    burger = str(corpus / "turtlebot3__main/turtlebot3_description/urdf/turtlebot3_burger.urdf")
+    bare, stocked = tmp_path / "bare", tmp_path / "stocked"
+    bare.mkdir()
+    shutil.copytree(corpus / "turtlebot3/turtlebot3_description", stocked / "turtlebot3_description")
+
+    left_out = load_robot(burger, base_dir=bare, skip_missing=True)
+    assert not list(ET.fromstring(left_out.urdf).iter("mesh"))
+    assert any("left out (skip_missing)" in n.message for n in left_out.notices)
+    found = load_robot(burger, base_dir=stocked, skip_missing=True)
+    meshes = [m.get("filename") for m in ET.fromstring(found.urdf).iter("mesh")]
+    assert len(meshes) == 4 and all(m.startswith(str(stocked)) for m in meshes)
+    assert not any("left out" in n.message for n in found.notices)

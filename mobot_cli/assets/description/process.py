@@ -71,6 +71,20 @@ def resolve_meshes(robot: ET.Element, resolver: ResourceResolver, source: Path,
     return paths
 
 
+def mesh_uris(robot: ET.Element) -> list[str]:
+    """Every link's <mesh filename> as written, before resolve_meshes rewrites them."""
+    return [mesh.get("filename", "") for link in robot.findall("link") for kind in ("collision", "visual")
+            for element in link.findall(kind) for mesh in element.findall("geometry/mesh")]
+
+
+def mesh_path_or_none(uri: str, resolver: ResourceResolver, source: Path) -> str | None:
+    """The file resolve_meshes would make of ``uri`` now; None where it would find none."""
+    try:
+        return _mesh_path(uri, resolver, source, "", "")
+    except DescriptionError:
+        return None
+
+
 def _mesh_path(uri: str, resolver: ResourceResolver, source: Path, link: str, kind: str) -> str:
     where = f"the {kind} mesh '{uri}' of link '{link}'"
     if not uri:

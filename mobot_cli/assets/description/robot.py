@@ -19,7 +19,7 @@ from mobot_cli.assets.description.check import check_geometry, check_tree, check
 from mobot_cli.assets.description.drive import detect_drive
 from mobot_cli.assets.description.frames import LinkTree, floats
 from mobot_cli.assets.description.process import apply_friction, collision_bounds, \
-    fix_inertials, inertial_values, resolve_meshes
+    fix_inertials, inertial_values, mesh_path_or_none, mesh_uris, resolve_meshes
 from mobot_cli.assets.description.sanity import check_mesh_file, check_sanity
 from mobot_cli.assets.description.sensors import DescribedSensor, collision_names, read_sensors, \
     sensor_summary
@@ -28,6 +28,8 @@ from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.common import cache
 from mobot_cli.errors import Location, Notice
 from mobot_cli.sim.plan import DriveSpec
+
+MAX_FINGERPRINTS = 16  # search paths an entry remembers agreeing with (folders run from)
 
 # The notice for a robot without detected wheels; a scenario that names them drops it.
 NO_DRIVE = "no drive wheels found: the robot will not move on commands"
@@ -91,20 +93,42 @@ class RobotDescription:
 
 def describe_expansion(source: Path, expansion: Expansion, resolver: ResourceResolver,
                        skip_missing: bool = False) -> RobotDescription:
-    """Check, cache and describe an expanded URDF text (from xacro or converted from SDF)."""
-    key = cache.digest("robot", expansion.text, resolver.fingerprint(), str(source),
-                       *(["skip_missing"] if skip_missing else []))
-    loaded = _from_document(cache.load("robot", key))
+    """Check, cache and describe an expanded URDF text (from xacro or converted from SDF).
+
+    The search paths (the scenario's folder among them) matter only through where the mesh
+    URIs lead, so an entry serves any search paths under which each of its URIs leads to the
+    same file (or to none) as when it was made: a scenario in a new folder does not check the
+    description again (~0.8 s with yourdfpy's import). Search paths seen to agree are noted in
+    the entry, so their next run skips the comparison."""
+    key = cache.digest("robot", expansion.text, str(source), *(["skip_missing"] if skip_missing else []))
+    document = cache.load("robot", key)
+    loaded = _from_document(document)
+    if loaded is not None and resolver.fingerprint() not in document["fingerprints"]:
+        if _same_meshes(document["uris"], resolver, source):
+            document["fingerprints"] = [*document["fingerprints"][1 - MAX_FINGERPRINTS:], resolver.fingerprint()]
+            cache.store("robot", key, document)
+        else:
+            loaded = None
     if loaded is None:
-        loaded, meshes = _build(source, expansion, resolver, skip_missing)
-        cache.store("robot", key, _to_document(loaded, meshes))
+        loaded, meshes, uris = _build(source, expansion, resolver, skip_missing)
+        cache.store("robot", key, _to_document(loaded, meshes, uris, resolver.fingerprint()))
     return RobotDescription(**{**_fields(loaded), "notices": expansion.notices + loaded.notices,
                                "files": expansion.files})
 
 
+def _same_meshes(uris: list, resolver: ResourceResolver, source: Path) -> bool:
+    """Whether each mesh URI of a cached entry leads where it led (or still nowhere) under
+    these search paths."""
+    try:
+        return all(mesh_path_or_none(uri, resolver, source) == path for uri, path in uris)
+    except (TypeError, ValueError):  # an entry written by hand, or torn
+        return False
+
+
 def _build(source: Path, expansion: Expansion, resolver: ResourceResolver,
-           skip_missing: bool = False) -> tuple[RobotDescription, list[str]]:
+           skip_missing: bool = False) -> tuple[RobotDescription, list[str], list[list[str | None]]]:
     robot = parse_urdf(expansion.text, source)
+    uris = [[uri, mesh_path_or_none(uri, resolver, source)] for uri in dict.fromkeys(mesh_uris(robot))]
     root_link = check_tree(robot, source)
     check_geometry(robot, source)
     check_with_yourdfpy(expansion.text, source)
@@ -129,7 +153,7 @@ def _build(source: Path, expansion: Expansion, resolver: ResourceResolver,
         links=links, joints=joints, total_mass=sum(link.mass for link in links),
         footprint=bounds[:4], drive=drive, notices=tuple(notices), bottom_z=bounds[4],
         sensors=sensors)
-    return description, meshes
+    return description, meshes, uris
 
 
 def _link_info(link: ET.Element) -> LinkInfo:
@@ -157,7 +181,8 @@ def _fields(description: RobotDescription) -> dict[str, Any]:
     return {name: getattr(description, name) for name in description.__dataclass_fields__}
 
 
-def _to_document(description: RobotDescription, meshes: list[str]) -> dict[str, Any]:
+def _to_document(description: RobotDescription, meshes: list[str], uris: list[list[str | None]],
+                 fingerprint: str) -> dict[str, Any]:
     document = asdict(description)
     document["source"] = str(description.source)
     document["files"] = []
@@ -167,6 +192,8 @@ def _to_document(description: RobotDescription, meshes: list[str]) -> dict[str, 
                       "line": n.location.line, "key": n.location.key}}
         for n in description.notices]
     document["meshes"] = [[path, *_stat(path)] for path in dict.fromkeys(meshes)]
+    document["uris"] = uris  # [uri, the file it led to, or None]: checked under other search paths
+    document["fingerprints"] = [fingerprint]  # search paths under which they lead there
     return document
 
 
@@ -188,6 +215,8 @@ def _from_document(document: dict[str, Any] | None) -> RobotDescription | None:
             return None
         if not all(sandbox.allows(path) for path, _, _ in document["meshes"]):  # live spawns
             return None
+        if not isinstance(document["uris"], list) or not isinstance(document["fingerprints"], list):
+            return None  # an entry from before URIs were kept
         drive = document["drive"]
         if drive is not None:
             drive = DriveSpec(**{**drive, "left_joints": tuple(drive["left_joints"]),
