@@ -335,7 +335,7 @@ def main() -> None:
     if rows_asked and "sweep" not in rows_asked:
         return
     batches: dict[str, list[float]] = {}
-    sweep_rate(work, 2)  # not counted: a folder's first run expands the robot's xacro (~0.9 s), once
+    sweep_rate(work, 2)  # not counted: a new folder's first run expands the xacro and loads the world again
     for _ in range(args.repeat):  # interleaved, as above
         for key, job in (("sweep", lambda: sweep_rate(work, args.runs)),
                          ("irsim", lambda: (peer_batch_rate(args.peers_venv, "irsim", args.runs), 0.0)),

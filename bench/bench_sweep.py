@@ -16,8 +16,9 @@
    logged at 10 Hz), start-up included: wall time, runs per second (goal >= 30), the CPU time of
    every process it starts (the sweep, the fork server, the workers: reaped here as a
    subreaper) and the median wall time of one run in its worker, after one command per tree not
-   counted (the first run in a new folder expands the robot's xacro, ~0.9 s, cached for the
-   folder's later runs). ``--trees A,B`` runs the
+   counted (the first run in a new folder expands the robot's xacro and loads the world again,
+   cached for the folder's later runs; it also checked the description again, ~0.9 s, before
+   those checks were shared between folders). ``--trees A,B`` runs the
    command with each source tree first on PYTHONPATH in turn (e.g. a checkout of the code
    before a change, and this one), so that both see the same load.
 
@@ -124,7 +125,7 @@ def command_main(trees: list[Path], repeat: int, runs: int) -> None:
         scenario = work / "one.yaml"
         scenario.write_text(one_robot("kinematic", 10))
         figures: dict[Path, list[tuple[float, float, float, float]]] = {t: [] for t in trees}
-        for i, tree in enumerate(trees):  # not counted: a folder's first run expands the robot's xacro (~0.9 s)
+        for i, tree in enumerate(trees):  # not counted: a new folder's first run fills its caches
             whole_command(tree, scenario, work / f"out{i}", runs)
         load = os.getloadavg()[0]
         for _ in range(repeat):  # interleaved: every tree sees the same load
