@@ -37,13 +37,14 @@ SKIP_HINT = "Or pass --skip-missing (or set skip_missing: true) to leave it out 
 
 
 def resolve_meshes(robot: ET.Element, resolver: ResourceResolver, source: Path,
-                   skip_missing: bool = False, notices: list[Notice] | None = None) -> list[str]:
-    """Rewrite every <mesh filename> to an absolute path; return the paths.
+                   skip_missing: bool = False, notices: list[Notice] | None = None) -> dict[str, str | None]:
+    """Rewrite every <mesh filename> to an absolute path; return each URI's path (None for one
+    left out), in the order they come.
 
     With ``skip_missing`` a visual or collision whose mesh cannot be found is removed and
     named in one notice (added to ``notices``); otherwise it is a DescriptionError.
     """
-    paths: list[str] = []
+    found: dict[str, str | None] = {}
     left_out: list[tuple[str, DescriptionError]] = []
     for link in robot.findall("link"):
         for kind in ("collision", "visual"):
@@ -59,22 +60,17 @@ def resolve_meshes(robot: ET.Element, resolver: ResourceResolver, source: Path,
                         raise
                     link.remove(element)
                     left_out.append((f"{kind} '{uri}' of link '{link.get('name', '')}'", exc))
+                    found[uri] = None
                     continue
                 mesh.set("filename", path)
-                paths.append(path)
+                found[uri] = path
     if left_out and notices is not None:
         named = "; ".join(what for what, _ in left_out)
         notices.append(Notice(
             f"{len(left_out)} mesh{'es' if len(left_out) > 1 else ''} cannot be found and "
             f"{'are' if len(left_out) > 1 else 'is'} left out (skip_missing): {named}. "
             f"The first: {left_out[0][1].message}", Location(file=source)))
-    return paths
-
-
-def mesh_uris(robot: ET.Element) -> list[str]:
-    """Every link's <mesh filename> as written, before resolve_meshes rewrites them."""
-    return [mesh.get("filename", "") for link in robot.findall("link") for kind in ("collision", "visual")
-            for element in link.findall(kind) for mesh in element.findall("geometry/mesh")]
+    return found
 
 
 def mesh_path_or_none(uri: str, resolver: ResourceResolver, source: Path) -> str | None:

@@ -19,7 +19,7 @@ from mobot_cli.assets.description.check import check_geometry, check_tree, check
 from mobot_cli.assets.description.drive import detect_drive
 from mobot_cli.assets.description.frames import LinkTree, floats
 from mobot_cli.assets.description.process import apply_friction, collision_bounds, \
-    fix_inertials, inertial_values, mesh_path_or_none, mesh_uris, resolve_meshes
+    fix_inertials, inertial_values, mesh_path_or_none, resolve_meshes
 from mobot_cli.assets.description.sanity import check_mesh_file, check_sanity
 from mobot_cli.assets.description.sensors import DescribedSensor, collision_names, read_sensors, \
     sensor_summary
@@ -110,8 +110,8 @@ def describe_expansion(source: Path, expansion: Expansion, resolver: ResourceRes
         else:
             loaded = None
     if loaded is None:
-        loaded, meshes, uris = _build(source, expansion, resolver, skip_missing)
-        cache.store("robot", key, _to_document(loaded, meshes, uris, resolver.fingerprint()))
+        loaded, found = _build(source, expansion, resolver, skip_missing)
+        cache.store("robot", key, _to_document(loaded, found, resolver.fingerprint()))
     return RobotDescription(**{**_fields(loaded), "notices": expansion.notices + loaded.notices,
                                "files": expansion.files})
 
@@ -126,15 +126,14 @@ def _same_meshes(uris: list, resolver: ResourceResolver, source: Path) -> bool:
 
 
 def _build(source: Path, expansion: Expansion, resolver: ResourceResolver,
-           skip_missing: bool = False) -> tuple[RobotDescription, list[str], list[list[str | None]]]:
+           skip_missing: bool = False) -> tuple[RobotDescription, dict[str, str | None]]:
     robot = parse_urdf(expansion.text, source)
-    uris = [[uri, mesh_path_or_none(uri, resolver, source)] for uri in dict.fromkeys(mesh_uris(robot))]
     root_link = check_tree(robot, source)
     check_geometry(robot, source)
     check_with_yourdfpy(expansion.text, source)
     check_sanity(robot, source)
     notices: list[Notice] = []
-    meshes = resolve_meshes(robot, resolver, source, skip_missing, notices)
+    found = resolve_meshes(robot, resolver, source, skip_missing, notices)
     for link in robot.findall("link"):
         for mesh in link.findall("collision/geometry/mesh"):
             check_mesh_file(Path(mesh.get("filename", "")), link.get("name", ""), source)
@@ -153,7 +152,7 @@ def _build(source: Path, expansion: Expansion, resolver: ResourceResolver,
         links=links, joints=joints, total_mass=sum(link.mass for link in links),
         footprint=bounds[:4], drive=drive, notices=tuple(notices), bottom_z=bounds[4],
         sensors=sensors)
-    return description, meshes, uris
+    return description, found
 
 
 def _link_info(link: ET.Element) -> LinkInfo:
@@ -181,7 +180,7 @@ def _fields(description: RobotDescription) -> dict[str, Any]:
     return {name: getattr(description, name) for name in description.__dataclass_fields__}
 
 
-def _to_document(description: RobotDescription, meshes: list[str], uris: list[list[str | None]],
+def _to_document(description: RobotDescription, found: dict[str, str | None],
                  fingerprint: str) -> dict[str, Any]:
     document = asdict(description)
     document["source"] = str(description.source)
@@ -191,8 +190,8 @@ def _to_document(description: RobotDescription, meshes: list[str], uris: list[li
          "location": {"file": str(n.location.file) if n.location.file is not None else None,
                       "line": n.location.line, "key": n.location.key}}
         for n in description.notices]
-    document["meshes"] = [[path, *_stat(path)] for path in dict.fromkeys(meshes)]
-    document["uris"] = uris  # [uri, the file it led to, or None]: checked under other search paths
+    document["meshes"] = [[path, *_stat(path)] for path in dict.fromkeys(p for p in found.values() if p is not None)]
+    document["uris"] = [[uri, path] for uri, path in found.items()]  # checked under other search paths
     document["fingerprints"] = [fingerprint]  # search paths under which they lead there
     return document
 
