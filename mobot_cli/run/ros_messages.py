@@ -14,7 +14,7 @@ from __future__ import annotations
 import functools
 import math
 import re
-from typing import Sequence
+from typing import Iterable, Sequence
 
 from mobot_cli.common.transforms import odom_origin, yaw_quat
 from mobot_cli.run import sensor_topics
@@ -102,13 +102,15 @@ class RobotMessages:
 
     def joint_states(self, stamp: Stamp, state: RobotState) -> bytes:
         """sensor_msgs/JointState: positions and velocities of every joint the robot had at spawn."""
+        positions, velocities = self._joint_numbers(state)
+        return self.joint_packer.pack((*stamp, *positions, *velocities))
+
+    def _joint_numbers(self, state: RobotState) -> tuple[Iterable[float], Iterable[float]]:
+        """Positions and velocities of the joints the robot had at spawn, in that order (0 for one gone)."""
         positions, velocities = state.joint_positions, state.joint_velocities
         if len(positions) == len(velocities) == len(self.joints):  # the same joints, in order
-            values = (*stamp, *positions.values(), *velocities.values())
-        else:
-            values = (*stamp, *(positions.get(j, 0.0) for j in self.joints),
-                      *(velocities.get(j, 0.0) for j in self.joints))
-        return self.joint_packer.pack(values)
+            return positions.values(), velocities.values()
+        return [positions.get(j, 0.0) for j in self.joints], [velocities.get(j, 0.0) for j in self.joints]
 
     def tf_values(self, stamp: Stamp, state: RobotState, out: list[float]) -> None:
         """This robot's /tf numbers (odom -> base, then each moving joint), appended to ``out``."""
@@ -122,17 +124,13 @@ class RobotMessages:
         """This robot's block of a row's values, appended to ``out``: the numbers of its odom,
         cmd_vel, joint_states and /tf transforms, each once."""
         half = state.odom_yaw / 2.0
-        positions, velocities = state.joint_positions, state.joint_velocities
         out += (state.odom_x, state.odom_y, math.sin(half), math.cos(half), state.odom_vx, state.odom_wz,
                 state.cmd_linear, state.cmd_angular)
-        if len(positions) == len(velocities) == len(self.joints):  # the same joints, in order
-            out += positions.values()
-            out += velocities.values()
-        else:
-            out += (positions.get(j, 0.0) for j in self.joints)
-            out += (velocities.get(j, 0.0) for j in self.joints)
+        positions, velocities = self._joint_numbers(state)
+        out += positions
+        out += velocities
         for joint in self.frames.moving:
-            out += joint.transform(positions)
+            out += joint.transform(state.joint_positions)
 
     def row_messages(self, at: int) -> list[tuple[Layout, tuple]]:
         """(layout, sources) of odom, cmd_vel and joint_states with this robot's block at value ``at``."""
