@@ -6,6 +6,7 @@ import json
 import math
 import os
 import signal
+import struct
 import subprocess
 import sys
 import time
@@ -95,6 +96,15 @@ def test_packers_match_rosbags_serializer_byte_for_byte():
     assert scan.angle_increment == np.float32(0.5) and list(scan.intensities) == [0.0] * 5
     cloud = store.deserialize_cdr(messages["sensor_msgs/msg/PointCloud2"], "sensor_msgs/msg/PointCloud2")
     assert (cloud.height, cloud.width, cloud.point_step, cloud.is_dense) == (1, 13, 16, True)
+
+
+def test_a_scan_keeps_the_sign_of_a_zero_angle_after_a_sensor_equal_but_for_it():
+    """-0.0 == 0.0, so two specs that differ only there are equal: the scan's cached bytes must not
+    be shared between them (hypothesis found it: the second scan carried the first one's angle)."""
+    ranges = np.array([1.0, 2.0], np.float32)
+    minus, plus = (sensor_cdr.laser_scan((0, 0), "l", lidar(samples=2, lo=lo, hi=1.0), ranges) for lo in (-0.0, 0.0))
+    assert minus != plus
+    assert struct.unpack_from("<f", plus, 20) == (0.0,) and str(struct.unpack_from("<f", minus, 20)[0]) == "-0.0"
 
 
 def _messages(bag: Path):
