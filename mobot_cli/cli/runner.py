@@ -12,6 +12,8 @@ from mobot_cli.cli.args import default_out
 from mobot_cli.cli.environment import Environment
 from mobot_cli.cli.startup import collect_garbage
 from mobot_cli.errors import ExitCode
+from mobot_cli.run import ahead as helper
+from mobot_cli.run.ahead import Ahead
 
 
 def run_scenario(env: Environment, scenario: Path, out: Optional[Path] = None, set_: Sequence[str] = (),
@@ -19,10 +21,6 @@ def run_scenario(env: Environment, scenario: Path, out: Optional[Path] = None, s
                  json_: bool = False, quiet: bool = False, skip_missing: bool = False, ros2_: bool = False,
                  view: bool = False, view_port: int = 8080) -> int:
     """Run a scenario to its end, write the run folder and print what `mobot run` prints; the exit code."""
-    from mobot_cli.common.files import check_out_folder
-    from mobot_cli.run.execute import execute
-    from mobot_cli.run.prepare import prepare
-
     overrides = list(set_)
     if seed is not None:
         overrides.append(f"seed={seed}")
@@ -34,21 +32,44 @@ def run_scenario(env: Environment, scenario: Path, out: Optional[Path] = None, s
         from mobot_cli.view.page import require_viser
 
         require_viser()  # before the run, not after it
-    prepared = prepare(scenario, overrides)
+    # The entry point's helper process prepares the plan while this one imports the engine.
+    ahead = helper.take()
+    if ahead:
+        ahead.prepare(scenario, overrides)
+    try:
+        return _run(env, ahead, scenario, overrides, out, realtime, json_, quiet, ros2_, view, view_port)
+    finally:
+        if ahead:
+            ahead.close()
+
+
+def _run(env: Environment, ahead: Ahead | None, scenario: Path, overrides: list[str], out: Optional[Path],
+         realtime: bool, json_: bool, quiet: bool, ros2_: bool, view: bool, view_port: int) -> int:
+    from mobot_cli.common.files import check_out_folder
+    from mobot_cli.run.execute import execute
+
+    prepared = ahead.prepared() if ahead else None
+    if prepared is None:  # no helper, or it could not: here, where its errors are reported
+        from mobot_cli.run.prepare import prepare
+
+        done = prepare(scenario, overrides)
+        plan, resolved_yaml, painter = done.plan, done.resolved_yaml, None
+    else:
+        (plan, resolved_yaml), painter = prepared, ahead
     collect_garbage()  # loaded: from here on garbage is made, and collected
-    output.notices(env, prepared.plan.notices, quiet=quiet or json_)
-    bridges = ros2.bridges(prepared.plan, ros2_)
-    out_dir = out or default_out("runs", prepared.plan.name)
+    output.notices(env, plan.notices, quiet=quiet or json_)
+    bridges = ros2.bridges(plan, ros2_)
+    out_dir = out or default_out("runs", plan.name)
     check_out_folder(out_dir)  # a file, a path under a file, a read-only folder: before the run
-    bar = None if (quiet or json_) else output.progress_bar(env, prepared.plan.total_steps, prepared.plan.name)
-    progress = _progress(bar, realtime, prepared.plan.physics.rate_hz)
+    bar = None if (quiet or json_) else output.progress_bar(env, plan.total_steps, plan.name)
+    progress = _progress(bar, realtime, plan.physics.rate_hz)
     ros2.joined(env, bridges, quiet=quiet or json_)
-    watcher = _Watcher(env, prepared.plan, view_port) if view else None
+    watcher = _Watcher(env, plan, view_port) if view else None
     if bar:
         bar.start()
     try:
-        result = execute(prepared.plan, prepared.resolved_yaml, out_dir, progress=progress, attachments=bridges,
-                         watch=watcher.watch if watcher else None)
+        result = execute(plan, resolved_yaml, out_dir, progress=progress, attachments=bridges,
+                         watch=watcher.watch if watcher else None, painter=painter)
     except BaseException:
         if watcher:
             watcher.close()
@@ -57,6 +78,8 @@ def run_scenario(env: Environment, scenario: Path, out: Optional[Path] = None, s
         if bar:
             bar.stop()
         ros2.report(env, bridges, quiet=quiet or json_)
+    if ahead:
+        ahead.close()  # the picture is drawn: nothing is left for it to do
     if json_:
         output.emit_json(env, result.record.model_dump(mode="json"))
     elif not quiet:

@@ -10,7 +10,7 @@ from pathlib import Path
 from mobot_cli.errors import MobotError, UsageError
 from mobot_cli.run.folder import is_run_folder, is_sweep_folder
 from mobot_cli.run.record import RunRecord
-from mobot_cli.run.trajectory import draw
+from mobot_cli.run.trajectory import draw, drawn
 
 MAX_ODOMETRY_TRACKS = 10  # more dashed lines than this (a sweep) hide the true paths
 
@@ -72,7 +72,8 @@ def replot(folder: Path, out: Path | None = None) -> PlotResult:
         subtitle = (f"{record.sim_time:g} s simulated; " if record else "") + \
             f"{len(tracks)} robot{'s' if len(tracks) != 1 else ''}"
     result.out.parent.mkdir(parents=True, exist_ok=True)
-    draw(tracks, world, result.out, title, subtitle)
+    draw([drawn(t.label, t.true, t.odom, t.start_z, sweeps=t.swept) for t in tracks], world, result.out, title,
+         subtitle)
     return result
 
 

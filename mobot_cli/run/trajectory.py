@@ -8,6 +8,7 @@ mesh worlds) is imported when the picture is drawn, at close.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import NamedTuple, Protocol
 
 from mobot_cli.common.transforms import Planar, odom_origin
 from mobot_cli.run.sinks import Sink, named
@@ -17,6 +18,34 @@ from mobot_cli.sim.state import RobotState
 
 SCAN_BAND = (0.05, 2.0)  # m above the floor: a 3D lidar's returns drawn on the floor plan
 MAX_SCAN_POINTS = 20000
+
+
+class Drawn(NamedTuple):
+    """One robot's track as the picture takes it: plain values, so that another process can draw
+    it (run/ahead.py). ``swept`` holds (x0, y0, cell, covered mask, area) per coverage area."""
+
+    label: str
+    true: list
+    odom: list
+    start_z: float | None
+    scan: list
+    swept: list
+
+
+def drawn(label: str, true: list, odom: list, start_z: float | None, scan: list = (), sweeps=()) -> Drawn:
+    """A track as the picture takes it; ``sweeps`` are run.sweep.Sweep objects."""
+    return Drawn(label, true, odom, start_z, list(scan),
+                 [(s.grid.x0, s.grid.y0, s.grid.cell, s.covered, s.area) for s in sweeps])
+
+
+class Painter(Protocol):
+    """Draws the picture in another process (run/ahead.py's helper) while the run closes its files."""
+
+    def paint(self, tracks: list[Drawn], out: Path, title: str, subtitle: str) -> bool:
+        """Start drawing ``out``; False: it cannot, draw it here."""
+
+    def painted(self) -> bool:
+        """Wait until it is written; False: it was not, draw it here."""
 
 
 def odom_to_world(state: RobotState) -> Planar:
@@ -31,8 +60,10 @@ def odom_to_world(state: RobotState) -> Planar:
 class TrajectorySink(Sink):
     """Collects each robot's path; close() draws ``trajectory.png``."""
 
-    def __init__(self, plan: Plan, out_dir: Path, sweeps: dict | None = None):
+    def __init__(self, plan: Plan, out_dir: Path, sweeps: dict | None = None, painter: Painter | None = None):
         self.path = out_dir / "trajectory.png"
+        self.painter = painter
+        self.painting = False  # the painter took the picture
         self.sweeps = sweeps if sweeps is not None else {}  # (robot, area) -> run.sweep.Sweep, filled meanwhile
         self.world = plan.world
         self.title = plan.name
@@ -61,15 +92,27 @@ class TrajectorySink(Sink):
         if reading.sensor.kind == "lidar" and key in self.open:
             self.open[key][0].last_scan = reading.data
 
+    def closing(self) -> None:
+        """A painter starts drawing now, while the other files close."""
+        if self.painter is not None:
+            self.painting = self.painter.paint(*self._picture(), self.title, self._subtitle())
+
     def close(self) -> None:
-        for track in self.tracks:
-            track.swept = [sweep for (name, _), sweep in self.sweeps.items() if name == track.label]
+        if self.painting and self.painter.painted():
+            return
         try:
-            draw(self.tracks, self.world, self.path, self.title,
-                 f"{self.last_step / self.rate:g} s simulated; {_robots(len(self.tracks))}")
+            draw(self._picture()[0], self.world, self.path, self.title, self._subtitle())
         except OSError as exc:
             self.path.with_name(self.path.name + ".tmp").unlink(missing_ok=True)  # no half a picture
             raise named(exc, self.path) from None
+
+
+    def _picture(self) -> tuple[list[Drawn], Path]:
+        return [drawn(t.label, t.true, t.odom, t.start_z, t.scan,
+                      [s for (name, _), s in self.sweeps.items() if name == t.label]) for t in self.tracks], self.path
+
+    def _subtitle(self) -> str:
+        return f"{self.last_step / self.rate:g} s simulated; {_robots(len(self.tracks))}"
 
 
 class _Points:
@@ -79,7 +122,6 @@ class _Points:
         self.label, self.true, self.odom = label, [], []
         self.last_scan = None  # sim.sensors.ScanData
         self.start_z: float | None = None  # the root link's height where the path starts
-        self.swept: list = []  # run.sweep.Sweep
 
     @property
     def scan(self) -> list[tuple[float, float]]:
@@ -99,17 +141,15 @@ def preload() -> None:
     preload_render()
 
 
-def draw(tracks: list, world: WorldPlan | None, out: Path, title: str, subtitle: str) -> None:
-    """Render ``tracks`` (objects with label, true, odom, start_z, and maybe scan and swept:
-    run.sweep.Sweep) over ``world``'s floor plan to ``out``; the plan's height band is measured
+def draw(tracks: list[Drawn], world: WorldPlan | None, out: Path, title: str, subtitle: str) -> None:
+    """Render ``tracks`` over ``world``'s floor plan to ``out``; the plan's height band is measured
     from the floor where the tracks start."""
     from mobot_cli.assets.world.floorplan import floor_plan
     from mobot_cli.plot.render import Swept, Track, render
 
     labels = [t.label for t in tracks]
-    plot_tracks = [Track(_unique(t.label, labels[:i]), t.true, t.odom, getattr(t, "scan", []),
-                         [Swept(s.grid.x0, s.grid.y0, s.grid.cell, s.covered, list(s.area))
-                          for s in getattr(t, "swept", ())])
+    plot_tracks = [Track(_unique(t.label, labels[:i]), t.true, t.odom, t.scan,
+                         [Swept(x0, y0, cell, covered, list(area)) for x0, y0, cell, covered, area in t.swept])
                    for i, t in enumerate(tracks)]
     starts = [(*t.true[0], t.start_z) for t in tracks if t.true and t.start_z is not None]
     render(plot_tracks, floor_plan(world, starts) if world is not None else [], out, title, subtitle)

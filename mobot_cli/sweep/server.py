@@ -15,6 +15,8 @@ import os
 import signal
 import threading
 
+from mobot_cli.common.forked import close_fds_but
+
 
 @contextlib.contextmanager
 def sigint_held():
@@ -87,7 +89,7 @@ def _forked_helpers():
             return pid
         code = 1
         try:
-            _close_fds_but({0, 1, 2, *map(int, passfds)})
+            close_fds_but({0, 1, 2, *map(int, passfds)})
             gc.enable()
             exec(args[-1], {"__name__": "__main__"})
             code = 0
@@ -105,15 +107,6 @@ def _forked_helpers():
         yield
     finally:
         util.spawnv_passfds = spawn
-
-
-def _close_fds_but(keep: set[int]) -> None:
-    """Close every file descriptor but ``keep``, as spawning a new program with those passed would."""
-    low = 0
-    for fd in sorted(keep) + [os.sysconf("SC_OPEN_MAX")]:
-        if low < fd:  # an empty range is skipped: closerange(0, 0) closes them all (0 - 1 wraps around)
-            os.closerange(low, fd)
-        low = fd + 1
 
 
 def context():

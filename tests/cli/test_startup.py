@@ -14,7 +14,7 @@ REPO = Path(__file__).resolve().parents[2]
 
 # Records the collector's state when the command gets to work, then runs `mobot` as the console script does.
 PROBE = """
-import functools, gc, sys
+import atexit, functools, gc, sys
 import mobot_cli.run.execute as execute
 import mobot_cli.cli.check as check
 seen = []
@@ -28,10 +28,8 @@ execute.execute = probe(execute.execute)
 check.check = probe(check.check)
 sys.argv = ["mobot", *sys.argv[1:]]
 from mobot_cli.__main__ import entry
-try:
-    entry()
-finally:
-    print("seen", seen, "enabled at exit", gc.isenabled())
+atexit.register(lambda: print("seen", seen, "enabled at exit", gc.isenabled()))  # a run leaves by os._exit
+entry()
 """
 
 

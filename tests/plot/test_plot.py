@@ -208,14 +208,13 @@ def test_the_band_is_measured_from_the_floor_under_the_robots(tmp_path, kind, he
 def test_trajectory_png_of_a_raised_floor_leaves_the_floor_white(tmp_path):
     world = WorldPlan(ground_plane=False, bodies=(
         StaticBody(name="stage", shapes=(StaticShape("box", (6.0, 6.0, 0.19), xyz=(0, 0, 0.095)),)),))
-    from mobot_cli.run.trajectory import draw
+    from mobot_cli.run.trajectory import draw, drawn
 
-    class Points:
-        label, true, odom, start_z = "r", [(0.0, 0.0), (1.0, 0.0)], [(0.0, 0.0), (1.0, 0.0)], 0.19
-    draw([Points()], WorldPlan(ground_plane=False), tmp_path / "empty.png", "stage", "")
+    path = [(0.0, 0.0), (1.0, 0.0)]
+    draw([drawn("r", path, path, 0.19)], WorldPlan(ground_plane=False), tmp_path / "empty.png", "stage", "")
     nothing = color_pixels(Image.open(tmp_path / "empty.png").convert("RGB"), FLOOR, tol=2)  # text edges
-    draw([Points()], world, tmp_path / "t.png", "stage", "")
+    draw([drawn("r", path, path, 0.19)], world, tmp_path / "t.png", "stage", "")
     assert color_pixels(Image.open(tmp_path / "t.png").convert("RGB"), FLOOR, tol=2) == nothing
-    Points.start_z = None  # a recording without heights: the band from z = 0, the stage drawn
-    draw([Points()], world, tmp_path / "t.png", "stage", "")
+    # a recording without heights: the band from z = 0, the stage drawn
+    draw([drawn("r", path, path, None)], world, tmp_path / "t.png", "stage", "")
     assert color_pixels(Image.open(tmp_path / "t.png").convert("RGB"), FLOOR, tol=2) > 5000

@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 import mobot_cli.__main__ as entry
+from mobot_cli.common.forked import close_fds_but
 from mobot_cli.sweep import server
 
 
@@ -114,7 +115,7 @@ def test_closing_all_but_some_descriptors_keeps_those(tmp_path):
     opened = [os.open(tmp_path / f"f{i}", os.O_CREAT | os.O_WRONLY) for i in range(4)]
     pid = os.fork()
     if pid == 0:  # the child reports, through its exit code, which of them it still has
-        server._close_fds_but({0, 1, 2, opened[1], opened[3]})
+        close_fds_but({0, 1, 2, opened[1], opened[3]})
         alive = [_is_open(fd) for fd in (0, 1, 2, *opened)]
         os._exit(sum(1 << i for i, up in enumerate(alive) if up))
     _, status = os.waitpid(pid, 0)
