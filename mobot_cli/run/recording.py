@@ -11,22 +11,21 @@ A name used again after its robot was deleted (a live world) is recorded as ``<n
 
 from __future__ import annotations
 
-import functools
 import math
 import platform
 import time
 from dataclasses import dataclass, field
-from importlib import metadata
 from pathlib import Path
 from typing import Optional
 
 from mobot_cli import __version__
 from mobot_cli.common.files import write_text_atomic
+from mobot_cli.common.installed import version
 from mobot_cli.errors import OutputError, cannot_write
 from mobot_cli.run.expect import Checker, Result, odom_error
 from mobot_cli.run.goals import GoalEnded, GoalStarted
 from mobot_cli.run.record import (SUMMARY, ExpectationResult, Expectations, GoalRecord, LiveInfo, OdomError,
-                                  OdomPose, Pose, RobotRecord, RunRecord, SensorRecord, Status, Versions)
+                                  OdomPose, Pose, RobotRecord, RunRecord, SensorRecord, Status, Versions, build_models)
 from mobot_cli.run.sinks import CsvSink, Sink
 from mobot_cli.run.timeline import Deleted, Reading, Record, Sample, Spawned
 from mobot_cli.sim.plan import Plan, RobotPlan
@@ -205,6 +204,7 @@ class Recording:
         try:
             for sink in self.sinks:
                 sink.closing()
+            build_models()  # meanwhile: the record is made once every file is closed
             for sink in self.sinks:
                 try:
                     sink.close()
@@ -238,7 +238,7 @@ class Recording:
                                         results=[ExpectationResult(**r.as_dict()) for r in self.results])
         return RunRecord(
             status=status, error=error, scenario=plan.name, world=plan.world.name, seed=plan.seed,
-            versions=Versions(mobot=__version__, pybullet=_version("pybullet"), python=platform.python_version()),
+            versions=Versions(mobot=__version__, pybullet=version("pybullet"), python=platform.python_version()),
             steps=steps, sim_time=_r(sim_time), wall_time=round(wall, 3),
             real_time_factor=round(sim_time / wall, 2) if wall > 0 else None,
             physics_rate_hz=plan.physics.rate_hz, log_rate_hz=_r(plan.physics.rate_hz / plan.log_every),
@@ -279,16 +279,9 @@ def _command(index: int) -> int | None:
 
 def preload() -> None:
     """Look up what every summary records, once (a sweep's fork server, for all its workers)."""
-    _version("pybullet")
+    version("pybullet")
 
 
-@functools.lru_cache(maxsize=None)
-def _version(package: str) -> str | None:
-    """An installed package's version, looked up once per process (a sweep worker's runs)."""
-    try:
-        return metadata.version(package)
-    except metadata.PackageNotFoundError:
-        return None
 
 
 def _r(value: float) -> float:
