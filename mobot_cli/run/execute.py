@@ -71,6 +71,13 @@ def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | 
     return RunResult(out_dir=out_dir, record=record, expectations=recording.results)
 
 
+def connect_ahead() -> None:
+    """Connect PyBullet's client for the next run's World now (sim/clients.py)."""
+    from mobot_cli.sim.clients import connect_ahead as connect
+
+    connect()
+
+
 def _play(timeline: Timeline, progress: Progress | None) -> None:
     """Tick and step to the plan's last step, then tick it (its events and final row)."""
     total, every = timeline.plan.total_steps, timeline.plan.log_every

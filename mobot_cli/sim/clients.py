@@ -50,6 +50,14 @@ def keep_clients(count: int) -> None:
         p.disconnect(physicsClientId=cid)
 
 
+def connect_ahead() -> None:
+    """Connect a client now for the next World, which takes it as a new one: a process with time
+    to spare before it has its plan (`mobot run` waiting for its helper) spends it here."""
+    cid = p.connect(p.DIRECT)
+    with _idle_lock:
+        _idle.append((cid, None))
+
+
 def connect(key: Any = None) -> tuple[int, Optional[Stage]]:
     """A PyBullet client (DIRECT, headless) and, when a kept one holds the static world for
     ``key``, that stage (else None: an empty client, new or reset)."""
