@@ -15,12 +15,12 @@ def timed(fn, *args) -> tuple[float, float]:
     return time.perf_counter() - wall, time.process_time() - cpu
 
 
-def process_seconds(args: list[str], repeat: int) -> float:
+def process_seconds(args: list[str], repeat: int, env: dict | None = None) -> float:
     """Median wall seconds of a whole command, start-up included."""
     times = []
     for _ in range(repeat):
         started = time.perf_counter()
-        subprocess.run(args, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        subprocess.run(args, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
         times.append(time.perf_counter() - started)
     return statistics.median(times)
 
