@@ -81,9 +81,11 @@ class Ahead:
             os.waitpid(self.pid, 0)
         except ChildProcessError:  # reaped already (SIGCHLD ignored)
             pass
-        self.pid = None
         if self.painting is not None:  # stopped while it drew (Ctrl-C): no half a picture left
-            self.painting.with_name(self.painting.name + ".tmp").unlink(missing_ok=True)
+            from mobot_cli.common.files import remove_temporaries  # not before the fork: it is early
+
+            remove_temporaries(self.painting, self.pid)
+        self.pid = None
 
 
 def fork_helper() -> None:
@@ -158,9 +160,8 @@ def _helper(reader: int, writer: int) -> None:
         return
     tracks, out, title, subtitle = request
     try:
-        draw(tracks, prepared.plan.world, out, title, subtitle)
+        draw(tracks, prepared.plan.world, out, title, subtitle)  # atomic: nothing half-written is left
     except BaseException:
-        out.with_name(out.name + ".tmp").unlink(missing_ok=True)
         _send(writer, False)  # the parent draws it again and reports what is wrong
         return
     _send(writer, True)

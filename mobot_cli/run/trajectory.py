@@ -102,8 +102,7 @@ class TrajectorySink(Sink):
             return
         try:
             draw(self._picture()[0], self.world, self.path, self.title, self._subtitle())
-        except OSError as exc:
-            self.path.with_name(self.path.name + ".tmp").unlink(missing_ok=True)  # no half a picture
+        except OSError as exc:  # written atomically: no half a picture is left
             raise named(exc, self.path) from None
 
 

@@ -160,6 +160,47 @@ def test_ctrl_c_in_the_loop_leaves_no_helper_and_no_half_picture(tmp_path):
     assert not list((tmp_path / "run").glob("*.tmp"))
 
 
+def test_a_helper_stopped_while_it_writes_the_picture_leaves_no_temporary_file(tmp_path):
+    """Ctrl-C while the helper writes trajectory.png: the run kills it, and removes the temporary
+    sibling write_bytes_atomic was filling in the helper (named after the helper's pid)."""
+    out = tmp_path / "trajectory.png"
+    reader, writer = os.pipe()  # the helper's pipes, as Ahead holds them
+    opened_r, opened_w = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # stands for the helper, killed inside write_bytes_atomic with its file half-written
+        try:
+            import mobot_cli.common.files as files
+
+            class Stuck:  # the temporary file, open: it says so and never finishes
+                def __init__(self, fd):
+                    self.fd = fd
+
+                def __enter__(self):
+                    return self
+
+                def __exit__(self, *exc):
+                    os.close(self.fd)
+
+                def write(self, data):
+                    os.write(opened_w, b"!")
+                    time.sleep(60)
+            files.os.fdopen = lambda fd, mode: Stuck(fd)
+            files.write_bytes_atomic(out, b"x" * 100)
+        finally:
+            os._exit(0)
+    os.close(opened_w)
+    assert os.read(opened_r, 1) == b"!"
+    os.close(opened_r)
+    left = [p.name for p in tmp_path.iterdir()]
+    assert len(left) == 1 and left[0].startswith(".trajectory.png.") and left[0].endswith(".tmp")
+    (tmp_path / f".trajectory.png.{pid + 1}.abcd.tmp").write_bytes(b"")  # another process's: kept
+    helper = ahead.Ahead(pid, reader, writer)
+    helper.painting = out
+    helper.close()
+    assert [p.name for p in tmp_path.iterdir()] == [f".trajectory.png.{pid + 1}.abcd.tmp"]
+    assert _gone(pid)
+
+
 def test_without_the_entry_point_there_is_no_helper(tmp_path):
     from mobot_cli.cli import invoke
 
