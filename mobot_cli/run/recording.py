@@ -103,6 +103,7 @@ class Recording:
         self.durable = durable  # summary.json flushed to disk here (a sweep flushes it itself)
         self.checker = Checker(plan)
         self.sinks: list[Sink] = []
+        self.painter = painter  # run.trajectory.Painter: trajectory.png drawn in another process
         self.failure: OutputError | None = None  # the first write that failed
         self.results: list[Result] = []
         self.last_step = 0
@@ -204,7 +205,8 @@ class Recording:
         try:
             for sink in self.sinks:
                 sink.closing()
-            build_models()  # meanwhile: the record is made once every file is closed
+            if self.painter is not None:
+                build_models()  # while the painter draws: the record is made once every file is closed
             for sink in self.sinks:
                 try:
                     sink.close()
@@ -280,8 +282,6 @@ def _command(index: int) -> int | None:
 def preload() -> None:
     """Look up what every summary records, once (a sweep's fork server, for all its workers)."""
     version("pybullet")
-
-
 
 
 def _r(value: float) -> float:
