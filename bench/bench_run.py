@@ -127,8 +127,8 @@ def main() -> None:
         mobot_out, alone_out, raw_out = [], [], []  # (whole process, its loop) pairs
         alone = {**os.environ, "MOBOT_HELPER": "0"}
         for i in range(args.repeat):  # interleaved: all three see the same load
-            mobot_out.append((process_seconds([mobot, "run", str(sixty), "--out", str(work / f"sixty{i}"), "--quiet"], 1),
-                              loop_seconds(plan)))
+            mobot_out.append((process_seconds([mobot, "run", str(sixty), "--out", str(work / f"sixty{i}"), "--quiet"],
+                                              1), loop_seconds(plan)))
             alone_out.append((process_seconds([mobot, "run", str(sixty), "--out", str(work / f"alone{i}"), "--quiet"],
                                               1, env=alone), loop_seconds(plan)))
             started = time.perf_counter()

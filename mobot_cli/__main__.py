@@ -56,8 +56,7 @@ def entry() -> None:
 def _start_sweep_pool(args: list[str]) -> None:
     """A local `mobot sweep` starts its fork server before anything else is imported: the
     server's imports (~0.4 s) then overlap the CLI's own instead of following them."""
-    if args[:1] == ["--traceback"]:
-        args = args[1:]
+    args = _command(args)
     if args[:1] != ["sweep"] or {"--help", "-h", "ray", "--executor=ray"} & set(args):
         return
     from mobot_cli.sweep.server import start_fork_server
@@ -65,10 +64,14 @@ def _start_sweep_pool(args: list[str]) -> None:
     start_fork_server()
 
 
+def _command(args: list[str]) -> list[str]:
+    """The command line from its command on: without the one root option a command may follow."""
+    return args[1:] if args[:1] == ["--traceback"] else args
+
+
 def _is_run(args: list[str]) -> bool:
     """A `mobot run` command line (not its --help)."""
-    if args[:1] == ["--traceback"]:
-        args = args[1:]
+    args = _command(args)
     return args[:1] == ["run"] and not {"--help", "-h"} & set(args)
 
 

@@ -12,8 +12,7 @@ from mobot_cli.cli.args import default_out
 from mobot_cli.cli.environment import Environment
 from mobot_cli.cli.startup import collect_garbage
 from mobot_cli.errors import ExitCode
-from mobot_cli.run import ahead as helper
-from mobot_cli.run.ahead import Ahead
+from mobot_cli.run.ahead import Ahead, take
 
 
 def run_scenario(env: Environment, scenario: Path, out: Optional[Path] = None, set_: Sequence[str] = (),
@@ -33,7 +32,7 @@ def run_scenario(env: Environment, scenario: Path, out: Optional[Path] = None, s
 
         require_viser()  # before the run, not after it
     # The entry point's helper process prepares the plan while this one imports the engine.
-    ahead = helper.take()
+    ahead = take()
     if ahead:
         ahead.prepare(scenario, overrides)
     try:

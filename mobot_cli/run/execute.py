@@ -12,6 +12,7 @@ from mobot_cli.run.record import RunRecord, Status
 from mobot_cli.run.recording import Recording
 from mobot_cli.run.timeline import Attachment, Timeline
 from mobot_cli.sim.plan import Plan
+from mobot_cli.sim.clients import connect_ahead  # noqa: F401 - the CLI's way to it (cli -> run -> sim)
 from mobot_cli.sim.engine import open_world
 
 Progress = Callable[[int, int], None]
@@ -69,13 +70,6 @@ def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | 
                 attachment.close()
             record = recording.close(status, error)
     return RunResult(out_dir=out_dir, record=record, expectations=recording.results)
-
-
-def connect_ahead() -> None:
-    """Connect PyBullet's client for the next run's World now (sim/clients.py)."""
-    from mobot_cli.sim.clients import connect_ahead as connect
-
-    connect()
 
 
 def _play(timeline: Timeline, progress: Progress | None) -> None:

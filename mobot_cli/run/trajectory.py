@@ -95,20 +95,19 @@ class TrajectorySink(Sink):
     def closing(self) -> None:
         """A painter starts drawing now, while the other files close."""
         if self.painter is not None:
-            self.painting = self.painter.paint(*self._picture(), self.title, self._subtitle())
+            self.painting = self.painter.paint(self._tracks(), self.path, self.title, self._subtitle())
 
     def close(self) -> None:
         if self.painting and self.painter.painted():
             return
         try:
-            draw(self._picture()[0], self.world, self.path, self.title, self._subtitle())
+            draw(self._tracks(), self.world, self.path, self.title, self._subtitle())
         except OSError as exc:  # written atomically: no half a picture is left
             raise named(exc, self.path) from None
 
-
-    def _picture(self) -> tuple[list[Drawn], Path]:
+    def _tracks(self) -> list[Drawn]:
         return [drawn(t.label, t.true, t.odom, t.start_z, t.scan,
-                      [s for (name, _), s in self.sweeps.items() if name == t.label]) for t in self.tracks], self.path
+                      [s for (name, _), s in self.sweeps.items() if name == t.label]) for t in self.tracks]
 
     def _subtitle(self) -> str:
         return f"{self.last_step / self.rate:g} s simulated; {_robots(len(self.tracks))}"

@@ -215,10 +215,12 @@ def test_mobot_helper_0_forks_nothing(tmp_path):
     assert done.returncode == 0 and _seen(done) == {"pid": None, "plan": None, "painted": None}
 
 
+LEAVES = st.none() | st.booleans() | st.floats(allow_nan=False) | st.text() | st.binary(max_size=200_000)
+
+
 @settings(max_examples=30, deadline=None)
-@given(value=st.recursive(st.none() | st.booleans() | st.floats(allow_nan=False) | st.text() | st.binary(max_size=200_000),
-                          lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=5), inner, max_size=4),
-                          max_leaves=8))
+@given(value=st.recursive(LEAVES, lambda inner: st.lists(inner, max_size=4)
+                          | st.dictionaries(st.text(max_size=5), inner, max_size=4), max_leaves=8))
 def test_values_cross_the_pipe_whole_whatever_their_size(value):
     reader, writer = os.pipe()
     try:
