@@ -82,7 +82,7 @@ def _run(env: Environment, ahead: Ahead | None, scenario: Path, overrides: list[
     if ahead:
         ahead.close()  # the picture is drawn: nothing is left for it to do
     if json_:
-        output.emit_json(env, result.record.model_dump(mode="json"))
+        output.emit_json(env, result.record.to_dict())
     elif not quiet:
         output.run_table(env, result.record, result.out_dir)
     output.expectations(env, result.expectations, verbose=not (quiet or json_))

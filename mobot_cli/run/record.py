@@ -1,17 +1,24 @@
-"""The run record: what ``summary.json`` holds, as one typed model built in one place.
+"""The run record: what ``summary.json`` holds, as one typed record built in one place.
 
 `mobot run` and `mobot serve --out` write it, `mobot check`, the terminal table and sweeps read
 it back; nothing passes string-keyed summary dicts between packages.
+
+The records are frozen dataclasses, not pydantic models: writing one needs nothing but the
+standard library, so a run never imports pydantic (~60 ms of a run's start-up, in the process
+that runs the loop; its helper validates the scenario). Pydantic validates a summary.json that
+is read back (``RunRecord.load``), from these same classes. Fields declared ``float`` or ``int``
+hold exactly that type, as a pydantic model's would, so the file's numbers read the same
+(``10.0``, not ``10``).
 """
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import json
 from enum import Enum
 from pathlib import Path
 from typing import Optional
-
-from pydantic import BaseModel, ConfigDict, ValidationError
 
 from mobot_cli.common.files import write_text_atomic
 
@@ -27,11 +34,46 @@ class Status(str, Enum):
     INTERRUPTED = "interrupted"  # Ctrl-C or SIGTERM before the end
 
 
-class _Model(BaseModel):
-    model_config = ConfigDict(extra="ignore", frozen=True, defer_build=True)
+class _Record:
+    """What every record shares: numbers of the declared type, and a JSON-ready form."""
+
+    def __post_init__(self) -> None:
+        for name, kind in _numbers(type(self)):
+            value = getattr(self, name)
+            if value is not None and type(value) is not kind:
+                object.__setattr__(self, name, kind(value))  # frozen: set once, here
+
+    def to_dict(self) -> dict:
+        """The record as plain JSON values (an enum as its value), keys in declaration order."""
+        return {f.name: _plain(getattr(self, f.name)) for f in dataclasses.fields(self)}
 
 
-class Pose(_Model):
+_NUMBERS = {"float": float, "Optional[float]": float, "int": int, "Optional[int]": int}
+
+
+@functools.cache
+def _numbers(cls: type) -> tuple[tuple[str, type], ...]:
+    """The fields of ``cls`` declared a float or an int (annotations are strings here)."""
+    return tuple((f.name, _NUMBERS[f.type]) for f in dataclasses.fields(cls) if f.type in _NUMBERS)
+
+
+def _plain(value):
+    if isinstance(value, _Record):
+        return value.to_dict()
+    if isinstance(value, Enum):
+        return value.value
+    if isinstance(value, list):
+        return [_plain(v) for v in value]
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    return value
+
+
+_record = dataclasses.dataclass(frozen=True, kw_only=True)  # every record class: keywords, fixed once made
+
+
+@_record
+class Pose(_Record):
     """A true pose in the world frame (m, rad)."""
 
     x: float
@@ -42,7 +84,8 @@ class Pose(_Model):
     yaw: float
 
 
-class OdomPose(_Model):
+@_record
+class OdomPose(_Record):
     """What the robot's odometry reports, in its odom frame (the spawn pose)."""
 
     x: float
@@ -50,14 +93,16 @@ class OdomPose(_Model):
     yaw: float
 
 
-class OdomError(_Model):
+@_record
+class OdomError(_Record):
     """Odometry against the truth at the end of the robot's life."""
 
     position: float
     yaw: float
 
 
-class SensorRecord(_Model):
+@_record
+class SensorRecord(_Record):
     """One sensor of a robot: what it is, where its readings went and how many there were."""
 
     name: str
@@ -69,7 +114,8 @@ class SensorRecord(_Model):
     file: str  # relative to the run folder
 
 
-class GoalRecord(_Model):
+@_record
+class GoalRecord(_Record):
     """How one goal command went: status, when, how long and how far the robot drove."""
 
     command: Optional[int]  # its index in the robot's commands list; None: a live goto request
@@ -83,7 +129,8 @@ class GoalRecord(_Model):
     laps: Optional[int] = None  # patrol: rounds completed
 
 
-class RobotRecord(_Model):
+@_record
+class RobotRecord(_Record):
     """One robot's life: where it came from, where it ended, how far it went."""
 
     name: str
@@ -96,11 +143,12 @@ class RobotRecord(_Model):
     distance: float
     collisions: int
     odom_error: OdomError
-    sensors: list[SensorRecord] = []
-    goals: list[GoalRecord] = []
+    sensors: list[SensorRecord] = dataclasses.field(default_factory=list)
+    goals: list[GoalRecord] = dataclasses.field(default_factory=list)
 
 
-class ExpectationResult(_Model):
+@_record
+class ExpectationResult(_Record):
     """One expectation for one robot."""
 
     robot: str
@@ -110,7 +158,8 @@ class ExpectationResult(_Model):
     passed: bool
 
 
-class Expectations(_Model):
+@_record
+class Expectations(_Record):
     """The expectations of a run that finished."""
 
     passed: int
@@ -118,13 +167,15 @@ class Expectations(_Model):
     results: list[ExpectationResult]
 
 
-class Versions(_Model):
+@_record
+class Versions(_Record):
     mobot: str
     pybullet: Optional[str] = None
     python: str
 
 
-class LiveInfo(_Model):
+@_record
+class LiveInfo(_Record):
     """What a live world adds to its record."""
 
     endpoint: str
@@ -132,7 +183,8 @@ class LiveInfo(_Model):
     requests: dict[str, int]
 
 
-class RunRecord(_Model):
+@_record
+class RunRecord(_Record):
     """``summary.json``: written last, so a folder without it is a run that did not end."""
 
     status: Status
@@ -147,8 +199,8 @@ class RunRecord(_Model):
     real_time_factor: Optional[float] = None
     physics_rate_hz: int
     log_rate_hz: float
-    notices: list[str] = []
-    robots: dict[str, RobotRecord] = {}
+    notices: list[str] = dataclasses.field(default_factory=list)
+    robots: dict[str, RobotRecord] = dataclasses.field(default_factory=dict)
     expectations: Optional[Expectations] = None
     live: Optional[LiveInfo] = None
 
@@ -158,7 +210,7 @@ class RunRecord(_Model):
 
     def to_json(self) -> str:
         """The file's text: two-space indents, keys in declaration order, no NaN."""
-        return json.dumps(self.model_dump(mode="json"), indent=2, allow_nan=False) + "\n"
+        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
 
     def save(self, folder: Path, durable: bool = True) -> None:
         """Write ``folder/summary.json`` atomically, flushed to disk unless not ``durable``."""
@@ -168,14 +220,14 @@ class RunRecord(_Model):
     def load(cls, folder: Path) -> Optional["RunRecord"]:
         """The record in ``folder``, or None when it is missing or not a record mobot wrote."""
         try:
-            return cls.model_validate_json((folder / SUMMARY).read_bytes())
-        except (OSError, ValueError, ValidationError):
+            return _reader().validate_json((folder / SUMMARY).read_bytes())
+        except (OSError, ValueError):  # pydantic's ValidationError is a ValueError
             return None
 
 
-def build_models() -> None:
-    """Build the record models' validators now rather than at their first use (defer_build): a
-    run does it while its helper process draws the picture (~20 ms the first time in a process)."""
-    for model in (Pose, OdomPose, OdomError, SensorRecord, GoalRecord, RobotRecord, ExpectationResult,
-                  Expectations, Versions, LiveInfo, RunRecord):
-        model.model_rebuild()
+@functools.cache
+def _reader():
+    """Pydantic's validator of a RunRecord (unknown keys ignored), built at the first read."""
+    from pydantic import TypeAdapter
+
+    return TypeAdapter(RunRecord)

@@ -25,7 +25,7 @@ from mobot_cli.errors import OutputError, cannot_write
 from mobot_cli.run.expect import Checker, Result, odom_error
 from mobot_cli.run.goals import GoalEnded, GoalStarted
 from mobot_cli.run.record import (SUMMARY, ExpectationResult, Expectations, GoalRecord, LiveInfo, OdomError,
-                                  OdomPose, Pose, RobotRecord, RunRecord, SensorRecord, Status, Versions, build_models)
+                                  OdomPose, Pose, RobotRecord, RunRecord, SensorRecord, Status, Versions)
 from mobot_cli.run.sinks import CsvSink, Sink
 from mobot_cli.run.timeline import Deleted, Reading, Record, Sample, Spawned
 from mobot_cli.sim.plan import Plan, RobotPlan
@@ -205,8 +205,6 @@ class Recording:
         try:
             for sink in self.sinks:
                 sink.closing()
-            if self.painter is not None:
-                build_models()  # while the painter draws: the record is made once every file is closed
             for sink in self.sinks:
                 try:
                     sink.close()
