@@ -111,11 +111,13 @@ class RobotSpec(Strict):
     name: str
     namespace: Optional[str] = None
     description: Reference = "mobot"
-    args: dict[str, Union[str, bool, int, float]] = Field(default_factory=dict)
+    # Empty defaults are values, not default_factory=list/dict: pydantic copies a default for each
+    # model, and a builtin factory costs it a parse of the builtin's text signature (~3 ms a process).
+    args: dict[str, Union[str, bool, int, float]] = {}
     pose: PoseSpec = Field(default_factory=PoseSpec)
     drive: Optional[DriveOverrides] = None
-    sensors: dict[SensorKey, SensorEntry] = Field(default_factory=dict)  # see sensor_model.py
-    commands: list[CommandSpec] = Field(default_factory=list)
+    sensors: dict[SensorKey, SensorEntry] = {}  # see sensor_model.py
+    commands: list[CommandSpec] = []
     count: Optional[Annotated[Int, Field(ge=1, le=1000)]] = None
     poses: Optional[list[tuple[Coordinate, Coordinate, Float]]] = None
 
@@ -220,9 +222,9 @@ class Scenario(Strict):
     seed: Annotated[Int, Field(ge=0, lt=2**32)] = 0
     settle: Seconds = 0.5
     log: LogSpec = Field(default_factory=LogSpec)
-    robots: list[RobotSpec] = Field(default_factory=list)
-    events: list[EventSpec] = Field(default_factory=list)
-    expect: list[ExpectSpec] = Field(default_factory=list)
+    robots: list[RobotSpec] = []
+    events: list[EventSpec] = []
+    expect: list[ExpectSpec] = []
     ros2: Optional[Ros2Spec] = None
 
     @field_validator("name")
