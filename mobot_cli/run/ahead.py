@@ -3,8 +3,9 @@
 The entry point forks it before the CLI is imported (``fork_helper``). While this process
 imports the CLI and the engine (numpy, PyBullet, the timeline and its sinks), the helper imports
 what reads a scenario (YAML, pydantic, the scenario models); told which scenario, it validates
-and resolves it and sends the plan back. It then loads the drawing code (Pillow, fonts) and
-waits: at the run's end it draws trajectory.png from the tracks this process sends it.
+and resolves it and sends the plan back. It then loads the drawing code (Pillow, fonts), makes
+ready the memory a picture takes (common/heap.py) and waits: at the run's end it draws
+trajectory.png from the tracks this process sends it.
 
 The helper only saves time. Whenever it cannot help (no second core, no fork, a scenario it
 could not prepare, a picture it could not write, a helper that died), this process does the
@@ -154,7 +155,7 @@ def _helper(reader: int, writer: int) -> None:
     _send(writer, (prepared.plan, prepared.resolved_yaml))
     from mobot_cli.run.trajectory import draw, preload
 
-    preload()
+    preload(one_picture=True)  # while the run's loop goes on
     request = _receive(reader)
     if request is None:
         return

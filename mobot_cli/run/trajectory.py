@@ -132,11 +132,12 @@ class _Points:
         return [tuple(xy) for xy in points[::max(1, len(points) // MAX_SCAN_POINTS), :2].tolist()]
 
 
-def preload() -> None:
-    """Import the drawing code and load its fonts now (a sweep's fork server, once for its workers)."""
+def preload(one_picture: bool = False) -> None:
+    """Import the drawing code and load its fonts now (a sweep's fork server, once for its workers);
+    ``one_picture``: and make ready the memory of the one picture this process draws next."""
     from mobot_cli.plot.render import preload as preload_render
 
-    preload_render()
+    preload_render(one_picture)
 
 
 def draw(tracks: list[Drawn], world: WorldPlan | None, out: Path, title: str, subtitle: str) -> None:
