@@ -31,11 +31,14 @@ def run_scenario(env: Environment, scenario: Path, out: Optional[Path] = None, s
         from mobot_cli.view.page import require_viser
 
         require_viser()  # before the run, not after it
-    # The entry point's helper process prepares the plan while this one imports the engine.
+    # The entry point's helper process validates and resolves the scenario this one reads, while
+    # this one imports the engine.
     ahead = take()
-    if ahead:
-        ahead.prepare(scenario, overrides)
     try:
+        if ahead:
+            from mobot_cli.scenario.overrides import read_ready
+
+            ahead.prepare(read_ready(scenario, overrides))  # a bad file or --set: reported as prepare() does
         return _run(env, ahead, scenario, overrides, out, realtime, json_, quiet, ros2_, view, view_port)
     finally:
         if ahead:
@@ -56,7 +59,10 @@ def _run(env: Environment, ahead: Ahead | None, scenario: Path, overrides: list[
         done = prepare(scenario, overrides)
         plan, resolved_yaml, painter = done.plan, done.resolved_yaml, None
     else:
-        (plan, resolved_yaml), painter = prepared, ahead
+        from mobot_cli.scenario.yamlsource import to_yaml
+
+        (plan, document), painter = prepared, ahead
+        resolved_yaml = to_yaml(document)
     collect_garbage()  # loaded: from here on garbage is made, and collected
     output.notices(env, plan.notices, quiet=quiet or json_)
     bridges = ros2.bridges(plan, ros2_)

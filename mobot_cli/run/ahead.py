@@ -1,9 +1,10 @@
 """A helper process forked as `mobot run` starts, so that a second core shares the run's fixed cost.
 
-The entry point forks it before the CLI is imported (``fork_helper``). While this process
-imports the CLI and the engine (numpy, PyBullet, the timeline and its sinks), the helper imports
-what reads a scenario (YAML, pydantic, the scenario models); told which scenario, it validates
-and resolves it and sends the plan back. It then loads the drawing code (Pillow, fonts), makes
+The entry point forks it before the CLI is imported (``fork_helper``). While this process reads
+the scenario file (PyYAML, --set) and imports the CLI and the engine (numpy, PyBullet, the
+timeline and its sinks), the helper imports what validates a scenario (pydantic, the scenario
+models); given the document read, it validates and resolves it and sends the plan and the
+resolved document back (this process writes it as YAML). It then loads the drawing code (Pillow, fonts), makes
 ready the memory a picture takes (common/heap.py) and waits: at the run's end it draws
 trajectory.png from the tracks this process sends it.
 
@@ -22,7 +23,6 @@ import pickle
 import signal
 import struct
 from pathlib import Path
-from typing import Sequence
 
 _LENGTH = struct.Struct("<Q")
 _forked: "Ahead | None" = None  # forked by the entry point, not yet taken by a run
@@ -36,15 +36,16 @@ class Ahead:
         self.reader, self.writer = reader, writer
         self.painting: Path | None = None  # the picture it draws now
 
-    def prepare(self, scenario: Path, overrides: Sequence[str]) -> None:
-        """Ask the helper to prepare ``scenario`` (``prepared`` takes the answer)."""
+    def prepare(self, source) -> None:
+        """Ask the helper to validate and resolve a scenario this process read and made ready
+        (scenario/overrides.read_ready); ``prepared`` takes the answer."""
         try:
-            _send(self.writer, (Path(scenario), list(overrides)))
+            _send(self.writer, source)
         except OSError:  # it is gone: prepared() says None
             pass
 
     def prepared(self):
-        """(plan, resolved YAML) from the helper; None: prepare here (and report its error)."""
+        """(plan, resolved document) from the helper; None: prepare here (and report its error)."""
         try:
             return _receive(self.reader)
         except OSError:
@@ -141,18 +142,18 @@ def _helper(reader: int, writer: int) -> None:
     """The helper's life: import, prepare when told what, send the plan, load the drawing code,
     draw when asked."""
     try:
-        from mobot_cli.run.prepare import prepare
+        from mobot_cli.run.prepare import resolve_ready
     except BaseException:
         return
-    request = _receive(reader)
-    if request is None:
+    source = _receive(reader)
+    if source is None:
         return
     try:
-        prepared = prepare(*request)
+        _, plan, document = resolve_ready(source)
     except BaseException:
         _send(writer, None)  # the parent prepares it again and reports what is wrong
         return
-    _send(writer, (prepared.plan, prepared.resolved_yaml))
+    _send(writer, (plan, document))
     from mobot_cli.run.trajectory import draw, preload
 
     preload(one_picture=True)  # while the run's loop goes on
@@ -161,7 +162,7 @@ def _helper(reader: int, writer: int) -> None:
         return
     tracks, out, title, subtitle = request
     try:
-        draw(tracks, prepared.plan.world, out, title, subtitle)  # atomic: nothing half-written is left
+        draw(tracks, plan.world, out, title, subtitle)  # atomic: nothing half-written is left
     except BaseException:
         _send(writer, False)  # the parent draws it again and reports what is wrong
         return

@@ -7,11 +7,11 @@ from pathlib import Path
 from typing import Iterable
 
 from mobot_cli.errors import MobotError
-from mobot_cli.scenario.document import resolved_document, to_yaml
-from mobot_cli.scenario.load import load_scenario, validate
+from mobot_cli.scenario.document import resolved_document
+from mobot_cli.scenario.load import validate, validate_ready
 from mobot_cli.scenario.model import Scenario
 from mobot_cli.scenario.resolve import resolve
-from mobot_cli.scenario.yamlsource import Source
+from mobot_cli.scenario.source import Source
 from mobot_cli.sim.plan import Plan
 
 SCENARIO_SUFFIXES = (".yaml", ".yml")
@@ -31,10 +31,20 @@ class Prepared:
 
 def prepare(path: Path | str, overrides: Iterable[str] = ()) -> Prepared:
     """Load, validate and resolve a scenario; raises located MobotErrors."""
-    scenario, source = load_scenario(path, overrides)
+    from mobot_cli.scenario.overrides import read_ready
+    from mobot_cli.scenario.yamlsource import to_yaml
+
+    scenario, plan, document = resolve_ready(read_ready(path, overrides))
+    return Prepared(scenario, plan, to_yaml(document))
+
+
+def resolve_ready(source: Source) -> tuple[Scenario, Plan, dict]:
+    """Validate and resolve a scenario file read and made ready (scenario/overrides.read_ready):
+    its typed form, its plan and the resolved document as plain data (yamlsource.to_yaml writes
+    it). Imports no PyYAML: the run's helper process does this part of ``prepare``."""
+    scenario = validate_ready(source)
     plan = resolve(scenario, source)
-    base_dir = Path(path).resolve().parent
-    return Prepared(scenario, plan, to_yaml(resolved_document(scenario, plan, base_dir)))
+    return scenario, plan, resolved_document(scenario, plan, Path(source.file).resolve().parent)
 
 
 def prepare_target(target: str | None, overrides: Iterable[str] = ()) -> Prepared:
@@ -52,6 +62,8 @@ def prepare_target(target: str | None, overrides: Iterable[str] = ()) -> Prepare
     except MobotError as exc:  # the generated document has no file or line worth naming
         raise type(exc)(exc.message, location=None if exc.location.file is None else exc.location,
                         hint=exc.hint) from None
+    from mobot_cli.scenario.yamlsource import to_yaml
+
     return Prepared(scenario, plan, to_yaml(resolved_document(scenario, plan, Path.cwd())))
 
 

@@ -12,8 +12,6 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from mobot_cli.scenario.expect_resolve import expect_document
 from mobot_cli.scenario.goals import area_form
 from mobot_cli.scenario.model import RobotSpec, Scenario
@@ -186,8 +184,3 @@ def _twist(cmd: TwistStep, rate: int) -> dict[str, Any]:
 
 def _text(value: Any) -> str:
     return ("true" if value else "false") if isinstance(value, bool) else str(value)
-
-
-def to_yaml(document: dict[str, Any]) -> str:
-    """Dump a resolved document as block-style YAML, keys in the order given."""
-    return yaml.safe_dump(document, sort_keys=False, default_flow_style=None, width=100)

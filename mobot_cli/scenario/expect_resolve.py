@@ -9,7 +9,7 @@ from mobot_cli.scenario.expect_model import DEFAULT_VISIT_RADIUS, OVER_TIME, Exp
 from mobot_cli.scenario.goals import area_form, area_polygon
 from mobot_cli.scenario.model import Scenario
 from mobot_cli.scenario.units import steps
-from mobot_cli.scenario.yamlsource import Source
+from mobot_cli.scenario.source import Source
 from mobot_cli.sim.plan import Event, Expectation, GoalStep, RobotPlan
 
 ALL = "all"

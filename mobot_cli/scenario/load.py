@@ -1,4 +1,7 @@
-"""Scenario file (plus --set overrides) to a validated ``Scenario``, or a located error."""
+"""Scenario file (plus --set overrides) to a validated ``Scenario``, or a located error.
+
+Reading the file and applying --set is scenario/overrides.py (PyYAML); validating is here
+(pydantic), importing the reading side only when it is asked to read."""
 
 from __future__ import annotations
 
@@ -8,79 +11,34 @@ from typing import Any, Iterable
 
 from pydantic import BaseModel, ValidationError
 
-from mobot_cli.errors import Location, ScenarioError, did_you_mean, shown
+from mobot_cli.errors import ScenarioError, did_you_mean, shown
 from mobot_cli.scenario.model import Scenario
 from mobot_cli.scenario.sensor_model import HINTS as SENSOR_HINTS
-from mobot_cli.scenario.yamlsafe import read_yaml_file
-from mobot_cli.scenario.yamlsource import PathKey, Source, parse_value, parse_yaml
+from mobot_cli.scenario.source import PathKey, Source
 
 
 def load_scenario(path: Path | str, overrides: Iterable[str] = ()) -> tuple[Scenario, Source]:
     """Read, override and validate a scenario file."""
-    path = Path(path)
-    source = parse_yaml(read_yaml_file(path), path)
-    return validate(source, overrides), source
+    from mobot_cli.scenario.overrides import read_ready  # PyYAML: see validate_ready
+
+    source = read_ready(path, overrides)
+    return validate_ready(source), source
 
 
 def validate(source: Source, overrides: Iterable[str] = ()) -> Scenario:
     """Apply overrides to parsed data and validate it into a Scenario."""
-    if source.data is None:
-        raise ScenarioError("the scenario is empty", location=Location(file=source.file),
-                            hint="Start from scenarios/quickstart.yaml.")
-    if not isinstance(source.data, dict):
-        raise ScenarioError("a scenario must be a mapping of keys (version, duration, robots, ...)",
-                            location=source.locate(()))
-    for item in overrides:
-        apply_override(source, item)
-    version = source.data.get("version")
-    if version != 1 or isinstance(version, bool):  # True == 1 in Python
-        raise ScenarioError(
-            "missing 'version'" if version is None else f"unsupported version {shown(version)}",
-            location=source.locate(("version",)), hint="This mobot reads 'version: 1' scenarios.")
+    from mobot_cli.scenario.overrides import ready
+
+    return validate_ready(ready(source, overrides))
+
+
+def validate_ready(source: Source) -> Scenario:
+    """Validate a document made ready by scenario/overrides.py; imports no PyYAML, so a process that
+    validates what another read (the run's helper) does without it."""
     try:
         return Scenario.model_validate(source.data)
     except ValidationError as exc:
         raise _to_scenario_error(exc, source) from None
-
-
-def apply_override(source: Source, item: str) -> None:
-    """Apply one ``KEY=VALUE``; list items are addressed by their ``name`` (or index)."""
-    key, sep, raw = item.partition("=")
-    if not sep or not key.strip():
-        raise ScenarioError(f"--set '{item}' is not KEY=VALUE", hint="e.g. --set robots.mobot.pose.x=2.0")
-    parts = key.strip().split(".")
-    node: Any = source.data
-    path: PathKey = ()
-    for i, part in enumerate(parts):
-        last = i == len(parts) - 1
-        if isinstance(node, list):
-            index = _list_index(node, part, item, path, source)
-            path += (index,)
-            if last:
-                node[index] = parse_value(raw, Location(file="--set " + item))
-            else:
-                node = node[index]
-            continue
-        if not isinstance(node, dict):
-            raise ScenarioError(f"--set {key}: '{'.'.join(parts[:i])}' is a value, not a mapping",
-                                location=source.locate(path))
-        path += (part,)
-        if last:
-            node[part] = parse_value(raw, Location(file="--set " + item))
-        else:
-            node = node.setdefault(part, [] if part == "robots" else {})
-    source.overrides[path] = item
-
-
-def _list_index(items: list, part: str, item: str, path: PathKey, source: Source) -> int:
-    names = [x.get("name") for x in items if isinstance(x, dict)]
-    for index, x in enumerate(items):
-        if isinstance(x, dict) and x.get("name") == part:
-            return index
-    if part.isdigit() and int(part) < len(items):
-        return int(part)
-    raise ScenarioError(f"--set {item.partition('=')[0]}: no item named '{part}' in '{source.key_text(path)}'",
-                        location=source.locate(path), hint=did_you_mean(part, [str(n) for n in names if n]))
 
 
 def _to_scenario_error(exc: ValidationError, source: Source) -> ScenarioError:

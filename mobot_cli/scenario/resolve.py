@@ -13,7 +13,7 @@ from mobot_cli.scenario.expect_resolve import resolve_expectations
 from mobot_cli.scenario.model import Scenario
 from mobot_cli.scenario.robots import RobotResolver, unlisted_robots
 from mobot_cli.scenario.units import steps
-from mobot_cli.scenario.yamlsource import Source
+from mobot_cli.scenario.source import Source
 from mobot_cli.sim.plan import Physics, Plan, Ros2Settings
 
 DEFAULT_LOG_RATE_HZ = 50  # the log runs at most this fast when log.rate_hz is not given

@@ -20,7 +20,7 @@ from mobot_cli.errors import Location, MobotError, ScenarioError
 from mobot_cli.scenario.model import RobotSpec
 from mobot_cli.scenario.sensors import resolve_sensors
 from mobot_cli.scenario.units import spawn_pose, steps
-from mobot_cli.scenario.yamlsource import Source
+from mobot_cli.scenario.source import Source
 from mobot_cli.scenario.goals import goal_step
 from mobot_cli.sim.plan import CommandStep, DriveSpec, RobotPlan, SpawnPose, TwistStep
 

@@ -7,63 +7,24 @@ that any later error can point at the line the user wrote. Reading limits are in
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import yaml
 
 from mobot_cli.errors import Location, ScenarioError, shown
-from mobot_cli.scenario.yamlsafe import MAX_DEPTH, MAX_NODES, check_tag, compose, construct_scalar
+from mobot_cli.scenario.source import PathKey, Source
+from mobot_cli.scenario.yamlsafe import MAX_DEPTH, MAX_NODES, check_tag, compose, construct_scalar, read_yaml_file
 
-PathKey = tuple[Any, ...]
-
-
-@dataclass
-class Source:
-    """Data parsed from one YAML document plus where each piece came from."""
-
-    data: Any
-    file: Path | None = None
-    lines: dict[PathKey, int] = field(default_factory=dict)
-    overrides: dict[PathKey, str] = field(default_factory=dict)  # path -> the --set text
-
-    def locate(self, path: PathKey) -> Location:
-        """Location of the deepest known prefix of ``path`` (a --set wins over the file)."""
-        if tuple(path) not in self.lines:  # made by an override, e.g. a mistyped --set key
-            for done, text in self.overrides.items():
-                if done[: len(path)] == tuple(path):
-                    return Location(file="--set " + text)
-        for n in range(len(path), -1, -1):
-            prefix = tuple(path[:n])
-            if prefix in self.overrides:
-                return Location(file="--set " + self.overrides[prefix], key=None)
-            if prefix in self.lines:
-                return Location(file=self.file, line=self.lines[prefix])
-        return Location(file=self.file)
+def read_source(path: Path | str, what: str = "scenario") -> Source:
+    """Read and parse a YAML file (limits and errors: yamlsafe.read_yaml_file, parse_yaml)."""
+    path = Path(path)
+    return parse_yaml(read_yaml_file(path, what), path)
 
 
-    def key_text(self, path: PathKey) -> str:
-        """Render ('robots', 0, 'pose', 'x') as 'robots.mobot.pose.x', the --set spelling."""
-        out: list[str] = []
-        node = self.data
-        for part in path:
-            if isinstance(part, int) and isinstance(node, list):
-                item = node[part] if part < len(node) else None
-                name = item.get("name") if isinstance(item, dict) else None
-                out.append(str(name) if isinstance(name, str) else f"[{part}]")
-            else:
-                out.append(str(part))
-            try:
-                node = node[part]
-            except (KeyError, IndexError, TypeError):
-                node = None
-        return ".".join(out).replace(".[", "[")
-
-    def locate_key(self, path: PathKey) -> Location:
-        """Like ``locate`` but also naming the key, for errors about one value."""
-        where = self.locate(path)
-        return Location(file=where.file, line=where.line, key=self.key_text(path))
+def to_yaml(document: dict[str, Any]) -> str:
+    """Dump a resolved document (scenario/document.py) as block-style YAML, keys in the order given."""
+    return yaml.safe_dump(document, sort_keys=False, default_flow_style=None, width=100)
 
 
 def parse_yaml(text: str, file: Path | None) -> Source:

@@ -123,6 +123,16 @@ def test_the_run_folder_is_the_same_with_the_helper_as_without(scenario, tmp_pat
     ["run", "scenarios/quickstart.yaml", "--set", "duration=-1", "--traceback"],
     ["run", "no/such/scenario.yaml"],
     ["run", "scenarios/quickstart.yaml", "--out", "README.md"],
+    # read by the run itself (the YAML side), validated by the helper (pydantic): either side's error
+    ["run", "tests/bad/malformed_yaml.yaml"],
+    ["run", "tests/bad/not_a_mapping.yaml"],
+    ["run", "tests/bad/missing_version.yaml"],
+    ["run", "tests/bad/yaml_date.yaml"],
+    ["run", "tests/bad/robot_syntax_error.yaml"],
+    ["run", "tests/bad/world_spawn_in_furniture.yaml"],
+    ["run", "scenarios/quickstart.yaml", "--set", "seed"],
+    ["run", "scenarios/quickstart.yaml", "--set", "robots.nobody.pose.x=1"],
+    ["run", "scenarios/quickstart.yaml", "--set", "version=2"],
 ])
 def test_bad_input_reads_the_same_with_the_helper_as_without(args):
     helped, alone = _mobot(*args, probe=True), _mobot(*args, helper=False)
@@ -134,6 +144,20 @@ def test_bad_input_reads_the_same_with_the_helper_as_without(args):
 
 
 @needs_two_cores
+def test_each_side_of_a_run_imports_only_its_own_share():
+    """The run's process reads the YAML and writes the record without pydantic; its helper
+    validates and resolves without PyYAML (each ~20-60 ms of start-up the other pays instead)."""
+    code = ("import sys; import mobot_cli.{}; print(sorted(m for m in ('yaml', 'pydantic', 'PIL', 'pybullet') "
+            "if m in sys.modules))")
+    def imported(modules: str) -> list[str]:
+        done = subprocess.run([sys.executable, "-c", code.format(modules)], capture_output=True, text=True,
+                              check=True, cwd=REPO)
+        return eval(done.stdout)  # noqa: S307 - a list of module names printed above
+    run_side = "cli.runner, mobot_cli.run.execute, mobot_cli.scenario.overrides, mobot_cli.scenario.yamlsource"
+    assert imported(run_side) == ["pybullet", "yaml"]
+    assert imported("run.prepare") == ["pydantic"]
+
+
 def test_a_run_whose_helper_dies_draws_its_picture_itself(tmp_path):
     scenario = REPO / "scenarios" / "quickstart.yaml"
     killed = _mobot("run", scenario, "--out", tmp_path / "killed", "--quiet", probe=True, KILL_HELPER="1")
