@@ -48,9 +48,10 @@ def run_scenario(env: Environment, scenario: Path, out: Optional[Path] = None, s
 def _run(env: Environment, ahead: Ahead | None, scenario: Path, overrides: list[str], out: Optional[Path],
          realtime: bool, json_: bool, quiet: bool, ros2_: bool, view: bool, view_port: int) -> int:
     from mobot_cli.common.files import check_out_folder
-    from mobot_cli.run.execute import connect_ahead, execute
+    from mobot_cli.run.execute import connect_ahead, execute, leave_at_exit
 
-    if ahead:
+    if ahead:  # forked by the entry point, so this process ends with the run (not so under invoke())
+        leave_at_exit()  # no disconnecting PyBullet first
         connect_ahead()  # while the helper still prepares the plan
     prepared = ahead.prepared() if ahead else None
     if prepared is None:  # no helper, or it could not: here, where its errors are reported

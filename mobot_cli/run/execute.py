@@ -12,7 +12,7 @@ from mobot_cli.run.record import RunRecord, Status
 from mobot_cli.run.recording import Recording
 from mobot_cli.run.timeline import Attachment, Timeline
 from mobot_cli.sim.plan import Plan
-from mobot_cli.sim.clients import connect_ahead  # noqa: F401 - the CLI's way to it (cli -> run -> sim)
+from mobot_cli.sim.clients import connect_ahead, leave_at_exit  # noqa: F401 - the CLI's way to them (cli -> run -> sim)
 from mobot_cli.sim.engine import open_world
 
 Progress = Callable[[int, int], None]

@@ -34,6 +34,7 @@ class Stage:
 _idle: list[tuple[int, Optional[Stage]]] = []  # kept clients, each empty or holding a stage
 _keep = 0
 _idle_lock = threading.Lock()  # Worlds may be made and closed in several threads
+_left = False  # leave_at_exit(): clients stay connected until the process ends
 
 
 def keep_clients(count: int) -> None:
@@ -48,6 +49,13 @@ def keep_clients(count: int) -> None:
         del _idle[_keep:]
     for cid, _ in extra:
         p.disconnect(physicsClientId=cid)
+
+
+def leave_at_exit() -> None:
+    """This process ends with its World (`mobot run`): a World's client is left connected when it
+    closes, for the system to reclaim with the process, rather than disconnected (~3 ms)."""
+    global _left
+    _left = True
 
 
 def connect_ahead() -> None:
@@ -77,6 +85,8 @@ def connect(key: Any = None) -> tuple[int, Optional[Stage]]:
 def release(cid: int, stage: Optional[Stage] = None, robots: Iterable[int] = ()) -> None:
     """Disconnect a World's client, or keep it: with its ``stage`` once the ``robots`` (body
     ids) are removed, or reset to empty when there is no stage to keep."""
+    if _left:
+        return
     with _idle_lock:
         keep = len(_idle) < _keep
     if keep and p.isConnected(physicsClientId=cid):
