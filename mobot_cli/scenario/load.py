@@ -15,6 +15,7 @@ from mobot_cli.errors import ScenarioError, did_you_mean, shown
 from mobot_cli.scenario.model import Scenario
 from mobot_cli.scenario.sensor_model import HINTS as SENSOR_HINTS
 from mobot_cli.scenario.source import PathKey, Source
+from mobot_cli.scenario.validator import scenario_validator
 
 
 def load_scenario(path: Path | str, overrides: Iterable[str] = ()) -> tuple[Scenario, Source]:
@@ -36,7 +37,7 @@ def validate_ready(source: Source) -> Scenario:
     """Validate a document made ready by scenario/overrides.py; imports no PyYAML, so a process that
     validates what another read (the run's helper) does without it."""
     try:
-        return Scenario.model_validate(source.data)
+        return scenario_validator().validate_python(source.data)  # Scenario.model_validate's, kept
     except ValidationError as exc:
         raise _to_scenario_error(exc, source) from None
 

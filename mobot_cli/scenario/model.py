@@ -40,7 +40,7 @@ class PhysicsSpec(Strict):
 class LogSpec(Strict):
     # None: about 50 Hz, rounded down to a whole number of physics steps (48 Hz at 240 Hz).
     rate_hz: Optional[Annotated[Float, Field(ge=MIN_LOG_RATE_HZ, le=MAX_RATE_HZ)]] = None
-    formats: list[Literal["csv", "mcap"]] = Field(default_factory=lambda: ["csv"])  # mcap: DIR/bag/
+    formats: list[Literal["csv", "mcap"]] = ["csv"]  # mcap: DIR/bag/ (no lambda: scenario/validator.py pickles)
 
 
 class PoseSpec(Strict):
@@ -114,7 +114,7 @@ class RobotSpec(Strict):
     # Empty defaults are values, not default_factory=list/dict: pydantic copies a default for each
     # model, and a builtin factory costs it a parse of the builtin's text signature (~3 ms a process).
     args: dict[str, Union[str, bool, int, float]] = {}
-    pose: PoseSpec = Field(default_factory=PoseSpec)
+    pose: PoseSpec = PoseSpec.model_construct()  # all defaults (see Scenario.physics)
     drive: Optional[DriveOverrides] = None
     sensors: dict[SensorKey, SensorEntry] = {}  # see sensor_model.py
     commands: list[CommandSpec] = []
@@ -217,11 +217,14 @@ class Scenario(Strict):
     world: Reference = "empty"
     # World models whose files are missing (Fuel includes, meshes) are left out with a warning.
     skip_missing: bool = False
-    physics: PhysicsSpec = Field(default_factory=PhysicsSpec)
+    # All defaults, made once without validating them (frozen: one serves every scenario).
+    # default_factory=PhysicsSpec made the first scenario without ``physics:`` build PhysicsSpec's
+    # own validator (defer_build) and import pydantic's plugin loader, ~20 ms of a process.
+    physics: PhysicsSpec = PhysicsSpec.model_construct()
     duration: Duration
     seed: Annotated[Int, Field(ge=0, lt=2**32)] = 0
     settle: Seconds = 0.5
-    log: LogSpec = Field(default_factory=LogSpec)
+    log: LogSpec = LogSpec.model_construct()  # all defaults (see physics)
     robots: list[RobotSpec] = []
     events: list[EventSpec] = []
     expect: list[ExpectSpec] = []
