@@ -4,16 +4,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import TYPE_CHECKING, Callable, Sequence
 
 from mobot_cli.errors import MobotError, OutputError
 from mobot_cli.run.expect import Result
-from mobot_cli.run.record import RunRecord, Status
+from mobot_cli.run.outcome import Status
 from mobot_cli.run.recording import Recording
 from mobot_cli.run.timeline import Attachment, Timeline
 from mobot_cli.sim.plan import Plan
 from mobot_cli.sim.clients import connect_ahead, leave_at_exit  # noqa: F401 - the CLI's way to them (cli -> run -> sim)
 from mobot_cli.sim.engine import open_world
+
+if TYPE_CHECKING:
+    from mobot_cli.run.record import RunRecord  # made at the end (run/outcome.py)
 
 Progress = Callable[[int, int], None]
 

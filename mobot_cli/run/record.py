@@ -21,17 +21,7 @@ from pathlib import Path
 from typing import Optional
 
 from mobot_cli.common.files import write_text_atomic
-
-SUMMARY = "summary.json"
-
-
-class Status(str, Enum):
-    """How a run (or a live world) ended."""
-
-    OK = "ok"
-    FAULT = "fault"  # the simulation broke: a NaN state, a robot left the world
-    ERROR = "error"  # a bug or an unexpected failure inside mobot
-    INTERRUPTED = "interrupted"  # Ctrl-C or SIGTERM before the end
+from mobot_cli.run.outcome import SUMMARY, Status  # noqa: F401 - the record's, re-exported
 
 
 class _Record:

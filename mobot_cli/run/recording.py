@@ -16,7 +16,7 @@ import platform
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Optional
+from typing import TYPE_CHECKING, Optional
 
 from mobot_cli import __version__
 from mobot_cli.common.files import write_text_atomic
@@ -24,12 +24,14 @@ from mobot_cli.common.installed import version
 from mobot_cli.errors import OutputError, cannot_write
 from mobot_cli.run.expect import Checker, Result, odom_error
 from mobot_cli.run.goals import GoalEnded, GoalStarted
-from mobot_cli.run.record import (SUMMARY, ExpectationResult, Expectations, GoalRecord, LiveInfo, OdomError,
-                                  OdomPose, Pose, RobotRecord, RunRecord, SensorRecord, Status, Versions)
+from mobot_cli.run.outcome import SUMMARY, Status
 from mobot_cli.run.sinks import CsvSink, Sink
 from mobot_cli.run.timeline import Deleted, Reading, Record, Sample, Spawned
 from mobot_cli.sim.plan import Plan, RobotPlan
 from mobot_cli.sim.state import RobotState
+
+if TYPE_CHECKING:  # the record's classes are made when it is written (run/outcome.py)
+    from mobot_cli.run.record import LiveInfo, RobotRecord, RunRecord, SensorRecord
 
 
 @dataclass
@@ -64,6 +66,8 @@ class _Life:
                     path_length=_r(self.distance - goal["from"]))
 
     def record(self, end: float, rate_hz: int) -> RobotRecord:
+        from mobot_cli.run.record import GoalRecord, OdomError, OdomPose, Pose, RobotRecord
+
         goals = [GoalRecord(**{k: v for k, v in g.items() if k != "from"},
                             time=_r(g.get("ended_at", end) - g["started_at"]),
                             **({} if "path_length" in g else {"path_length": _r(self.distance - g["from"])}))
@@ -82,6 +86,7 @@ class _Life:
 
     def _sensor(self, spec, rate_hz: int) -> SensorRecord:
         from mobot_cli.run import sensor_topics
+        from mobot_cli.run.record import SensorRecord
         from mobot_cli.run.sensor_files import sensor_file
 
         return SensorRecord(name=spec.name, kind=spec.kind, topic=sensor_topics.topic(self.plan, spec),
@@ -205,6 +210,7 @@ class Recording:
         try:
             for sink in self.sinks:
                 sink.closing()
+            import mobot_cli.run.record  # noqa: F401 - its classes made now, while a painter draws
             for sink in self.sinks:
                 try:
                     sink.close()
@@ -229,6 +235,8 @@ class Recording:
             self._failed(exc)
 
     def _record(self, status: Status, error: str | None, steps: int, live: LiveInfo | None) -> RunRecord:
+        from mobot_cli.run.record import ExpectationResult, Expectations, RunRecord, Versions
+
         wall = time.perf_counter() - self._started
         plan, sim_time = self.plan, steps / self.plan.physics.rate_hz
         expectations = None

@@ -145,10 +145,11 @@ def test_bad_input_reads_the_same_with_the_helper_as_without(args):
 
 @needs_two_cores
 def test_each_side_of_a_run_imports_only_its_own_share():
-    """The run's process reads the YAML and writes the record without pydantic; its helper
-    validates and resolves without PyYAML (each ~20-60 ms of start-up the other pays instead)."""
-    code = ("import sys; import mobot_cli.{}; print(sorted(m for m in ('yaml', 'pydantic', 'PIL', 'pybullet') "
-            "if m in sys.modules))")
+    """The run's process reads the YAML and writes the record without pydantic (and makes the
+    record's classes only at its end); its helper validates and resolves without PyYAML (each
+    ~10-60 ms of start-up the other pays instead)."""
+    code = ("import sys; import mobot_cli.{}; print(sorted(m for m in ('yaml', 'pydantic', 'PIL', 'pybullet', "
+            "'mobot_cli.run.record') if m in sys.modules))")
     def imported(modules: str) -> list[str]:
         done = subprocess.run([sys.executable, "-c", code.format(modules)], capture_output=True, text=True,
                               check=True, cwd=REPO)

@@ -1,0 +1,20 @@
+"""How a run ended and the file that says so: all a run needs of its record until it ends.
+
+The record's classes (run/record.py) are made only when a run writes its summary, while its
+helper draws the picture (~11 ms of making dataclasses a run's start-up no longer pays).
+"""
+
+from __future__ import annotations
+
+from enum import Enum
+
+SUMMARY = "summary.json"
+
+
+class Status(str, Enum):
+    """How a run (or a live world) ended."""
+
+    OK = "ok"
+    FAULT = "fault"  # the simulation broke: a NaN state, a robot left the world
+    ERROR = "error"  # a bug or an unexpected failure inside mobot
+    INTERRUPTED = "interrupted"  # Ctrl-C or SIGTERM before the end
