@@ -4,9 +4,9 @@ The entry point forks it before the CLI is imported (``fork_helper``). While thi
 the scenario file (PyYAML, --set) and imports the CLI and the engine (numpy, PyBullet, the
 timeline and its sinks), the helper imports what validates a scenario (pydantic, the scenario
 models); given the document read, it validates and resolves it and sends the plan and the
-resolved document back (this process writes it as YAML). It then loads the drawing code (Pillow, fonts), makes
-ready the memory a picture takes (common/heap.py) and waits: at the run's end it draws
-trajectory.png from the tracks this process sends it.
+resolved document back (this process writes it as YAML). It then loads the drawing code
+(Pillow, fonts), makes ready the memory a picture takes (common/heap.py) and waits: at the
+run's end it draws trajectory.png from the tracks this process sends it.
 
 The helper only saves time. Whenever it cannot help (no second core, no fork, a scenario it
 could not prepare, a picture it could not write, a helper that died), this process does the
@@ -37,8 +37,8 @@ class Ahead:
         self.painting: Path | None = None  # the picture it draws now
 
     def prepare(self, source) -> None:
-        """Ask the helper to validate and resolve a scenario this process read and made ready
-        (scenario/overrides.read_ready); ``prepared`` takes the answer."""
+        """Ask the helper to validate and resolve ``source``, a scenario.source.Source this process
+        read and made ready (scenario/overrides.read_ready); ``prepared`` takes the answer."""
         try:
             _send(self.writer, source)
         except OSError:  # it is gone: prepared() says None
