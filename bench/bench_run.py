@@ -139,7 +139,8 @@ def main() -> None:
             loop = float(subprocess.run(raw_cmd, check=True, capture_output=True, text=True).stdout)
             raw_out.append((time.perf_counter() - started, loop))
             started = time.perf_counter()
-            done = subprocess.run([*probe, "--out", str(work / f"inside{i}")], check=True, capture_output=True, text=True)
+            done = subprocess.run([*probe, "--out", str(work / f"inside{i}")], check=True, capture_output=True,
+                                  text=True)
             inside_out.append((time.perf_counter() - started, float(done.stderr.split()[-1])))
         for label, pairs in (("mobot run", mobot_out), ("mobot run, MOBOT_HELPER=0", alone_out),
                              ("raw PyBullet script", raw_out), ("mobot run, its loop timed inside it", inside_out)):

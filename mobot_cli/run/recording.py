@@ -108,7 +108,6 @@ class Recording:
         self.durable = durable  # summary.json flushed to disk here (a sweep flushes it itself)
         self.checker = Checker(plan)
         self.sinks: list[Sink] = []
-        self.painter = painter  # run.trajectory.Painter: trajectory.png drawn in another process
         self.failure: OutputError | None = None  # the first write that failed
         self.results: list[Result] = []
         self.last_step = 0

@@ -16,6 +16,7 @@ from mobot_cli.errors import Location, ScenarioError, shown
 from mobot_cli.scenario.source import PathKey, Source
 from mobot_cli.scenario.yamlsafe import MAX_DEPTH, MAX_NODES, check_tag, compose, construct_scalar, read_yaml_file
 
+
 def read_source(path: Path | str, what: str = "scenario") -> Source:
     """Read and parse a YAML file (limits and errors: yamlsafe.read_yaml_file, parse_yaml)."""
     path = Path(path)

@@ -15,7 +15,7 @@ from typing import Any
 from mobot_cli.errors import Location, ScenarioError, UsageError, did_you_mean, shown
 from mobot_cli.scenario.limits import SCENARIO_NAME_RE, check_name, check_reference
 from mobot_cli.scenario.yamlsafe import read_yaml_file
-from mobot_cli.scenario.yamlsource import Source, parse_value, parse_yaml
+from mobot_cli.scenario.yamlsource import Source, parse_value, parse_yaml, read_source
 
 MAX_RUNS = 10_000  # runs of one sweep (each is prepared up front, ~10 ms apiece)
 SWEEP_FILE_KEYS = ("scenario", "name", "seed", "set", "grid", "zip", "random", "samples")
@@ -193,7 +193,7 @@ def run_count(spec: SweepSpec) -> int:
 
 def load_sweep_file(path: Path) -> SweepSpec:
     """Read a sweep file: {scenario, name, seed, set, grid, zip, random, samples}; unchecked."""
-    source = parse_yaml(read_yaml_file(path, "sweep"), path)
+    source = read_source(path, "sweep")
     data = source.data
     if not isinstance(data, dict):
         raise ScenarioError("a sweep file must be a mapping (scenario, grid, zip, random, ...)",
