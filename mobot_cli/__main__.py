@@ -33,6 +33,9 @@ def entry() -> None:
     # run's CPU from the other core, where the run's helper and a sweep's other worker run.
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     try:
+        from mobot_cli.common.classcode import install
+
+        install()  # dataclasses made from here on compile nothing a process before them compiled
         _start_sweep_pool(sys.argv[1:])
         _start_run_helper(sys.argv[1:])
         from mobot_cli.cli import main

@@ -154,9 +154,11 @@ def _helper(reader: int, writer: int) -> None:
         _send(writer, None)  # the parent prepares it again and reports what is wrong
         return
     _send(writer, (plan, document))
+    from mobot_cli.common.classcode import save
     from mobot_cli.run.trajectory import draw, preload
 
     preload(one_picture=True)  # while the run's loop goes on
+    save()  # the classes made here that the run did not make (it saves its own at exit)
     request = _receive(reader)
     if request is None:
         return

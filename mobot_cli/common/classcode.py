@@ -1,0 +1,109 @@
+"""Dataclass methods compiled once a machine, not once a process: the `mobot` command's start.
+
+Making a dataclass writes its methods (``__init__``, ``__eq__``, ``__repr__``, ...) as Python
+text and compiles it, each time the class is made: ~1 ms a class, most of it in the compiler.
+A `mobot run` makes about 40 before its loop and its helper about 80 (mobot's plan and record
+types, and pydantic's and annotated-types' own), which came to a fifth of their imports. Both
+start with ``install()`` (the entry point calls it, before anything else is imported): every
+dataclass made afterwards gets its methods' code from ``classcode/PYTHON.marshal`` in the cache
+folder, where the process that first compiled a text left it (``save()``, at exit). The text is
+the key and the code is what ``compile`` makes of it, so a class is the same either way; a text
+not yet there (new code, another Python) is compiled as before and kept.
+
+This relies on one detail of CPython's ``dataclasses`` (3.10 to 3.13): it runs the text it
+writes with the built-in ``exec``, looked up in its module's globals, where ``install()`` puts a
+function that runs the same text's code. Were that to change, the function would simply never be
+called. Only the `mobot` command installs it: the Python API leaves its caller's process as it is.
+
+The cache file is read as .pyc files are, as code this user's processes wrote: only a regular
+file owned by this user and writable by no one else is read, and a damaged one is ignored (and
+replaced). Anything that goes wrong here costs the time it was to save, never a run.
+"""
+
+import builtins
+import dataclasses
+import marshal
+import os
+import stat
+import sys
+
+KIND = "classcode"
+MAX_ENTRIES = 4096  # above this, a save keeps only the texts its own process used
+_TAG = f"{sys.implementation.cache_tag}-{sys.hexversion:x}"  # a code object is one Python's
+_codes: dict = {}  # method text -> its code
+_used: set = set()  # texts this process ran
+_fresh = False  # a text was compiled here: save() has something to keep
+_installed = False
+
+
+def install() -> None:
+    """Load the cache and have every dataclass made from now on use it; once a process."""
+    global _installed
+    if _installed:
+        return
+    _installed = True
+    _codes.update(_load())
+    dataclasses.exec = _exec  # shadows the built-in for that module alone
+    import atexit
+
+    atexit.register(save)
+
+
+def save() -> None:
+    """Keep the texts this process compiled, with those already kept (a cache never fails)."""
+    global _fresh
+    if not _fresh:
+        return
+    _fresh = False
+    try:
+        from mobot_cli.common.files import write_bytes_atomic
+
+        path = _path()
+        codes = {**_load(), **_codes}  # another process may have kept others meanwhile
+        if len(codes) > MAX_ENTRIES:
+            codes = {text: code for text, code in codes.items() if text in _used}
+        path.parent.mkdir(parents=True, exist_ok=True)
+        write_bytes_atomic(path, marshal.dumps(codes), durable=False)
+    except Exception:  # a read-only folder, no home folder, a full disk
+        pass
+
+
+def _exec(source, /, *args, **kwargs):
+    """``exec`` for dataclasses: a text's code from the cache, compiled as ``exec`` would (no
+    __future__ flags: dataclasses.py has none) and kept when new."""
+    global _fresh
+    if type(source) is str:
+        code = _codes.get(source)
+        if code is None:
+            code = _codes[source] = compile(source, "<string>", "exec", dont_inherit=True)
+            _fresh = True
+        _used.add(source)
+        source = code
+    return builtins.exec(source, *args, **kwargs)
+
+
+def _path():
+    from mobot_cli.common.cachedir import cache_dir
+
+    return cache_dir() / KIND / f"{_TAG}.marshal"
+
+
+def _load() -> dict:
+    """The kept texts and their code; empty when there is no file or it is not to be trusted."""
+    try:
+        fd = os.open(_path(), os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
+    except (OSError, RuntimeError):  # none yet, a link, no home folder
+        return {}
+    with os.fdopen(fd, "rb") as handle:
+        info = os.fstat(handle.fileno())
+        if (not stat.S_ISREG(info.st_mode) or info.st_mode & (stat.S_IWGRP | stat.S_IWOTH)
+                or (hasattr(os, "getuid") and info.st_uid != os.getuid())):
+            return {}
+        try:
+            codes = marshal.loads(handle.read())
+        except Exception:  # damaged: compiled again, and the file replaced
+            return {}
+    code_type = type(_load.__code__)
+    if type(codes) is not dict or not all(type(t) is str and type(c) is code_type for t, c in codes.items()):
+        return {}
+    return codes
