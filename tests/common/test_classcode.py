@@ -1,7 +1,7 @@
-"""Dataclass methods kept compiled in the cache folder (common/classcode.py): classes made from the
-kept code are the classes Python makes, a second process compiles nothing, and a cache file is only
-trusted when this user wrote it. Each case runs in a process of its own: install() changes how that
-whole process makes dataclasses."""
+"""Dataclass methods and forward references kept compiled in the cache folder (common/classcode.py):
+classes and type hints made from the kept code are those Python makes, a second process compiles
+nothing, and a cache file is only trusted when this user wrote it. Each case runs in a process of
+its own: install() changes how that whole process makes them."""
 
 from __future__ import annotations
 
@@ -25,6 +25,7 @@ from mobot_cli.common import classcode
 if sys.argv[1] == "1":
     classcode.install()
 from dataclasses import dataclass, field, replace, FrozenInstanceError, KW_ONLY
+from typing import ForwardRef, TypedDict, get_type_hints
 
 @dataclass(frozen=True)
 class Pose:
@@ -45,6 +46,14 @@ class Slot:
     a: int
     b: "list[int]" = field(default_factory=lambda: [1, 2])
 
+class Row(TypedDict, total=False):
+    name: "str"
+    points: "list[tuple[float, float]] | None"
+
+def scale(pose: "Pose", by: "dict[str, float] | None" = None) -> "Pose":
+    return pose
+
+refs = [ForwardRef("dict[str, int] | None"), ForwardRef("Pose")]
 p, q = Pose(1.0, tags=("a",)), Track("t", [(0, 1)], note="n", rate=10)
 try:
     p.x = 3
@@ -60,6 +69,8 @@ out = {
     "slots": Slot.__slots__,
     "init": [[c.__init__.__code__.co_code.hex(), c.__init__.__code__.co_varnames, repr(c.__init__.__code__.co_consts),
               str(c.__init__.__annotations__)] for c in (Pose, Track, Slot)],
+    "refs": [[r.__forward_code__.co_code.hex(), r.__forward_code__.co_names] for r in refs],
+    "hints": [str(get_type_hints(Row)), str(get_type_hints(scale))],
     "fresh": classcode._fresh,
     "kept": len(classcode._codes),
 }
