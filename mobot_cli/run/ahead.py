@@ -4,7 +4,9 @@ The entry point forks it before the CLI is imported (``fork_helper``). While thi
 the scenario file (PyYAML, --set) and imports the CLI and the engine (numpy, PyBullet, the
 timeline and its sinks), the helper imports what validates a scenario (pydantic, the scenario
 models); given the document read, it validates and resolves it and sends the plan and the
-resolved document back (this process writes it as YAML). It then loads the drawing code
+resolved document back (this process writes it as YAML), with the file PyBullet loads each URDF
+from and the links whose friction it sets (sim/urdf_file.py), which this process then need not
+work out. It then loads the drawing code
 (Pillow, fonts), makes ready the memory a picture takes (common/heap.py) and waits: at the
 run's end it draws trajectory.png from the tracks this process sends it.
 
@@ -45,11 +47,19 @@ class Ahead:
             pass
 
     def prepared(self):
-        """(plan, resolved document) from the helper; None: prepare here (and report its error)."""
+        """(plan, resolved document) from the helper; None: prepare here (and report its error).
+        The URDF facts it sent with them are this process's from now on (sim/urdf_file.py)."""
         try:
-            return _receive(self.reader)
+            answer = _receive(self.reader)
         except OSError:
             return None
+        if answer is None:
+            return None
+        plan, document, facts = answer
+        from mobot_cli.sim.urdf_file import known
+
+        known(facts)
+        return plan, document
 
     def paint(self, tracks: list, out: Path, title: str, subtitle: str) -> bool:
         """Have the helper draw trajectory.png (run.trajectory.Painter); False: draw it here."""
@@ -153,7 +163,9 @@ def _helper(reader: int, writer: int) -> None:
     except BaseException:
         _send(writer, None)  # the parent prepares it again and reports what is wrong
         return
-    _send(writer, (plan, document))
+    from mobot_cli.sim.urdf_file import facts
+
+    _send(writer, (plan, document, facts(_urdf_texts(plan))))
     from mobot_cli.common.classcode import save
     from mobot_cli.run.trajectory import draw, preload
 
@@ -169,6 +181,12 @@ def _helper(reader: int, writer: int) -> None:
         _send(writer, False)  # the parent draws it again and reports what is wrong
         return
     _send(writer, True)
+
+
+def _urdf_texts(plan) -> list[str]:
+    """The URDF texts the run loads: its robots' and its world's static bodies made of one."""
+    return [*dict.fromkeys(robot.urdf for robot in plan.robots),
+            *(body.urdf for body in plan.world.bodies if body.urdf and not body.shapes)]
 
 
 def _send(fd: int, value: object) -> None:

@@ -38,7 +38,7 @@ robots:
 PROBE = """
 import atexit, os, signal, sys
 from mobot_cli.run import ahead
-seen = {"pid": None, "plan": None, "painted": None}
+seen = {"pid": None, "plan": None, "painted": None, "facts": None, "parsed": None}
 take, prepared, painted = ahead.take, ahead.Ahead.prepared, ahead.Ahead.painted
 def take_():
     helper = take()
@@ -54,7 +54,11 @@ def painted_(self):
     seen["painted"] = painted(self)
     return seen["painted"]
 ahead.take, ahead.Ahead.prepared, ahead.Ahead.painted = take_, prepared_, painted_
-atexit.register(lambda: print("helper", seen))
+def told():  # the URDF facts the helper sent, and whether this process imported an XML parser
+    seen["facts"] = len(getattr(sys.modules.get("mobot_cli.sim.urdf_file"), "_known", ()))
+    seen["parsed"] = "xml.etree.ElementTree" in sys.modules
+    print("helper", seen)
+atexit.register(told)
 sys.argv = ["mobot", *sys.argv[1:]]
 from mobot_cli.__main__ import entry
 entry()
@@ -109,6 +113,9 @@ def test_the_run_folder_is_the_same_with_the_helper_as_without(scenario, tmp_pat
     assert helped.returncode == alone.returncode in (0, 1) and helped.stderr == alone.stderr
     seen = _seen(helped)
     assert seen["plan"] is True and seen["painted"] is True  # the helper did prepare and draw
+    assert seen["facts"] == 1  # and worked out the file and friction of the robot's URDF
+    if scenario == "quickstart":  # (a coverage run loads the floor plan, whose code imports XML parsing)
+        assert seen["parsed"] is False
     assert _gone(seen["pid"])  # and was reaped
     files = _files(tmp_path / "helped")
     assert {"trajectory.png", "scenario.yaml", "summary.json"} <= set(files)
@@ -237,7 +244,8 @@ def test_without_the_entry_point_there_is_no_helper(tmp_path):
 def test_mobot_helper_0_forks_nothing(tmp_path):
     done = _mobot("run", "scenarios/quickstart.yaml", "--out", tmp_path / "out", "--quiet", "--duration", "0.2",
                   helper=False, probe=True)
-    assert done.returncode == 0 and _seen(done) == {"pid": None, "plan": None, "painted": None}
+    assert done.returncode == 0 and _seen(done) == {"pid": None, "plan": None, "painted": None, "facts": 0,
+                                                    "parsed": True}  # (it parsed the URDF itself)
 
 
 LEAVES = st.none() | st.booleans() | st.floats(allow_nan=False) | st.text() | st.binary(max_size=200_000)
