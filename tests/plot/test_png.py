@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from PIL import Image, ImageDraw
 
-from mobot_cli.plot.png import encode_rgb
+from mobot_cli.plot.png import deflate, encode_rgb
 
 
 def decoded(data: bytes) -> Image.Image:
@@ -54,6 +54,29 @@ def test_any_rgb_image_round_trips(width, height, seed):
     pixels = np.random.default_rng(seed).integers(0, 256, size=(height, width, 3), dtype=np.uint8)
     image = Image.fromarray(pixels, "RGB")
     assert np.array_equal(np.asarray(decoded(encode_rgb(image))), pixels)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.binary(max_size=5000) | st.integers(0, 3_000_000).map(lambda n: bytes(n // 7) + b"\x01" * (n - n // 7)))
+def test_the_two_halves_make_one_zlib_stream(data):
+    """Compressed in two threads, read back by zlib whole, its checksum checked."""
+    stream = deflate(np.frombuffer(data, dtype=np.uint8))
+    assert stream[:2] == zlib.compress(data, 1)[:2]
+    assert zlib.decompress(stream) == data
+
+
+def test_a_trajectory_sized_picture_is_as_small_as_one_stream_makes_it():
+    image = Image.new("RGB", (2400, 1800), "white")
+    draw = ImageDraw.Draw(image)
+    for k in range(0, 2400, 150):
+        draw.line([(k, 0), (k, 1800)], fill=(226, 226, 226), width=2)
+    draw.line([(100 + 9 * i, 900 + 600 * np.sin(i / 20)) for i in range(240)], fill=(31, 119, 180), width=4)
+    small = image.reduce(2)
+    data = encode_rgb(small)
+    assert decoded(data).tobytes() == small.tobytes()
+    rows = np.frombuffer(small.tobytes(), np.uint8).reshape(900, 3600)
+    filtered = np.hstack([np.full((900, 1), 2, np.uint8), np.vstack([rows[:1], rows[1:] - rows[:-1]])])
+    assert len(data) < 1.02 * len(zlib.compress(filtered.tobytes(), 1)) + 100
 
 
 def test_other_modes_are_refused():
