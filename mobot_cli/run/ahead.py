@@ -167,7 +167,7 @@ def _helper(reader: int, writer: int) -> None:
 
     _send(writer, (plan, document, facts(_urdf_texts(plan))))
     from mobot_cli.common.classcode import save
-    from mobot_cli.run.trajectory import draw, preload
+    from mobot_cli.run.picture import draw, preload
 
     preload(one_picture=True)  # while the run's loop goes on
     save()  # the classes made here that the run did not make (it saves its own at exit)

@@ -153,8 +153,8 @@ def test_bad_input_reads_the_same_with_the_helper_as_without(args):
 @needs_two_cores
 def test_each_side_of_a_run_imports_only_its_own_share():
     """The run's process reads the YAML and writes the record without pydantic (and makes the
-    record's classes only at its end); its helper validates and resolves without PyYAML (each
-    ~10-60 ms of start-up the other pays instead)."""
+    record's classes only at its end); its helper validates and resolves without PyYAML, and draws
+    without PyBullet (each ~10-60 ms of start-up the other pays instead)."""
     code = ("import sys; import mobot_cli.{}; print(sorted(m for m in ('yaml', 'pydantic', 'PIL', 'pybullet', "
             "'mobot_cli.run.record') if m in sys.modules))")
     def imported(modules: str) -> list[str]:
@@ -164,6 +164,10 @@ def test_each_side_of_a_run_imports_only_its_own_share():
     run_side = "cli.runner, mobot_cli.run.execute, mobot_cli.scenario.overrides, mobot_cli.scenario.yamlsource"
     assert imported(run_side) == ["pybullet", "yaml"]
     assert imported("run.prepare") == ["pydantic"]
+    drawing = ("import sys; import mobot_cli.run.prepare; from mobot_cli.run.picture import draw, preload; preload(); "
+               "print(sorted(m for m in ('PIL', 'pybullet', 'yaml') if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", drawing], capture_output=True, text=True, check=True, cwd=REPO)
+    assert done.stdout.split() == ["['PIL']"]  # the helper draws without the engine
 
 
 def test_a_run_whose_helper_dies_draws_its_picture_itself(tmp_path):
