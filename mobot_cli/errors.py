@@ -6,7 +6,6 @@ Only ``mobot_cli.cli`` turns these into printed text and exit codes.
 
 from __future__ import annotations
 
-import difflib
 import errno
 from dataclasses import dataclass
 from enum import IntEnum
@@ -166,6 +165,8 @@ def shown(value: object, limit: int = 60) -> str:
 
 def did_you_mean(word: str, choices: Iterable[str]) -> str:
     """Return ' Did you mean 'x'?' for the closest choice, or a list of valid ones."""
+    import difflib  # only when a name is misspelt
+
     choices = sorted(set(choices))
     close = difflib.get_close_matches(word, choices, n=1, cutoff=0.6)
     if close:

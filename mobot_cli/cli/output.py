@@ -5,7 +5,6 @@ Every function writes to the streams of the Environment it is given, never to sy
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any, Iterable
 
@@ -28,6 +27,8 @@ def notices(env: Environment, lines: Iterable[str], quiet: bool = False) -> None
 
 def emit_json(env: Environment, data: Any) -> None:
     """Print a JSON document on stdout, for scripts."""
+    import json  # --json only
+
     env.stdout.write(json.dumps(data, indent=2) + "\n")
 
 

@@ -10,7 +10,6 @@ when a process is killed, and each fsync cost a run 1-5 ms.
 from __future__ import annotations
 
 import errno
-import json
 import math
 import os
 from pathlib import Path
@@ -68,6 +67,8 @@ def write_text_atomic(path: Path, text: str, durable: bool = True) -> None:
 
 def write_json_atomic(path: Path, data: Any) -> None:
     """Write JSON atomically: indented by 2, a trailing newline, NaN and infinity refused."""
+    import json  # not before a run's loop, which writes none
+
     write_text_atomic(path, json.dumps(data, indent=2, allow_nan=False, default=json_default) + "\n")
 
 

@@ -163,6 +163,11 @@ def test_each_side_of_a_run_imports_only_its_own_share():
         return eval(done.stdout)  # noqa: S307 - a list of module names printed above
     run_side = "cli.runner, mobot_cli.run.execute, mobot_cli.scenario.overrides, mobot_cli.scenario.yamlsource"
     assert imported(run_side) == ["pybullet", "yaml"]
+    before_loop = ("import sys; import mobot_cli.{}; print(sorted(m for m in ('json', 'difflib', 'hashlib', "
+                   "'xml.etree.ElementTree') if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", before_loop.format(run_side)], capture_output=True, text=True,
+                          check=True, cwd=REPO)
+    assert done.stdout.split() == ["[]"]  # the summary's JSON, a misspelt name's suggestions, the URDF's file
     assert imported("run.prepare") == ["pydantic"]
     drawing = ("import sys; import mobot_cli.run.prepare; from mobot_cli.run.picture import draw, preload; preload(); "
                "print(sorted(m for m in ('PIL', 'pybullet', 'yaml') if m in sys.modules))")
