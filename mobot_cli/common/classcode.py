@@ -34,7 +34,7 @@ import sys
 import typing
 
 KIND = "classcode"
-MAX_ENTRIES = 4096  # above this, a save keeps only the texts its own process used
+MAX_ENTRIES = 2048  # ~twice what all commands together make; above it a save keeps the texts its process used
 _TAG = f"{sys.implementation.cache_tag}-{sys.hexversion:x}"  # a code object is one Python's
 _codes: dict = {}  # "exec\n" or "eval\n", then the text -> its code
 _used: set = set()  # texts this process ran

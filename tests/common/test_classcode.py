@@ -154,7 +154,7 @@ def test_a_full_cache_keeps_what_its_last_process_used(tmp_path, monkeypatch):
     kept.chmod(0o644)
     made = _probe(tmp_path, installed=True)
     codes = marshal.loads(kept.read_bytes())
-    assert made["fresh"] is True and 0 < len(codes) < 100  # the probe's methods, not the 4,096 others
+    assert made["fresh"] is True and 0 < len(codes) < 100  # the probe's methods, not the 2,048 others
     assert not any(text.startswith("x = ") for text in codes)
     assert _probe(tmp_path, installed=True)["fresh"] is False
 
