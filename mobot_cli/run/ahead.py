@@ -6,9 +6,9 @@ timeline and its sinks), the helper imports what validates a scenario (pydantic,
 models); given the document read, it validates and resolves it and sends the plan and the
 resolved document back (this process writes it as YAML), with the file PyBullet loads each URDF
 from and the links whose friction it sets (sim/urdf_file.py), which this process then need not
-work out. It then loads the drawing code
-(Pillow, fonts), makes ready the memory a picture takes (common/heap.py) and waits: at the
-run's end it draws trajectory.png from the tracks this process sends it.
+work out. It then loads the drawing code (run/picture.py: Pillow and fonts, not the engine),
+makes ready the memory a picture takes (common/heap.py) and waits: at the run's end it draws
+trajectory.png from the tracks this process sends it.
 
 The helper only saves time. Whenever it cannot help (no second core, no fork, a scenario it
 could not prepare, a picture it could not write, a helper that died), this process does the

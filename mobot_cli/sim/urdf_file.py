@@ -17,14 +17,13 @@ _known: dict[str, tuple[Path, frozenset[str]]] = {}  # URDF text -> its file and
 
 def facts(texts) -> dict[str, tuple[Path, frozenset[str]]]:
     """``urdf_path`` and ``links_with_friction`` of each text (its file written now), for another
-    process to take with ``known``; a text that does not parse is left to that process."""
-    import xml.etree.ElementTree as ET
-
+    process to take with ``known``; a text that does not parse, or whose file cannot be written,
+    is left to that process, which reports it where the robot is spawned, as without a helper."""
     found = {}
     for text in texts:
         try:
             found[text] = (urdf_path(text), links_with_friction(text))
-        except (ET.ParseError, OSError):  # reported where the robot is spawned, as without a helper
+        except Exception:  # noqa: BLE001 - whatever it is, the run meets it again and says so
             pass
     return found
 
