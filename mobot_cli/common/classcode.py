@@ -28,8 +28,6 @@ replaced). Anything that goes wrong here costs the time it was to save, never a 
 import builtins
 import dataclasses
 import marshal
-import os
-import stat
 import sys
 import typing
 
@@ -109,19 +107,16 @@ def _path():
 
 def _load() -> dict:
     """The kept texts and their code; empty when there is no file or it is not to be trusted."""
+    from mobot_cli.common.cachedir import read_own
+
     try:
-        fd = os.open(_path(), os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
-    except (OSError, RuntimeError):  # none yet, a link, no home folder
+        data = read_own(_path())
+    except (OSError, RuntimeError):  # unreadable, no home folder
         return {}
-    with os.fdopen(fd, "rb") as handle:
-        info = os.fstat(handle.fileno())
-        if (not stat.S_ISREG(info.st_mode) or info.st_mode & (stat.S_IWGRP | stat.S_IWOTH)
-                or (hasattr(os, "getuid") and info.st_uid != os.getuid())):
-            return {}
-        try:
-            codes = marshal.loads(handle.read())
-        except Exception:  # damaged: compiled again, and the file replaced
-            return {}
+    try:
+        codes = marshal.loads(data) if data is not None else {}
+    except Exception:  # damaged: compiled again, and the file replaced
+        return {}
     code_type = type(_load.__code__)
     if type(codes) is not dict or not all(type(t) is str and type(c) is code_type for t, c in codes.items()):
         return {}

@@ -23,7 +23,6 @@ import hashlib
 import io
 import os
 import pickle
-import stat
 import sys
 from pathlib import Path
 
@@ -84,19 +83,15 @@ def _key() -> str:
 
 
 def _load(path: Path):
+    from mobot_cli.common.cachedir import read_own
+
     try:
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
-    except OSError:
+        data = read_own(path)
+        if data is None:
+            return None
+        validator = _Unpickler(io.BytesIO(data)).load()
+    except Exception:  # unreadable, damaged, refused or made by other code: build it instead
         return None
-    with os.fdopen(fd, "rb") as handle:
-        info = os.fstat(handle.fileno())
-        if (not stat.S_ISREG(info.st_mode) or info.st_mode & (stat.S_IWGRP | stat.S_IWOTH)
-                or (hasattr(os, "getuid") and info.st_uid != os.getuid())):
-            return None
-        try:
-            validator = _Unpickler(io.BytesIO(handle.read())).load()
-        except Exception:  # damaged, refused or made by other code: build it instead
-            return None
     from pydantic_core import SchemaValidator
 
     return validator if isinstance(validator, SchemaValidator) else None
