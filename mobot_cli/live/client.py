@@ -25,7 +25,7 @@ from mobot_cli.errors import LiveWorldError, RequestRefused
 from mobot_cli.live import endpoint as endpoints
 from mobot_cli.live import keys
 from mobot_cli.live import protocol
-from mobot_cli.live.protocol import HARD_LIMIT_BYTES, Refusal, check_size, decode_reply, encode
+from mobot_cli.live.protocol import HARD_LIMIT_BYTES, Refusal, decode_reply, encode_request
 
 START_HINT = "Start one with `mobot serve` (in another terminal), or point --endpoint / MOBOT_ENDPOINT at it."
 TCP_HINT = ("A tcp:// live world answers only clients it has authorised, and the client must hold the "
@@ -74,9 +74,8 @@ class Client:
         """Send one request and return its reply, refused or not; LiveWorldError on silence."""
         socket = self._connect()
         request_id = next(self._ids)
-        frame = encode({"op": op, "id": request_id, **fields})
-        try:
-            check_size(frame)  # the world would refuse it without its id: this reply would never come
+        try:  # the world would refuse it without its id (or never get it): no reply would come
+            frame = encode_request({"op": op, "id": request_id, **fields})
         except Refusal as exc:
             return protocol.reply(request_id, exc.result, exc.message)
         socket.send_multipart([b"", frame])

@@ -101,6 +101,20 @@ def encode_reply(answer: dict[str, Any]) -> bytes:
     return encode(reply(None, Result.OPERATION_FAILED, "the reply could not be encoded as JSON"))
 
 
+def encode_request(document: dict[str, Any]) -> bytes:
+    """A request's bytes; Refusal(INVALID_REQUEST), as the server would refuse it, for a number that
+    is not finite (JSON has none: it could not be sent) or a request over MAX_REQUEST_BYTES."""
+    try:
+        frame = encode(document)
+    except ValueError:
+        bad = _non_finite(document)
+        if bad is None:
+            raise
+        raise Refusal(Result.INVALID_REQUEST, _not_finite(repr(bad))) from None
+    check_size(frame)
+    return frame
+
+
 def check_size(frame: bytes) -> None:
     """Refusal(INVALID_REQUEST) for a request larger than MAX_REQUEST_BYTES (the server's check,
     which a client makes too: the server cannot read the id of a request it will not parse)."""
@@ -157,10 +171,27 @@ def _finite(text: str) -> float:
     """json's float parsing, refusing what overflows to infinity (1e999)."""
     value = float(text)
     if not math.isfinite(value):
-        shown = text if len(text) <= 40 else text[:37] + "..."
-        raise _NotFinite(f"request has the number {shown}, which is not finite as a float: "
-                         "numbers must be finite")
+        raise _NotFinite(_not_finite(text))
     return value
+
+
+def _not_finite(text: str) -> str:
+    shown = text if len(text) <= 40 else text[:37] + "..."
+    return f"request has the number {shown}, which is not finite as a float: numbers must be finite"
+
+
+def _non_finite(document: Any) -> float | None:
+    """The first number in ``document`` that is not finite, if any."""
+    stack = [document]
+    while stack:
+        value = stack.pop()
+        if isinstance(value, float) and not math.isfinite(value):
+            return value
+        if isinstance(value, dict):
+            stack.extend(value.values())
+        elif isinstance(value, (list, tuple)):
+            stack.extend(value)
+    return None
 
 
 def _shallow(document: Any) -> bool:

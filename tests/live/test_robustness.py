@@ -11,6 +11,7 @@ import pytest
 import zmq
 
 from tests.live.live_server import LiveProcess, wait_for_step
+from mobot_cli.cli import invoke
 from mobot_cli.live.client import Client
 from mobot_cli.live.protocol import HARD_LIMIT_BYTES, MAX_REQUEST_BYTES
 
@@ -104,6 +105,22 @@ def test_the_client_refuses_an_oversized_request_as_the_world_would(live):
         assert (reply["ok"], reply["result"], reply["code"]) == (False, "INVALID_REQUEST", 900)
         assert f"larger than the limit of {MAX_REQUEST_BYTES} bytes" in reply["message"]
     still_serving(live)
+
+
+@pytest.mark.parametrize("value", [float("nan"), float("inf"), -float("inf")])
+def test_the_client_refuses_a_number_json_has_not_as_the_world_would(live, value):
+    """NaN and infinity cannot be sent as JSON: the client answers with the world's own refusal of
+    one (what a raw peer gets for 1e999) instead of failing with a traceback."""
+    with live.client(timeout=5) as client:
+        reply = client.call("cmd", name="nobody", linear=0.1, pose={"xyz": [0.0, value, 0.0]})
+        assert (reply["ok"], reply["result"], reply["code"]) == (False, "INVALID_REQUEST", 900)
+        assert reply["message"] == (f"request has the number {value!r}, which is not finite as a float: "
+                                    "numbers must be finite")
+    still_serving(live)
+    done = invoke(["cmd", "nobody", "--linear", "nan", "--endpoint", live.endpoint])
+    assert (done.exit_code, done.stdout) == (2, "")
+    assert done.stderr == ("mobot: error: INVALID_REQUEST: request has the number nan, which is not finite as a "
+                           "float: numbers must be finite\n")
 
 
 def test_clients_that_vanish_mid_request(live):
