@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+from typing import Callable
+
 from mobot_cli.errors import SpawnError
 from mobot_cli.sim.bullet import p
+from mobot_cli.sim.plan import StaticBody, StaticShape
+from mobot_cli.sim.static_shapes import shape_args
 
 # How far below the floor (or into another body) a spawned robot may reach. Gazebo users
 # spawn at z = 0 with wheels whose meshes dip a few millimetres into the floor; more than
@@ -41,6 +45,16 @@ class Probes:
     def __init__(self, cid: int):
         self.cid = cid
         self._shapes: dict[tuple[float, float, float], int] = {}
+        self._parts: dict[StaticShape, int] = {}  # kept: removing a shape makes PyBullet print
+
+    def shape(self, shape: StaticShape) -> int:
+        """A collision shape, without a body, of one static shape; -1 when PyBullet refuses it."""
+        if shape not in self._parts:
+            try:
+                self._parts[shape] = p.createCollisionShape(physicsClientId=self.cid, **shape_args(shape))
+            except p.error:
+                self._parts[shape] = -1
+        return self._parts[shape]
 
     def closest(self, body: int, normal: tuple[float, float, float], at, distance: float) -> list:
         """getClosestPoints between ``body`` and a plane through ``at`` facing ``normal``."""
@@ -150,12 +164,45 @@ def _place(cid: int, body: int, link_xyz, quat) -> None:
     p.resetBasePositionAndOrientation(body, pos, orn, physicsClientId=cid)
 
 
+def _part_text(text: str) -> str:
+    return f", {text}" if text else ""
+
+
 def _at(xyz) -> str:
     return f"x={xyz[0]:.3f}, y={xyz[1]:.3f}, z={xyz[2]:.3f}"
 
 
-def check_clear(cid: int, body: int, others: dict[int, str], name: str, xyz, z_auto: bool = False) -> None:
-    """Refuse a robot that reaches into the floor or another body by more than a centimetre."""
+# How refusals say which part of a body the robot met (body id -> text, "" for none).
+Part = Callable[[int], str]
+
+
+def no_part(other: int) -> str:
+    return ""
+
+
+def nearest_part(probes: Probes, robot: int, body: StaticBody, reach: float) -> StaticShape | None:
+    """The shape of ``body`` deepest into (or else nearest to, within ``reach``) the robot.
+
+    PyBullet reports contacts with a compound body without saying which of its shapes: each is
+    tried alone here, on the error path only.
+    """
+    best, nearest = None, float("inf")
+    for shape in body.shapes:
+        probe = probes.shape(shape)
+        if probe < 0:
+            continue
+        points = p.getClosestPoints(robot, -1, reach, collisionShapeB=probe, collisionShapePositionB=body.xyz,
+                                    collisionShapeOrientationB=body.quat, physicsClientId=probes.cid)
+        distance = min((pt[8] for pt in points), default=float("inf"))
+        if distance < nearest:
+            best, nearest = shape, distance
+    return best
+
+
+def check_clear(cid: int, body: int, others: dict[int, str], name: str, xyz, z_auto: bool = False,
+                part: Part = no_part) -> None:
+    """Refuse a robot that reaches into the floor or another body by more than a centimetre;
+    ``part`` says which part of the other body."""
     hint = ("Move the robot clear of it: z: auto already rested it on the surface below."
             if z_auto else "Raise z, move the robot, or use z: auto to rest it on the floor.")
     for other, label in others.items():
@@ -163,8 +210,8 @@ def check_clear(cid: int, body: int, others: dict[int, str], name: str, xyz, z_a
         depth = -min((pt[8] for pt in points), default=0.0)
         if depth > MAX_SPAWN_PENETRATION:
             raise SpawnError(
-                f"robot '{name}' spawned at {_at(xyz)} reaches {depth * 100:.1f} cm into {label}",
-                hint=hint)
+                f"robot '{name}' spawned at {_at(xyz)} reaches {depth * 100:.1f} cm into {label}"
+                + _part_text(part(other)), hint=hint)
 
 
 

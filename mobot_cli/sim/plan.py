@@ -178,6 +178,7 @@ class StaticShape:
     mesh: str = ""  # absolute path of an OBJ or STL file; it collides as a concave triangle mesh
     xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
     quat: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
+    name: str = ""  # as in the world file, scoped in its model: "link::collision" (refusals name it)
 
 
 @dataclass(frozen=True)

@@ -30,7 +30,7 @@ def create(cid: int, body: StaticBody) -> list[int]:
 def _create(cid: int, body: StaticBody, shapes: tuple[StaticShape, ...]) -> int:
     try:
         if len(shapes) == 1:
-            shape = p.createCollisionShape(physicsClientId=cid, **_single(shapes[0]))
+            shape = p.createCollisionShape(physicsClientId=cid, **shape_args(shapes[0]))
         else:
             shape = p.createCollisionShapeArray(physicsClientId=cid, **_array(shapes))
     except p.error:
@@ -45,7 +45,8 @@ def _create(cid: int, body: StaticBody, shapes: tuple[StaticShape, ...]) -> int:
                              useMaximalCoordinates=True, physicsClientId=cid)
 
 
-def _single(shape: StaticShape) -> dict:
+def shape_args(shape: StaticShape) -> dict:
+    """createCollisionShape's arguments for one shape, posed in its body's frame."""
     args = {"shapeType": _TYPES[shape.kind], "collisionFramePosition": shape.xyz,
             "collisionFrameOrientation": shape.quat}
     kind, size = shape.kind, shape.size
@@ -68,7 +69,7 @@ def _array(shapes: tuple[StaticShape, ...]) -> dict:
         "shapeTypes", "radii", "halfExtents", "lengths", "fileNames", "meshScales", "planeNormals",
         "flags", "collisionFramePositions", "collisionFrameOrientations")}
     for shape in shapes:
-        single = _single(shape)
+        single = shape_args(shape)
         out["shapeTypes"].append(single["shapeType"])
         out["radii"].append(single.get("radius", 0.0))
         out["halfExtents"].append(single.get("halfExtents", [0.0, 0.0, 0.0]))

@@ -11,7 +11,7 @@ from __future__ import annotations
 from mobot_cli.errors import SpawnError
 from mobot_cli.sim.bullet import p
 from mobot_cli.sim.placement import MAX_CROSSINGS, MAX_SPAWN_PENETRATION, RAY_REACH, RAY_STEP, \
-    Bounds, _at
+    Bounds, Part, _at, _part_text, no_part
 
 # Up and the four horizontal directions; down is left out: below a robot is its floor, and a
 # ground plane (a half space) is "crossed" once by any ray going down.
@@ -50,8 +50,10 @@ def _centre(box: Bounds) -> tuple[float, float, float]:
     return ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2)
 
 
-def check_not_inside(cid: int, solids: dict[int, str], name: str, xyz, box: Bounds) -> None:
-    """Refuse a robot (bounds ``box``) whose centre lies inside a static body's closed surface."""
+def check_not_inside(cid: int, solids: dict[int, str], name: str, xyz, box: Bounds,
+                     part: Part = no_part) -> None:
+    """Refuse a robot (bounds ``box``) whose centre lies inside a static body's closed surface;
+    ``part`` says which part of it."""
     if not solids:
         return
     centre = _centre(box)
@@ -61,12 +63,18 @@ def check_not_inside(cid: int, solids: dict[int, str], name: str, xyz, box: Boun
         return
     rays = surfaces_along(cid, [centre] * len(DIRECTIONS), DIRECTIONS)
     if all(sum(1 for b, _ in ray if b == first) % 2 == 1 for ray in rays):
-        raise SpawnError(f"robot '{name}' spawned at {_at(xyz)} is inside {solids[first]}",
-                         hint="Move the robot clear of it.")
+        raise SpawnError(f"robot '{name}' spawned at {_at(xyz)} is inside {solids[first]}"
+                         + _part_text(part(first)), hint="Move the robot clear of it.")
 
 
-def check_above_floor(cid: int, floors: dict[int, str], name: str, xyz, box: Bounds) -> None:
-    """Refuse a robot (bounds ``box``) with no floor below it but a floor above its lowest point."""
+def _aside(text: str) -> str:
+    return f" ({text})" if text else ""
+
+
+def check_above_floor(cid: int, floors: dict[int, str], name: str, xyz, box: Bounds,
+                      part: Part = no_part) -> None:
+    """Refuse a robot (bounds ``box``) with no floor below it but a floor above its lowest point;
+    ``part`` says which part of that floor."""
     if not floors:
         return
     lo = box[0]
@@ -78,6 +86,6 @@ def check_above_floor(cid: int, floors: dict[int, str], name: str, xyz, box: Bou
     above = next(((b, d) for b, d in up if b in floors), None)
     if above is not None:
         raise SpawnError(
-            f"robot '{name}' spawned at {_at(xyz)} is below the floor: {floors[above[0]]} "
-            f"is above its lowest point and nothing is below it",
+            f"robot '{name}' spawned at {_at(xyz)} is below the floor: {floors[above[0]]}"
+            f"{_aside(part(above[0]))} is above its lowest point and nothing is below it",
             hint="Raise z, or use z: auto to rest it on the floor.")

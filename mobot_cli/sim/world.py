@@ -6,12 +6,13 @@ Worlds can live in one process (tests, sweeps in threads).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from mobot_cli.errors import SimulationFault, SpawnError, WorldError, did_you_mean
-from mobot_cli.sim import clearance, entity, friction, placement, static_shapes, surroundings
+from mobot_cli.sim import clearance, entity, friction, parts, placement, static_shapes, surroundings
 from mobot_cli.sim.clients import Stage, connect, release
 from mobot_cli.sim.bullet import p
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, ContactCounter
@@ -39,6 +40,9 @@ HEALTH_RATE_HZ = 10
 # welds casters into the chassis, and linorobot2 2wd then rested on its two casters with its
 # wheels unloaded (it could not move); it also loses per-link <contact> friction.
 URDF_FLAGS = p.URDF_USE_INERTIA_FROM_FILE | p.URDF_USE_IMPLICIT_CYLINDER
+# A refusal names the part of a world model nearest the robot within this reach (a robot
+# inside a closed mesh touches none of it).
+PART_REACH = 10.0  # m
 
 
 class World:
@@ -216,11 +220,19 @@ class World:
         xyz = placement.link_frame_xyz(cid, uid)
         others = dict(self._statics)
         others.update({r.body: f"robot '{n}'" for n, r in self._robots.items() if r.body != uid})
-        placement.check_clear(cid, uid, others, name, xyz, z_auto=z_auto)
+        part = functools.partial(self._part, uid)
+        placement.check_clear(cid, uid, others, name, xyz, z_auto=z_auto, part=part)
         box = placement.body_bounds(self._probes, uid)
-        surroundings.check_not_inside(cid, {b: self._statics[b] for b in self._solids}, name, xyz, box)
+        surroundings.check_not_inside(cid, {b: self._statics[b] for b in self._solids}, name, xyz, box, part)
         if not z_auto:
-            surroundings.check_above_floor(cid, self._statics, name, xyz, box)
+            surroundings.check_above_floor(cid, self._statics, name, xyz, box, part)
+
+    def _part(self, robot: int, other: int) -> str:
+        """Which part of static body ``other`` a refused robot met (error path only)."""
+        label = self._statics.get(other)
+        body = next((b for b in self.plan.bodies if (b.label or f"static body '{b.name}'") == label), None)
+        shape = placement.nearest_part(self._probes, robot, body, PART_REACH) if body is not None else None
+        return parts.describe(body, shape) if shape is not None else ""
 
     def _rest(self, uid: int, pose: SpawnPose, name: str) -> None:
         """Rest a body at (x, y) on the floor below (z: auto), as a spawn does."""

@@ -37,7 +37,8 @@ def test_goto_drives_through_the_doorway_and_waits_for_the_goal(house):
     code, out, err = mobot(house, "goto", "r", "0", "0")  # the coffee table
     assert (code, out) == (2, "")
     assert err == ("mobot: error: INVALID_REQUEST: goto request: goto (0, 0) is inside world model "
-                   "'coffee_table' at (0.00, 0.00, 0.00)\n")
+                   "'coffee_table' at (0.00, 0.00, 0.00), its collision 'coffee_table::mobot_coffee_table::link::"
+                   "body', a 1.00 x 0.60 x 0.40 m box centred at (0.00, 0.00, 0.20)\n")
 
 
 def test_a_goal_into_a_wall_ends_blocked_and_exits_1(house):

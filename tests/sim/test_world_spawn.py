@@ -201,3 +201,37 @@ def test_a_finite_plane_blocks_only_where_it_is(tmp_path, mobot_desc, y, blocked
         end = world.read("mobot")
     assert (end.true_x < 2.0) is blocked
     assert not blocked or end.true_x > 1.6  # it drove up to the poster
+
+
+def test_spawn_into_a_wall_names_the_wall_and_where_it_stands(mobot_desc):
+    """Issue 33: the house's walls are one model of twelve boxes; the refusal says which."""
+    with World(Physics(), load_world("house").plan) as world:
+        with pytest.raises(SpawnError) as info:
+            world.spawn(robot(mobot_desc, xyz=(5.0, 1.0, 0.0)))
+        assert world.names() == []
+        world.spawn(robot(mobot_desc, xyz=(5.0, 2.0, 0.0)))  # a metre north is the kitchen
+    assert ("reaches 15.0 cm into world model 'house_walls' at (0.00, 0.00, 0.00), its collision "
+            "'house_walls::walls::wall_mid_y_east_1', a 2.00 x 0.15 x 2.50 m box centred at (5.00, 1.00, 1.25)"
+            in info.value.message)
+
+
+def test_spawn_into_a_corpus_multi_link_model_names_its_link(corpus, mobot_desc):
+    """turtlebot3_house is one static model of 34 links in seven PyBullet bodies (16 shapes each)."""
+    plan = load_world(str(corpus / "turtlebot3_simulations/turtlebot3_gazebo/worlds/turtlebot3_house.world"),
+                      skip_missing=True).plan
+    with World(Physics(), plan) as world:
+        with pytest.raises(SpawnError) as info:
+            world.spawn(robot(mobot_desc, xyz=(-5.15, -1.5, 0.0)))
+    assert ("into world model 'turtlebot3_house' at (0.00, 0.00, 0.00), its collision "
+            "'turtlebot3_house::turtlebot3_house::Wall_88::Wall_88_Collision', a 5.00 x 0.15 x 2.50 m box "
+            "centred at (-5.15, -1.50, 1.25)" in info.value.message)
+
+
+def test_goal_in_a_wall_names_the_wall(tmp_path):
+    path = _scenario(tmp_path, "world: house\nduration: 3\nrobots:\n  - name: mobot\n    pose: {x: -3, y: -2.5}\n"
+                               "    commands:\n      - {at: 1.0, goto: {x: 5.0, y: 1.0}}\n")
+    with pytest.raises(ScenarioError) as info:
+        prepare(path)
+    assert ("goto (5, 1) is inside world model 'house_walls' at (0.00, 0.00, 0.00), its collision "
+            "'house_walls::walls::wall_mid_y_east_1', a 2.00 x 0.15 x 2.50 m box centred at (5.00, 1.00, 1.25)"
+            in info.value.message)

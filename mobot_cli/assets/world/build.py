@@ -93,7 +93,8 @@ class _Builder:
                     self.extend(model.pose @ local, _corners(shape_kind, size))
                 s_xyz, s_quat = xyz_quat(local)
                 shapes.append(StaticShape(kind=shape_kind, size=tuple(float(v) for v in size),
-                                          mesh=path, xyz=s_xyz, quat=s_quat))
+                                          mesh=path, xyz=s_xyz, quat=s_quat,
+                                          name=f"{link.name}::{shape.name}"))
         if shapes:
             self.bodies.append(StaticBody(name=model.name, xyz=xyz, quat=quat, shapes=tuple(shapes),
                                           friction=min(frictions) if frictions else None,

@@ -31,7 +31,7 @@ def floor_plan(world: WorldPlan, starts: list[tuple[float, float, float]] = ()) 
     root link x, y, z where it started; the band is measured from z = 0 without them)."""
     from mobot_cli.assets.world.floorlevel import floor_level
 
-    floor = floor_level(world, list(starts), _shapes) if starts else 0.0
+    floor = floor_level(world, list(starts), body_shapes) if starts else 0.0
     band = (floor + BAND[0], floor + BAND[1])
     return [polygon for _, polygons in body_shadows(world, band) for polygon in polygons]
 
@@ -44,7 +44,7 @@ def body_shadows(world: WorldPlan, band: tuple[float, float] = BAND) -> tuple[tu
     out = []
     for body in world.bodies:
         polygons: list[Polygon] = []
-        for shape in _shapes(body):
+        for shape in body_shapes(body):
             xyz, quat = compose_poses((body.xyz, body.quat), (shape.xyz, shape.quat))
             polygons.extend(shape_shadow(shape, xyz, quat, band))
         if polygons:
@@ -52,7 +52,8 @@ def body_shadows(world: WorldPlan, band: tuple[float, float] = BAND) -> tuple[tu
     return tuple(out)
 
 
-def _shapes(body) -> list[StaticShape]:
+def body_shapes(body) -> list[StaticShape]:
+    """A static body's collision shapes: its own, or read from its URDF text."""
     return list(body.shapes) or _urdf_shapes(body.urdf)
 
 
@@ -129,8 +130,10 @@ def _urdf_shapes(urdf: str) -> list[StaticShape]:
             shape = _urdf_geometry(collision.find("geometry"))
             if shape is not None:
                 kind, size, mesh = shape
+                part = collision.get("name")
                 shapes.append(StaticShape(kind=kind, size=size, mesh=mesh, xyz=frame.pos,
-                                          quat=quat_from_matrix(frame.rot)))
+                                          quat=quat_from_matrix(frame.rot),
+                                          name=f"{name}::{part}" if part else name))
     return shapes
 
 

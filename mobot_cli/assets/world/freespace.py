@@ -9,19 +9,39 @@ from __future__ import annotations
 
 import numpy as np
 
-from mobot_cli.assets.world.floorplan import body_shadows
+from mobot_cli.assets.world.floorplan import BAND, body_shadows, body_shapes, shape_shadow
 from mobot_cli.common.polygon import contains
 from mobot_cli.common.raster import Grid, fill_shape
+from mobot_cli.common.transforms import compose_poses
+from mobot_cli.sim.parts import describe
 from mobot_cli.sim.plan import WorldPlan
 
 
 def obstacle_at(world: WorldPlan, x: float, y: float) -> str | None:
-    """How messages name the static body whose shadow holds (x, y), or None in free space."""
+    """How messages name the static body whose shadow holds (x, y), and which of its collisions
+    (see sim/parts.py), or None in free space."""
     for label, polygons in body_shadows(world):
-        for polygon in polygons:
-            if len(polygon) >= 3 and _near_box(polygon, x, y) and contains(polygon, x, y):
-                return label
+        if any(_holds(polygon, x, y) for polygon in polygons):
+            return label + _part(world, label, x, y)
     return None
+
+
+def _part(world: WorldPlan, label: str, x: float, y: float) -> str:
+    """", its collision 'model::link::collision', a ... box centred at (...)", or "": found again
+    shape by shape, for the message only."""
+    for body in world.bodies:
+        if (body.label or f"static body '{body.name}'") != label:
+            continue
+        for shape in body_shapes(body):
+            xyz, quat = compose_poses((body.xyz, body.quat), (shape.xyz, shape.quat))
+            if any(_holds(polygon, x, y) for polygon in shape_shadow(shape, xyz, quat, BAND)):
+                text = describe(body, shape)
+                return f", {text}" if text else ""
+    return ""
+
+
+def _holds(polygon, x: float, y: float) -> bool:
+    return len(polygon) >= 3 and _near_box(polygon, x, y) and contains(polygon, x, y)
 
 
 def obstacle_mask(world: WorldPlan, grid: Grid) -> np.ndarray:
