@@ -18,6 +18,7 @@ from mobot_cli.assets.world.loaded import LoadedWorld, WorldRobot
 from mobot_cli.common.transforms import quat_from_rpy
 from mobot_cli.errors import Location, MobotError, ScenarioError
 from mobot_cli.scenario.model import RobotSpec
+from mobot_cli.scenario.sensor_switches import arg_text
 from mobot_cli.scenario.sensors import resolve_sensors
 from mobot_cli.scenario.units import spawn_pose, steps
 from mobot_cli.scenario.source import Source
@@ -233,10 +234,3 @@ def unlisted_robots(world: LoadedWorld, robots) -> list[str]:
 def _source(detected: DriveSpec, fields: dict[str, Any]) -> str:
     layout = {"left_joints", "right_joints", "wheel_radius", "wheel_separation"}
     return "scenario" if layout <= fields.keys() else detected.source
-
-
-def arg_text(value: Any) -> str:
-    """A xacro argument value as the text xacro sees ('true', not 'True')."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    return str(value)

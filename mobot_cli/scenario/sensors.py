@@ -31,6 +31,8 @@ class Context(Protocol):
 
     def locate_key(self, path: tuple) -> Location | None: ...
 
+    def describe(self, spec: RobotSpec, path: tuple) -> RobotDescription: ...
+
 # A check about a pair of values names the larger; the scenario may have set the smaller.
 PARTNER = {"max_angle": "min_angle", "vertical_max_angle": "vertical_min_angle",
            "range_max": "range_min", "samples": "vertical_samples"}
@@ -67,14 +69,17 @@ def resolve_sensors(spec: RobotSpec, desc: RobotDescription, path: tuple,
                                 hint="Give each sensor one entry.")
         if entry.enabled is False:
             if not found:
+                added, _, _ = _switch(key, spec, desc, path, ctx) or ("", "", "")
                 raise ScenarioError(f"'{key}' turns off a sensor that '{desc.name}' does "
-                                    "not have", location=ctx.locate_key(where),
-                                    hint=_choices(key, desc, adding=False))
+                                    f"not have{added}", location=ctx.locate_key(where),
+                                    hint="Without that argument it is off already: remove the entry."
+                                    if added else _choices(key, desc, adding=False))
             del sensors[found[0].name]
             touched[found[0].name] = key
             continue
-        sensor = _changed(found[0], entry, where, ctx) if found else _added(key, entry, where,
-                                                                            desc, ctx)
+        if not found and (entry.type is None or entry.link is None):
+            raise _missing(key, entry, spec, desc, path, ctx)
+        sensor = _changed(found[0], entry, where, ctx) if found else _added(key, entry, where, ctx)
         sensors[sensor.name] = _check(sensor, entry, where, desc, ctx)
         touched[sensor.name] = key
     out = tuple(_spec(s, touched.get(s.name), spec, desc, path, ctx) for s in sensors.values())
@@ -95,13 +100,33 @@ def _changed(sensor: DescribedSensor, entry: SensorOverride, where: tuple,
     return replace(sensor, **changes)
 
 
-def _added(key: str, entry: SensorOverride, where: tuple, desc: RobotDescription,
-           ctx: Context) -> DescribedSensor:
+def _missing(key: str, entry: SensorOverride, spec: RobotSpec, desc: RobotDescription, path: tuple,
+             ctx: Context) -> ScenarioError:
+    """The error for a key that names no sensor and cannot add one: it says which xacro argument
+    would give the description that sensor, when one would."""
     missing = [k for k in ("type", "link") if getattr(entry, k) is None]
-    if missing:
-        raise ScenarioError(f"'{desc.name}' has no sensor named '{key}' (by name or topic), and "
-                            f"adding one needs {' and '.join(repr(m) for m in missing)}",
-                            location=ctx.locate_key(where), hint=_choices(key, desc, adding=True))
+    added, args, others = _switch(key, spec, desc, path, ctx) or ("", "", "")
+    if added:
+        return ScenarioError(f"'{desc.name}' has no sensor named '{key}'{added}",
+                             location=ctx.locate_key(path + ("sensors", key)),
+                             hint=f"Give robot '{spec.name}' args: {args}.")
+    hint = _choices(key, desc, adding=True) + (f" {others}" if others else "")
+    return ScenarioError(f"'{desc.name}' has no sensor named '{key}' (by name or topic), and "
+                         f"adding one needs {' and '.join(repr(m) for m in missing)}",
+                         location=ctx.locate_key(path + ("sensors", key)), hint=hint)
+
+
+def _switch(key: str, spec: RobotSpec, desc: RobotDescription, path: tuple,
+            ctx: Context) -> tuple[str, str, str] | None:
+    """What sensor_switches.switch_text says of ``key`` (error path only: it expands again)."""
+    from mobot_cli.scenario.sensor_switches import arg_text, switch_text
+
+    args = {k: arg_text(v) for k, v in spec.args.items()}
+    return switch_text(desc, args, lambda sensors: bool(find_sensors(key, sensors)),
+                       lambda other: ctx.describe(spec.model_copy(update={"args": other}), path))
+
+
+def _added(key: str, entry: SensorOverride, where: tuple, ctx: Context) -> DescribedSensor:
     _fields_fit(KINDS[entry.type], entry, where, ctx)  # type: ignore[index]
     added = replace(DescribedSensor(name=key.replace("/", "_"), type=entry.type,  # type: ignore[arg-type]
                                     link=entry.link), **entry.changes())  # type: ignore[arg-type]
