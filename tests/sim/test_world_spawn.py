@@ -7,6 +7,7 @@ import csv
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 import trimesh
 
@@ -235,3 +236,22 @@ def test_goal_in_a_wall_names_the_wall(tmp_path):
     assert ("goto (5, 1) is inside world model 'house_walls' at (0.00, 0.00, 0.00), its collision "
             "'house_walls::walls::wall_mid_y_east_1', a 2.00 x 0.15 x 2.50 m box centred at (5.00, 1.00, 1.25)"
             in info.value.message)
+
+
+def test_house_patrol_scenario_completes_its_patrol_and_scans_the_rooms(tmp_path):
+    """scenarios/house_patrol.yaml: the lidar switched on, a patrol that completes, CSV and MCAP."""
+    out = tmp_path / "house_patrol"
+    assert invoke(["run", str(REPO / "scenarios" / "house_patrol.yaml"), "--out", str(out), "--quiet"]) \
+        == Outcome(0, "", "")
+    summary = json.loads((out / "summary.json").read_text())
+    mobot = summary["robots"]["mobot"]
+    [goal] = mobot["goals"]
+    assert (goal["status"], goal["laps"]) == ("reached", 1) and goal["ended_at"] < summary["sim_time"]
+    assert goal["path_length"] > 8.0  # living room -> bedroom -> living room, ~9 m
+    assert mobot["collisions"] == 0 and summary["expectations"]["failed"] == 0
+    [scan] = mobot["sensors"]
+    assert (scan["topic"], scan["readings"]) == ("/mobot/scan", 141)  # 5 Hz over 28 s, from t = 0
+    ranges = np.load(out / scan["file"])["ranges"]
+    seen = np.isfinite(ranges) & (ranges < 8.0)
+    assert ranges.shape == (141, 180) and seen.mean() > 0.9  # walls and furniture in every room
+    assert (out / "bag" / "bag.mcap").stat().st_size > 0 and (out / "odom" / "mobot.csv").is_file()

@@ -311,3 +311,15 @@ def test_the_bundled_sweep_file_expands_to_checked_runs():
     assert len(sweep.variants) == 6
     assert sweep.prepared[1].plan.robots[0].drive.odometry == "ground_truth"
     assert len(sweep.prepared[0].plan.expectations) == 6
+
+
+def test_the_bundled_passing_sweep_exits_0_with_every_row_passed(tmp_path):
+    """scenarios/sweeps/engines.yaml: both engines x both odometry sources, every expectation met."""
+    done = invoke(["sweep", str(REPO / "scenarios" / "sweeps" / "engines.yaml"), "--out", str(tmp_path / "s"),
+                   "--jobs", "1", "--quiet"])
+    assert done.exit_code == 0, done
+    table = rows(tmp_path / "s")
+    assert [(r["physics.engine"], r["robots.mobot.drive.odometry"]) for r in table] == [
+        ("bullet", "encoder"), ("bullet", "ground_truth"), ("kinematic", "encoder"), ("kinematic", "ground_truth")]
+    assert all((r["status"], r["expect_failed"], r["mobot.collisions"]) == ("passed", "0", "0") for r in table)
+    assert all(float(r["mobot.x"]) == pytest.approx(1.0, abs=0.05) for r in table)  # 1 m east, then north
