@@ -3,10 +3,6 @@
 `main()` runs it on the process's streams; `invoke()` runs it on captured ones and returns
 the exit code and what it printed, for tests and scripts. Commands print only to the
 Environment they find in Typer's context object (`ctx.obj`).
-
-The Typer app (cli/app.py) is imported only for a command line that needs it: the plain forms
-of `mobot run` are read by cli/fastpath.py, with the same values, exit codes and errors, and
-the ~50 ms Typer takes to start (importing Click, building every command) stays out of a run.
 """
 
 from __future__ import annotations
@@ -16,7 +12,6 @@ import sys
 from dataclasses import dataclass, replace
 from typing import Iterable
 
-from mobot_cli.cli import fastpath
 from mobot_cli.cli.environment import Environment
 from mobot_cli.cli.startup import collect_garbage
 from mobot_cli.cli.output import report_error
@@ -60,9 +55,6 @@ def _execute(args: list[str], env: Environment) -> int:
     try:
         # Click prints --help itself, to sys.stdout: point the sys streams at env's for the call.
         with contextlib.redirect_stdout(env.stdout), contextlib.redirect_stderr(env.stderr):
-            command = fastpath.read(args)
-            if command is not None:
-                return command(env)  # it starts the garbage collector once loaded
             collect_garbage()
             from mobot_cli.cli.app import dispatch
 

@@ -1,7 +1,7 @@
 """The `mobot` Typer app: every command, its options and help; `dispatch` runs a command line.
 
 Command modules import heavy libraries (pybullet, pydantic, xacro) inside their functions
-so that `mobot --help` stays fast. A plain `mobot run` does not come here at all (fastpath.py).
+so that `mobot --help` stays fast.
 """
 
 from __future__ import annotations

@@ -25,11 +25,11 @@ def notices(env: Environment, lines: Iterable[str], quiet: bool = False) -> None
         env.stderr.write(f"mobot: warning: {line}\n")
 
 
-def emit_json(env: Environment, data: Any) -> None:
-    """Print a JSON document on stdout, for scripts."""
+def emit_json(env: Environment, data: Any, one_line: bool = False) -> None:
+    """Print a JSON document on stdout, for scripts; ``one_line``: compact, one line (JSON Lines)."""
     import json  # --json only
 
-    env.stdout.write(json.dumps(data, indent=2) + "\n")
+    env.stdout.write((json.dumps(data) if one_line else json.dumps(data, indent=2)) + "\n")
 
 
 def stdout_console(env: Environment):

@@ -6,8 +6,7 @@ from mobot_cli.cli.environment import Environment
 from mobot_cli.errors import Location
 from mobot_cli.sim.plan import Plan, Ros2Settings
 
-# The --ros2 option's help; run.py and serve.py declare the option (Typer stays out of this
-# module, which a `mobot run` read without Typer uses: cli/fastpath.py).
+# The --ros2 option's help; run.py and serve.py declare the option.
 HELP = ("Join ROS 2 as node 'mobot': publish /clock, /tf, odom, joint_states, robot_description; "
         "take cmd_vel (extra 'ros2'; domain ROS_DOMAIN_ID).")
 

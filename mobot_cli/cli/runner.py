@@ -1,83 +1,107 @@
-"""What `mobot run` does once its command line is read: by Typer (run.py) or, for the plain
-forms, by cli/fastpath.py, which keeps Typer out of a run's start-up."""
+"""What `mobot run` does once Typer has read its command line (cli/run.py): run one scenario, or
+several one after another in this process, each into its own run folder."""
 
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional, Sequence
 
 from mobot_cli.cli import output, ros2
 from mobot_cli.cli.args import default_out
 from mobot_cli.cli.environment import Environment
-from mobot_cli.cli.startup import collect_garbage
-from mobot_cli.errors import ExitCode
-from mobot_cli.run.ahead import Ahead, take
+from mobot_cli.errors import ExitCode, MobotError, UsageError
 
 
-def run_scenario(env: Environment, scenario: Path, out: Optional[Path] = None, set_: Sequence[str] = (),
-                 seed: Optional[int] = None, duration: Optional[float] = None, realtime: bool = False,
-                 json_: bool = False, quiet: bool = False, skip_missing: bool = False, ros2_: bool = False,
-                 view: bool = False, view_port: int = 8080) -> int:
-    """Run a scenario to its end, write the run folder and print what `mobot run` prints; the exit code."""
-    overrides = list(set_)
-    if seed is not None:
-        overrides.append(f"seed={seed}")
-    if duration is not None:
-        overrides.append(f"duration={duration}")
-    if skip_missing:
+@dataclass(frozen=True)
+class RunOptions:
+    """The options of `mobot run` that apply to each scenario it runs."""
+
+    set_: Sequence[str] = ()
+    seed: Optional[int] = None
+    duration: Optional[float] = None
+    realtime: bool = False
+    json_: bool = False
+    quiet: bool = False
+    skip_missing: bool = False
+    ros2_: bool = False
+    view: bool = False
+    view_port: int = 8080
+
+
+def run_scenarios(env: Environment, scenarios: Sequence[Path], out: Optional[Path], options: RunOptions) -> int:
+    """Run each scenario in turn; the worst exit code (ExitCode's order, 0 to 3).
+
+    One scenario is `mobot run` as it always was: its errors raise. With several, a scenario
+    that fails is reported and the next one runs; Ctrl-C stops them all at once (raised)."""
+    if len(scenarios) == 1:
+        return run_scenario(env, scenarios[0], out, options)
+    if options.view:
+        raise UsageError("--view watches one run: give one scenario file", hint="or run them without --view")
+    folders = _batch_folders(scenarios, out)
+    worst = ExitCode.OK
+    for scenario, folder in zip(scenarios, folders):
+        try:
+            code = run_scenario(env, scenario, folder, options, one_line_json=True)
+        except MobotError as exc:
+            if env.traceback:
+                raise
+            output.report_error(env, exc)
+            code = exc.exit_code
+        worst = max(worst, code)
+    return worst
+
+
+def _batch_folders(scenarios: Sequence[Path], out: Optional[Path]) -> list[Optional[Path]]:
+    """Each scenario's run folder: OUT/<file stem> with --out, else its default (None)."""
+    if out is None:
+        return [None] * len(scenarios)
+    seen: dict[str, Path] = {}
+    for scenario in scenarios:
+        other = seen.setdefault(scenario.stem, scenario)
+        if other is not scenario:
+            raise UsageError(f"'{other}' and '{scenario}' would both write {out / scenario.stem}: with several "
+                             "scenario files, --out DIR writes DIR/<file name without .yaml> for each",
+                             hint="rename one of them, or run them in two commands")
+    return [out / scenario.stem for scenario in scenarios]
+
+
+def run_scenario(env: Environment, scenario: Path, out: Optional[Path], options: RunOptions,
+                 one_line_json: bool = False) -> int:
+    """Run a scenario to its end, write the run folder and print what `mobot run` prints; the exit code.
+    ``one_line_json``: --json prints the summary on one line (several runs: JSON Lines)."""
+    from mobot_cli.common.files import check_out_folder
+    from mobot_cli.run.execute import execute
+    from mobot_cli.run.prepare import prepare
+
+    overrides = list(options.set_)
+    if options.seed is not None:
+        overrides.append(f"seed={options.seed}")
+    if options.duration is not None:
+        overrides.append(f"duration={options.duration}")
+    if options.skip_missing:
         overrides.append("skip_missing=true")
-    if view:
+    if options.view:
         from mobot_cli.view.page import require_viser
 
         require_viser()  # before the run, not after it
-    # The entry point's helper process validates and resolves the scenario this one reads, while
-    # this one imports the engine.
-    ahead = take()
-    try:
-        if ahead:
-            from mobot_cli.scenario.overrides import read_ready
-
-            ahead.prepare(read_ready(scenario, overrides))  # a bad file or --set: reported as prepare() does
-        return _run(env, ahead, scenario, overrides, out, realtime, json_, quiet, ros2_, view, view_port)
-    finally:
-        if ahead:
-            ahead.close()
-
-
-def _run(env: Environment, ahead: Ahead | None, scenario: Path, overrides: list[str], out: Optional[Path],
-         realtime: bool, json_: bool, quiet: bool, ros2_: bool, view: bool, view_port: int) -> int:
-    from mobot_cli.common.files import check_out_folder
-    from mobot_cli.run.execute import connect_ahead, execute, leave_at_exit
-
-    if ahead:  # forked by the entry point, so this process ends with the run (not so under invoke())
-        leave_at_exit()  # no disconnecting PyBullet first
-        connect_ahead()  # while the helper still prepares the plan
-    prepared = ahead.prepared() if ahead else None
-    if prepared is None:  # no helper, or it could not: here, where its errors are reported
-        from mobot_cli.run.prepare import prepare
-
-        done = prepare(scenario, overrides)
-        plan, resolved_yaml, painter = done.plan, done.resolved_yaml, None
-    else:
-        from mobot_cli.scenario.yamlsource import to_yaml
-
-        (plan, document), painter = prepared, ahead
-        resolved_yaml = to_yaml(document)
-    collect_garbage()  # loaded: from here on garbage is made, and collected
-    output.notices(env, plan.notices, quiet=quiet or json_)
-    bridges = ros2.bridges(plan, ros2_)
+    done = prepare(scenario, overrides)
+    plan = done.plan
+    quiet = options.quiet or options.json_
+    output.notices(env, plan.notices, quiet=quiet)
+    bridges = ros2.bridges(plan, options.ros2_)
     out_dir = out or default_out("runs", plan.name)
     check_out_folder(out_dir)  # a file, a path under a file, a read-only folder: before the run
-    bar = None if (quiet or json_) else output.progress_bar(env, plan.total_steps, plan.name)
-    progress = _progress(bar, realtime, plan.physics.rate_hz)
-    ros2.joined(env, bridges, quiet=quiet or json_)
-    watcher = _Watcher(env, plan, view_port) if view else None
+    bar = None if quiet else output.progress_bar(env, plan.total_steps, plan.name)
+    progress = _progress(bar, options.realtime, plan.physics.rate_hz)
+    ros2.joined(env, bridges, quiet=quiet)
+    watcher = _Watcher(env, plan, options.view_port) if options.view else None
     if bar:
         bar.start()
     try:
-        result = execute(plan, resolved_yaml, out_dir, progress=progress, attachments=bridges,
-                         watch=watcher.watch if watcher else None, painter=painter)
+        result = execute(plan, done.resolved_yaml, out_dir, progress=progress, attachments=bridges,
+                         watch=watcher.watch if watcher else None)
     except BaseException:
         if watcher:
             watcher.close()
@@ -85,14 +109,12 @@ def _run(env: Environment, ahead: Ahead | None, scenario: Path, overrides: list[
     finally:
         if bar:
             bar.stop()
-        ros2.report(env, bridges, quiet=quiet or json_)
-    if ahead:
-        ahead.close()  # the picture is drawn: nothing is left for it to do
-    if json_:
-        output.emit_json(env, result.record.to_dict())
-    elif not quiet:
+        ros2.report(env, bridges, quiet=quiet)
+    if options.json_:
+        output.emit_json(env, result.record.to_dict(), one_line=one_line_json)
+    elif not options.quiet:
         output.run_table(env, result.record, result.out_dir)
-    output.expectations(env, result.expectations, verbose=not (quiet or json_))
+    output.expectations(env, result.expectations, verbose=not quiet)
     if watcher:
         watcher.replay(result.out_dir)
     if any(not r.passed for r in result.expectations):

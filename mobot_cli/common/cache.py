@@ -10,7 +10,6 @@ import os
 from pathlib import Path
 from typing import Any
 
-from mobot_cli.common.cachedir import cache_dir  # noqa: F401  (here for its callers)
 from mobot_cli.common.files import write_text_atomic
 
 # Bump when the layout of a cached document changes, so old entries are simply missed.
@@ -27,6 +26,15 @@ BOUNDED_KINDS = ("xacro", "robot")
 # at most this many files and bytes each; the least recently used go first (README, Security).
 CACHE_MAX_FILES = 1024
 CACHE_MAX_BYTES = 256 * 1024 * 1024
+
+
+def cache_dir() -> Path:
+    """mobot's cache folder: $MOBOT_CACHE_DIR, else $XDG_CACHE_HOME/mobot, else ~/.cache/mobot."""
+    explicit = os.environ.get("MOBOT_CACHE_DIR")
+    if explicit:
+        return Path(explicit).expanduser()
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    return (Path(xdg).expanduser() if xdg else Path.home() / ".cache") / "mobot"
 
 
 @functools.lru_cache(maxsize=1)

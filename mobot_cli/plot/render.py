@@ -1,7 +1,7 @@
 """trajectory.png: robots' paths over a floor plan, drawn with Pillow.
 
-Pillow, not matplotlib: importing matplotlib alone takes ~0.6 s here, more than a whole
-10-second run, while Pillow imports in ~20 ms and draws a plot in a few tens of ms. Lines are
+Pillow, not matplotlib: importing matplotlib alone takes longer than a whole short run, while
+Pillow imports and draws a plot in a small part of one. Lines are
 drawn at twice the size and scaled down, which smooths them. Metres on both axes, one scale
 for x and y (equal aspect), a grid at the tick marks, the legend in a panel on the right.
 """
@@ -16,16 +16,12 @@ from pathlib import Path
 from PIL import Image, ImageDraw, ImageFont
 
 from mobot_cli.common.files import write_bytes_atomic
-from mobot_cli.common.heap import reserve
 from mobot_cli.assets.world.floorplan import Polygon
 from mobot_cli.plot.png import encode_rgb
 
 Point = tuple[float, float]
 WIDTH, HEIGHT = 1200, 900  # pixels of the saved image
 SS = 2  # drawn at SS times the size, then reduced: smooth lines without an antialiasing API
-# About the most a picture allocates at once: the canvas and its reduction (4 bytes a pixel in
-# Pillow) and the rows that encoding copies and filters (plot/png.py), plus a quarter for the rest.
-MEMORY = (4 * WIDTH * HEIGHT * (SS * SS + 1) + 2 * 3 * WIDTH * HEIGHT) * 5 // 4
 MARGIN = {"left": 80, "right": 250, "top": 56, "bottom": 64}
 PALETTE = ((31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189),
            (140, 86, 75), (227, 119, 194), (127, 127, 127), (188, 189, 34), (23, 190, 207))
@@ -87,24 +83,12 @@ def render(tracks: list[Track], floor: list[Polygon], out: Path, title: str, sub
     write_bytes_atomic(out, png, durable=False)
 
 
-def preload(one_picture: bool = False) -> None:
+def preload() -> None:
     """Load the fonts a picture uses (13 and 20 points) and what encoding imports, ahead of the
-    first picture; for ``one_picture`` soon in a short-lived process (a run's helper), also make
-    the memory it takes ready (common/heap.py: the first picture then draws in ~20 ms, not ~35)
-    and its white canvas (~1.5 ms of filling 17 MB)."""
+    first picture (a sweep's fork server, once for all its workers)."""
     for size in (13, 20):
         _font(size)
     encode_rgb(Image.new("RGB", (1, 1)))
-    if one_picture:
-        reserve(MEMORY)
-        _blank[:] = [_white()]
-
-
-_blank: list = []  # the next picture's canvas, made ahead by preload(one_picture=True)
-
-
-def _white():
-    return Image.new("RGB", (WIDTH * SS, HEIGHT * SS), "white")
 
 
 @functools.lru_cache(maxsize=None)
@@ -162,7 +146,7 @@ class _Canvas:
     """World metres to pixels with one scale for both axes, and the drawing helpers."""
 
     def __init__(self, bounds: tuple[float, float, float, float]):
-        self.image = _blank.pop() if _blank else _white()
+        self.image = Image.new("RGB", (WIDTH * SS, HEIGHT * SS), "white")
         self.draw = ImageDraw.Draw(self.image)
         x0, y0, x1, y1 = bounds
         left, top = MARGIN["left"], MARGIN["top"]

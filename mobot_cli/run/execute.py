@@ -12,7 +12,6 @@ from mobot_cli.run.outcome import Status
 from mobot_cli.run.recording import Recording
 from mobot_cli.run.timeline import Attachment, Timeline
 from mobot_cli.sim.plan import Plan
-from mobot_cli.sim.clients import connect_ahead, leave_at_exit  # noqa: F401 - the CLI's way to them (cli -> run -> sim)
 from mobot_cli.sim.engine import open_world
 
 if TYPE_CHECKING:
@@ -32,20 +31,19 @@ class RunResult:
 
 def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | None = None,
             attachments: Sequence[Attachment] = (),
-            watch: Callable[[Timeline], None] | None = None, durable: bool = True, painter=None) -> RunResult:
+            watch: Callable[[Timeline], None] | None = None, durable: bool = True) -> RunResult:
     """Run a plan and write its run folder; summary.json is written last and says how it ended.
 
     ``attachments`` (the ROS 2 bridge) open after the robots are placed and close at the end;
     ``watch`` is called with the timeline once its robots are spawned, to attach more consumers
     (a live view). ``durable=False`` leaves flushing summary.json to disk to the caller (a sweep
-    does it off the worker's clock). ``painter`` (run.trajectory.Painter) may draw trajectory.png
-    in another process."""
+    does it off the worker's clock)."""
     with open_world(plan.physics, plan.world, seed=plan.seed) as world:
         # The robots are spawned and checked before the folder is made: a spawn refused
         # (inside furniture, below the floor) leaves no run folder behind.
         timeline = Timeline(plan, world)
         timeline.start()
-        recording = Recording(plan, out_dir, resolved_yaml, durable, painter)
+        recording = Recording(plan, out_dir, resolved_yaml, durable)
         status, error = Status.OK, None
         opened: list[Attachment] = []
         try:

@@ -34,17 +34,11 @@ def prepare(path: Path | str, overrides: Iterable[str] = ()) -> Prepared:
     from mobot_cli.scenario.overrides import read_ready
     from mobot_cli.scenario.yamlsource import to_yaml
 
-    scenario, plan, document = resolve_ready(read_ready(path, overrides))
-    return Prepared(scenario, plan, to_yaml(document))
-
-
-def resolve_ready(source: Source) -> tuple[Scenario, Plan, dict]:
-    """Validate and resolve a scenario file read and made ready (scenario/overrides.read_ready):
-    its typed form, its plan and the resolved document as plain data (yamlsource.to_yaml writes
-    it). Imports no PyYAML: the run's helper process does this part of ``prepare``."""
+    source = read_ready(path, overrides)
     scenario = validate_ready(source)
     plan = resolve(scenario, source)
-    return scenario, plan, resolved_document(scenario, plan, Path(source.file).resolve().parent)
+    document = resolved_document(scenario, plan, Path(source.file).resolve().parent)
+    return Prepared(scenario, plan, to_yaml(document))
 
 
 def prepare_target(target: str | None, overrides: Iterable[str] = ()) -> Prepared:

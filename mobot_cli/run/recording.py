@@ -103,7 +103,7 @@ class Recording:
     summary.json with status ``error`` and that message, where it can.
     """
 
-    def __init__(self, plan: Plan, out_dir: Path, resolved_yaml: str, durable: bool = True, painter=None):
+    def __init__(self, plan: Plan, out_dir: Path, resolved_yaml: str, durable: bool = True):
         self.plan, self.out_dir = plan, out_dir
         self.durable = durable  # summary.json flushed to disk here (a sweep flushes it itself)
         self.checker = Checker(plan)
@@ -122,7 +122,7 @@ class Recording:
             out_dir.mkdir(parents=True, exist_ok=True)
             (out_dir / SUMMARY).unlink(missing_ok=True)  # a reused folder must not look finished early
             write_text_atomic(out_dir / "scenario.yaml", resolved_yaml, durable=False)  # summary.json is
-            self.sinks = make_sinks(plan, out_dir, self.checker.sweeps, painter)
+            self.sinks = make_sinks(plan, out_dir, self.checker.sweeps)
         except OSError as exc:
             failure = self._failed(exc)
             self._save(self._record(Status.ERROR, str(failure), 0, None))
@@ -208,9 +208,6 @@ class Recording:
         raised = self.failure
         try:
             for sink in self.sinks:
-                sink.closing()
-            import mobot_cli.run.record  # noqa: F401 - its classes made now, while a painter draws
-            for sink in self.sinks:
                 try:
                     sink.close()
                 except OSError as exc:
@@ -256,9 +253,8 @@ class Recording:
             expectations=expectations, live=live)
 
 
-def make_sinks(plan: Plan, out_dir: Path, sweeps: dict | None = None, painter=None) -> list[Sink]:
-    """The sinks a plan's ``formats`` ask for; trajectory.png draws ``sweeps`` (the checker's), by
-    ``painter`` (run.trajectory.Painter) where one is given."""
+def make_sinks(plan: Plan, out_dir: Path, sweeps: dict | None = None) -> list[Sink]:
+    """The sinks a plan's ``formats`` ask for; trajectory.png draws ``sweeps`` (the checker's)."""
     sinks: list[Sink] = []
     if "csv" in plan.formats:
         sinks.append(CsvSink(plan, out_dir))
@@ -268,7 +264,7 @@ def make_sinks(plan: Plan, out_dir: Path, sweeps: dict | None = None, painter=No
         sinks.append(BagSink(plan, out_dir))
     from mobot_cli.run.trajectory import TrajectorySink
 
-    sinks.append(TrajectorySink(plan, out_dir, sweeps, painter))  # every run; last, as it draws when closed
+    sinks.append(TrajectorySink(plan, out_dir, sweeps))  # every run; last, as it draws when closed
     return sinks
 
 

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from mobot_cli.errors import MobotError, UsageError
 from mobot_cli.run.folder import is_run_folder, is_sweep_folder
-from mobot_cli.run.picture import draw, drawn
+from mobot_cli.run.trajectory import draw, drawn
 from mobot_cli.run.record import RunRecord
 
 MAX_ODOMETRY_TRACKS = 10  # more dashed lines than this (a sweep) hide the true paths

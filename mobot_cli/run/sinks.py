@@ -34,9 +34,6 @@ class Sink:
     def reading(self, key: str, reading: Reading) -> None:
         """Record one sensor reading of robot ``key`` (after its first sample)."""
 
-    def closing(self) -> None:
-        """The run is over and every sink closes next: start what can go on meanwhile."""
-
     def close(self) -> None:
         """Finish every file."""
 

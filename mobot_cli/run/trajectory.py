@@ -1,34 +1,23 @@
 """``DIR/trajectory.png``: every robot's true path and odometry over the floor plan, after every run,
 with each lidar robot's last scan as points.
 
-The sink only collects points while the run goes; the plotting code (run/picture.py: Pillow,
-and trimesh for mesh worlds) is imported when the picture is drawn, at close.
+The sink only collects points while the run goes; the plotting code (Pillow, and trimesh for
+mesh worlds) is imported when the picture is drawn, at close.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Protocol
+from typing import NamedTuple
 
 from mobot_cli.common.transforms import Planar, odom_origin
-from mobot_cli.run.picture import Drawn, draw, drawn
 from mobot_cli.run.sinks import Sink, named
 from mobot_cli.run.timeline import Reading, Sample
-from mobot_cli.sim.plan import Plan
+from mobot_cli.sim.plan import Plan, WorldPlan
 from mobot_cli.sim.state import RobotState
 
 SCAN_BAND = (0.05, 2.0)  # m above the floor: a 3D lidar's returns drawn on the floor plan
 MAX_SCAN_POINTS = 20000
-
-
-class Painter(Protocol):
-    """Draws the picture in another process (run/ahead.py's helper) while the run closes its files."""
-
-    def paint(self, tracks: list[Drawn], out: Path, title: str, subtitle: str) -> bool:
-        """Start drawing ``out``; False: it cannot, draw it here."""
-
-    def painted(self) -> bool:
-        """Wait until it is written; False: it was not, draw it here."""
 
 
 def odom_to_world(state: RobotState) -> Planar:
@@ -43,10 +32,8 @@ def odom_to_world(state: RobotState) -> Planar:
 class TrajectorySink(Sink):
     """Collects each robot's path; close() draws ``trajectory.png``."""
 
-    def __init__(self, plan: Plan, out_dir: Path, sweeps: dict | None = None, painter: Painter | None = None):
+    def __init__(self, plan: Plan, out_dir: Path, sweeps: dict | None = None):
         self.path = out_dir / "trajectory.png"
-        self.painter = painter
-        self.painting = False  # the painter took the picture
         self.sweeps = sweeps if sweeps is not None else {}  # (robot, area) -> run.sweep.Sweep, filled meanwhile
         self.world = plan.world
         self.title = plan.name
@@ -75,14 +62,7 @@ class TrajectorySink(Sink):
         if reading.sensor.kind == "lidar" and key in self.open:
             self.open[key][0].last_scan = reading.data
 
-    def closing(self) -> None:
-        """A painter starts drawing now, while the other files close."""
-        if self.painter is not None:
-            self.painting = self.painter.paint(self._tracks(), self.path, self.title, self._subtitle())
-
     def close(self) -> None:
-        if self.painting and self.painter.painted():
-            return
         try:
             draw(self._tracks(), self.world, self.path, self.title, self._subtitle())
         except OSError as exc:  # written atomically: no half a picture is left
@@ -113,6 +93,50 @@ class _Points:
         if self.last_scan.ranges.shape[0] > 1:  # a 3D lidar: what a floor plan shows, not the floor
             points = points[(points[:, 2] > SCAN_BAND[0]) & (points[:, 2] < SCAN_BAND[1])]
         return [tuple(xy) for xy in points[::max(1, len(points) // MAX_SCAN_POINTS), :2].tolist()]
+
+
+class Drawn(NamedTuple):
+    """One robot's track as the picture takes it, from a run or from a run folder's CSV files
+    (run/replot.py). ``swept`` holds (x0, y0, cell, covered mask, area) per coverage area."""
+
+    label: str
+    true: list
+    odom: list
+    start_z: float | None
+    scan: list
+    swept: list
+
+
+def drawn(label: str, true: list, odom: list, start_z: float | None, scan: list = (), sweeps=()) -> Drawn:
+    """A track as the picture takes it; ``sweeps`` are run.sweep.Sweep objects."""
+    return Drawn(label, true, odom, start_z, list(scan),
+                 [(s.grid.x0, s.grid.y0, s.grid.cell, s.covered, s.area) for s in sweeps])
+
+
+def preload() -> None:
+    """Import the drawing code and load its fonts now (a sweep's fork server, once for its workers)."""
+    from mobot_cli.plot.render import preload as preload_render
+
+    preload_render()
+
+
+def draw(tracks: list[Drawn], world: WorldPlan | None, out: Path, title: str, subtitle: str) -> None:
+    """Render ``tracks`` over ``world``'s floor plan to ``out``; the plan's height band is measured
+    from the floor where the tracks start."""
+    from mobot_cli.assets.world.floorplan import floor_plan
+    from mobot_cli.plot.render import Swept, Track, render
+
+    labels = [t.label for t in tracks]
+    plot_tracks = [Track(_unique(t.label, labels[:i]), t.true, t.odom, t.scan,
+                         [Swept(x0, y0, cell, covered, list(area)) for x0, y0, cell, covered, area in t.swept])
+                   for i, t in enumerate(tracks)]
+    starts = [(*t.true[0], t.start_z) for t in tracks if t.true and t.start_z is not None]
+    render(plot_tracks, floor_plan(world, starts) if world is not None else [], out, title, subtitle)
+
+
+def _unique(label: str, before: list[str]) -> str:
+    count = before.count(label)
+    return f"{label} ({count + 1})" if count else label
 
 
 def _robots(n: int) -> str:

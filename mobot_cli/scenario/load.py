@@ -15,12 +15,11 @@ from mobot_cli.errors import ScenarioError, did_you_mean, shown
 from mobot_cli.scenario.model import Scenario
 from mobot_cli.scenario.sensor_model import HINTS as SENSOR_HINTS
 from mobot_cli.scenario.source import PathKey, Source
-from mobot_cli.scenario.validator import scenario_validator
 
 
 def load_scenario(path: Path | str, overrides: Iterable[str] = ()) -> tuple[Scenario, Source]:
     """Read, override and validate a scenario file."""
-    from mobot_cli.scenario.overrides import read_ready  # PyYAML: see validate_ready
+    from mobot_cli.scenario.overrides import read_ready  # PyYAML: imported when a file is read
 
     source = read_ready(path, overrides)
     return validate_ready(source), source
@@ -34,10 +33,9 @@ def validate(source: Source, overrides: Iterable[str] = ()) -> Scenario:
 
 
 def validate_ready(source: Source) -> Scenario:
-    """Validate a document made ready by scenario/overrides.py; imports no PyYAML, so a process that
-    validates what another read (the run's helper) does without it."""
+    """Validate a document made ready by scenario/overrides.py."""
     try:
-        return scenario_validator().validate_python(source.data)  # Scenario.model_validate's, kept
+        return Scenario.model_validate(source.data)
     except ValidationError as exc:
         raise _to_scenario_error(exc, source) from None
 

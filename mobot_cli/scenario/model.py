@@ -26,7 +26,7 @@ class Strict(BaseModel):
     """Base: unknown keys and NaN/inf numbers are errors."""
 
     # defer_build: the validators are built once, for the whole Scenario, when the first scenario
-    # is validated, not model by model at import (~10 ms less of every run's start).
+    # is validated, not model by model at import (a process that never validates never builds).
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True, defer_build=True)
 
 
@@ -40,7 +40,7 @@ class PhysicsSpec(Strict):
 class LogSpec(Strict):
     # None: about 50 Hz, rounded down to a whole number of physics steps (48 Hz at 240 Hz).
     rate_hz: Optional[Annotated[Float, Field(ge=MIN_LOG_RATE_HZ, le=MAX_RATE_HZ)]] = None
-    formats: list[Literal["csv", "mcap"]] = ["csv"]  # mcap: DIR/bag/ (no lambda: scenario/validator.py pickles)
+    formats: list[Literal["csv", "mcap"]] = ["csv"]  # mcap: DIR/bag/
 
 
 class PoseSpec(Strict):
@@ -112,7 +112,7 @@ class RobotSpec(Strict):
     namespace: Optional[str] = None
     description: Reference = "mobot"
     # Empty defaults are values, not default_factory=list/dict: pydantic copies a default for each
-    # model, and a builtin factory costs it a parse of the builtin's text signature (~3 ms a process).
+    # model, and a builtin factory costs it a parse of the builtin's text signature.
     args: dict[str, Union[str, bool, int, float]] = {}
     pose: PoseSpec = PoseSpec.model_construct()  # all defaults (see Scenario.physics)
     drive: Optional[DriveOverrides] = None
@@ -219,7 +219,7 @@ class Scenario(Strict):
     skip_missing: bool = False
     # All defaults, made once without validating them (frozen: one serves every scenario).
     # default_factory=PhysicsSpec made the first scenario without ``physics:`` build PhysicsSpec's
-    # own validator (defer_build) and import pydantic's plugin loader, ~20 ms of a process.
+    # own validator (defer_build) apart from the Scenario's.
     physics: PhysicsSpec = PhysicsSpec.model_construct()
     duration: Duration
     seed: Annotated[Int, Field(ge=0, lt=2**32)] = 0

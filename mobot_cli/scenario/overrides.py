@@ -2,8 +2,7 @@
 mapping, its version) and the --set overrides applied, located like any error.
 
 This is the YAML side of loading a scenario (PyYAML parses the file and each --set value);
-scenario/load.py validates the result with pydantic. `mobot run` does this part itself and its
-helper process the other (run/ahead.py), so that the helper need not import PyYAML.
+scenario/load.py validates the result with pydantic.
 """
 
 from __future__ import annotations

@@ -1,14 +1,13 @@
 """PyBullet clients for Worlds: connected anew, or kept between Worlds that follow one another.
 
-A sweep worker's runs follow one another. Connecting a client costs ~15 ms of CPU (more wall
-time on a busy machine), resetting one ~7 ms, and building the static world again up to tens
-of ms (a house of meshes). So a kept client keeps its static world too (a Stage), with the
-robots removed, when the next World has the same physics and world plan and the run left the
-world as a fresh one would be: robots removed newest first, so that PyBullet hands the same
-body ids out again in the same order. A run that removed a body on the way (a deleted robot,
-a refused spawn) or faulted (NaN states) is reset to empty instead: resetSimulation makes a
-new dynamics world and restarts the body ids. Either way the next run writes the same run
-folder, byte for byte, as in a new client (tests/sim/test_clients.py).
+A sweep worker's runs follow one another, and each would otherwise connect a new client and build
+its static world again (a house of meshes). So a kept client keeps its static world too (a Stage),
+with the robots removed, when the next World has the same physics and world plan and the run left
+the world as a fresh one would be: robots removed newest first, so that PyBullet hands the same
+body ids out again in the same order. A run that removed a body on the way (a deleted robot, a
+refused spawn) or faulted (NaN states) is reset to empty instead: resetSimulation makes a new
+dynamics world and restarts the body ids. Either way the next run writes the same run folder, byte
+for byte, as in a new client (tests/sim/test_clients.py).
 """
 
 from __future__ import annotations
@@ -34,7 +33,6 @@ class Stage:
 _idle: list[tuple[int, Optional[Stage]]] = []  # kept clients, each empty or holding a stage
 _keep = 0
 _idle_lock = threading.Lock()  # Worlds may be made and closed in several threads
-_left = False  # leave_at_exit(): clients stay connected until the process ends
 
 
 def keep_clients(count: int) -> None:
@@ -49,21 +47,6 @@ def keep_clients(count: int) -> None:
         del _idle[_keep:]
     for cid, _ in extra:
         p.disconnect(physicsClientId=cid)
-
-
-def leave_at_exit() -> None:
-    """This process ends with its World (`mobot run`): a World's client is left connected when it
-    closes, for the system to reclaim with the process, rather than disconnected (~3 ms)."""
-    global _left
-    _left = True
-
-
-def connect_ahead() -> None:
-    """Connect a client now for the next World, which takes it as a new one: a process with time
-    to spare before it has its plan (`mobot run` waiting for its helper) spends it here."""
-    cid = p.connect(p.DIRECT)
-    with _idle_lock:
-        _idle.append((cid, None))
 
 
 def connect(key: Any = None) -> tuple[int, Optional[Stage]]:
@@ -85,8 +68,6 @@ def connect(key: Any = None) -> tuple[int, Optional[Stage]]:
 def release(cid: int, stage: Optional[Stage] = None, robots: Iterable[int] = ()) -> None:
     """Disconnect a World's client, or keep it: with its ``stage`` once the ``robots`` (body
     ids) are removed, or reset to empty when there is no stage to keep."""
-    if _left:
-        return
     with _idle_lock:
         keep = len(_idle) < _keep
     if keep and p.isConnected(physicsClientId=cid):

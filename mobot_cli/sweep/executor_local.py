@@ -9,13 +9,11 @@ killed by SIGKILL (guard.die_with_sweep). Workers stay alive for the whole sweep
 so imports, in-process caches and the PyBullet client are paid once per worker, not once per run. They come from
 multiprocessing's fork server with everything a run needs imported once (sweep.preload; never
 forked from the parent itself, which may run threads such as the progress bar), so a
-replacement is ready in milliseconds instead of the 0.5 s a spawned one needs; spawn where
-there is no fork server. How the fork server starts: sweep/server.py.
+replacement starts warm; spawn where there is no fork server (sweep/server.py).
 
-``prestart`` starts the fork server and the workers before the runs are prepared: their
-imports (~0.4 s) then take the second core while the sweep reads and checks the scenario,
-instead of following it. A thread waits for the workers, since a fork server answers only
-once its imports are done.
+``prestart`` starts the workers from a thread before the runs are prepared: the fork server's
+imports then take the second core while the sweep reads and checks the scenario, instead of
+following it. Starting a worker waits until the fork server has imported, hence the thread.
 """
 
 from __future__ import annotations
@@ -29,7 +27,7 @@ from multiprocessing.connection import Connection, wait
 from typing import Callable, Iterable
 
 from mobot_cli.sweep.guard import die_with_sweep
-from mobot_cli.sweep.server import context, sigint_held, start_fork_server
+from mobot_cli.sweep.server import context, sigint_held, start_tracker
 from mobot_cli.sweep.task import Outcome, Task, failed, run_task
 
 Runner = Callable[[Task], Outcome]
@@ -102,23 +100,30 @@ class LocalExecutor:
         self.timeout = timeout
         self.runner = runner
         self._early: list[_Worker] = []  # started by prestart, not yet given to run
-        self._starter: threading.Thread | None = None
+        self._starters: list[threading.Thread] = []
+        self._asked = 0  # workers prestart asked its threads for
         self._closed = threading.Event()
 
     def prestart(self, count: int | None = None) -> None:
-        """Start the fork server now and, given the number of runs, ``min(jobs, count)`` workers
-        from a thread, so that they get ready while the runs are prepared. ``close`` stops what
-        ``run`` did not use."""
-        # Without a fork server (spawn), run() starts the workers: one spawned from a thread would
-        # not inherit SIGINT held back (server.sigint_held). One that cannot start, run() reports.
-        if not start_fork_server():
-            return
+        """Start workers from a thread, so that they get ready while the runs are prepared: one
+        (and with it the fork server) before the runs are counted, ``min(jobs, count)`` in all
+        once they are. ``close`` stops what ``run`` did not use."""
+        # Without a fork server (spawn), run() starts the workers: each would import everything
+        # itself, and the sweep's own imports would wait for the core. One that cannot start,
+        # run() reports.
         ctx = context()
-        if count is None or self._starter is not None or self._early:
+        if ctx.get_start_method() != "forkserver":
             return
-        self._starter = threading.Thread(target=self._start_early, args=(ctx, min(self.jobs, count)),
-                                         name="mobot-sweep-prestart", daemon=True)
-        self._starter.start()
+        wanted = min(self.jobs, 1 if count is None else count) - self._asked
+        if wanted <= 0:
+            return
+        if not self._starters:
+            start_tracker()
+        self._asked += wanted
+        starter = threading.Thread(target=self._start_early, args=(ctx, wanted),
+                                   name="mobot-sweep-prestart", daemon=True)
+        self._starters.append(starter)
+        starter.start()
 
     def _start_early(self, ctx, count: int) -> None:
         for _ in range(count):
@@ -139,9 +144,9 @@ class LocalExecutor:
         self._stop_all(self._take_early())
 
     def _take_early(self) -> list[_Worker]:
-        if self._starter is not None:
-            self._starter.join()
-            self._starter = None
+        for starter in self._starters:
+            starter.join()
+        self._starters = []
         workers, self._early = self._early, []
         return workers
 

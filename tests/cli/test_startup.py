@@ -1,7 +1,7 @@
 """The garbage collector is held back while a command starts and running when it works.
 
 __main__.entry() disables it; the CLI starts it again, with start-up's objects frozen, before
-the run's loop (cli/runner.py) or before Typer reads any other command line (cli/__init__.py).
+Typer reads the command line (cli/__init__.py).
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ REPO = Path(__file__).resolve().parents[2]
 
 # Records the collector's state when the command gets to work, then runs `mobot` as the console script does.
 PROBE = """
-import atexit, functools, gc, sys
+import functools, gc, sys
 import mobot_cli.run.execute as execute
 import mobot_cli.cli.check as check
 seen = []
@@ -28,8 +28,10 @@ execute.execute = probe(execute.execute)
 check.check = probe(check.check)
 sys.argv = ["mobot", *sys.argv[1:]]
 from mobot_cli.__main__ import entry
-atexit.register(lambda: print("seen", seen, "enabled at exit", gc.isenabled()))  # a run leaves by os._exit
-entry()
+try:
+    entry()
+finally:
+    print("seen", seen, "enabled at exit", gc.isenabled())
 """
 
 

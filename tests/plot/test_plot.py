@@ -99,20 +99,6 @@ def test_floor_plan_is_drawn_under_the_paths(tmp_path):
     assert not (tmp_path / "t.png.tmp").exists()
 
 
-def test_the_canvas_made_ahead_draws_the_same_picture(tmp_path, monkeypatch):
-    """A run's helper makes its one picture's white canvas during the loop (render.preload)."""
-    from mobot_cli.plot import render as module
-
-    monkeypatch.setattr(module, "reserve", lambda size: None)  # this process's heap is pytest's
-    tracks = [Track("a", [(0, 0), (1, 0.5), (2, 0)], [(0, 0), (1, 0.6), (2, 0.1)])]
-    render(tracks, [], tmp_path / "new.png", "title")
-    module.preload(one_picture=True)
-    ahead = module._blank[0]
-    render(tracks, [], tmp_path / "ahead.png", "title")
-    assert module._blank == [] and ahead.size == (2 * module.WIDTH, 2 * module.HEIGHT)
-    assert Image.open(tmp_path / "ahead.png").tobytes() == Image.open(tmp_path / "new.png").tobytes()
-
-
 def test_plot_helpers():
     assert [nice_step(s) for s in (2.2, 10, 21, 0.3)] == [0.5, 2, 5, 0.05]
     runs = dash_runs([(0, 0), (10, 0), (10, 10)], 3, 2)

@@ -82,18 +82,3 @@ def test_a_world_whose_robot_was_deleted_is_not_kept_but_reset(kept, tmp_path):
     stage = clients._idle[0][1]
     assert stage is not None and len(stage.statics) == statics
     assert p.getNumBodies(physicsClientId=clients._idle[0][0]) == statics  # the robot removed, the world kept
-
-
-def test_a_process_that_ends_with_its_world_leaves_the_client_to_its_exit(monkeypatch):
-    monkeypatch.setattr(clients, "_left", False)  # leave_at_exit() is for good: undone here, for the next tests
-    plan = prepare(REPO / "scenarios" / "quickstart.yaml").plan
-    with World(plan.physics, plan.world) as world:
-        closed = world.client_id
-    assert not p.isConnected(physicsClientId=closed)  # the default: disconnected when the World closes
-    clients.leave_at_exit()
-    with World(plan.physics, plan.world) as world:
-        left = world.client_id
-    try:
-        assert p.isConnected(physicsClientId=left) and clients._idle == []  # left connected, not kept for reuse
-    finally:
-        p.disconnect(physicsClientId=left)
