@@ -26,7 +26,7 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
-    rich_markup_mode=None,  # plain help: Rich formatting costs ~150 ms on every --help
+    rich_markup_mode=None,  # plain help: Rich formatting would slow every --help
     context_settings={"help_option_names": ["-h", "--help"]},
 )
 

@@ -28,7 +28,9 @@ def sigint_held():
         return
     # multiprocessing's resource tracker unblocks SIGINT in the starting thread right after it
     # starts, which would undo the hold for the fork server the same call starts next: it is
-    # started first (resource_tracker.ensure_running: no underscore, though not in the manual).
+    # started first. The one call of mobot into multiprocessing outside its manual (a public
+    # name of a public module, no underscore); without it, a Ctrl-C while the fork server
+    # imports kills it with a traceback on the terminal.
     from multiprocessing import resource_tracker
 
     resource_tracker.ensure_running()
