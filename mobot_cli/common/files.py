@@ -4,7 +4,7 @@ Each write goes to a uniquely named temporary sibling, is flushed to disk and re
 the target, so parallel writers of the same file (sweep workers filling one cache) never
 mix their bytes, and a file that exists is whole. A run folder's files other than
 summary.json skip the flush to disk (``durable=False``): the rename alone keeps them whole
-when a process is killed, and each fsync cost a run 1-5 ms.
+when a process is killed, and an fsync per file would slow every run.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from mobot_cli.errors import OutputError, cannot_write
 def write_bytes_atomic(path: Path, data: bytes, durable: bool = True) -> None:
     """Write bytes to a temporary sibling, flush it to disk (``durable``) and rename it into place."""
     path = Path(path)
-    tmp = path.with_name(f"{_temporary_prefix(path, os.getpid())}{os.urandom(4).hex()}.tmp")
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.{os.urandom(4).hex()}.tmp")
     # os.open with 0o666 (not mkstemp's 0o600): the file gets the permissions the umask gives.
     fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
     try:
@@ -41,23 +41,6 @@ def write_bytes_atomic(path: Path, data: bytes, durable: bool = True) -> None:
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
-
-
-def remove_temporaries(path: Path, pid: int) -> None:
-    """Remove what process ``pid``, killed inside write_bytes_atomic(``path``), left behind."""
-    prefix = _temporary_prefix(path, pid)
-    try:
-        left = [entry for entry in os.scandir(path.parent) if entry.name.startswith(prefix)
-                and entry.name.endswith(".tmp")]
-    except OSError:
-        return
-    for entry in left:
-        Path(entry.path).unlink(missing_ok=True)
-
-
-def _temporary_prefix(path: Path, pid: int) -> str:
-    """How the temporary siblings of ``path`` written by process ``pid`` are named."""
-    return f".{path.name}.{pid}."
 
 
 def write_text_atomic(path: Path, text: str, durable: bool = True) -> None:
