@@ -1,7 +1,6 @@
 """How a run ended and the file that says so: all a run needs of its record until it ends.
 
-The record's classes (run/record.py) are made only when a run writes its summary, while its
-helper draws the picture (~11 ms of making dataclasses a run's start-up no longer pays).
+The record's classes (run/record.py) are imported only when a run writes its summary.
 """
 
 from __future__ import annotations

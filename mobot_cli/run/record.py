@@ -4,8 +4,7 @@
 it back; nothing passes string-keyed summary dicts between packages.
 
 The records are frozen dataclasses, not pydantic models: writing one needs nothing but the
-standard library, so a run never imports pydantic (~60 ms of a run's start-up, in the process
-that runs the loop; its helper validates the scenario). Pydantic validates a summary.json that
+standard library. Pydantic validates a summary.json that
 is read back (``RunRecord.load``), from these same classes. Fields declared ``float`` or ``int``
 hold exactly that type, as a pydantic model's would, so the file's numbers read the same
 (``10.0``, not ``10``).

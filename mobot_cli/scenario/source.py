@@ -1,6 +1,5 @@
 """A scenario document as plain data, with the line of every key and item and the --set texts
-applied to it: what errors point at. Made by scenario/yamlsource.py; free of PyYAML, so that a
-process that only validates a document read elsewhere (the run's helper) need not import it."""
+applied to it: what errors point at. Made by scenario/yamlsource.py; free of PyYAML."""
 
 from __future__ import annotations
 
