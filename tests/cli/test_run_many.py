@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 
 import pytest
+from PIL import Image
 
 from mobot_cli.cli import invoke
 from mobot_cli.run.folder import is_run_folder
@@ -100,3 +101,25 @@ def test_view_watches_one_run_only(files, tmp_path):
     done = invoke(["run", files["ok"], files["other"], "--view", "--out", tmp_path / "out"])
     assert (done.exit_code, done.stdout) == (2, "")
     assert "--view watches one run" in done.stderr and not (tmp_path / "out").exists()
+
+
+def test_a_batch_writes_the_same_folders_as_one_run_each(tmp_path):
+    """Nothing of one run carries over into the next in the same process."""
+    repo = Path(__file__).resolve().parents[2]
+    names = ["quickstart", "events", "square"]
+    paths = [repo / "scenarios" / f"{name}.yaml" for name in names]
+    assert invoke(["run", *paths, "--out", tmp_path / "batch", "--quiet", "--duration", "2"]).exit_code == 0
+    for name, path in zip(names, paths):
+        assert invoke(["run", path, "--out", tmp_path / "one" / name, "--quiet", "--duration", "2"]).exit_code == 0
+        batch, one = tmp_path / "batch" / name, tmp_path / "one" / name
+        files = sorted(p.relative_to(one) for p in one.rglob("*") if p.is_file())
+        assert files == sorted(p.relative_to(batch) for p in batch.rglob("*") if p.is_file())
+        for rel in files:
+            if rel.name == "summary.json":
+                timing = ("wall_time", "real_time_factor", "started", "finished")
+                strip = lambda f: {k: v for k, v in json.loads(f.read_text()).items() if k not in timing}  # noqa: E731
+                assert strip(batch / rel) == strip(one / rel), (name, rel)
+            elif rel.suffix == ".png":
+                assert Image.open(batch / rel).tobytes() == Image.open(one / rel).tobytes(), (name, rel)
+            else:
+                assert (batch / rel).read_bytes() == (one / rel).read_bytes(), (name, rel)
