@@ -13,7 +13,6 @@ from dataclasses import dataclass, replace
 from typing import Iterable
 
 from mobot_cli.cli.environment import Environment
-from mobot_cli.cli.startup import collect_garbage
 from mobot_cli.cli.output import report_error
 from mobot_cli.errors import ExitCode, MobotError
 
@@ -55,7 +54,6 @@ def _execute(args: list[str], env: Environment) -> int:
     try:
         # Click prints --help itself, to sys.stdout: point the sys streams at env's for the call.
         with contextlib.redirect_stdout(env.stdout), contextlib.redirect_stderr(env.stderr):
-            collect_garbage()
             from mobot_cli.cli.app import dispatch
 
             return dispatch(args, env)

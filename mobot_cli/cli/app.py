@@ -18,6 +18,7 @@ from mobot_cli.cli import cmd, delete, goto, lockstep, odom, scan, serve, spawn,
 from mobot_cli.cli import view as view_command
 from mobot_cli.cli import list as list_command  # not `list`: that would shadow the builtin here
 from mobot_cli.cli.environment import Environment
+from mobot_cli.cli.startup import collect_garbage
 from mobot_cli.errors import ExitCode
 
 app = typer.Typer(
@@ -39,12 +40,15 @@ def _version(ctx: typer.Context, value: bool) -> None:
 
 @app.callback()
 def _root(
+    ctx: typer.Context,
     traceback: bool = typer.Option(False, "--traceback", help="Show a Python traceback on errors (for bug reports)."),
     version: Optional[bool] = typer.Option(None, "--version", callback=_version, is_eager=True,
                                            help="Print the version and exit."),
 ) -> None:
     # Declared here for parsing and --help; _execute has read --traceback already (_traceback_asked).
     del traceback, version
+    if ctx.invoked_subcommand != "run":  # a run starts it once its scenario is loaded (cli/runner.py)
+        collect_garbage()
 
 
 app.command("run")(run.run)

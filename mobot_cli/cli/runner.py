@@ -11,6 +11,7 @@ from typing import Optional, Sequence
 from mobot_cli.cli import output, ros2
 from mobot_cli.cli.args import default_out
 from mobot_cli.cli.environment import Environment
+from mobot_cli.cli.startup import collect_garbage
 from mobot_cli.errors import ExitCode, MobotError, UsageError
 
 
@@ -87,6 +88,7 @@ def run_scenario(env: Environment, scenario: Path, out: Optional[Path], options:
 
         require_viser()  # before the run, not after it
     done = prepare(scenario, overrides)
+    collect_garbage()  # loaded: from here on garbage is made, and collected (cli/startup.py)
     plan = done.plan
     quiet = options.quiet or options.json_
     output.notices(env, plan.notices, quiet=quiet)
