@@ -16,7 +16,7 @@ from mobot_cli.errors import LiveWorldError
 from mobot_cli.live.client import Client
 
 REPO = Path(__file__).resolve().parents[2]
-START_TIMEOUT = 60.0  # s; a cold first start imports pybullet and may expand xacro
+START_TIMEOUT = 600.0  # s; only catches a server that never answers (a cold start on a busy machine is slow)
 
 
 class LiveProcess:
@@ -58,8 +58,9 @@ class LiveProcess:
                 return
             except LiveWorldError:
                 time.sleep(0.05)
+        output = self.output()  # before kill() closes the log
         self.kill()
-        raise RuntimeError(f"mobot serve did not answer within {START_TIMEOUT} s: {self.output()}")
+        raise RuntimeError(f"mobot serve did not answer within {START_TIMEOUT} s: {output}")
 
     def client(self, timeout: float = 30.0) -> Client:
         return Client(self.endpoint, timeout=timeout)

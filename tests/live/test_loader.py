@@ -49,9 +49,8 @@ def test_loads_come_back_as_plans_or_refusals_and_workers_stay_warm():
         pids = {w.process.pid for w in pool._workers}
         again = Job(spawn("again", description="mobot"), 240)
         pool.submit(again)
-        started = time.monotonic()
-        finish(pool, [again])
-        assert time.monotonic() - started < 2.0 and {w.process.pid for w in pool._workers} == pids
+        finish(pool, [again])  # by the same warm workers, not new ones (which a busy machine makes slow)
+        assert {w.process.pid for w in pool._workers} == pids
     finally:
         assert pool.close() == []
 
@@ -64,7 +63,9 @@ def test_a_load_past_the_cpu_limit_is_stopped_and_replaced():
         hostile = Job(spawn("hostile", urdf=HEAD + '<link name="${python.sum(python.range(10**12))}"/></robot>'), 240)
         pool.submit(hostile)
         finish(pool, [hostile])
-        assert time.monotonic() - hostile.started < loader.WALL_FACTOR * 1 + 1  # from its dispatch
+        # Stopped by its limits (1 s of CPU, 3 s of wall time), not left to run: without them it would
+        # run for hours. The slack is for this test's own polling on a busy machine.
+        assert time.monotonic() - hostile.started < loader.WALL_FACTOR * 1 + 10  # from its dispatch
         assert hostile.outcome.result == Result.RESOURCE_PARSE_ERROR
         assert "it was stopped" in hostile.outcome.message
         after = Job(spawn("after", description="mobot"), 240)
@@ -111,9 +112,12 @@ def test_a_long_load_drops_to_the_lowest_priority():
     pool = LoaderPool(Limits(seconds=30, memory=512 * 2**20))
     try:
         slow, worker = _endless_load(pool)
-        assert os.getpriority(os.PRIO_PROCESS, worker.process.pid) == 0  # quick loads are not held back
-        # Demoted once the load has used DEMOTE_AFTER s of CPU (however long that takes on a busy machine).
-        deadline = time.monotonic() + 60
+        # Quick loads are not held back: a worker runs at its parent's priority (nice 0, or the
+        # nice 19 of a test run under `nice -n 19`) until it is demoted.
+        assert os.getpriority(os.PRIO_PROCESS, worker.process.pid) == os.getpriority(os.PRIO_PROCESS, 0)
+        # Demoted once the load has used DEMOTE_AFTER s of CPU (however long that takes on a busy machine:
+        # at nice 19 beside two busy cores, minutes; the deadline only catches a load never demoted).
+        deadline = time.monotonic() + 600
         while not worker.demoted and time.monotonic() < deadline:
             used = loader._cpu_seconds(worker.process.pid) - worker.cpu_at_start
             assert pool.poll() == []
@@ -134,7 +138,8 @@ def test_a_load_waiting_for_the_cpu_is_not_demoted():
             while time.monotonic() < job.started + loader.DEMOTE_AFTER + 0.5:
                 assert pool.poll() == []
                 time.sleep(0.01)
-            assert not worker.demoted and os.getpriority(os.PRIO_PROCESS, worker.process.pid) == 0
+            assert not worker.demoted
+            assert os.getpriority(os.PRIO_PROCESS, worker.process.pid) == os.getpriority(os.PRIO_PROCESS, 0)
             assert worker.demote_at > time.monotonic()  # it is looked at again later
         finally:
             os.kill(worker.process.pid, signal.SIGCONT)

@@ -14,6 +14,7 @@ from mobot_cli.live.client import Client
 from tests.live.live_server import REPO, LiveProcess
 
 QUICKSTART = str(REPO / "scenarios" / "quickstart.yaml")
+PACED_STEP = 1000.0 / 240  # s: one step of a world paced at --rtf 0.001
 
 
 @pytest.fixture(scope="module")
@@ -86,19 +87,22 @@ def test_pause_and_resume_are_idempotent_and_step_needs_a_paused_world(cache):
 
 
 def test_serve_paused_starts_at_t_0_and_stays_there(cache):
-    server = LiveProcess(QUICKSTART, "--paused", cache_dir=cache)  # real time, yet paused
+    # Paced at a thousandth of real time, yet paused: a paced step would wait 1/240 s x 1000 = 4.2 s
+    # of wall time, so the steps below would take 25 minutes paced. As fast as it can, they take a
+    # fraction of a second, or a minute on a machine that gives this test almost no CPU.
+    server = LiveProcess(QUICKSTART, "--paused", "--rtf", "0.001", cache_dir=cache)
     try:
         time.sleep(0.5)
-        with server.client() as client:
+        with server.client(timeout=60) as client:
             ping = client.ping()
             assert (ping["step"], ping["state"]) == (0, "paused")
             assert "240 Hz, paused." in server.output()
             started = time.perf_counter()
-            assert client.request("step", steps=240)["t"] == 1.0  # as fast as it can, not paced
-            for _ in range(120):  # one step per request: paced, each would wait 1/240 s (0.5 s in all)
+            assert client.request("step", steps=240, timeout=120)["t"] == 1.0  # paced: 1,000 s
+            for _ in range(120):  # one step per request
                 client.request("step", states=False)
             elapsed = time.perf_counter() - started
-            assert client.ping()["step"] == 360 and elapsed < 0.45, elapsed
+            assert client.ping()["step"] == 360 and elapsed < 120 * PACED_STEP, elapsed
     finally:
         server.kill()
 

@@ -99,9 +99,8 @@ def test_the_client_refuses_an_oversized_request_as_the_world_would(live):
     """The world cannot read the id of a request it will not parse, so its refusal would never
     match: the client answers it with the same INVALID_REQUEST instead of waiting in vain."""
     with live.client(timeout=5) as client:
-        started = time.monotonic()
+        # Waiting in vain would end in LiveWorldError after the timeout: a reply is the answer.
         reply = client.call("spawn", name="big", urdf="x" * (MAX_REQUEST_BYTES + 1))
-        assert time.monotonic() - started < 2.0
         assert (reply["ok"], reply["result"], reply["code"]) == (False, "INVALID_REQUEST", 900)
         assert f"larger than the limit of {MAX_REQUEST_BYTES} bytes" in reply["message"]
     still_serving(live)

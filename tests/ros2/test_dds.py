@@ -152,9 +152,14 @@ def test_cmd_vel_timeout_stops_a_robot_whose_commands_stop(tmp_path, cache):
     live = serve(tmp_path, cache, "ros2: {cmd_vel_timeout: 0.25}")
     try:
         peer("drive", "rt/r1/cmd_vel", "0.2", "0.5", "1.0")
-        time.sleep(0.6)
+        # 0.25 s of simulated time after the last command: however long a busy machine takes to
+        # step that far, the robot stops (60 s only catches a robot that never does).
+        deadline = time.monotonic() + 60
         with live.client() as client:
             after = client.odom("r1")
+            while after["cmd"] != {"linear": 0.0, "angular": 0.0} and time.monotonic() < deadline:
+                time.sleep(0.05)
+                after = client.odom("r1")
     finally:
         live.signal()
         live.kill()
