@@ -31,10 +31,11 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from mobot_cli.api import Simulation  # noqa: E402
-from mobot_cli.run.execute import execute  # noqa: E402
-from mobot_cli.run.prepare import prepare, prepare_target  # noqa: E402
 from common import timed  # noqa: E402  (bench/common.py)
+
+from mobot_cli.api import Simulation  # noqa: E402
+from mobot_cli.run import execute  # noqa: E402
+from mobot_cli.scenario.prepare import prepare, prepare_target  # noqa: E402
 from tests.sim.sensor_world import ROOM_SDF  # noqa: E402
 
 EVERY = 10  # physics steps between two commands

@@ -31,9 +31,10 @@ sys.path.insert(0, str(REPO / "tests"))
 
 
 def load_plans(corpus: Path, names: list[str]):
-    from mobot_cli.assets.description.load import load_robot
-    from mobot_cli.sim.plan import RobotPlan, SpawnPose
     from sim.test_fidelity import CASES, PACKAGES
+
+    from mobot_cli.assets.description.describe import load_robot
+    from mobot_cli.plan import RobotPlan, SpawnPose
 
     os.environ["MOBOT_RESOURCE_PATH"] = ":".join(str(corpus / pkg) for pkg in PACKAGES)
     os.environ.setdefault("MOBOT_CACHE_DIR", tempfile.mkdtemp(prefix="mobot-bench-"))

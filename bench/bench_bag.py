@@ -26,10 +26,10 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from mobot_cli.run.execute import execute  # noqa: E402
-from mobot_cli.run.prepare import prepare  # noqa: E402
-
 from common import process_seconds, timed  # noqa: E402  (bench/common.py)
+
+from mobot_cli.run import execute  # noqa: E402
+from mobot_cli.scenario.prepare import prepare  # noqa: E402
 
 
 def scenario_text(robots: int, seconds: float, formats: str) -> str:
@@ -45,7 +45,7 @@ class SinkClock:
     """Seconds spent inside BagSink (open, write, close): the bag's own cost, measured in the run."""
 
     def __init__(self) -> None:
-        from mobot_cli.run import bag
+        from mobot_cli.record import bag
 
         self.seconds = 0.0
         for name in ("__init__", "write", "close"):

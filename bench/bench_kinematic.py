@@ -100,7 +100,7 @@ def one_robot(engine: str, rate: int, lidar: bool = False) -> str:
 def house_poses(count: int, spacing: float = 0.8) -> list[tuple[float, float, float]]:
     """``count`` places in the bundled house where the bundled robot may spawn."""
     from mobot_cli.errors import MobotError
-    from mobot_cli.run.prepare import prepare
+    from mobot_cli.scenario.prepare import prepare
     from mobot_cli.sim.engine import open_world
 
     plan = prepare(REPO / "scenarios" / "house.yaml", ["physics.engine=kinematic"]).plan
@@ -133,9 +133,9 @@ def fleet(engine: str, rate: int, poses, seconds: float, lidar: bool = False) ->
 
 def mobot_rtf(path: Path) -> tuple[float, int]:
     """The loop's real-time factor for a scenario file (spawns excluded) and the collisions."""
-    from mobot_cli.run.prepare import prepare
-    from mobot_cli.run.timeline import Timeline
+    from mobot_cli.scenario.prepare import prepare
     from mobot_cli.sim.engine import open_world
+    from mobot_cli.timeline.loop import Timeline
 
     plan = prepare(path).plan
     with open_world(plan.physics, plan.world, seed=plan.seed) as world:
@@ -155,9 +155,9 @@ def mobot_rtf(path: Path) -> tuple[float, int]:
 
 def raw_rtf(path: Path) -> float:
     """The same one-robot script as nothing but PyBullet calls at 240 Hz (bench_run.py's loop)."""
-    from mobot_cli.run.prepare import prepare
-    from mobot_cli.sim.bullet import p
-    from mobot_cli.sim.urdf_file import urdf_path
+    from mobot_cli.scenario.prepare import prepare
+    from mobot_cli.sim.bullet.urdf_file import urdf_path
+    from mobot_cli.sim.pb import p
 
     plan = prepare(path).plan
     cid = p.connect(p.DIRECT)
@@ -228,9 +228,9 @@ def sweep_rate(work: Path, runs: int = 32) -> tuple[float, float]:
 
 def engines_table() -> list[str]:
     """Every bundled scenario in both engines: how far apart each robot ends (the README's table)."""
-    from mobot_cli.run.prepare import prepare
-    from mobot_cli.run.timeline import simulate
-    from mobot_cli.run.timeline import Sample
+    from mobot_cli.scenario.prepare import prepare
+    from mobot_cli.timeline.loop import simulate
+    from mobot_cli.timeline.records import Sample
 
     lines = ["| scenario | robot | physics end (x, y, yaw) | kinematic end | distance | yaw |",
              "|---|---|---|---|---|---|"]

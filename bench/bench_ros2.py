@@ -35,13 +35,13 @@ from conftest import LOOPBACK_DDS  # noqa: E402  (tests/conftest.py: loopback on
 os.environ.update(ROS_DOMAIN_ID=str(150 + os.getpid() % 50), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
                   CYCLONEDDS_URI=LOOPBACK_DDS)
 
+from mobot_cli.plan import Ros2Settings  # noqa: E402
 from mobot_cli.ros2 import dds, names  # noqa: E402
 from mobot_cli.ros2 import publisher as publishing  # noqa: E402
 from mobot_cli.ros2.bridge import Bridge  # noqa: E402
-from mobot_cli.run.execute import execute  # noqa: E402
-from mobot_cli.run.prepare import prepare  # noqa: E402
-from mobot_cli.run.timeline import simulate  # noqa: E402
-from mobot_cli.sim.plan import Ros2Settings  # noqa: E402
+from mobot_cli.run import execute  # noqa: E402
+from mobot_cli.scenario.prepare import prepare  # noqa: E402
+from mobot_cli.timeline.loop import simulate  # noqa: E402
 
 ROBOTS, RAYS = 10, 360  # the bundled robot's lidar: 360 beams at 10 Hz
 LISTENER = textwrap.dedent("""

@@ -27,12 +27,12 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from mobot_cli.run.execute import execute  # noqa: E402
-from mobot_cli.run.prepare import prepare  # noqa: E402
-from mobot_cli.run.timeline import simulate  # noqa: E402
-
 from common import bytecode_state, process_seconds, timed  # noqa: E402  (bench/common.py)
 from raw_run import raw_loop  # noqa: E402  (bench/raw_run.py)
+
+from mobot_cli.run import execute  # noqa: E402
+from mobot_cli.scenario.prepare import prepare  # noqa: E402
+from mobot_cli.timeline.loop import simulate  # noqa: E402
 
 
 def scenario_text(robots: int, seconds: float) -> str:

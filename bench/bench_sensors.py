@@ -29,16 +29,15 @@ REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 import numpy as np  # noqa: E402
-
-from mobot_cli.run.execute import execute  # noqa: E402
-from mobot_cli.run.prepare import prepare  # noqa: E402
-from mobot_cli.sim import lidar  # noqa: E402
-from mobot_cli.sim.bullet import p  # noqa: E402
-from mobot_cli.sim.plan import Physics, RayAxis, SensorSpec  # noqa: E402
-from mobot_cli.sim.raycast import StaticScene, forget_kept  # noqa: E402
-from mobot_cli.sim.world import World  # noqa: E402
-
 from common import timed  # noqa: E402  (bench/common.py)
+
+from mobot_cli.plan import Physics, RayAxis, SensorSpec  # noqa: E402
+from mobot_cli.run import execute  # noqa: E402
+from mobot_cli.scenario.prepare import prepare  # noqa: E402
+from mobot_cli.sim.bullet.world import World  # noqa: E402
+from mobot_cli.sim.pb import p  # noqa: E402
+from mobot_cli.sim.sensing import lidar  # noqa: E402
+from mobot_cli.sim.sensing.raycast import StaticScene, forget_kept  # noqa: E402
 
 CORPUS = REPO.parent / "shared" / "corpus"
 MOBOT_LIDAR = SensorSpec(name="lidar", kind="lidar", link="lidar_link", every=24, topic="scan",

@@ -34,8 +34,8 @@ import ctypes
 import os
 import resource
 import shutil
-import subprocess
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
@@ -44,11 +44,11 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from mobot_cli.run.timeline import simulate  # noqa: E402
 from mobot_cli.sweep.executor_local import LocalExecutor  # noqa: E402
 from mobot_cli.sweep.expand import expand  # noqa: E402
 from mobot_cli.sweep.runner import run_sweep  # noqa: E402
 from mobot_cli.sweep.spec import build_spec  # noqa: E402
+from mobot_cli.timeline.loop import simulate  # noqa: E402
 
 GRID = ["robots.mobot.commands.0.linear=0.1,0.2,0.3,0.4", "robots.mobot.commands.0.angular=0,0.2,0.4,0.6"]
 GRID32 = [GRID[0], "robots.mobot.commands.0.angular=0,0.1,0.2,0.3,0.4,0.5,0.6,0.7"]

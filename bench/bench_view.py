@@ -26,10 +26,10 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from mobot_cli.run.execute import execute  # noqa: E402
-from mobot_cli.run.prepare import prepare  # noqa: E402
-
 from bench_run import scenario_text  # noqa: E402
+
+from mobot_cli.run import execute  # noqa: E402
+from mobot_cli.scenario.prepare import prepare  # noqa: E402
 
 CLIENT = r'''
 import sys, time, msgspec, viser, websockets.sync.client as ws

@@ -27,9 +27,9 @@ SMALL_HOUSE = "aws-robomaker-small-house-world/worlds/small_house.world"
 
 def load_and_build(world: str) -> tuple[float, float]:
     """Seconds to load the world (cache or cold) and to build it in PyBullet."""
-    from mobot_cli.assets.world.load import load_world
-    from mobot_cli.sim.plan import Physics
-    from mobot_cli.sim.world import World
+    from mobot_cli.assets.world.worldplan import load_world
+    from mobot_cli.plan import Physics
+    from mobot_cli.sim.bullet.world import World
 
     started = time.perf_counter()
     loaded = load_world(world)
@@ -40,10 +40,10 @@ def load_and_build(world: str) -> tuple[float, float]:
 
 def step_rate(world: str, seconds: float) -> float:
     """Physics steps per wall second with one robot driving at 0.1 m/s."""
-    from mobot_cli.assets.description.load import load_robot
-    from mobot_cli.assets.world.load import load_world
-    from mobot_cli.sim.plan import Physics, RobotPlan, SpawnPose
-    from mobot_cli.sim.world import World
+    from mobot_cli.assets.description.describe import load_robot
+    from mobot_cli.assets.world.worldplan import load_world
+    from mobot_cli.plan import Physics, RobotPlan, SpawnPose
+    from mobot_cli.sim.bullet.world import World
 
     desc = load_robot("mobot")
     xy = (3.5, 1.0) if world != "empty" else (0.0, 0.0)

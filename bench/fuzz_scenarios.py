@@ -33,6 +33,7 @@ def main() -> int:
 
     from hypothesis import Phase, given, seed, settings
     from hypothesis import strategies as st
+
     from tests.scenario.mutations import BUNDLED, check, mutated, override, workspace
 
     counts: collections.Counter[str] = collections.Counter()

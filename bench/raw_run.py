@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The raw PyBullet loop mobot is measured against: nothing but PyBullet calls, no mobot import.
 
-The same physics a mobot run of the bundled robot does (mobot_cli/sim/world.py's engine
+The same physics a mobot run of the bundled robot does (mobot_cli/sim/bullet/world.py's engine
 settings, velocity motors set when the command changes, base state and wheel joints read and a
 CSV row written at the log rate). ``bench_run.py`` calls ``raw_loop`` in its own process, and
 runs this file as a whole process to time the raw loop's fixed cost (interpreter, PyBullet's

@@ -12,6 +12,7 @@ import sys
 import time
 
 import rclpy
+from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -19,7 +20,6 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu, JointState, LaserScan
 from std_msgs.msg import String
-from geometry_msgs.msg import Twist
 
 try:
     from tf2_msgs.msg import TFMessage  # no community wheel of tf2_msgs exists for every distro

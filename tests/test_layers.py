@@ -8,19 +8,24 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
 
-# Higher imports lower. mobot_cli/__init__.py (the version) and mobot_cli/errors.py sit below
-# everything; mobot_cli/__main__.py is the entry point above everything.
+# Higher imports lower, as DESIGN.md draws the folders. mobot_cli/__init__.py (the version),
+# mobot_cli/errors.py and mobot_cli/plan.py (the Plan every layer passes down) sit below everything;
+# mobot_cli/__main__.py is the entry point above everything.
 LAYERS = {
-    "cli": 4,
-    "run": 3, "live": 3, "sweep": 3, "plot": 3, "view": 3, "api": 3, "ros2": 3, "gym": 3,
-    "scenario": 2, "assets": 2,
+    "cli": 8,
+    "run": 7, "live": 7, "sweep": 7, "api": 7, "gym": 7, "view": 7, "ros2": 7,  # the doors
+    "record": 6,  # the run folder
+    "ros": 5,  # ROS formats: the timeline's records as messages
+    "timeline": 4,  # the one loop
+    "scenario": 3,
+    "assets": 2,
     "sim": 1,
     "common": 0,
 }
-BOTTOM = {"", "errors"}  # the package itself, mobot_cli.errors
+BOTTOM = {"", "errors", "plan"}  # the package itself, mobot_cli.errors, mobot_cli.plan
 TOP = {"__main__"}
 # The only imports between two packages of the same layer, each one way.
-SAME_LAYER = {("run", "plot"), ("live", "run"), ("sweep", "run"), ("api", "run"), ("gym", "api"), ("ros2", "run"), ("view", "run"), ("scenario", "assets")}
+SAME_LAYER = {("live", "run"), ("sweep", "run"), ("api", "run"), ("gym", "api"), ("ros2", "run"), ("view", "run")}
 
 
 def module_name(root: Path, path: Path) -> str:
@@ -161,9 +166,9 @@ def test_the_checker_finds_upward_imports_at_any_depth(tmp_path):
                                   "def f():\n    from mobot_cli.run import tf\n",
         "mobot_cli/sim/state.py": "from ..scenario.model import Spec\n",
         "mobot_cli/run/__init__.py": "",
-        "mobot_cli/run/tf.py": "from mobot_cli.sim import world\nfrom mobot_cli.plot import draw\n",
-        "mobot_cli/plot/__init__.py": "",
-        "mobot_cli/plot/draw.py": "import mobot_cli.run.tf\n",
+        "mobot_cli/run/tf.py": "from mobot_cli.sim import world\nfrom mobot_cli.view import draw\n",
+        "mobot_cli/view/__init__.py": "",
+        "mobot_cli/view/draw.py": "import mobot_cli.run.tf\n",
         "mobot_cli/scenario/__init__.py": "",
         "mobot_cli/scenario/model.py": "",
         "mobot_cli/errors.py": "from mobot_cli.common import files\n",
@@ -172,12 +177,12 @@ def test_the_checker_finds_upward_imports_at_any_depth(tmp_path):
     })
     problems = upward_imports(root)
     assert [p.split(": ")[0] for p in problems] == [
-        "mobot_cli/errors.py:1", "mobot_cli/plot/draw.py:1", "mobot_cli/sim/state.py:1",
+        "mobot_cli/errors.py:1", "mobot_cli/run/tf.py:2", "mobot_cli/sim/state.py:1",
         "mobot_cli/sim/world.py:5"]
     assert problems[3] == ("mobot_cli/sim/world.py:5: mobot_cli.sim.world imports mobot_cli.run.tf: "
                            "'run' is a layer above 'sim'")
     assert "mobot_cli.sim.state imports mobot_cli.scenario.model" in problems[2]  # relative import
-    assert "'plot' and 'run' share a layer" in problems[1]  # run -> plot is fine, not plot -> run
+    assert "'run' and 'view' share a layer" in problems[1]  # view -> run is fine, not run -> view
 
 
 def test_the_checker_finds_cycles_through_function_level_imports(tmp_path):

@@ -2,8 +2,8 @@
 
 from mobot_cli.api.sensors import Scan
 from mobot_cli.api.simulation import Simulation
-from mobot_cli.run.timeline import Reading
-from mobot_cli.run.record import RunRecord, Status
+from mobot_cli.record.summary import RunRecord, Status
 from mobot_cli.sim.state import RobotState
+from mobot_cli.timeline.records import Reading
 
 __all__ = ["Reading", "RobotState", "RunRecord", "Scan", "Simulation", "Status"]

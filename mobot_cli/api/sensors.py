@@ -15,12 +15,12 @@ import numpy as np
 from pydantic import ValidationError
 
 from mobot_cli.errors import UsageError
-from mobot_cli.run.timeline import Deleted, Reading
+from mobot_cli.plan import RobotPlan, SensorSpec
 from mobot_cli.scenario.model import RobotSpec
 from mobot_cli.scenario.robots import RobotResolver
-from mobot_cli.sim.lidar import axis_angles
-from mobot_cli.sim.plan import RobotPlan, SensorSpec
-from mobot_cli.sim.sensors import ScanData
+from mobot_cli.sim.sensing.lidar import axis_angles
+from mobot_cli.sim.sensing.rig import ScanData
+from mobot_cli.timeline.records import Deleted, Reading
 
 NO_END = 2**62  # a spawned robot's commands come from your code, not a script
 

@@ -17,17 +17,18 @@ from pydantic import ValidationError
 
 from mobot_cli.api.sensors import Latest, Scan, pick, robot_plan
 from mobot_cli.errors import MobotError, UsageError, did_you_mean
-from mobot_cli.run.prepare import Prepared, prepare_target
-from mobot_cli.run.record import RunRecord, Status
-from mobot_cli.run.recording import Recording
-from mobot_cli.run.goals import GoalEnded, GoalStarted
-from mobot_cli.run.timeline import Reading, Timeline
+from mobot_cli.plan import Plan
+from mobot_cli.record.recording import Recording
+from mobot_cli.record.summary import RunRecord, Status
 from mobot_cli.scenario.goal_model import GoalFields, GotoSpec
 from mobot_cli.scenario.goals import goal_step
+from mobot_cli.scenario.prepare import Prepared, prepare_target
 from mobot_cli.scenario.units import steps
-from mobot_cli.sim.plan import Plan
-from mobot_cli.sim.state import RobotState
 from mobot_cli.sim.engine import open_world
+from mobot_cli.sim.state import RobotState
+from mobot_cli.timeline.goals import GoalEnded, GoalStarted
+from mobot_cli.timeline.loop import Timeline
+from mobot_cli.timeline.records import Reading
 
 
 class Simulation:

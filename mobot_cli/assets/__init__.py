@@ -8,10 +8,9 @@ Imports here stay light: yourdfpy, trimesh and xacro load only when a descriptio
 expanded or checked for the first time (a warm load reads the cache).
 """
 
+from mobot_cli.assets.description.describe import bundled_robot_names, expand_to_text, load_robot
 from mobot_cli.assets.description.drive import detect_drive
-from mobot_cli.assets.description.load import bundled_robot_names, expand_to_text, load_robot
-from mobot_cli.assets.description.robot import JointInfo, LinkInfo, RobotDescription, \
-    inspect_summary
+from mobot_cli.assets.description.robot import JointInfo, LinkInfo, RobotDescription, inspect_summary
 from mobot_cli.assets.resources import ResourceResolver, bundled_dir
 
 __all__ = ["JointInfo", "LinkInfo", "ResourceResolver", "RobotDescription", "bundled_dir",

@@ -11,13 +11,13 @@ from typing import Optional
 import typer
 
 from mobot_cli import __version__
-from mobot_cli.cli import check, inspect, run, xacro
+from mobot_cli.cli import check, inspect, run, serve, xacro
 from mobot_cli.cli import plot as plot_command
 from mobot_cli.cli import sweep as sweep_command
-from mobot_cli.cli import cmd, delete, goto, lockstep, odom, scan, serve, spawn, stop
 from mobot_cli.cli import view as view_command
-from mobot_cli.cli import list as list_command  # not `list`: that would shadow the builtin here
 from mobot_cli.cli.environment import Environment
+from mobot_cli.cli.live import cmd, delete, goto, lockstep, odom, scan, spawn, stop
+from mobot_cli.cli.live import list as list_command  # not `list`: that would shadow the builtin here
 from mobot_cli.cli.startup import collect_garbage
 from mobot_cli.errors import ExitCode
 

@@ -63,8 +63,8 @@ def check(
 
 
 def _check_scenario(path: Path, skip_missing: bool, overrides: list[str]) -> dict:
-    from mobot_cli.run.preflight import check_spawns
-    from mobot_cli.run.prepare import prepare
+    from mobot_cli.scenario.prepare import prepare
+    from mobot_cli.sim.preflight import check_spawns
 
     plan = prepare(path, [*overrides, *(["skip_missing=true"] if skip_missing else [])]).plan
     check_spawns(plan)  # robots inside furniture or below the floor are bad input too
@@ -74,7 +74,7 @@ def _check_scenario(path: Path, skip_missing: bool, overrides: list[str]) -> dic
 
 
 def _check_robot(path: Path, args: dict[str, str], skip_missing: bool) -> dict:
-    from mobot_cli.assets.description.load import load_robot
+    from mobot_cli.assets.description.describe import load_robot
     from mobot_cli.assets.description.robot import inspect_summary
 
     desc = load_robot(str(path), args, Path.cwd(), skip_missing)
@@ -92,14 +92,14 @@ def _is_world(path: Path) -> bool:
 
 
 def _bundled_world(path: Path) -> bool:
-    from mobot_cli.assets.world.load import bundled_world_names
+    from mobot_cli.assets.world.worldplan import bundled_world_names
 
     return not path.exists() and str(path) in bundled_world_names()
 
 
 def _check_world(path: Path, skip_missing: bool) -> dict:
-    from mobot_cli.assets.world.load import load_world
-    from mobot_cli.run.preflight import check_world
+    from mobot_cli.assets.world.worldplan import load_world
+    from mobot_cli.sim.preflight import check_world
 
     loaded = load_world(str(path), Path.cwd(), skip_missing=skip_missing)
     check_world(loaded.plan)  # every mesh loads into PyBullet
@@ -107,7 +107,7 @@ def _check_world(path: Path, skip_missing: bool) -> dict:
 
 
 def _check_run_folder(env, path: Path, json_: bool, repair: bool) -> int:
-    from mobot_cli.run.folder import repair_run, run_status
+    from mobot_cli.record.folder import repair_run, run_status
 
     repaired = repair_run(path) if repair else None
     result = run_status(path)

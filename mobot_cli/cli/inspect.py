@@ -20,7 +20,7 @@ def inspect(
                                       help="Leave out visuals and collisions whose meshes are missing, with a warning."),
 ) -> int:
     """Show a robot's link/joint tree, total mass, footprint and detected drive."""
-    from mobot_cli.assets.description.load import load_robot
+    from mobot_cli.assets.description.describe import load_robot
     from mobot_cli.assets.description.robot import inspect_summary
 
     desc = load_robot(robot, parse_mappings(mappings or []), Path.cwd(), skip_missing)

@@ -191,8 +191,14 @@ def sweep_progress(env: Environment, total: int, label: str):
     """A Rich bar for a sweep (runs done, failed, ETA) on stderr when it is a terminal; else None."""
     if not env.stderr_isatty:
         return None
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, \
-        TimeRemainingColumn
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
 
     bar = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                    TextColumn("runs, [red]{task.fields[failed]} failed[/]"), TimeElapsedColumn(),

@@ -17,7 +17,7 @@ def plot(
     out: Optional[Path] = typer.Option(None, "--out", "-o", help="The PNG to write [default: FOLDER/trajectory.png]."),
 ) -> int:
     """Draw every robot's true path and odometry over the world's floor plan, as a PNG."""
-    from mobot_cli.run.replot import replot
+    from mobot_cli.record.replot import replot
 
     result = replot(folder, out)
     output.notices(ctx.obj, result.notices)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from mobot_cli.cli.environment import Environment
 from mobot_cli.errors import Location
-from mobot_cli.sim.plan import Plan, Ros2Settings
+from mobot_cli.plan import Plan, Ros2Settings
 
 # The --ros2 option's help; run.py and serve.py declare the option.
 HELP = ("Join ROS 2 as node 'mobot': publish /clock, /tf, odom, joint_states, robot_description; "

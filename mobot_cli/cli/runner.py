@@ -73,8 +73,8 @@ def run_scenario(env: Environment, scenario: Path, out: Optional[Path], options:
     """Run a scenario to its end, write the run folder and print what `mobot run` prints; the exit code.
     ``one_line_json``: --json prints the summary on one line (several runs: JSON Lines)."""
     from mobot_cli.common.files import check_out_folder
-    from mobot_cli.run.execute import execute
-    from mobot_cli.run.prepare import prepare
+    from mobot_cli.run import execute
+    from mobot_cli.scenario.prepare import prepare
 
     overrides = list(options.set_)
     if options.seed is not None:

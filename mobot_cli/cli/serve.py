@@ -7,7 +7,8 @@ from typing import Optional
 
 import typer
 
-from mobot_cli.cli import live_common, output, ros2
+from mobot_cli.cli import output, ros2
+from mobot_cli.cli.live import common
 from mobot_cli.errors import ExitCode, UsageError
 
 
@@ -15,7 +16,7 @@ def serve(
     ctx: typer.Context,
     target: Optional[str] = typer.Argument(None, metavar="[WORLD or SCENARIO]",
                                            help="A world (bundled name or file) or a scenario .yaml [default: empty]."),
-    endpoint: Optional[str] = live_common.ENDPOINT,
+    endpoint: Optional[str] = common.ENDPOINT,
     bind_any: bool = typer.Option(False, "--bind-any", help="Allow a TCP endpoint that is not loopback."),
     realtime: bool = typer.Option(False, "--realtime", help="Step in real time (the default)."),
     fast: bool = typer.Option(False, "--fast", help="Step as fast as possible."),
@@ -41,8 +42,8 @@ def serve(
     from mobot_cli.live.keys import authorise_hint
     from mobot_cli.live.loader import Limits
     from mobot_cli.live.server import LiveServer, pace_text
-    from mobot_cli.run.prepare import prepare_target
-    from mobot_cli.run.record import Status
+    from mobot_cli.record.summary import Status
+    from mobot_cli.scenario.prepare import prepare_target
     from mobot_cli.scenario.units import steps
 
     env = ctx.obj
@@ -71,13 +72,13 @@ def serve(
 
     def ready(where: str) -> None:
         if not quiet:
-            live_common.status(env, f"serving '{plan.name}' (world {plan.world.name}, {len(plan.robots)} robot(s)) "
+            common.status(env, f"serving '{plan.name}' (world {plan.world.name}, {len(plan.robots)} robot(s)) "
                                f"at {where}, {pace_text(pace)}, {plan.physics.rate_hz} Hz"
                                f"{', paused' if paused else ''}. "
                                "Stop with Ctrl-C or `mobot stop`.")
             ros2.joined(env, bridges, quiet=False)
             if ipc_path(where) is None:
-                live_common.status(env, authorise_hint())
+                common.status(env, authorise_hint())
 
     try:
         result = server.serve(ready)
@@ -88,10 +89,10 @@ def serve(
     if not quiet:
         t = result.steps / plan.physics.rate_hz
         where = f"; record in {out}" if out is not None else ""
-        live_common.status(env, f"stopped after {t:.3f} s simulated, {sum(result.requests.values())} "
+        common.status(env, f"stopped after {t:.3f} s simulated, {sum(result.requests.values())} "
                            f"request(s){where}")
     if result.status == Status.FAULT:
-        live_common.status(env, f"error: {result.error}")
+        common.status(env, f"error: {result.error}")
         return ExitCode.SIMULATION_FAULT
     return ExitCode.OK
 

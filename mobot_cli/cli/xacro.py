@@ -15,7 +15,7 @@ def xacro(
     mappings: list[str] = typer.Argument(None, metavar="[NAME:=VALUE]...", help="xacro arguments."),
 ) -> None:
     """Print the expanded URDF of a xacro file or bundled robot, mesh paths resolved."""
-    from mobot_cli.assets.description.load import expand_to_text
+    from mobot_cli.assets.description.describe import expand_to_text
 
     text = expand_to_text(file, parse_mappings(mappings or []), Path.cwd())
     ctx.obj.stdout.write(text if text.endswith("\n") else text + "\n")

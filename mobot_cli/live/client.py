@@ -23,8 +23,7 @@ import zmq
 
 from mobot_cli.errors import LiveWorldError, RequestRefused
 from mobot_cli.live import endpoint as endpoints
-from mobot_cli.live import keys
-from mobot_cli.live import protocol
+from mobot_cli.live import keys, protocol
 from mobot_cli.live.protocol import HARD_LIMIT_BYTES, Refusal, decode_reply, encode_request
 
 START_HINT = "Start one with `mobot serve` (in another terminal), or point --endpoint / MOBOT_ENDPOINT at it."

@@ -10,10 +10,10 @@ from __future__ import annotations
 from typing import Any
 
 from mobot_cli.live.protocol import Refusal, Result
-from mobot_cli.run import sensor_topics
-from mobot_cli.run.timeline import Deleted, Reading, Record
-from mobot_cli.sim.lidar import angle_step
-from mobot_cli.sim.plan import RobotPlan
+from mobot_cli.plan import RobotPlan
+from mobot_cli.ros import sensor_topics
+from mobot_cli.sim.sensing.lidar import angle_step
+from mobot_cli.timeline.records import Deleted, Reading, Record
 
 
 class LatestReadings:

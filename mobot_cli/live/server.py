@@ -27,14 +27,14 @@ from mobot_cli.errors import MobotError, SimulationFault
 from mobot_cli.live import endpoint as endpoints
 from mobot_cli.live import protocol, schema, spawning
 from mobot_cli.live.clock import Clock, pace_text
-from mobot_cli.live.lockstep import Lockstep, LockstepRequests, Owed
 from mobot_cli.live.loader import Job, Limits, LoaderPool
+from mobot_cli.live.lockstep import Lockstep, LockstepRequests, Owed
 from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.live.session import Session
-from mobot_cli.run.record import LiveInfo, Status
-from mobot_cli.run.timeline import Attachment, Timeline
-from mobot_cli.sim.plan import Plan
+from mobot_cli.plan import Plan
+from mobot_cli.record.summary import LiveInfo, Status
 from mobot_cli.sim.engine import open_world
+from mobot_cli.timeline.loop import Attachment, Timeline
 
 # In --fast mode requests get at most as much wall time between two steps as the last step
 # took (so a flood of requests at least halves, never stops, the world), within these bounds.

@@ -15,18 +15,18 @@ from typing import Any, Callable
 from mobot_cli.errors import MobotError, SimulationFault, did_you_mean
 from mobot_cli.live import entity_state, protocol, schema, spawning
 from mobot_cli.live.history import History
-from mobot_cli.live.readings import LatestReadings
 from mobot_cli.live.protocol import Refusal, Result
-from mobot_cli.run.record import LiveInfo, RunRecord, Status
-from mobot_cli.run.recording import Recording
-from mobot_cli.run.goals import GoalEnded, GoalStarted
-from mobot_cli.run.timeline import Deleted, Record, Spawned, Timeline
+from mobot_cli.live.readings import LatestReadings
+from mobot_cli.plan import Event, Plan, RobotPlan
+from mobot_cli.record.recording import Recording
+from mobot_cli.record.summary import LiveInfo, RunRecord, Status
 from mobot_cli.scenario.goal_model import GoalFields, GotoSpec
 from mobot_cli.scenario.goals import goal_step
 from mobot_cli.scenario.units import spawn_pose, steps
-from mobot_cli.sim.plan import Event, Plan, RobotPlan
-from mobot_cli.sim.world import FLOOR_OF_THE_WORLD, World
-
+from mobot_cli.sim.bullet.world import FLOOR_OF_THE_WORLD, World
+from mobot_cli.timeline.goals import GoalEnded, GoalStarted
+from mobot_cli.timeline.loop import Timeline
+from mobot_cli.timeline.records import Deleted, Record, Spawned
 
 LIVE_GOAL = -1  # the command index of a goal a live request gave (not one of the scenario's)
 

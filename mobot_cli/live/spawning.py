@@ -13,18 +13,18 @@ import re
 from pathlib import Path
 
 from mobot_cli.assets import sandbox
-from mobot_cli.assets.description.load import resolve_description
+from mobot_cli.assets.description.describe import resolve_description
 from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.common.transforms import compose_poses, quat_from_rpy
 from mobot_cli.errors import DescriptionError, MobotError, ResourceError, SpawnError
 from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.live.schema import Spawn, normalize_namespace
-from mobot_cli.run.timeline import NameTaken, NotInWorld
+from mobot_cli.plan import RobotPlan, SpawnPose
 from mobot_cli.scenario.model import RobotSpec
 from mobot_cli.scenario.robots import RobotResolver
-from mobot_cli.sim.plan import RobotPlan, SpawnPose
+from mobot_cli.sim.bullet.urdf_file import urdf_path
 from mobot_cli.sim.state import RobotState
-from mobot_cli.sim.urdf_file import urdf_path
+from mobot_cli.timeline.loop import NameTaken, NotInWorld
 
 DESCRIPTION_SUFFIXES = (".urdf", ".xacro")
 UNSUPPORTED_SUFFIXES = (".sdf", ".world", ".dae", ".stl", ".obj", ".mjcf", ".xml")

@@ -25,9 +25,10 @@ from dataclasses import dataclass
 from typing import Mapping
 
 from mobot_cli.errors import Location, UsageError
+from mobot_cli.plan import Plan, Ros2Settings
 from mobot_cli.ros2 import names
-from mobot_cli.run.timeline import Record, Sample, Timeline
-from mobot_cli.sim.plan import Plan, Ros2Settings
+from mobot_cli.timeline.loop import Timeline
+from mobot_cli.timeline.records import Record, Sample
 
 # Records wait and are published together at most this long (wall time): a world stepping in
 # real time sends every sample as it comes (they are 20 ms apart), a fast one sends a few at a

@@ -27,7 +27,6 @@ from cyclonedds.sub import DataReader, Subscriber
 from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
-
 ANY_STATE = 0xFFFF_FFFF  # read/take mask: every sample, view and instance state
 
 

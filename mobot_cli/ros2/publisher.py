@@ -24,16 +24,27 @@ from dataclasses import dataclass
 from typing import Callable
 
 from mobot_cli.errors import MobotError
+from mobot_cli.plan import RobotPlan
+from mobot_cli.ros import sensor_topics
+from mobot_cli.ros.cdr import Packer
+from mobot_cli.ros.definitions import MESSAGES
+from mobot_cli.ros.messages import (
+    CLOCK,
+    CLOCK_PACKER,
+    JOINT_STATE,
+    ODOMETRY,
+    STRING,
+    TF,
+    TWIST,
+    RobotMessages,
+    stamp_of,
+    tf_layout,
+    tf_static,
+)
+from mobot_cli.ros.sensor_definitions import SENSOR_MESSAGES
 from mobot_cli.ros2 import dds, graph, idl, names
-from mobot_cli.run.cdr import Packer
-from mobot_cli.run.ros_messages import (CLOCK, CLOCK_PACKER, JOINT_STATE, ODOMETRY, STRING, TF, TWIST,
-                                        RobotMessages, stamp_of, tf_layout, tf_static)
-from mobot_cli.run.ros_msgs import MESSAGES
-from mobot_cli.run.ros_sensor_msgs import SENSOR_MESSAGES
-from mobot_cli.run import sensor_topics
-from mobot_cli.run.timeline import Deleted, Reading, Record, Sample, Spawned
-from mobot_cli.sim.plan import RobotPlan
 from mobot_cli.sim.state import RobotState
+from mobot_cli.timeline.records import Deleted, Reading, Record, Sample, Spawned
 
 # Type hashes of the types mobot sends that the bag does not record (tests/ros2/test_wire.py
 # checks them); the others come with the bag's definitions (run/ros_msgs.py, run/ros_sensor_msgs.py).

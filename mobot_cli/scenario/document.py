@@ -12,11 +12,11 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from mobot_cli.plan import CommandStep, DriveSpec, GoalStep, Plan, RobotPlan, TwistStep
 from mobot_cli.scenario.expect_resolve import expect_document
 from mobot_cli.scenario.goals import area_form
 from mobot_cli.scenario.model import RobotSpec, Scenario
 from mobot_cli.scenario.units import steps
-from mobot_cli.sim.plan import CommandStep, DriveSpec, GoalStep, Plan, RobotPlan, TwistStep
 
 DRIVE_KEYS = ("odometry", "left_joints", "right_joints", "wheel_radius", "wheel_separation",
               "wheel_separation_multiplier", "wheel_radius_multiplier", "max_wheel_torque",

@@ -11,10 +11,10 @@ import dataclasses
 from typing import Sequence
 
 from mobot_cli.errors import ScenarioError, did_you_mean, shown
+from mobot_cli.plan import Event, RobotPlan
 from mobot_cli.scenario.model import EventSpec
 from mobot_cli.scenario.robots import RobotResolver
 from mobot_cli.scenario.units import steps
-from mobot_cli.sim.plan import Event, RobotPlan
 
 
 def resolve_events(specs: Sequence[EventSpec], robots: tuple[RobotPlan, ...],

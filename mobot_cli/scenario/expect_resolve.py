@@ -5,12 +5,12 @@ from __future__ import annotations
 from typing import Sequence
 
 from mobot_cli.errors import ScenarioError, did_you_mean, shown
+from mobot_cli.plan import Event, Expectation, GoalStep, RobotPlan
 from mobot_cli.scenario.expect_model import DEFAULT_VISIT_RADIUS, OVER_TIME, ExpectSpec, OdomErrorSpec, UprightSpec
 from mobot_cli.scenario.goals import area_form, area_polygon
 from mobot_cli.scenario.model import Scenario
-from mobot_cli.scenario.units import steps
 from mobot_cli.scenario.source import Source
-from mobot_cli.sim.plan import Event, Expectation, GoalStep, RobotPlan
+from mobot_cli.scenario.units import steps
 
 ALL = "all"
 

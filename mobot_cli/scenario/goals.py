@@ -12,9 +12,9 @@ from typing import Callable
 
 from mobot_cli.common.polygon import box_polygon
 from mobot_cli.errors import Location, ScenarioError
+from mobot_cli.plan import GoalControl, GoalStep, WorldPlan
 from mobot_cli.scenario.goal_model import GoalFields
 from mobot_cli.scenario.units import steps
-from mobot_cli.sim.plan import GoalControl, GoalStep, WorldPlan
 
 DEFAULT = GoalControl()
 PLAN_CELL = 0.05  # m: the grid coverage lanes are planned on (finer for spacings under 0.15 m)

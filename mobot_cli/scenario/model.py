@@ -14,12 +14,28 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, field_validat
 
 from mobot_cli.errors import shown
 from mobot_cli.scenario.expect_model import ExpectSpec
-from mobot_cli.scenario.sensor_model import SensorEntry, SensorKey
 from mobot_cli.scenario.goal_model import GoalFields
-from mobot_cli.scenario.limits import NAME_RE  # noqa: F401 - live/schema.py imports the name rule from here
-from mobot_cli.scenario.limits import (FLEET_NAME_RE, MAX_NAMESPACE_LENGTH, MAX_RATE_HZ, MIN_LOG_RATE_HZ,
-                                       NAMESPACE_RE, SCENARIO_NAME_RE, Coordinate, Duration, Float, Int, PositiveFloat, Reference, Seconds, Vector3,
-                                       check_engine, check_name, gravity_length)
+from mobot_cli.scenario.limits import (
+    FLEET_NAME_RE,
+    MAX_NAMESPACE_LENGTH,
+    MAX_RATE_HZ,
+    MIN_LOG_RATE_HZ,
+    NAME_RE,  # noqa: F401 - live/schema.py imports the name rule from here
+    NAMESPACE_RE,
+    SCENARIO_NAME_RE,
+    Coordinate,
+    Duration,
+    Float,
+    Int,
+    PositiveFloat,
+    Reference,
+    Seconds,
+    Vector3,
+    check_engine,
+    check_name,
+    gravity_length,
+)
+from mobot_cli.scenario.sensor_model import SensorEntry, SensorKey
 
 
 class Strict(BaseModel):

@@ -5,16 +5,16 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from mobot_cli.assets.world.load import load_world
 from mobot_cli.assets.world.loaded import LoadedWorld
+from mobot_cli.assets.world.worldplan import load_world
 from mobot_cli.errors import MobotError, ScenarioError
+from mobot_cli.plan import Physics, Plan, Ros2Settings
 from mobot_cli.scenario.events import resolve_events
 from mobot_cli.scenario.expect_resolve import resolve_expectations
 from mobot_cli.scenario.model import Scenario
 from mobot_cli.scenario.robots import RobotResolver, unlisted_robots
-from mobot_cli.scenario.units import steps
 from mobot_cli.scenario.source import Source
-from mobot_cli.sim.plan import Physics, Plan, Ros2Settings
+from mobot_cli.scenario.units import steps
 
 DEFAULT_LOG_RATE_HZ = 50  # the log runs at most this fast when log.rate_hz is not given
 

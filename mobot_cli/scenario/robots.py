@@ -11,19 +11,19 @@ import dataclasses
 from pathlib import Path
 from typing import Any
 
+from mobot_cli.assets.description.describe import load_robot
 from mobot_cli.assets.description.drive import drive_from_joints
-from mobot_cli.assets.description.load import load_robot
 from mobot_cli.assets.description.robot import NO_DRIVE, RobotDescription
 from mobot_cli.assets.world.loaded import LoadedWorld, WorldRobot
 from mobot_cli.common.transforms import quat_from_rpy
 from mobot_cli.errors import Location, MobotError, ScenarioError
-from mobot_cli.scenario.model import RobotSpec
-from mobot_cli.scenario.sensor_switches import arg_text
-from mobot_cli.scenario.sensors import resolve_sensors
-from mobot_cli.scenario.units import spawn_pose, steps
-from mobot_cli.scenario.source import Source
+from mobot_cli.plan import CommandStep, DriveSpec, RobotPlan, SpawnPose, TwistStep
 from mobot_cli.scenario.goals import goal_step
-from mobot_cli.sim.plan import CommandStep, DriveSpec, RobotPlan, SpawnPose, TwistStep
+from mobot_cli.scenario.model import RobotSpec
+from mobot_cli.scenario.sensor_resolve import resolve_sensors
+from mobot_cli.scenario.sensor_switches import arg_text
+from mobot_cli.scenario.source import Source
+from mobot_cli.scenario.units import spawn_pose, steps
 
 
 class RobotResolver:

@@ -15,14 +15,12 @@ import re
 import unicodedata
 from typing import Annotated, Any, Literal, Optional
 
-from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, StrictBool, \
-    model_validator
+from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, StrictBool, model_validator
 
 from mobot_cli.assets.description.sensors import MAX_SAMPLES
 from mobot_cli.common.transforms import quat_from_rpy
 from mobot_cli.errors import shown
-from mobot_cli.scenario.limits import MAX_COORDINATE, MAX_RATE_HZ, Float, Int, NonNegativeFloat, \
-    Vector3
+from mobot_cli.scenario.limits import MAX_COORDINATE, MAX_RATE_HZ, Float, Int, NonNegativeFloat, Vector3
 
 MAX_LABEL_LENGTH = 256  # a sensor key, topic, frame, link or collision name
 KEY_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_.-]*(/[A-Za-z_][A-Za-z0-9_.-]*)*$")

@@ -5,8 +5,8 @@ from __future__ import annotations
 import math
 
 from mobot_cli.common.transforms import quat_from_rpy
+from mobot_cli.plan import SpawnPose
 from mobot_cli.scenario.model import PoseSpec
-from mobot_cli.sim.plan import SpawnPose
 
 
 def steps(seconds: float, rate_hz: int) -> int:

@@ -12,8 +12,8 @@ from __future__ import annotations
 import math
 from typing import Callable, Iterable
 
-from mobot_cli.sim.bullet import p
 from mobot_cli.sim.contacts import SUPPORT_NORMAL_Z
+from mobot_cli.sim.pb import p
 
 # How much further than the tightest clearance asked for the distances are measured.
 REACH_MARGIN = 0.5  # m

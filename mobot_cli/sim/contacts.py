@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import Hashable, Iterable, Protocol
 
-from mobot_cli.sim.bullet import p
+from mobot_cli.sim.pb import p
 
 # Contacts are sampled at this rate, not every step: one getContactPoints call for the whole
 # world per sample keeps the step loop within a few percent of raw PyBullet.

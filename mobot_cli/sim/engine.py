@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-from mobot_cli.sim.plan import Physics, WorldPlan
-from mobot_cli.sim.world import World
+from mobot_cli.plan import Physics, WorldPlan
+from mobot_cli.sim.bullet.world import World
 
 
 def open_world(physics: Physics, world: WorldPlan, seed: int = 0) -> World:
     """A World for ``physics.engine``: "bullet" (sim/world.py) or "kinematic" (sim/kinematic.py)."""
     if physics.engine == "kinematic":
-        from mobot_cli.sim.kinematic import KinematicWorld  # the physics engine never loads it
+        from mobot_cli.sim.kinematic.world import KinematicWorld  # the physics engine never loads it
 
         return KinematicWorld(physics, world, seed=seed)
     return World(physics, world, seed=seed)

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from mobot_cli.sim.bullet import p
-from mobot_cli.sim.robot import SimRobot
+from mobot_cli.sim.bullet.robot import SimRobot
+from mobot_cli.sim.pb import p
 
 Vec = tuple[float, float, float]
 

@@ -9,7 +9,7 @@ the world frame, for messages only (no PyBullet here: goal checks use it too).
 from __future__ import annotations
 
 from mobot_cli.common.transforms import compose_poses, pose_point
-from mobot_cli.sim.plan import StaticBody, StaticShape
+from mobot_cli.plan import StaticBody, StaticShape
 
 
 def describe(body: StaticBody, shape: StaticShape) -> str:

@@ -5,8 +5,8 @@ from __future__ import annotations
 from typing import Callable
 
 from mobot_cli.errors import SpawnError
-from mobot_cli.sim.bullet import p
-from mobot_cli.sim.plan import StaticBody, StaticShape
+from mobot_cli.plan import StaticBody, StaticShape
+from mobot_cli.sim.pb import p
 from mobot_cli.sim.static_shapes import shape_args
 
 # How far below the floor (or into another body) a spawned robot may reach. Gazebo users

@@ -8,8 +8,8 @@ hulls: the hull of a house's walls fills every room. PyBullet's URDF importer ig
 from __future__ import annotations
 
 from mobot_cli.errors import WorldError
-from mobot_cli.sim.bullet import p
-from mobot_cli.sim.plan import StaticBody, StaticShape
+from mobot_cli.plan import StaticBody, StaticShape
+from mobot_cli.sim.pb import p
 
 _TYPES = {"box": p.GEOM_BOX, "cylinder": p.GEOM_CYLINDER, "capsule": p.GEOM_CAPSULE,
           "sphere": p.GEOM_SPHERE, "plane": p.GEOM_PLANE, "mesh": p.GEOM_MESH}

@@ -9,9 +9,18 @@ number of times in every direction; a ray from outside crosses it an even number
 from __future__ import annotations
 
 from mobot_cli.errors import SpawnError
-from mobot_cli.sim.bullet import p
-from mobot_cli.sim.placement import MAX_CROSSINGS, MAX_SPAWN_PENETRATION, RAY_REACH, RAY_STEP, \
-    Bounds, Part, _at, _part_text, no_part
+from mobot_cli.sim.pb import p
+from mobot_cli.sim.placement import (
+    MAX_CROSSINGS,
+    MAX_SPAWN_PENETRATION,
+    RAY_REACH,
+    RAY_STEP,
+    Bounds,
+    Part,
+    _at,
+    _part_text,
+    no_part,
+)
 
 # Up and the four horizontal directions; down is left out: below a robot is its floor, and a
 # ground plane (a half space) is "crossed" once by any ray going down.

@@ -42,7 +42,7 @@ def _worker_main(conn: Connection, runner: Runner, sweep_pid: int) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     die_with_sweep(sweep_pid)  # a sweep killed with SIGKILL cannot stop its workers itself
     import mobot_cli.sweep.preload  # noqa: F401  (imported by the fork server already, but for spawn)
-    from mobot_cli.sim.clients import connect, keep_clients, release
+    from mobot_cli.sim.bullet.clients import connect, keep_clients, release
 
     keep_clients(1)  # one run after another: each takes the PyBullet client the last one reset
     release(*connect())  # connected now, while the sweep still prepares its runs

@@ -15,7 +15,7 @@ from dataclasses import dataclass, replace
 from typing import Iterable
 
 from mobot_cli.errors import Location, MobotError
-from mobot_cli.run.prepare import Prepared, prepare
+from mobot_cli.scenario.prepare import Prepared, prepare
 from mobot_cli.sweep.spec import Axis, SweepSpec
 
 _PLAIN_SEED = re.compile(r"0|[1-9][0-9]*")  # what YAML reads as that whole number, and nothing else

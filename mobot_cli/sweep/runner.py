@@ -9,12 +9,20 @@ from pathlib import Path
 from typing import Any, Callable, Protocol
 
 from mobot_cli.common.files import check_out_folder
-from mobot_cli.run.record import SUMMARY
 from mobot_cli.errors import UsageError, cannot_write
+from mobot_cli.record.summary import SUMMARY
 from mobot_cli.sweep.expand import Sweep
 from mobot_cli.sweep.guard import LOCK_FILE, FolderLock, check_unlocked
-from mobot_cli.sweep.results import (ResultsCsv, columns, folder, read_rows, rewrite_sorted, row,
-                                     sweep_document, write_document)
+from mobot_cli.sweep.results import (
+    ResultsCsv,
+    columns,
+    folder,
+    read_rows,
+    rewrite_sorted,
+    row,
+    sweep_document,
+    write_document,
+)
 from mobot_cli.sweep.syncer import Syncer
 from mobot_cli.sweep.task import FAILED, Outcome, Task
 

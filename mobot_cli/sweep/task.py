@@ -16,8 +16,8 @@ from typing import TYPE_CHECKING, Any
 from mobot_cli.errors import MobotError, SimulationFault
 
 if TYPE_CHECKING:  # the sweep starts its workers before it imports these (executor_local.prestart)
-    from mobot_cli.run.record import RobotRecord
-    from mobot_cli.sim.plan import Plan
+    from mobot_cli.plan import Plan
+    from mobot_cli.record.summary import RobotRecord
 
 PASSED, FAILED = "passed", "failed"
 
@@ -54,7 +54,7 @@ def failed(index: int, failure: str, reason: str, wall_time: float = 0.0) -> Out
 
 def run_task(task: Task) -> Outcome:
     """Run one task in this process and say how it went; never raises (but on Ctrl-C)."""
-    from mobot_cli.run.execute import execute  # imported once per warm worker
+    from mobot_cli.run import execute  # imported once per warm worker
 
     started = time.perf_counter()
     try:

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from mobot_cli.sim.plan import SensorSpec
+from mobot_cli.plan import SensorSpec
 from mobot_cli.view.geometry import matrix, matrix_wxyz
 
 HIT_COLOR = (230, 40, 40)

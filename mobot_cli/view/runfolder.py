@@ -16,9 +16,9 @@ from pathlib import Path
 import numpy as np
 
 from mobot_cli.errors import MobotError, UsageError
-from mobot_cli.run.folder import is_run_folder, is_sweep_folder
-from mobot_cli.run.record import RunRecord
-from mobot_cli.sim.plan import Plan, RobotPlan
+from mobot_cli.plan import Plan, RobotPlan
+from mobot_cli.record.folder import is_run_folder, is_sweep_folder
+from mobot_cli.record.summary import RunRecord
 from mobot_cli.view.bagread import Joints
 from mobot_cli.view.readings import Cloud
 
@@ -98,7 +98,7 @@ def read_run(folder: Path) -> RunView:
 
 
 def _plan(scenario: Path, notices: list[str]) -> Plan | None:
-    from mobot_cli.run.prepare import prepare
+    from mobot_cli.scenario.prepare import prepare
 
     if not scenario.is_file():
         notices.append(f"{scenario} is missing: no world, and robots drawn as boxes")

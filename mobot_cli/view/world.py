@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from mobot_cli.sim.plan import StaticBody, StaticShape, WorldPlan
+from mobot_cli.plan import StaticBody, StaticShape, WorldPlan
 from mobot_cli.view.geometry import matrix
 
 # Height colours (m -> RGB), from the floor to above a door: slate, teal, sand, coral.

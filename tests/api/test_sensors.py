@@ -12,8 +12,8 @@ from mcap.reader import make_reader
 
 from mobot_cli.api import Simulation
 from mobot_cli.errors import MobotError
-from mobot_cli.run.execute import execute
-from mobot_cli.run.prepare import prepare
+from mobot_cli.run import execute
+from mobot_cli.scenario.prepare import prepare
 from tests.sim.sensor_world import HALF_X, HALF_Y, ROOM_SDF, room_scenario
 
 LIDAR = {"lidar": "true"}

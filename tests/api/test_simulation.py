@@ -10,7 +10,7 @@ import pytest
 from mobot_cli.api import Simulation, Status
 from mobot_cli.cli import invoke
 from mobot_cli.errors import SpawnError, UsageError
-from mobot_cli.run.prepare import prepare
+from mobot_cli.scenario.prepare import prepare
 
 REPO = Path(__file__).resolve().parents[2]
 QUICKSTART = REPO / "scenarios" / "quickstart.yaml"

@@ -10,8 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from mobot_cli.assets import (bundled_robot_names, expand_to_text, inspect_summary,
-                              load_robot)
+from mobot_cli.assets import bundled_robot_names, expand_to_text, inspect_summary, load_robot
 from mobot_cli.errors import DescriptionError, ResourceError
 from mobot_cli.sim.drive import default_separation_multiplier
 

@@ -144,7 +144,7 @@ def test_dolly_laser(corpus, model, topic):
 
 def test_dolly_in_its_world_keeps_its_laser(corpus):
     from mobot_cli.assets.description.sdf import describe_world_robot
-    from mobot_cli.assets.world.load import load_world
+    from mobot_cli.assets.world.worldplan import load_world
 
     world = load_world(str(corpus / "dolly/dolly_gazebo/worlds/dolly_empty.world"), None)
     laser, = describe_world_robot(world.robot("Dolly"), None).sensors

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from mobot_cli.assets.world.load import load_world
+from mobot_cli.assets.world.worldplan import load_world
 from mobot_cli.errors import WorldError
-from mobot_cli.run.preflight import check_world
+from mobot_cli.sim.preflight import check_world
 
 SMALL_HOUSE = "aws-robomaker-small-house-world/worlds/small_house.world"
 BOOKSTORE = "aws-robomaker-bookstore-world/worlds/bookstore.world"

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from mobot_cli.assets.world import build as world_build
-from mobot_cli.assets.world.load import load_world
+from mobot_cli.assets.world.worldplan import load_world
 from mobot_cli.cli import invoke
 from mobot_cli.errors import WorldError
 

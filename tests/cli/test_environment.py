@@ -86,7 +86,7 @@ def test_ctrl_c_is_exit_130(monkeypatch, tiny, tmp_path):
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr("mobot_cli.run.prepare.prepare", interrupted)  # where Ctrl-C lands in a run
+    monkeypatch.setattr("mobot_cli.scenario.prepare.prepare", interrupted)  # where Ctrl-C lands in a run
     # Typer turns Ctrl-C into a quiet exit 130; the console script's entry point says
     # `mobot: interrupted` (tests/cli/test_interrupt.py), in-process callers get the code.
     assert invoke(["run", tiny, "--out", tmp_path / "r"]) == Outcome(130, "", "")

@@ -10,7 +10,7 @@ import pytest
 from PIL import Image
 
 from mobot_cli.cli import invoke
-from mobot_cli.run.folder import is_run_folder
+from mobot_cli.record.folder import is_run_folder
 
 RUN = "version: 1\nname: {name}\nduration: 0.5\nrobots:\n  - name: mobot\n"
 FAILS = RUN + "expect:\n  - {{robot: mobot, distance: {{min: 1.0}}}}\n"  # it stands still

@@ -15,7 +15,7 @@ REPO = Path(__file__).resolve().parents[2]
 # Records the collector's state when the command gets to work, then runs `mobot` as the console script does.
 PROBE = """
 import functools, gc, sys
-import mobot_cli.run.execute as execute
+import mobot_cli.run as execute
 import mobot_cli.cli.check as check
 seen = []
 def probe(original):

@@ -10,9 +10,21 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from mobot_cli.common.transforms import Frame, Planar, compose_poses, mat_vec, matrix_rpy, \
-    odom_origin, pose_point, quat_from_matrix, quat_from_rpy, quat_matrix, quat_mul, rpy_matrix, \
-    yaw_quat
+from mobot_cli.common.transforms import (
+    Frame,
+    Planar,
+    compose_poses,
+    mat_vec,
+    matrix_rpy,
+    odom_origin,
+    pose_point,
+    quat_from_matrix,
+    quat_from_rpy,
+    quat_matrix,
+    quat_mul,
+    rpy_matrix,
+    yaw_quat,
+)
 
 angle = st.floats(-math.pi, math.pi, allow_nan=False)
 small = st.floats(-1.5, 1.5, allow_nan=False)  # pitch away from gimbal lock

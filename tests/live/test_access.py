@@ -16,12 +16,12 @@ import pytest
 import zmq
 from zmq.auth import create_certificates, load_certificate
 
-from tests.live.live_server import REPO, LiveProcess
+from mobot_cli.common import cache
 from mobot_cli.errors import UsageError
 from mobot_cli.live import keys
 from mobot_cli.live.client import Client
-from mobot_cli.common import cache
-from mobot_cli.sim import urdf_file
+from mobot_cli.sim.bullet import urdf_file
+from tests.live.live_server import REPO, LiveProcess
 
 
 @pytest.fixture(scope="module")

@@ -20,9 +20,9 @@ import zmq
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tests.live.live_server import LiveProcess
 from mobot_cli.live.protocol import Refusal, Result, decode
 from mobot_cli.live.schema import Cmd, parse
+from tests.live.live_server import LiveProcess
 
 FAST_SAMPLE = 200
 SLOW_SAMPLE = int(os.environ.get("MOBOT_FUZZ_REQUESTS", "5000"))

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from tests.live.live_server import REPO, LiveProcess
 from mobot_cli.cli import invoke
+from tests.live.live_server import REPO, LiveProcess
 
 BAD_ROBOTS = REPO / "tests" / "bad" / "robots"
 TUTORIAL = [(0.0, 0.0), (1.0, 1.0), (2.0, 0.0), (1.0, 2.0), (0.0, 2.0)]

@@ -13,7 +13,7 @@ from mobot_cli.live.loader import Job, Limits, LoaderPool
 from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.live.schema import parse
 from mobot_cli.live.spawning import load_plan
-from mobot_cli.sim.plan import RobotPlan
+from mobot_cli.plan import RobotPlan
 
 HEAD = '<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">'
 

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from tests.live.live_server import REPO, LiveProcess, wait_for_step
 from mobot_cli.cli import Outcome, invoke
 from mobot_cli.errors import RequestRefused
+from tests.live.live_server import REPO, LiveProcess, wait_for_step
 
 EVENTS = REPO / "scenarios" / "events.yaml"
 

@@ -10,10 +10,10 @@ import time
 import pytest
 import zmq
 
-from tests.live.live_server import LiveProcess, wait_for_step
 from mobot_cli.cli import invoke
 from mobot_cli.live.client import Client
 from mobot_cli.live.protocol import HARD_LIMIT_BYTES, MAX_REQUEST_BYTES
+from tests.live.live_server import LiveProcess, wait_for_step
 
 
 @pytest.fixture(scope="module")

@@ -19,7 +19,7 @@ from mobot_cli.cli import invoke
 from mobot_cli.errors import LiveWorldError
 from mobot_cli.live.client import Client
 from mobot_cli.live.server import LiveServer
-from mobot_cli.sim.plan import SensorSpec
+from mobot_cli.plan import SensorSpec
 from tests.sim.sensor_world import lidar, one_robot, planned, room_distance
 
 REPO = Path(__file__).resolve().parents[2]

@@ -14,14 +14,14 @@ from unittest import mock
 import pytest
 import zmq
 
-from tests.live.live_server import LiveProcess
 from mobot_cli.assets import sandbox
-from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.assets.description.xacro import expand_file
+from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.errors import DescriptionError
 from mobot_cli.live import protocol
 from mobot_cli.live.schema import parse
 from mobot_cli.live.spawning import load_plan
+from tests.live.live_server import LiveProcess
 
 HEAD = '<?xml version="1.0"?>\n<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">\n'
 SECRET = "SECRET-TOKEN-4711"

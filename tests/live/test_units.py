@@ -11,10 +11,10 @@ import pytest
 from mobot_cli.common.transforms import quat_from_rpy
 from mobot_cli.errors import DescriptionError, ResourceError, ScenarioError, SpawnError, UsageError
 from mobot_cli.live import endpoint, protocol, spawning
+from mobot_cli.live.clock import Clock
 from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.live.schema import Spawn, normalize_namespace, parse
-from mobot_cli.live.clock import Clock
-from mobot_cli.sim.plan import SpawnPose
+from mobot_cli.plan import SpawnPose
 from mobot_cli.sim.state import RobotState
 
 

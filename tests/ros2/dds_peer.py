@@ -112,6 +112,7 @@ def take(topic: str, type_name: str, seconds: float, transient_local: bool = Fal
     from cyclonedds.qos import Policy, Qos
     from cyclonedds.sub import DataReader
     from cyclonedds.topic import Topic
+
     from mobot_cli.ros2 import idl
 
     dp = DomainParticipant(int(os.environ.get("ROS_DOMAIN_ID", "0")))
@@ -131,6 +132,7 @@ def drive(topic: str, linear: float, angular: float, seconds: float) -> dict:
     from cyclonedds.domain import DomainParticipant
     from cyclonedds.pub import DataWriter
     from cyclonedds.topic import Topic
+
     from mobot_cli.ros2 import idl
 
     dp = DomainParticipant(int(os.environ.get("ROS_DOMAIN_ID", "0")))

@@ -234,10 +234,10 @@ def test_robots_spawned_and_deleted_live_join_and_leave_the_graph(tmp_path, cach
 
 
 def test_a_bridge_on_its_own_thread_publishes_the_same(tmp_path):
+    from mobot_cli.plan import Ros2Settings
     from mobot_cli.ros2.bridge import Bridge
-    from mobot_cli.run.execute import execute
-    from mobot_cli.run.prepare import prepare
-    from mobot_cli.sim.plan import Ros2Settings
+    from mobot_cli.run import execute
+    from mobot_cli.scenario.prepare import prepare
 
     prepared = prepare(REPO / "scenarios" / "fleet.yaml", ["duration=1.0", "log.formats=[csv]"])
     counts = []

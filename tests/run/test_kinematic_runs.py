@@ -12,10 +12,9 @@ import numpy as np
 import pytest
 
 from mobot_cli.cli import invoke
-from mobot_cli.run.prepare import prepare
+from mobot_cli.plan import SensorSpec
+from mobot_cli.sim.bullet.world import World
 from mobot_cli.sim.engine import open_world
-from mobot_cli.sim.world import World
-from mobot_cli.sim.plan import SensorSpec
 from tests.sim.sensor_world import lidar, one_robot, planned, room_distance
 
 REPO = Path(__file__).resolve().parents[2]

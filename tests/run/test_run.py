@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from mobot_cli.cli import invoke
-from mobot_cli.run.prepare import prepare
+from mobot_cli.scenario.prepare import prepare
 
 REPO = Path(__file__).resolve().parents[2]
 SCENARIOS = sorted((REPO / "scenarios").glob("*.yaml"))
@@ -145,8 +145,8 @@ def test_resolved_scenario_matches_golden_file(name):
 
 def test_a_warm_headless_run_imports_no_plotting_viewer_or_mesh_code(tmp_path):
     """DESIGN: headless runs must not import plotting or viewer code (nor heavy mesh tooling)."""
-    code = ("import sys, pathlib; from mobot_cli.run.prepare import prepare; "
-            "from mobot_cli.run.execute import execute; "
+    code = ("import sys, pathlib; from mobot_cli.scenario.prepare import prepare; "
+            "from mobot_cli.run import execute; "
             f"p = prepare({str(REPO / 'scenarios' / 'quickstart.yaml')!r}); "
             f"execute(p.plan, p.resolved_yaml, pathlib.Path({str(tmp_path / 'r')!r})); "
             "print(sorted(m for m in ('matplotlib', 'yourdfpy', 'trimesh', 'rich', 'xacro', 'pyglet', 'cyclonedds', "

@@ -186,7 +186,7 @@ def workspace(tmp: Path) -> Path:
 
 def load_and_resolve(path: Path, overrides: list[str]) -> None:
     """What `mobot check` (a scenario) or `mobot sweep` (a sweep file) does before running anything."""
-    from mobot_cli.run.prepare import prepare
+    from mobot_cli.scenario.prepare import prepare
     from mobot_cli.sweep.expand import expand
     from mobot_cli.sweep.spec import build_spec, is_sweep_file
 

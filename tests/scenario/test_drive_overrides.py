@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from mobot_cli.errors import ScenarioError
-from mobot_cli.run.prepare import prepare
+from mobot_cli.scenario.prepare import prepare
 
 ROBOTS = Path(__file__).resolve().parents[1] / "sim" / "robots"
 NO_DRIVE = "no drive wheels found: the robot will not move on commands"

@@ -12,7 +12,7 @@ import pytest
 
 from mobot_cli.cli import Outcome, invoke
 from mobot_cli.errors import ScenarioError
-from mobot_cli.run.prepare import prepare
+from mobot_cli.scenario.prepare import prepare
 
 REPO = Path(__file__).resolve().parents[2]
 EVENTS = REPO / "scenarios" / "events.yaml"

@@ -16,8 +16,8 @@ import pytest
 
 from mobot_cli.cli import invoke
 from mobot_cli.errors import ScenarioError, UsageError
-from mobot_cli.run.prepare import prepare
 from mobot_cli.scenario.load import load_scenario
+from mobot_cli.scenario.prepare import prepare
 from mobot_cli.scenario.yamlsafe import MAX_DEPTH, MAX_NODES, MAX_YAML_BYTES
 from mobot_cli.scenario.yamlsource import parse_value, parse_yaml
 from tests.scenario.mutations import cpu_seconds

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from mobot_cli.run.prepare import prepare
-from mobot_cli.sim.plan import Plan, RayAxis, SensorSpec
+from mobot_cli.plan import Plan, RayAxis, SensorSpec
+from mobot_cli.scenario.prepare import prepare
 
 HALF_X, HALF_Y, WALL_HEIGHT = 3.0, 2.0, 2.0
 

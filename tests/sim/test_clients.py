@@ -9,11 +9,11 @@ from pathlib import Path
 
 import pytest
 
-from mobot_cli.run.execute import execute
-from mobot_cli.run.prepare import prepare
-from mobot_cli.sim import clients
-from mobot_cli.sim.bullet import p
-from mobot_cli.sim.world import World
+from mobot_cli.run import execute
+from mobot_cli.scenario.prepare import prepare
+from mobot_cli.sim.bullet import clients
+from mobot_cli.sim.bullet.world import World
+from mobot_cli.sim.pb import p
 
 REPO = Path(__file__).resolve().parents[2]
 # Mesh and box worlds, robots deleted and spawned mid-run, a lidar, goals: one after another,

@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from mobot_cli.run.prepare import prepare
-from mobot_cli.sim.plan import SpawnPose, StaticBody, WorldPlan
-from mobot_cli.sim.world import World
+from mobot_cli.plan import SpawnPose, StaticBody, WorldPlan
+from mobot_cli.scenario.prepare import prepare
+from mobot_cli.sim.bullet.world import World
 
 REPO = Path(__file__).resolve().parents[2]
 

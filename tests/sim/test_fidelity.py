@@ -11,8 +11,8 @@ from dataclasses import dataclass, replace
 
 import pytest
 
-from mobot_cli.sim.plan import Physics, RobotPlan, SpawnPose, WorldPlan
-from mobot_cli.sim.world import World
+from mobot_cli.plan import Physics, RobotPlan, SpawnPose, WorldPlan
+from mobot_cli.sim.bullet.world import World
 
 RATE = 240
 PACKAGES = ("turtlebot3", "husky", "jackal", "velodyne_simulator", "linorobot2", "gz_ros2_control")

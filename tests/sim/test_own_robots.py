@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from mobot_cli.assets.description.load import load_robot
-from mobot_cli.sim.plan import Physics, RobotPlan, SpawnPose, WorldPlan
-from mobot_cli.sim.world import World
+from mobot_cli.assets.description.describe import load_robot
+from mobot_cli.plan import Physics, RobotPlan, SpawnPose, WorldPlan
+from mobot_cli.sim.bullet.world import World
 
 WHEELDROP = Path(__file__).parent / "robots" / "wheeldrop.urdf.xacro"
 RESTING_Z = 0.035  # base_link above the floor when the wheels (radius 0.035) touch it

@@ -12,12 +12,11 @@ import math
 
 import pytest
 
+from mobot_cli.plan import Physics, WorldPlan
 from mobot_cli.sim import placement
-from mobot_cli.sim.bullet import p
-from mobot_cli.sim.plan import Physics, WorldPlan
-from mobot_cli.sim.urdf_file import urdf_path
-from mobot_cli.sim.world import URDF_FLAGS, World
-
+from mobot_cli.sim.bullet.urdf_file import urdf_path
+from mobot_cli.sim.bullet.world import URDF_FLAGS, World
+from mobot_cli.sim.pb import p
 from tests.sim.test_fidelity import robot_plans  # noqa: F401  (the corpus robots, a fixture)
 
 NORMALS = [(1.0, 0.0, 0.0), (-1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, -1.0, 0.0), (0.0, 0.0, 1.0),

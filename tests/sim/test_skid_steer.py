@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mobot_cli.sim.plan import RobotPlan, SpawnPose
-from mobot_cli.sim.twist_trim import LIMITS, TwistTrim
+from mobot_cli.plan import RobotPlan, SpawnPose
+from mobot_cli.sim.bullet.twist_trim import LIMITS, TwistTrim
 from tests.sim.test_fidelity import CASES, drive, robot_plans  # noqa: F401 - a fixture
 
 SKID4 = Path(__file__).parent / "robots" / "skid4.urdf.xacro"
@@ -44,7 +44,7 @@ def arc(plan: RobotPlan, speed: float, radius: float = 1.0) -> tuple[float, floa
 
 @pytest.fixture(scope="module")
 def own_plans(tmp_path_factory):
-    from mobot_cli.assets.description.load import load_robot
+    from mobot_cli.assets.description.describe import load_robot
 
     mp = pytest.MonkeyPatch()
     mp.setenv("MOBOT_CACHE_DIR", str(tmp_path_factory.mktemp("skid-cache")))

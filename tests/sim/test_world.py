@@ -9,9 +9,9 @@ import pybullet as p
 import pytest
 
 from mobot_cli.errors import SimulationFault, SpawnError
+from mobot_cli.plan import DriveSpec, Physics, RobotPlan, SpawnPose, StaticBody, WorldPlan
+from mobot_cli.sim.bullet.world import World
 from mobot_cli.sim.drive import Odometry, default_separation_multiplier, wheel_speeds
-from mobot_cli.sim.plan import DriveSpec, Physics, RobotPlan, SpawnPose, StaticBody, WorldPlan
-from mobot_cli.sim.world import World
 
 RADIUS, TRACK = 0.05, 0.30
 

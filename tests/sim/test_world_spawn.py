@@ -11,13 +11,13 @@ import numpy as np
 import pytest
 import trimesh
 
-from mobot_cli.assets.description.load import load_robot
-from mobot_cli.assets.world.load import load_world
+from mobot_cli.assets.description.describe import load_robot
+from mobot_cli.assets.world.worldplan import load_world
 from mobot_cli.cli import Outcome, invoke
 from mobot_cli.errors import ScenarioError, SpawnError
-from mobot_cli.run.prepare import prepare
-from mobot_cli.sim.plan import Physics, RobotPlan, SpawnPose
-from mobot_cli.sim.world import World
+from mobot_cli.plan import Physics, RobotPlan, SpawnPose
+from mobot_cli.scenario.prepare import prepare
+from mobot_cli.sim.bullet.world import World
 
 REPO = Path(__file__).resolve().parents[2]
 SMALL_HOUSE = "aws-robomaker-small-house-world/worlds/small_house.world"

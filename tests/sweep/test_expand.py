@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from mobot_cli.cli import invoke
-from mobot_cli.run.prepare import prepare
+from mobot_cli.scenario.prepare import prepare
 from mobot_cli.sweep.expand import expand
 from mobot_cli.sweep.spec import build_spec
 

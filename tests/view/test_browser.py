@@ -19,8 +19,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from tests.view.browser import Browser, available
 from mobot_cli.cli import invoke
+from tests.view.browser import Browser, available
 
 REPO = Path(__file__).resolve().parents[2]
 pytest.importorskip("viser", reason="the view extra (viser) is not installed")

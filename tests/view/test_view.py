@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from mobot_cli.cli import invoke
-from mobot_cli.run.prepare import prepare
+from mobot_cli.scenario.prepare import prepare
 
 REPO = Path(__file__).resolve().parents[2]
 viser = pytest.importorskip("viser", reason="the view extra (viser) is not installed")
@@ -132,7 +132,7 @@ class Reading:
 
 
 def lidar(samples: int = 4):
-    from mobot_cli.sim.plan import RayAxis, SensorSpec
+    from mobot_cli.plan import RayAxis, SensorSpec
 
     return SensorSpec(name="scan", kind="lidar", link="base_link", every=24, xyz=(0.1, 0.0, 0.2),
                       horizontal=RayAxis(samples, -np.pi / 2, np.pi / 2), range_min=0.1, range_max=5.0)
@@ -152,8 +152,8 @@ def test_a_lidar_reading_becomes_points_on_its_link():
 
 def test_the_live_view_draws_states_and_readings_on_the_page(page):
     """A LiveView on a real timeline: robots appear, move, and a reading record is drawn."""
-    from mobot_cli.run.timeline import Timeline
-    from mobot_cli.sim.world import World
+    from mobot_cli.sim.bullet.world import World
+    from mobot_cli.timeline.loop import Timeline
     from mobot_cli.view.live import LiveView
 
     plan = prepare(REPO / "scenarios" / "fleet.yaml").plan
@@ -189,7 +189,7 @@ def test_the_page_buttons_press_the_servers_own_pause_state():
 
     from mobot_cli.live.client import Client
     from mobot_cli.live.server import LiveServer
-    from mobot_cli.run.prepare import prepare_target
+    from mobot_cli.scenario.prepare import prepare_target
     from mobot_cli.view.controls import GateControl
 
     ready = threading.Event()

@@ -144,8 +144,8 @@ def _valid(value: str | None, count: int) -> bool:
 
 def check_with_yourdfpy(text: str, source: Path) -> None:
     """Run yourdfpy's own validation (geometry, limits, attributes) on the text."""
-    from lxml import etree  # lazy, with yourdfpy: only a cold load pays for them
     import yourdfpy
+    from lxml import etree  # lazy, with yourdfpy: only a cold load pays for them
 
     try:
         parser = etree.XMLParser(remove_blank_text=True, remove_comments=True)

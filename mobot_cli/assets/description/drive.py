@@ -16,7 +16,7 @@ from pathlib import Path
 from mobot_cli.assets.description.frames import LinkTree
 from mobot_cli.assets.description.wheels import Wheel, wheel
 from mobot_cli.errors import DescriptionError, Location, Notice, did_you_mean
-from mobot_cli.sim.plan import DriveSpec
+from mobot_cli.plan import DriveSpec
 
 _LEFT_TAGS = ("leftJoint", "left_joint", "leftFrontJoint", "leftRearJoint")
 _RIGHT_TAGS = ("rightJoint", "right_joint", "rightFrontJoint", "rightRearJoint")

@@ -14,20 +14,24 @@ from pathlib import Path
 from typing import Any
 
 from mobot_cli.assets import sandbox
-from mobot_cli.assets.description.check import check_geometry, check_tree, check_with_yourdfpy, \
-    parse_urdf
+from mobot_cli.assets.description.check import check_geometry, check_tree, check_with_yourdfpy, parse_urdf
 from mobot_cli.assets.description.drive import detect_drive
 from mobot_cli.assets.description.frames import LinkTree, floats
-from mobot_cli.assets.description.process import apply_friction, collision_bounds, \
-    fix_inertials, inertial_values, mesh_path_or_none, resolve_meshes
+from mobot_cli.assets.description.process import (
+    apply_friction,
+    collision_bounds,
+    fix_inertials,
+    inertial_values,
+    mesh_path_or_none,
+    resolve_meshes,
+)
 from mobot_cli.assets.description.sanity import check_mesh_file, check_sanity
-from mobot_cli.assets.description.sensors import DescribedSensor, collision_names, read_sensors, \
-    sensor_summary
+from mobot_cli.assets.description.sensors import DescribedSensor, collision_names, read_sensors, sensor_summary
 from mobot_cli.assets.description.xacro import Expansion
 from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.common import cache
 from mobot_cli.errors import Location, Notice
-from mobot_cli.sim.plan import DriveSpec
+from mobot_cli.plan import DriveSpec
 
 MAX_FINGERPRINTS = 16  # search paths an entry remembers agreeing with (folders run from)
 

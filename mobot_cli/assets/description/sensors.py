@@ -18,7 +18,7 @@ from pathlib import Path
 
 from mobot_cli.assets.description.sensor_xml import SensorXml
 from mobot_cli.errors import DescriptionError, Location, Notice, did_you_mean
-from mobot_cli.sim.plan import RayAxis, SensorSpec
+from mobot_cli.plan import RayAxis, SensorSpec
 
 LIDAR_TYPES = ("ray", "gpu_ray", "lidar", "gpu_lidar")
 KINDS = {**{t: "lidar" for t in LIDAR_TYPES}, "imu": "imu", "contact": "contact"}

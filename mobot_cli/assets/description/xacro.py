@@ -19,8 +19,7 @@ from typing import Iterator, Mapping
 from mobot_cli.assets import sandbox
 from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.common import cache
-from mobot_cli.errors import DescriptionError, Location, MobotError, Notice, ResourceError, \
-    did_you_mean
+from mobot_cli.errors import DescriptionError, Location, MobotError, Notice, ResourceError, did_you_mean
 
 # xacro keeps its state in module globals, so expansions must not overlap.
 _lock = threading.Lock()

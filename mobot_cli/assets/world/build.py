@@ -16,7 +16,7 @@ from mobot_cli.assets.world.paths import SdfPaths
 from mobot_cli.assets.world.pose import xyz_quat
 from mobot_cli.assets.world.reader import SdfReader
 from mobot_cli.assets.world.to_urdf import model_to_urdf
-from mobot_cli.sim.plan import StaticBody, StaticShape, WorldPlan
+from mobot_cli.plan import StaticBody, StaticShape, WorldPlan
 
 # A model placed farther than this from the origin is a typo (the AWS bookstore has a book
 # at z = 343 km): it is left out with a warning rather than stretching the world.

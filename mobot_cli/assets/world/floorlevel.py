@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from mobot_cli.common.transforms import compose_poses, quat_matrix
-from mobot_cli.sim.plan import StaticShape, WorldPlan
+from mobot_cli.plan import StaticShape, WorldPlan
 
 # A surface this far above a robot's root link may still be its floor (the root's own height
 # above the floor is what the robot's wheels and chassis add; base_footprint adds none).

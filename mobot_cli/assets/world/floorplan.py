@@ -15,9 +15,8 @@ import math
 import xml.etree.ElementTree as ET
 
 from mobot_cli.assets.description.frames import LinkTree, floats, origin_frame
-from mobot_cli.common.transforms import Quat, Vec, compose_poses, pose_point, quat_from_matrix, \
-    quat_matrix
-from mobot_cli.sim.plan import StaticShape, WorldPlan
+from mobot_cli.common.transforms import Quat, Vec, compose_poses, pose_point, quat_from_matrix, quat_matrix
+from mobot_cli.plan import StaticShape, WorldPlan
 
 Point = tuple[float, float]
 Polygon = list[Point]

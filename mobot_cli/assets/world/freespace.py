@@ -13,8 +13,8 @@ from mobot_cli.assets.world.floorplan import BAND, body_shadows, body_shapes, sh
 from mobot_cli.common.polygon import contains
 from mobot_cli.common.raster import Grid, fill_shape
 from mobot_cli.common.transforms import compose_poses
+from mobot_cli.plan import WorldPlan
 from mobot_cli.sim.parts import describe
-from mobot_cli.sim.plan import WorldPlan
 
 
 def obstacle_at(world: WorldPlan, x: float, y: float) -> str | None:

@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from mobot_cli.sim.plan import WorldPlan
+from mobot_cli.plan import WorldPlan
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,1 @@
+"""The live-world commands: clients of `mobot serve` that share one set of options."""

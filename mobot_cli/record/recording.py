@@ -1,0 +1,290 @@
+"""The run folder as a timeline's consumer: one place for `mobot run` and `mobot serve --out`.
+
+    DIR/scenario.yaml      the resolved scenario (or world) the run started from
+    DIR/odom/, DIR/bag/    per robot, however it entered the world (the sinks)
+    DIR/sensors/           per robot with sensors, opened at the first reading
+    DIR/trajectory.png     drawn when the recording closes
+    DIR/summary.json       the RunRecord, written last
+
+A name used again after its robot was deleted (a live world) is recorded as ``<name>__2``.
+"""
+
+from __future__ import annotations
+
+import math
+import platform
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Optional
+
+from mobot_cli import __version__
+from mobot_cli.common.files import write_text_atomic
+from mobot_cli.common.installed import version
+from mobot_cli.errors import OutputError, cannot_write
+from mobot_cli.plan import Plan, RobotPlan
+from mobot_cli.record.outcome import SUMMARY, Status
+from mobot_cli.record.sinks import CsvSink
+from mobot_cli.sim.state import RobotState
+from mobot_cli.timeline.expect import Checker, Result, odom_error
+from mobot_cli.timeline.goals import GoalEnded, GoalStarted
+from mobot_cli.timeline.records import Deleted, Reading, Record, Sample, Sink, Spawned
+
+if TYPE_CHECKING:  # the record's classes are made when it is written (run/outcome.py)
+    from mobot_cli.record.summary import LiveInfo, RobotRecord, RunRecord, SensorRecord
+
+
+@dataclass
+class _Life:
+    """One robot's life in the record, accumulated sample by sample."""
+
+    name: str
+    plan: RobotPlan
+    spawned_at: float
+    deleted_at: Optional[float] = None
+    first: Optional[RobotState] = None
+    last: Optional[RobotState] = None
+    distance: float = 0.0
+    readings: dict[str, int] = field(default_factory=dict)  # sensor name -> readings recorded
+    goals: list[dict] = field(default_factory=list)  # GoalRecord fields, and the distance at the start
+
+    def add(self, state: RobotState) -> None:
+        if self.first is None:
+            self.first = state
+        elif self.last is not None:
+            self.distance += math.hypot(state.true_x - self.last.true_x, state.true_y - self.last.true_y)
+        self.last = state
+
+    def started(self, record: GoalStarted, rate: int) -> None:
+        self.goals.append({"command": _command(record.index), "kind": record.kind, "status": "unfinished",
+                           "started_at": record.step / rate, "from": self.distance})
+
+    def ended(self, record: GoalEnded, rate: int) -> None:
+        goal = next(g for g in reversed(self.goals) if g["command"] == _command(record.index))
+        error = _r(record.error) if math.isfinite(record.error) else None  # a robot whose state broke
+        goal.update(status=record.status, ended_at=record.step / rate, error=error, laps=record.laps,
+                    path_length=_r(self.distance - goal["from"]))
+
+    def record(self, end: float, rate_hz: int) -> RobotRecord:
+        from mobot_cli.record.summary import GoalRecord, OdomError, OdomPose, Pose, RobotRecord
+
+        goals = [GoalRecord(**{k: v for k, v in g.items() if k != "from"},
+                            time=_r(g.get("ended_at", end) - g["started_at"]),
+                            **({} if "path_length" in g else {"path_length": _r(self.distance - g["from"])}))
+                 for g in self.goals]
+        s = self.last
+        position, yaw = odom_error(self.first, s)
+        return RobotRecord(
+            name=self.name, namespace=self.plan.namespace, source=self.plan.source,
+            spawned_at=self.spawned_at, deleted_at=self.deleted_at,
+            final_pose=Pose(x=_r(s.true_x), y=_r(s.true_y), z=_r(s.true_z), roll=_r(s.true_roll),
+                            pitch=_r(s.true_pitch), yaw=_r(s.true_yaw)),
+            final_odom=OdomPose(x=_r(s.odom_x), y=_r(s.odom_y), yaw=_r(s.odom_yaw)),
+            distance=_r(self.distance), collisions=s.collisions,
+            odom_error=OdomError(position=_r(position), yaw=_r(yaw)), goals=goals,
+            sensors=[self._sensor(spec, rate_hz) for spec in self.plan.sensors])
+
+    def _sensor(self, spec, rate_hz: int) -> SensorRecord:
+        from mobot_cli.record.sensor_files import sensor_file
+        from mobot_cli.record.summary import SensorRecord
+        from mobot_cli.ros import sensor_topics
+
+        return SensorRecord(name=spec.name, kind=spec.kind, topic=sensor_topics.topic(self.plan, spec),
+                            frame_id=sensor_topics.sensor_frame(self.plan, spec).frame,
+                            rate_hz=_r(sensor_topics.rate_hz(spec, rate_hz)),
+                            readings=self.readings.get(spec.name, 0), file=sensor_file(self.name, spec))
+
+
+class Recording:
+    """Takes a timeline's records into ``out_dir``; ``close`` writes the RunRecord last.
+
+    A file that cannot be written (a full disk, a read-only folder, a name too long) raises an
+    OutputError naming it, once; ``close`` then still finishes what it can and writes a
+    summary.json with status ``error`` and that message, where it can.
+    """
+
+    def __init__(self, plan: Plan, out_dir: Path, resolved_yaml: str, durable: bool = True):
+        self.plan, self.out_dir = plan, out_dir
+        self.durable = durable  # summary.json flushed to disk here (a sweep flushes it itself)
+        self.checker = Checker(plan)
+        self.sinks: list[Sink] = []
+        self.failure: OutputError | None = None  # the first write that failed
+        self.results: list[Result] = []
+        self.last_step = 0
+        self._keys: dict[str, str] = {}  # robot name -> its name in the record
+        self._lives: dict[str, _Life] = {}  # record name -> life, in order of arrival
+        self._renamed = False
+        self._sensor_files = False
+        self._readers: list[Sink] = []  # the sinks that take readings (not Sink's no-op), made at the first
+        self._started = time.perf_counter()
+        made = not out_dir.exists()
+        try:
+            out_dir.mkdir(parents=True, exist_ok=True)
+            (out_dir / SUMMARY).unlink(missing_ok=True)  # a reused folder must not look finished early
+            write_text_atomic(out_dir / "scenario.yaml", resolved_yaml, durable=False)  # summary.json is
+            self.sinks = make_sinks(plan, out_dir, self.checker.sweeps)
+        except OSError as exc:
+            failure = self._failed(exc)
+            self._save(self._record(Status.ERROR, str(failure), 0, None))
+            if made:
+                _remove_if_empty(out_dir)  # nothing written, not even the summary: leave nothing
+            raise failure from exc
+        self.sinks.append(self.checker)
+
+    def __call__(self, record: Record) -> None:
+        """Take one record of the timeline (the Consumer interface)."""
+        try:
+            if isinstance(record, Sample):
+                self._sample(record)
+            elif isinstance(record, Reading):  # the two kinds that come many times a second first
+                self._reading(record)
+            elif isinstance(record, Spawned):
+                self._spawned(record)
+            elif isinstance(record, GoalStarted):
+                self._lives[self._keys[record.robot]].started(record, self.plan.physics.rate_hz)
+            elif isinstance(record, GoalEnded):
+                key = self._keys[record.robot]
+                self._lives[key].ended(record, self.plan.physics.rate_hz)
+                self.checker.goal_ended(key, record)
+            elif isinstance(record, Deleted):
+                key = self._keys.pop(record.name)
+                self._lives[key].deleted_at = record.step / self.plan.physics.rate_hz
+                for sink in self.sinks:
+                    sink.deleted(record.step, key)
+        except OSError as exc:
+            raise self._failed(exc) from exc
+
+    def _failed(self, exc: OSError) -> OutputError:
+        """The first failed write, as the error to report: later ones follow from it (a full
+        disk stays full)."""
+        if self.failure is None:
+            self.failure = cannot_write(exc.filename or self.out_dir, exc)
+        return self.failure
+
+    def _spawned(self, record: Spawned) -> None:
+        name, lives = record.robot.name, 1
+        key = name
+        while key in self._lives:
+            lives += 1
+            key = f"{name}__{lives}"
+        self._renamed = self._renamed or key != name
+        self._keys[name] = key
+        self._lives[key] = _Life(key, record.robot, record.step / self.plan.physics.rate_hz)
+        for sink in self.sinks:
+            sink.spawned(record.step, key, record.robot)
+
+    def _reading(self, record: Reading) -> None:
+        key = self._keys[record.robot]
+        life = self._lives[key]
+        life.readings[record.sensor.name] = life.readings.get(record.sensor.name, 0) + 1
+        if not self._sensor_files:  # a run without sensors never makes DIR/sensors/
+            from mobot_cli.record.sensor_files import SensorFilesSink
+
+            files = SensorFilesSink(self.plan, self.out_dir)
+            for known in self._lives.values():
+                files.spawned(0, known.name, known.plan)
+            self.sinks.insert(0, files)
+            self._sensor_files = True
+            self._readers = [sink for sink in self.sinks if type(sink).reading is not Sink.reading]
+        for sink in self._readers:
+            sink.reading(key, record)
+
+    def _sample(self, sample: Sample) -> None:
+        if self._renamed:
+            sample = Sample(sample.step, {self._keys[n]: s for n, s in sample.states.items()}, sample.complete)
+        for sink in self.sinks:
+            sink.write(sample)
+        lives = self._lives
+        for key, state in sample.states.items():
+            lives[key].add(state)
+        self.last_step = sample.step
+
+    def close(self, status: Status, error: str | None = None, steps: int | None = None,
+              live: LiveInfo | None = None) -> RunRecord:
+        """Close every writer and write summary.json last; returns the record.
+
+        Raises OutputError when a file could not be written here (an earlier failure was
+        raised when it happened); every writer is closed all the same."""
+        raised = self.failure
+        try:
+            for sink in self.sinks:
+                try:
+                    sink.close()
+                except OSError as exc:
+                    self._failed(exc)
+        finally:
+            if self.failure is not None:
+                status, error = Status.ERROR, str(self.failure)
+            elif self.plan.expectations and status == Status.OK:
+                self.results = self.checker.results()
+            record = self._record(status, error, self.last_step if steps is None else steps, live)
+            self._save(record)
+        if self.failure is not raised:
+            raise self.failure
+        return record
+
+    def _save(self, record: RunRecord) -> None:
+        """Write summary.json; when even that fails, the failure is the error to report."""
+        try:
+            record.save(self.out_dir, self.durable)
+        except OSError as exc:
+            self._failed(exc)
+
+    def _record(self, status: Status, error: str | None, steps: int, live: LiveInfo | None) -> RunRecord:
+        from mobot_cli.record.summary import ExpectationResult, Expectations, RunRecord, Versions
+
+        wall = time.perf_counter() - self._started
+        plan, sim_time = self.plan, steps / self.plan.physics.rate_hz
+        expectations = None
+        if self.results:
+            failed = sum(not r.passed for r in self.results)
+            expectations = Expectations(passed=len(self.results) - failed, failed=failed,
+                                        results=[ExpectationResult(**r.as_dict()) for r in self.results])
+        return RunRecord(
+            status=status, error=error, scenario=plan.name, world=plan.world.name, seed=plan.seed,
+            versions=Versions(mobot=__version__, pybullet=version("pybullet"), python=platform.python_version()),
+            steps=steps, sim_time=_r(sim_time), wall_time=round(wall, 3),
+            real_time_factor=round(sim_time / wall, 2) if wall > 0 else None,
+            physics_rate_hz=plan.physics.rate_hz, log_rate_hz=_r(plan.physics.rate_hz / plan.log_every),
+            notices=list(plan.notices),
+            robots={key: life.record(life.deleted_at if life.deleted_at is not None else sim_time,
+                                     plan.physics.rate_hz)
+                    for key, life in self._lives.items() if life.last is not None},
+            expectations=expectations, live=live)
+
+
+def make_sinks(plan: Plan, out_dir: Path, sweeps: dict | None = None) -> list[Sink]:
+    """The sinks a plan's ``formats`` ask for; trajectory.png draws ``sweeps`` (the checker's)."""
+    sinks: list[Sink] = []
+    if "csv" in plan.formats:
+        sinks.append(CsvSink(plan, out_dir))
+    if "mcap" in plan.formats:
+        from mobot_cli.record.bag import BagSink  # imports rosbags: only when a bag is asked for
+
+        sinks.append(BagSink(plan, out_dir))
+    from mobot_cli.record.trajectory import TrajectorySink
+
+    sinks.append(TrajectorySink(plan, out_dir, sweeps))  # every run; last, as it draws when closed
+    return sinks
+
+
+def _remove_if_empty(folder: Path) -> None:
+    try:
+        folder.rmdir()
+    except OSError:
+        pass
+
+
+def _command(index: int) -> int | None:
+    """A goal's command index in the record; None for a goal a live request gave (index < 0)."""
+    return index if index >= 0 else None
+
+
+def preload() -> None:
+    """Look up what every summary records, once (a sweep's fork server, for all its workers)."""
+    version("pybullet")
+
+
+def _r(value: float) -> float:
+    """Six decimals and never -0.0, so that records compare as text."""
+    return round(value, 6) + 0.0

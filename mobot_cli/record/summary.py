@@ -1,0 +1,222 @@
+"""The run record: what ``summary.json`` holds, as one typed record built in one place.
+
+`mobot run` and `mobot serve --out` write it, `mobot check`, the terminal table and sweeps read
+it back; nothing passes string-keyed summary dicts between packages.
+
+The records are frozen dataclasses, not pydantic models: writing one needs nothing but the
+standard library. Pydantic validates a summary.json that
+is read back (``RunRecord.load``), from these same classes. Fields declared ``float`` or ``int``
+hold exactly that type, as a pydantic model's would, so the file's numbers read the same
+(``10.0``, not ``10``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import json
+from enum import Enum
+from pathlib import Path
+from typing import Optional
+
+from mobot_cli.common.files import write_text_atomic
+from mobot_cli.record.outcome import SUMMARY, Status  # noqa: F401 - the record's, re-exported
+
+
+class _Record:
+    """What every record shares: numbers of the declared type, and a JSON-ready form."""
+
+    def __post_init__(self) -> None:
+        for name, kind in _numbers(type(self)):
+            value = getattr(self, name)
+            if value is not None and type(value) is not kind:
+                object.__setattr__(self, name, kind(value))  # frozen: set once, here
+
+    def to_dict(self) -> dict:
+        """The record as plain JSON values (an enum as its value), keys in declaration order."""
+        return {f.name: _plain(getattr(self, f.name)) for f in dataclasses.fields(self)}
+
+
+_NUMBERS = {"float": float, "Optional[float]": float, "int": int, "Optional[int]": int}
+
+
+@functools.cache
+def _numbers(cls: type) -> tuple[tuple[str, type], ...]:
+    """The fields of ``cls`` declared a float or an int (annotations are strings here)."""
+    return tuple((f.name, _NUMBERS[f.type]) for f in dataclasses.fields(cls) if f.type in _NUMBERS)
+
+
+def _plain(value):
+    if isinstance(value, _Record):
+        return value.to_dict()
+    if isinstance(value, Enum):
+        return value.value
+    if isinstance(value, list):
+        return [_plain(v) for v in value]
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    return value
+
+
+_record = dataclasses.dataclass(frozen=True, kw_only=True)  # every record class: keywords, fixed once made
+
+
+@_record
+class Pose(_Record):
+    """A true pose in the world frame (m, rad)."""
+
+    x: float
+    y: float
+    z: float
+    roll: float
+    pitch: float
+    yaw: float
+
+
+@_record
+class OdomPose(_Record):
+    """What the robot's odometry reports, in its odom frame (the spawn pose)."""
+
+    x: float
+    y: float
+    yaw: float
+
+
+@_record
+class OdomError(_Record):
+    """Odometry against the truth at the end of the robot's life."""
+
+    position: float
+    yaw: float
+
+
+@_record
+class SensorRecord(_Record):
+    """One sensor of a robot: what it is, where its readings went and how many there were."""
+
+    name: str
+    kind: str  # lidar | imu | contact
+    topic: str  # in the bag, namespace included
+    frame_id: str  # frame prefix included
+    rate_hz: float
+    readings: int
+    file: str  # relative to the run folder
+
+
+@_record
+class GoalRecord(_Record):
+    """How one goal command went: status, when, how long and how far the robot drove."""
+
+    command: Optional[int]  # its index in the robot's commands list; None: a live goto request
+    kind: str  # goto | path | patrol | coverage
+    status: str  # reached | timed_out | blocked | cancelled | unfinished (the run ended first)
+    started_at: float
+    ended_at: Optional[float] = None
+    time: float  # s from start to end (or to the end of the record)
+    path_length: float  # m the robot truly drove meanwhile (from the log rows)
+    error: Optional[float] = None  # m from the goal's last point (a patrol's first) when it ended
+    laps: Optional[int] = None  # patrol: rounds completed
+
+
+@_record
+class RobotRecord(_Record):
+    """One robot's life: where it came from, where it ended, how far it went."""
+
+    name: str
+    namespace: str
+    source: str
+    spawned_at: float
+    deleted_at: Optional[float] = None
+    final_pose: Pose
+    final_odom: OdomPose
+    distance: float
+    collisions: int
+    odom_error: OdomError
+    sensors: list[SensorRecord] = dataclasses.field(default_factory=list)
+    goals: list[GoalRecord] = dataclasses.field(default_factory=list)
+
+
+@_record
+class ExpectationResult(_Record):
+    """One expectation for one robot."""
+
+    robot: str
+    kind: str
+    expected: str
+    happened: str
+    passed: bool
+
+
+@_record
+class Expectations(_Record):
+    """The expectations of a run that finished."""
+
+    passed: int
+    failed: int
+    results: list[ExpectationResult]
+
+
+@_record
+class Versions(_Record):
+    mobot: str
+    pybullet: Optional[str] = None
+    python: str
+
+
+@_record
+class LiveInfo(_Record):
+    """What a live world adds to its record."""
+
+    endpoint: str
+    pace: str
+    requests: dict[str, int]
+
+
+@_record
+class RunRecord(_Record):
+    """``summary.json``: written last, so a folder without it is a run that did not end."""
+
+    status: Status
+    error: Optional[str] = None
+    scenario: str
+    world: str
+    seed: int
+    versions: Versions
+    steps: int
+    sim_time: float
+    wall_time: float
+    real_time_factor: Optional[float] = None
+    physics_rate_hz: int
+    log_rate_hz: float
+    notices: list[str] = dataclasses.field(default_factory=list)
+    robots: dict[str, RobotRecord] = dataclasses.field(default_factory=dict)
+    expectations: Optional[Expectations] = None
+    live: Optional[LiveInfo] = None
+
+    @property
+    def failed_expectations(self) -> int:
+        return self.expectations.failed if self.expectations else 0
+
+    def to_json(self) -> str:
+        """The file's text: two-space indents, keys in declaration order, no NaN."""
+        return json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
+
+    def save(self, folder: Path, durable: bool = True) -> None:
+        """Write ``folder/summary.json`` atomically, flushed to disk unless not ``durable``."""
+        write_text_atomic(folder / SUMMARY, self.to_json(), durable)
+
+    @classmethod
+    def load(cls, folder: Path) -> Optional["RunRecord"]:
+        """The record in ``folder``, or None when it is missing or not a record mobot wrote."""
+        try:
+            return _reader().validate_json((folder / SUMMARY).read_bytes())
+        except (OSError, ValueError):  # pydantic's ValidationError is a ValueError
+            return None
+
+
+@functools.cache
+def _reader():
+    """Pydantic's validator of a RunRecord (unknown keys ignored), built at the first read."""
+    from pydantic import TypeAdapter
+
+    return TypeAdapter(RunRecord)

@@ -1,0 +1,1 @@
+"""The physics engine: robots are PyBullet bodies whose wheels are driven by torques."""

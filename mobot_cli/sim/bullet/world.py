@@ -1,0 +1,379 @@
+"""The World: the only owner of a PyBullet client. Spawns robots, drives them, steps, reports.
+
+Everything is headless (``pybullet.DIRECT``) and every call names its client, so several
+Worlds can live in one process (tests, sweeps in threads).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+from mobot_cli.errors import SimulationFault, SpawnError, WorldError, did_you_mean
+from mobot_cli.plan import Physics, RobotPlan, SpawnPose, WorldPlan
+from mobot_cli.sim import clearance, entity, parts, placement, static_shapes, surroundings
+from mobot_cli.sim.bullet import friction
+from mobot_cli.sim.bullet.clients import Stage, connect, release
+from mobot_cli.sim.bullet.robot import SimRobot
+from mobot_cli.sim.bullet.urdf_file import links_with_friction, quiet_stdout, urdf_path
+from mobot_cli.sim.contacts import CONTACT_RATE_HZ, ContactCounter
+from mobot_cli.sim.pb import p
+from mobot_cli.sim.state import RobotState
+
+if TYPE_CHECKING:
+    from mobot_cli.sim.sensing.rig import Sensing
+
+__all__ = ["World", "RobotState"]
+
+# Encoder odometry is folded in at this rate (diff_drive_controller's default update rate);
+# reads bring it up to date as well, so no reader sees stale odometry.
+ODOMETRY_RATE_HZ = 50
+# A robot below this height has fallen out of the world.
+FLOOR_OF_THE_WORLD = -10.0  # m
+# Robots are checked for NaN and falling at this rate: a fault is caught within 0.1 s of
+# simulated time, and the check costs nothing measurable per step.
+HEALTH_RATE_HZ = 10
+# Inertia as written (not recomputed from collision shapes), and cylinders as true cylinders:
+# PyBullet's default 40-sided hulls rolled 1 mm (3 %) too large on turtlebot3's 33 mm wheels.
+# URDF_MERGE_FIXED_LINKS would halve the step time (burger 54 -> 21 us, husky 62 -> 38 us) but
+# welds casters into the chassis, and linorobot2 2wd then rested on its two casters with its
+# wheels unloaded (it could not move); it also loses per-link <contact> friction.
+URDF_FLAGS = p.URDF_USE_INERTIA_FROM_FILE | p.URDF_USE_IMPLICIT_CYLINDER
+# A refusal names the part of a world model nearest the robot within this reach (a robot
+# inside a closed mesh touches none of it).
+PART_REACH = 10.0  # m
+
+
+class World:
+    """A headless physics world built from a plan; robots come and go by name."""
+
+    def __init__(self, physics: Physics, world: WorldPlan, seed: int = 0):
+        self.physics = physics
+        self.plan = world
+        self.seed = seed  # handed in like every source of randomness; PyBullet itself draws none
+        self._cid, stage = connect((physics, world))
+        # The static world stays for the next World only when nothing but this run's robots
+        # came and went: a body removed on the way, or a fault, and the client is reset instead.
+        self._pristine = True
+        self._steps = 0
+        self._robots: dict[str, SimRobot] = {}
+        self._ramping: list[SimRobot] = []
+        self._odom_every = max(1, round(physics.rate_hz / ODOMETRY_RATE_HZ))
+        self._check_every = max(1, round(physics.rate_hz / HEALTH_RATE_HZ))
+        self._contacts = ContactCounter()
+        self._contact_every = max(1, round(physics.rate_hz / CONTACT_RATE_HZ))
+        self._sensing: Sensing | None = None  # made when the first robot with sensors arrives
+        self._clearance: dict[str, float] = {}  # robot -> how far its clearance is measured (m)
+        if stage is not None:
+            self._probes, self._statics, self._solids, self._ground = \
+                stage.probes, stage.statics, stage.solids, stage.ground
+            return
+        self._probes = placement.Probes(self._cid)
+        try:
+            self._build(world)
+        except BaseException:
+            self._pristine = False
+            self.close()
+            raise
+
+    def reset(self) -> None:
+        """Back to the world as built, at step 0, with no robots: PyBullet's own reset, then the
+        same static bodies in the same order (so the same ids), as if the world were new."""
+        for name in list(self._robots):
+            self.remove(name)
+        p.resetSimulation(physicsClientId=self._cid)
+        self._probes = placement.Probes(self._cid)  # the reset removed its shapes too
+        self._pristine = False  # not a client to keep its static world for another run
+        self._steps = 0
+        self._ramping = []
+        self._contacts = ContactCounter()
+        self._sensing = None  # rebuilt with the first robot with sensors: its noise restarts too
+        self._clearance = {}
+        self._build(self.plan)
+
+    def _build(self, world: WorldPlan) -> None:
+        cid, physics = self._cid, self.physics
+        p.setPhysicsEngineParameter(
+            fixedTimeStep=physics.dt, numSolverIterations=physics.solver_iterations,
+            numSubSteps=0, deterministicOverlappingPairs=1, enableConeFriction=friction.CONE_FRICTION,
+            physicsClientId=cid)
+        p.setGravity(*physics.gravity, physicsClientId=cid)
+        self._statics: dict[int, str] = {}
+        self._solids: set[int] = set()  # static bodies with an inside (not planes)
+        self._ground: int | None = None
+        if world.ground_plane:
+            self._ground = self._plane(0.0)
+            self._statics[self._ground] = "the ground plane"
+        for body in world.bodies:
+            if body.shapes:
+                uids = static_shapes.create(cid, body)
+                for uid in uids:
+                    p.changeDynamics(uid, -1, physicsClientId=cid, lateralFriction=friction.DEFAULT_FRICTION
+                                     if body.friction is None else body.friction)
+            else:
+                uids = [self._load(body.urdf, body.xyz, body.quat, fixed=True)]
+                if uids[0] < 0:
+                    raise WorldError(f"PyBullet could not load static body '{body.name}'",
+                                     hint="Check its geometry: meshes must exist and be readable.")
+                friction.set_friction(cid, uids[0], links_with_friction(body.urdf), {}, friction.DEFAULT_FRICTION)
+            for uid in uids:
+                self._statics[uid] = body.label or f"static body '{body.name}'"
+                if not any(shape.kind == "plane" for shape in body.shapes):
+                    self._solids.add(uid)
+
+    def _load(self, urdf: str, xyz, quat, fixed: bool = False) -> int:
+        """Load URDF text; -1 when PyBullet refuses it."""
+        try:
+            with quiet_stdout():  # the importer prints its warnings to stdout
+                return p.loadURDF(str(urdf_path(urdf)), xyz, quat, useFixedBase=fixed,
+                                  flags=URDF_FLAGS, physicsClientId=self._cid)
+        except p.error:
+            return -1
+
+    def _plane(self, z: float) -> int:
+        cid = self._cid
+        shape = p.createCollisionShape(p.GEOM_PLANE, physicsClientId=cid)
+        uid = p.createMultiBody(0.0, shape, basePosition=(0.0, 0.0, z), physicsClientId=cid)
+        p.changeDynamics(uid, -1, lateralFriction=friction.FLOOR_FRICTION, physicsClientId=cid)
+        return uid
+
+    @property
+    def step_count(self) -> int:
+        """Whole physics steps taken since the world was built."""
+        return self._steps
+
+    @property
+    def client_id(self) -> int:
+        """The PyBullet client id, for code that queries PyBullet directly."""
+        return self._cid
+
+    def names(self) -> list[str]:
+        """Names of the robots in the world, in spawn order."""
+        return list(self._robots)
+
+    def body_id(self, name: str) -> int:
+        """The PyBullet body of a robot."""
+        return self._robot(name).body
+
+    def has_drive(self, name: str) -> bool:
+        """True when the robot takes velocity commands."""
+        return self._robot(name).drive is not None
+
+    def spawn(self, robot: RobotPlan) -> None:
+        """Load a robot at its pose, checked: unique name, on the floor, not inside things."""
+        if robot.name in self._robots:
+            raise SpawnError(f"a robot named '{robot.name}' already exists",
+                             hint="Robot names must be unique; pick another name.")
+        cid, pose = self._cid, robot.pose
+        norm = math.sqrt(sum(q * q for q in pose.quat))
+        if not norm > 1e-9:
+            raise SpawnError(f"robot '{robot.name}' has a zero orientation quaternion",
+                             hint="Give the pose a unit quaternion (x, y, z, w) or rpy angles.")
+        pose = replace(pose, quat=tuple(q / norm for q in pose.quat))
+        robot = replace(robot, pose=pose)
+        uid = self._load(robot.urdf, pose.xyz, pose.quat)
+        if uid < 0:
+            raise SpawnError(f"PyBullet could not load robot '{robot.name}' "
+                             f"({robot.source or 'URDF text'})",
+                             hint="Run `mobot check` on its description.")
+        try:
+            self._settle_in(uid, robot)
+            sim_robot = SimRobot(cid, uid, robot, self.physics.dt)
+            if robot.sensors:
+                self._sensors().add(robot.name, uid, sim_robot.links, robot.sensors)
+        except BaseException:
+            p.removeBody(uid, physicsClientId=cid)
+            self._pristine = False
+            raise
+        self._robots[robot.name] = sim_robot
+
+    def _settle_in(self, uid: int, robot: RobotPlan) -> None:
+        """Place the robot (z: auto), refuse overlaps, set contact and damping defaults."""
+        cid, pose = self._cid, robot.pose
+        probe_z = 0.0 if self._ground is not None else placement.PROBE_Z
+        lowest = placement.lowest_points(self._probes, uid, self._ground, probe_z)
+        if pose.z_auto:
+            floors = set(self._statics)  # the ground plane is among them
+            placement.rest_on_floor(self._probes, uid, self._ground, floors, pose.xyz, pose.quat, robot.name,
+                                    probe_z)
+        self._check_placed(uid, robot.name, pose.z_auto)
+        bottom = min(lowest.values(), default=0.0)
+        wheels = friction.wheel_links(cid, uid, robot)
+        casters = {link for link, h in lowest.items()
+                   if h - bottom <= friction.CASTER_BAND and link not in wheels and friction.rigid(cid, uid, link)}
+        if robot.drive is not None and max(len(robot.drive.left_joints),
+                                           len(robot.drive.right_joints)) > 1:
+            friction.soften_axial_friction(cid, uid, wheels, friction.SKID_AXIAL_FRICTION)
+        explicit = links_with_friction(robot.urdf)
+        friction.set_friction(cid, uid, explicit, {link: friction.CASTER_FRICTION for link in casters},
+                              friction.DEFAULT_FRICTION)
+        for link in range(-1, p.getNumJoints(uid, physicsClientId=cid)):
+            # PyBullet damps every body (0.04) by default; Gazebo does not, and it slows robots.
+            p.changeDynamics(uid, link, linearDamping=0.0, angularDamping=0.0,
+                             activationState=p.ACTIVATION_STATE_DISABLE_SLEEPING,
+                             physicsClientId=cid)
+
+    def _check_placed(self, uid: int, name: str, z_auto: bool) -> None:
+        """SpawnError unless the body is clear of the floor, the world and the other robots."""
+        cid = self._cid
+        xyz = placement.link_frame_xyz(cid, uid)
+        others = dict(self._statics)
+        others.update({r.body: f"robot '{n}'" for n, r in self._robots.items() if r.body != uid})
+        part = functools.partial(self._part, uid)
+        placement.check_clear(cid, uid, others, name, xyz, z_auto=z_auto, part=part)
+        box = placement.body_bounds(self._probes, uid)
+        surroundings.check_not_inside(cid, {b: self._statics[b] for b in self._solids}, name, xyz, box, part)
+        if not z_auto:
+            surroundings.check_above_floor(cid, self._statics, name, xyz, box, part)
+
+    def _part(self, robot: int, other: int) -> str:
+        """Which part of static body ``other`` a refused robot met (error path only)."""
+        label = self._statics.get(other)
+        body = next((b for b in self.plan.bodies if (b.label or f"static body '{b.name}'") == label), None)
+        shape = placement.nearest_part(self._probes, robot, body, PART_REACH) if body is not None else None
+        return parts.describe(body, shape) if shape is not None else ""
+
+    def _rest(self, uid: int, pose: SpawnPose, name: str) -> None:
+        """Rest a body at (x, y) on the floor below (z: auto), as a spawn does."""
+        probe_z = 0.0 if self._ground is not None else placement.PROBE_Z
+        placement.rest_on_floor(self._probes, uid, self._ground, set(self._statics), pose.xyz, pose.quat, name,
+                                probe_z)
+
+    def kinematics(self, name: str) -> entity.Kinematics:
+        """The root link's world pose and velocity (of its origin) now."""
+        return entity.kinematics(self._robot(name))
+
+    def teleport(self, name: str, pose: SpawnPose, linear=(0.0, 0.0, 0.0), angular=(0.0, 0.0, 0.0)) -> None:
+        """Move a robot to ``pose`` (world frame; z: auto rests it on the floor) with this twist
+        (world frame, of its root link's origin), checked like a spawn: SpawnError leaves it where it was."""
+        robot = self._robot(name)
+        saved = entity.saved(robot)
+        try:
+            if pose.z_auto:
+                self._rest(robot.body, pose, name)
+            else:
+                entity.place(robot, pose.xyz, pose.quat)
+            self._check_placed(robot.body, name, pose.z_auto)
+        except BaseException:
+            entity.restore(robot, saved)
+            raise
+        entity.set_twist(robot, linear, angular)
+
+    def remove(self, name: str) -> None:
+        """Delete a robot from the world."""
+        robot = self._robot(name)
+        p.removeBody(robot.body, physicsClientId=self._cid)
+        self._pristine = False
+        del self._robots[name]
+        self._contacts.forget(name)
+        if self._sensing is not None:
+            self._sensing.forget(name)
+        self._clearance.pop(name, None)
+        if robot in self._ramping:
+            self._ramping.remove(robot)
+
+    def set_command(self, name: str, linear: float, angular: float) -> None:
+        """Command a body twist (m/s, rad/s); ValueError for a robot without a drive."""
+        robot = self._robot(name)
+        robot.set_command(linear, angular)
+        if robot.drive.ramping and robot not in self._ramping:
+            self._ramping.append(robot)
+
+    def step(self) -> None:
+        """Advance one physics step; SimulationFault when a robot's state goes bad."""
+        if self._ramping:
+            for robot in self._ramping:
+                robot.drive.ramp_step()
+            self._ramping = [r for r in self._ramping if r.drive.ramping]
+        p.stepSimulation(physicsClientId=self._cid)
+        self._steps += 1
+        if self._steps % self._odom_every == 0:
+            for robot in self._robots.values():
+                if robot.drive is not None:
+                    robot.drive.integrate()
+                    robot.drive.integrated_at = self._steps
+                    if robot.drive.trim is not None:
+                        robot.drive.trim_step(self._odom_every * self.physics.dt)
+        if self._steps % self._check_every == 0:
+            for robot in self._robots.values():
+                self._check(robot)
+        if self._steps % self._contact_every == 0:
+            self._contacts.sample(self._cid, self._robots.values())
+
+    def _check(self, robot: SimRobot) -> None:
+        pos = p.getBasePositionAndOrientation(robot.body, physicsClientId=self._cid)[0]
+        # One comparison chain on the hot path; NaN and inf fail it, then we look closer.
+        if FLOOR_OF_THE_WORLD < pos[2] < math.inf and abs(pos[0]) + abs(pos[1]) < math.inf:
+            return
+        self._pristine = False  # a faulted world is not kept for the next run
+        if not all(math.isfinite(v) for v in pos):
+            raise SimulationFault(
+                f"robot '{robot.name}' has a non-finite state at step {self._steps}",
+                hint="Raise physics.rate_hz, or check the robot's masses and inertias.")
+        if pos[2] < FLOOR_OF_THE_WORLD:
+            raise SimulationFault(
+                f"robot '{robot.name}' fell out of the world (z = {pos[2]:.1f} m) "
+                f"at step {self._steps}",
+                hint="Is there a floor under its spawn pose?")
+
+    def sense(self, due: list[tuple[str, str]]) -> list[object]:
+        """Readings of the (robot, sensor name) pairs due now, computed together (sim/sensors.py)."""
+        return (self._sensing or self._sensors()).read(self._steps, due)
+
+    def _sensors(self) -> Sensing:
+        if self._sensing is None:
+            from mobot_cli.sim.sensing.rig import Sensing  # worlds without sensors never load it
+
+            self._sensing = Sensing(self._cid, self.plan, self.seed, self.physics.dt, self.physics.gravity,
+                                    self.label, lambda: [r.body for r in self._robots.values()])
+        return self._sensing
+
+    def label(self, body: int) -> str:
+        """What messages call a body: "robot 'NAME'" or the static body's label."""
+        for name, robot in self._robots.items():
+            if robot.body == body:
+                return f"robot '{name}'"
+        return self._statics.get(body, f"body {body}")
+    def odom_origin(self, name: str) -> tuple[float, float, float]:
+        """Where the robot's odometry started: its odom frame's x, y, yaw in the world."""
+        return self._robot(name).spawn_xy_yaw
+
+    def read(self, name: str) -> RobotState:
+        """The robot's command, odometry and ground truth now (and its clearance when watched)."""
+        robot = self._robot(name)
+        state = robot.state(self._steps)
+        if self._clearance and name in self._clearance:
+            state.clearance, state.nearest = clearance.nearest(
+                self._cid, robot.body, self._clearance[name], [r.body for r in self._robots.values()], self.label)
+        return state
+
+    def states(self, names) -> dict[str, RobotState]:
+        """``read`` of each robot named, by name."""
+        return {name: self.read(name) for name in names}
+
+    def watch_clearance(self, name: str, reach: float) -> None:
+        """Measure the robot's clearance (up to ``reach`` m) whenever its state is read."""
+        self._clearance[name] = max(reach, self._clearance.get(name, 0.0))
+
+    def _robot(self, name: str) -> SimRobot:
+        try:
+            return self._robots[name]
+        except KeyError:
+            hint = did_you_mean(name, self._robots)
+            raise KeyError(f"no robot named '{name}'. {hint}".strip()) from None
+
+    def close(self) -> None:
+        """Let go of the PyBullet client (see clients.keep_clients); the world is unusable afterwards."""
+        if self._cid >= 0:
+            stage = Stage((self.physics, self.plan), self._statics, self._solids, self._ground, self._probes) \
+                if self._pristine else None
+            release(self._cid, stage, [robot.body for robot in self._robots.values()])
+            self._cid = -1
+
+    def __enter__(self) -> World:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

@@ -1,0 +1,397 @@
+"""The kinematic engine: robots follow their commanded twist; nothing is simulated by PyBullet.
+
+``physics: {engine: kinematic}``. The World's interface, records and checks are the physics
+engine's (sim/world.py): robots are loaded, placed and checked the same way, sensors read the
+same PyBullet bodies. What differs is ``step``: each robot's wheel rates ramp toward its
+command (sim/kinematic_body.py) and the body moves along the exact arc they give, unless
+its collision shapes would then overlap a static body or another robot more than
+``PENETRATION``; then it makes the largest part of the step that does not (found by
+bisection), or stays put. It rests on the highest floor under its footprint (it climbs what
+its contacts count as support, sim/kinematic_collide.py) and keeps its spawn roll and pitch.
+Touching counts as a collision exactly as in the physics engine (sim/contacts.py).
+
+Cost: a robot in open space costs a few microseconds a step: the clearance measured at its
+last query lets it move that far before PyBullet is asked again, and its PyBullet body is
+moved only when something looks at it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from mobot_cli.errors import SimulationFault, SpawnError
+from mobot_cli.plan import Physics, RobotPlan, SpawnPose, WorldPlan
+from mobot_cli.sim import clearance as clearance_mod
+from mobot_cli.sim.bullet.world import World
+from mobot_cli.sim.contacts import CONTACT_RATE_HZ, CONTACT_SLOP, RELEASE_SAMPLES, ContactCounter
+from mobot_cli.sim.kinematic.body import Mover
+from mobot_cli.sim.kinematic.collide import (
+    NEAR_MARGIN,
+    QUERY_REACH,
+    SUPPORT_BAND,
+    Floor,
+    Near,
+    body_top,
+    distances,
+    feet,
+    nearest,
+    static_boxes,
+)
+from mobot_cli.sim.placement import body_bounds
+from mobot_cli.sim.state import RobotState
+
+# How far a robot may end up inside another body (m): the bisection stops within this.
+PENETRATION = 0.001
+BISECTIONS = 8  # a 0.1 m step is resolved to 0.4 mm
+# A blocked robot makes no move shorter than this (it would creep into the tolerance forever).
+MIN_MOVE = 1e-4  # m
+# The floor under a robot changes only by more than this (rays in float32 jitter below it).
+FLOOR_TOLERANCE = 1e-6  # m
+
+
+class KinematicWorld(World):
+    """A World whose robots move kinematically (see the module's docstring)."""
+
+    def __init__(self, physics: Physics, world: WorldPlan, seed: int = 0):
+        super().__init__(physics, world, seed)
+        self._start_kinematics()
+
+    def _start_kinematics(self) -> None:
+        """The engine's own state for the world as built, with no robots yet."""
+        physics, world = self.physics, self.plan
+        self._movers: dict[str, Mover] = {}
+        self._order: list[Mover] = []
+        self._by_body: dict[int, object] = {}  # body id -> SimRobot, of the robots in _order
+        # robot i, j -> their distance when last measured plus both travels then (-inf: never)
+        self._measured = np.zeros((0, 0))
+        self._near: dict[str, Near] = {}
+        self._floor = Floor(self._cid, world)
+        self._flat = self._floor.flat and world.ground_plane  # the floor is z = 0 everywhere
+        # static body -> the top of its box: one no higher than a robot's support band is floor
+        self._tops = {uid: body_top(self._cid, uid) for uid in self._statics if uid != self._ground}
+        self._boxes = static_boxes(self._cid, world, [uid for uid in self._statics if uid != self._ground])
+        self._contact_every = max(1, round(physics.rate_hz / CONTACT_RATE_HZ))
+        sample_hz = physics.rate_hz / self._contact_every
+        # A pair must be apart 0.1 s before touching again counts again, at any rate.
+        self._contacts = ContactCounter(max(1, round(RELEASE_SAMPLES * sample_hz / CONTACT_RATE_HZ)))
+        self._idle = 0  # samples without touches not yet told to _contacts
+
+    def reset(self) -> None:
+        """Back to the world as built, at step 0, with no robots (see World.reset)."""
+        super().reset()
+        self._start_kinematics()
+
+    def teleport(self, name: str, pose: SpawnPose, linear=(0.0, 0.0, 0.0), angular=(0.0, 0.0, 0.0)) -> None:
+        """Move a robot, checked like a spawn (World.teleport); it goes on from there at its wheels'
+        rates: the twist given is not kept, the robot follows its command."""
+        self._sync_all()  # checked against the other robots where they are
+        super().teleport(name, pose, linear, angular)
+        mover = self._movers[name]
+        mover.relocate(self._steps)
+        self._measured[mover.index, :] = -np.inf  # its distances to the others: measure again
+        self._measured[:, mover.index] = -np.inf
+
+    def kinematics(self, name: str):
+        """The root link's world pose and velocity now (its body put where it is first)."""
+        if name in self._movers:
+            self._movers[name].sync(full=True)
+        return super().kinematics(name)
+
+    def spawn(self, robot: RobotPlan) -> None:
+        """Load and check the robot as the physics engine does, then stand it on the floor."""
+        self._sync_all()  # a spawn is checked against the other robots where they are
+        super().spawn(robot)
+        sim = self._robots[robot.name]
+        try:
+            (lo, hi) = body_bounds(self._probes, sim.body)
+            x, y, z = sim.link_pose()[0]
+            reach = float(np.hypot(max(x - lo[0], hi[0] - x), max(y - lo[1], hi[1] - y)))
+            mover = Mover(sim, self.physics.dt, lo[2], reach, feet(self._probes, sim.body, lo, (x, y, sim.spawn_xy_yaw[2])))
+            mover.above = hi[2] - z  # its highest point above its link origin
+            floor = self._floor_under([mover], mover.floor + SUPPORT_BAND)[0]
+            if not np.isfinite(floor):
+                raise SpawnError(f"robot '{robot.name}' has no floor under it",
+                                 hint="Spawn it above the ground or a floor of the world.")
+            mover.floor, mover.z = floor, floor + mover.height
+            mover.sync()
+        except BaseException:
+            super().remove(robot.name)
+            raise
+        self._movers[robot.name] = mover
+        self._reindex()
+        self._near[robot.name] = Near(self._cid, self._tops, self._boxes)
+
+    def remove(self, name: str) -> None:
+        """Delete a robot from the world."""
+        super().remove(name)
+        gone = self._movers.pop(name, None)
+        if gone is not None:
+            keep = [m.index for m in self._movers.values()]
+            self._measured = self._measured[np.ix_(keep, keep)]
+            self._reindex(grown=False)
+        self._near.pop(name, None)
+
+    def _reindex(self, grown: bool = True) -> None:
+        """Robots in spawn order, each knowing its row in the pair matrix (a new one: unmeasured)."""
+        self._order = list(self._movers.values())
+        self._by_body = {m.robot.body: m.robot for m in self._order}
+        self._reach = np.array([m.reach for m in self._order])
+        for index, mover in enumerate(self._order):
+            mover.index = index
+        if grown:
+            n = len(self._order)
+            measured = np.full((n, n), -np.inf)
+            measured[:n - 1, :n - 1] = self._measured
+            self._measured = measured
+
+    def set_command(self, name: str, linear: float, angular: float) -> None:
+        """Command a body twist (m/s, rad/s); ValueError for a robot without a drive."""
+        robot = self._robot(name)
+        if robot.drive is None:
+            raise ValueError(f"robot '{robot.name}' has no drive: it cannot take velocity commands")
+        robot.cmd = (float(linear), float(angular))
+        self._movers[name].command(float(linear), float(angular))
+
+    def step(self) -> None:
+        """Move every robot one step along its twist, as far as nothing is in the way."""
+        # Runs every step for every robot: a robot in open space costs one motion() and one move().
+        self._steps += 1
+        moves = []
+        for mover in self._order:
+            motion = mover.motion()
+            if motion is not None or mover.touches:
+                moves.append((mover, motion))
+        if moves:
+            near = self._robot_pairs(moves) if len(self._order) > 1 else {}
+            steps, move, moved = self._steps, self._move, []
+            for mover, motion in moves:
+                bound = mover.bound
+                if mover not in near and not mover.touches and mover.used + bound < mover.clear - CONTACT_SLOP:
+                    # Nothing static within reach of this step (the clearance last measured) and
+                    # no robot near: the whole step, no query.
+                    mover.used += bound
+                    mover.move(motion[0], motion[1], 1.0)
+                    mover.moved, mover.travel = steps, mover.travel + bound
+                    moved.append(mover)
+                elif move(mover, motion, near.get(mover, ())):
+                    moved.append(mover)
+            if moved and not self._flat:
+                self._lift(moved)
+        if self._steps % self._contact_every == 0:
+            self._count()
+
+    def _robot_pairs(self, moves) -> dict[Mover, list[Mover]]:
+        """The robots each moving robot might touch this step, in one numpy pass over all pairs:
+        not those whose circles (reach) stay apart by more than both their steps, nor those
+        whose distance, last measured, is more than both have travelled since (and this step)."""
+        everyone = self._order
+        n = len(everyone)
+        x = np.fromiter([m.x for m in everyone], float, n)
+        y = np.fromiter([m.y for m in everyone], float, n)
+        bound = np.zeros(n)
+        rows = [mover.index for mover, _ in moves]
+        bound[rows] = [mover.bound for mover, _ in moves]
+        reach = self._reach
+        dx, dy = x[:, None] - x[None, :], y[:, None] - y[None, :]
+        # First the pairs no farther apart along x and y than any pair's circles and steps can
+        # reach (most are farther), then the test itself on them alone, as numbers computed the
+        # same way for every pair would give.
+        limit = 2.0 * (bound.max() + reach.max()) + CONTACT_SLOP + 1e-9
+        close = np.abs(dx) <= limit
+        close &= np.abs(dy) <= limit
+        np.fill_diagonal(close, False)
+        if len(rows) < n:  # only the moving robots' rows
+            close &= np.isin(np.arange(n), rows)[:, None]
+        i, j = np.nonzero(close)
+        if not len(i):
+            return {}
+        travel = np.fromiter([m.travel for m in everyone], float, n)
+        margin = bound[i] + bound[j] + CONTACT_SLOP
+        gap = np.hypot(dx[i, j], dy[i, j]) - reach[i] - reach[j]
+        left = self._measured[i, j] - travel[i] - travel[j]
+        keep = (gap <= margin) & (left <= margin)
+        out: dict[Mover, list[Mover]] = {}
+        for a, b in zip(i[keep].tolist(), j[keep].tolist()):
+            out.setdefault(everyone[a], []).append(everyone[b])
+        return out
+
+    def _move(self, mover: Mover, motion, others: list[Mover]) -> bool:
+        """One robot's step, asking PyBullet what is in its way (step() makes a step in open
+        space itself); True when it moved."""
+        distance, turn = motion if motion is not None else (0.0, 0.0)
+        bound = mover.bound
+        stuck = mover.stuck
+        if stuck is not None and motion == stuck[0] and _still(others, stuck[1]):
+            mover.move(distance, turn, 0.0)  # blocked by the same things from the same pose
+            return False
+        if motion is None and mover.moved <= mover.queried and _still(others, mover.queried):
+            return False  # touching, and nothing moved since: the same touches
+        for other in others:
+            other.sync()
+        fraction, (static, apart, touching) = self._fit(mover, distance, turn, others)
+        if not self._tops:  # no static body but the ground: nothing static is ever in the way
+            static = math.inf
+        elif not others and not self._near[mover.robot.name].bodies:
+            # Nothing static within the box Near looked in: none within NEAR_MARGIN / 2 either.
+            static = QUERY_REACH + NEAR_MARGIN / 2.0
+        mover.clear, mover.used, mover.touches, mover.queried = static, 0.0, touching, self._steps
+        if motion is not None:
+            mover.stuck = (motion, self._steps) if fraction == 0.0 else None
+            mover.move(distance, turn, fraction)
+            if fraction > 0.0:
+                mover.moved, mover.travel = self._steps, mover.travel + bound * fraction
+            mover.synced = True  # _fit left the body at the pose it moved to
+        for other in others:  # distance now, plus both travels so far: see _robot_pairs
+            i, j = mover.index, other.index
+            self._measured[i, j] = self._measured[j, i] = \
+                apart.get(other.robot.body, QUERY_REACH) + mover.travel + other.travel
+        return motion is not None and fraction > 0.0
+
+    def _fit(self, mover: Mover, distance: float, turn: float, others: list[Mover]):
+        """The largest part of the step (1.0 when all of it) that does not push the robot into
+        anything deeper than PENETRATION (or than it already is), and the distances there."""
+        near = self._near[mover.robot.name]
+        near.around(mover.x, mover.y, mover.z, mover.reach, mover.height, mover.floor, mover.z + mover.above)
+        body, z, reach = mover.robot.body, mover.z, mover.reach + QUERY_REACH
+        robots = [other.robot.body for other in others]
+
+        def at(fraction: float):
+            x, y, yaw = mover.target(distance, turn, fraction)
+            mover.place(x, y, z, yaw)
+            return distances(self._cid, body, near.within(x, y, reach), robots, QUERY_REACH, mover.floor)
+
+        full = at(1.0)
+        if nearest(full) >= -PENETRATION or (distance == 0.0 and turn == 0.0):
+            return 1.0, full
+        here = at(0.0)
+        floor = min(-PENETRATION, nearest(here))  # already deeper: it may not go deeper still
+        if nearest(full) >= floor:
+            at(1.0)
+            return 1.0, full
+        lo, hi, best = 0.0, 1.0, here
+        # Conservative advancement first: no point of the robot moves more than ``bound`` over
+        # the whole step, so the part of it within the clearance here (and the tolerance) is
+        # safe. Approaching a wall or a robot head-on, that is all the way: one query.
+        bound = abs(distance) + abs(turn) * mover.reach
+        safe = (nearest(here) - floor) / bound if bound > 0.0 else 0.0
+        if safe * bound < MIN_MOVE:  # pressed against it already: stay put (and be stuck)
+            mover.place(mover.x, mover.y, z, mover.yaw)
+            return 0.0, here
+        if safe < 1.0:
+            found = at(safe)
+            if nearest(found) >= floor:
+                mover.place(*_xy_z_yaw(mover.target(distance, turn, safe), z))
+                return safe, found
+            hi = safe
+        for _ in range(BISECTIONS):
+            mid = (lo + hi) / 2.0
+            found = at(mid)
+            if nearest(found) >= floor:
+                lo, best = mid, found
+            else:
+                hi = mid
+        x, y, yaw = mover.target(distance, turn, lo)
+        mover.place(x, y, z, yaw)
+        return lo, best
+
+    def _lift(self, moved: list[Mover]) -> None:
+        """Stand the robots that moved on the floor now under them (one ray batch for all)."""
+        floors = self._floor_under(moved, np.array([m.floor + SUPPORT_BAND for m in moved]))
+        for mover, floor in zip(moved, floors):
+            if not np.isfinite(floor):
+                raise SimulationFault(
+                    f"robot '{mover.robot.name}' drove off the floor (nothing under it) at step {self._steps}",
+                    hint="Keep it on the world's floor, or give the world a ground plane.")
+            if abs(floor - mover.floor) > FLOOR_TOLERANCE:  # not the rays' rounding
+                mover.moved, mover.travel = self._steps, mover.travel + abs(floor - mover.floor)
+                mover.used += abs(floor - mover.floor)
+                mover.floor, mover.z = floor, floor + mover.height
+                mover.synced = False
+
+    def _floor_under(self, movers: list[Mover], tops) -> np.ndarray:
+        """The highest floor under each robot's footprint, below ``tops``."""
+        if self._flat:
+            return np.zeros(len(movers))
+        points, top = [], []
+        for mover, t in zip(movers, np.broadcast_to(tops, (len(movers),)).tolist()):
+            # numpy's cosine as ever, taken out as a float: the same numbers, at Python's speed
+            c, s, x, y = float(np.cos(mover.yaw)), float(np.sin(mover.yaw)), mover.x, mover.y
+            points += [(x + c * fx - s * fy, y + s * fx + c * fy) for fx, fy in mover.feet]
+            top += [t] * len(mover.feet)
+        heights = self._floor.heights(np.array(points), np.array(top))
+        return heights.reshape(len(movers), -1).max(axis=1)
+
+    def _count(self) -> None:
+        """One contact sample from the touches the robots' last queries found."""
+        for mover in self._order:
+            if mover.touches:
+                break
+        else:
+            self._idle += 1  # told to the counter before the next sample with touches
+            return
+        if self._idle:
+            self._contacts.idle(self._idle)
+            self._idle = 0
+        by_body = self._by_body
+        pairs = set()
+        for mover in self._order:
+            if not mover.touches:
+                continue
+            robot = mover.robot
+            for other in mover.touches:
+                hit = by_body.get(other)
+                if hit is None:
+                    pairs.add((robot, ("body", other)))
+                elif hit is not robot:
+                    pairs.add((robot, ("robot", hit.name)))
+                    pairs.add((hit, ("robot", robot.name)))
+        self._contacts.record(pairs)
+
+    def _sync_all(self, full: bool = False) -> None:
+        for mover in self._movers.values():
+            mover.sync(full)
+
+    def sense(self, due: list[tuple[str, str]]) -> list[object]:
+        """Readings due now: the robots' bodies are put where they are first."""
+        self._sync_all(full=True)
+        rigs = self._sensors().rigs
+        if any(rigs[robot][sensor].spec.kind == "contact" for robot, sensor in due):
+            from mobot_cli.sim.pb import p
+
+            p.performCollisionDetection(physicsClientId=self._cid)  # contact sensors read its points
+        return super().sense(due)
+
+    def states(self, names) -> dict[str, RobotState]:
+        """``read`` of each robot named, by name."""
+        if self._clearance:
+            return super().states(names)
+        movers = self._movers
+        try:
+            return {name: movers[name].state() for name in names}  # a log row: this is hot
+        except KeyError:  # one of them is not a Mover (yet): read() it
+            return super().states(names)
+
+    def read(self, name: str) -> RobotState:
+        """The robot's command, odometry and ground truth now (and its clearance when watched)."""
+        state = self._movers[name].state() if name in self._movers else self._robot(name).state()
+        if self._clearance and name in self._clearance:
+            self._sync_all()
+            state.clearance, state.nearest = clearance_mod.nearest(
+                self._cid, self._robot(name).body, self._clearance[name],
+                [r.body for r in self._robots.values()], self.label)
+        return state
+
+
+def _still(movers: list[Mover], since: int) -> bool:
+    """None of ``movers`` has moved after step ``since``."""
+    for mover in movers:
+        if mover.moved > since:
+            return False
+    return True
+
+
+def _xy_z_yaw(pose: tuple[float, float, float], z: float) -> tuple[float, float, float, float]:
+    return pose[0], pose[1], z, pose[2]
+

@@ -1,0 +1,1 @@
+"""Sensors computed from the simulation: lidar rays on the static world, IMU, contacts."""

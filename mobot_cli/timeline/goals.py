@@ -1,0 +1,179 @@
+"""Goal commands on the timeline: one driver per robot plays its goals and the twists after them.
+
+A driver wakes only when something is due: a command's start, a twist's end, or, while a goal
+runs, every control period (``CONTROL_RATE_HZ``, whole physics steps). On each control tick it
+reads the robot once, turns the pose it trusts into a twist (run/pursuit.py) and commands it.
+A goal ends ``reached``, ``timed_out`` (its ``timeout``), ``blocked`` (the robot's true pose
+moved less than ``BLOCKED_DISTANCE`` and turned less than ``BLOCKED_TURN`` in
+``BLOCKED_SECONDS``: it pushes against something) or ``cancelled`` (a live command or goal
+took over); the robot is stopped and ``GoalEnded`` recorded. Progress is judged on the true
+pose, so wheels spinning against a wall count as blocked even if the encoders say they move.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+from mobot_cli.common.transforms import Planar
+from mobot_cli.plan import GoalStep, TwistStep
+from mobot_cli.sim.bullet.world import World
+from mobot_cli.sim.state import RobotState
+from mobot_cli.timeline.pursuit import Pose, Pursuit
+
+CONTROL_RATE_HZ = 20  # nav2's controller_frequency default
+BLOCKED_SECONDS = 1.0
+BLOCKED_DISTANCE = 0.02  # m
+BLOCKED_TURN = 0.05  # rad
+STATUSES = ("reached", "timed_out", "blocked", "cancelled")
+
+
+@dataclass(frozen=True)
+class GoalStarted:
+    """Goal command ``index`` of ``robot`` started at ``step``."""
+
+    step: int
+    robot: str
+    index: int
+    kind: str
+
+
+@dataclass(frozen=True)
+class GoalEnded:
+    """Goal command ``index`` of ``robot`` ended at ``step``: ``status`` is one of STATUSES."""
+
+    step: int
+    robot: str
+    index: int
+    kind: str
+    status: str
+    started: int  # its start step
+    error: float  # m: the true distance from the goal's last point
+    laps: int | None = None  # patrol: rounds completed
+
+
+class Driver:
+    """Plays ``items`` (GoalSteps and TwistSteps, in order) for robot ``name``."""
+
+    def __init__(self, name: str, items, world: World, rate_hz: int, emit: Callable[[object], None]):
+        self.name, self.world, self.emit = name, world, emit
+        self.items: list[GoalStep | TwistStep] = list(items)
+        self.every = max(1, round(rate_hz / CONTROL_RATE_HZ))
+        self.dt = self.every / rate_hz
+        self.blocked_steps = max(1, round(BLOCKED_SECONDS * rate_hz))
+        self.current: GoalStep | TwistStep | None = None
+        self.started = 0
+        self.wake = self.items[0].step if self.items else -1  # the next step it has work at
+        self.pursuit: Pursuit | None = None
+        self.anchor: tuple[int, float, float, float] = (0, 0.0, 0.0, 0.0)  # blocked check: step, x, y, yaw
+        self.lap_ends: list[int] = []  # patrol: route vertices that close a lap
+        x, y, yaw = world.odom_origin(name)
+        self.odom = Planar(x, y, yaw)
+
+    @property
+    def finished(self) -> bool:
+        """Nothing left to do."""
+        return self.current is None and not self.items
+
+    def tick(self, step: int) -> None:
+        """Do what is due at ``step`` (call when ``step >= wake``)."""
+        if isinstance(self.current, GoalStep):
+            self._control(step)
+        elif isinstance(self.current, TwistStep):  # its hold is over
+            self.world.set_command(self.name, 0.0, 0.0)
+            self.current = None
+        if self.current is None:
+            self._next(step)
+
+    def cancel(self, step: int) -> None:
+        """A live command or goal takes over: a running goal ends ``cancelled``; the rest is dropped."""
+        if isinstance(self.current, GoalStep):
+            self._end(step, "cancelled", self.world.read(self.name), stop=False)
+        self.current, self.items = None, []
+
+    def _next(self, step: int) -> None:
+        """Start the next item when its time has come; else sleep until it has."""
+        if not self.items:
+            self.wake = -1
+            return
+        if self.items[0].step > step:
+            self.wake = self.items[0].step
+            return
+        item = self.items.pop(0)
+        self.current, self.started = item, step
+        if isinstance(item, TwistStep):
+            self.world.set_command(self.name, item.linear, item.angular)
+            if item.hold is not None:
+                self.wake = step + item.hold
+            else:
+                self.current = None
+                self.wake = self.items[0].step if self.items else -1
+            return
+        self._start_goal(step, item)
+
+    def _start_goal(self, step: int, goal: GoalStep) -> None:
+        state = self.world.read(self.name)
+        pose = self._pose(state, goal)
+        route = [(pose.x, pose.y), *goal.points]
+        if goal.kind == "patrol":
+            route.append(goal.points[0])
+            self.lap_ends = [len(route) - 1]
+        self.pursuit = Pursuit(route, goal.control, self.dt, yaw=goal.yaw)
+        if goal.kind == "patrol" and goal.laps != 1:
+            self._add_lap(goal)  # the route holds two laps ahead: one more each time one begins
+        self.anchor = (step, state.true_x, state.true_y, state.true_yaw)
+        self.emit(GoalStarted(step, self.name, goal.index, goal.kind))
+        self._control(step, state)
+
+    def _add_lap(self, goal: GoalStep) -> None:
+        before = len(self.pursuit.route)
+        self.pursuit.extend([*goal.points[1:], goal.points[0]])
+        self.lap_ends.append(self.lap_ends[-1] + len(self.pursuit.route) - before)
+
+    def _control(self, step: int, state: RobotState | None = None) -> None:
+        """One control tick of the running goal."""
+        goal = self.current
+        state = state or self.world.read(self.name)
+        pursuit = self.pursuit
+        if goal.kind == "patrol" and len(self.lap_ends) > 1 and pursuit.passed >= self.lap_ends[-2] and \
+                (goal.laps is None or len(self.lap_ends) < goal.laps):
+            self._add_lap(goal)  # on its last lap ahead: one more
+        linear, angular = pursuit.update(self._pose(state, goal))
+        if pursuit.done:
+            self._end(step, "reached", state)
+        elif goal.control.timeout is not None and step - self.started >= goal.control.timeout:
+            self._end(step, "timed_out", state)
+        elif self._blocked(step, state):
+            self._end(step, "blocked", state)
+        else:
+            self.world.set_command(self.name, linear, angular)
+            self.wake = step + self.every
+
+    def _blocked(self, step: int, state: RobotState) -> bool:
+        """Whether the robot stayed put for BLOCKED_SECONDS (checked once per such window)."""
+        since, x, y, yaw = self.anchor
+        if step - since < self.blocked_steps:
+            return False
+        self.anchor = (step, state.true_x, state.true_y, state.true_yaw)
+        moved = math.hypot(state.true_x - x, state.true_y - y)
+        turned = abs(math.remainder(state.true_yaw - yaw, math.tau))
+        return moved < BLOCKED_DISTANCE and turned < BLOCKED_TURN
+
+    def _end(self, step: int, status: str, state: RobotState, stop: bool = True) -> None:
+        goal = self.current
+        if stop:
+            self.world.set_command(self.name, 0.0, 0.0)
+        target = goal.points[0] if goal.kind == "patrol" else goal.points[-1]
+        error = math.hypot(state.true_x - target[0], state.true_y - target[1])
+        laps = sum(self.pursuit.passed >= end for end in self.lap_ends) if goal.kind == "patrol" else None
+        self.emit(GoalEnded(step, self.name, goal.index, goal.kind, status, self.started, error, laps))
+        self.current, self.pursuit, self.lap_ends = None, None, []
+        self.wake = step
+
+    def _pose(self, state: RobotState, goal: GoalStep) -> Pose:
+        """The pose the goal's controller trusts: odometry mapped into the world, or the truth."""
+        if goal.control.localization == "ground_truth":
+            return Pose(state.true_x, state.true_y, state.true_yaw)
+        x, y = self.odom(state.odom_x, state.odom_y)
+        return Pose(x, y, self.odom.yaw + state.odom_yaw)
