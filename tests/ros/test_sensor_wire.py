@@ -15,7 +15,7 @@ from mobot_cli.ros.sensor_definitions import CONTACTS_STATE, IMU, POINT_CLOUD2
 from mobot_cli.ros2 import names
 from mobot_cli.sim.sensing.lidar import Beams
 from mobot_cli.sim.sensing.rig import Contact
-from tests.run.test_sensor_records import _typestore
+from tests.record.test_sensor_records import _typestore
 from tests.sim.sensor_world import lidar
 
 pytest.importorskip("cyclonedds")
