@@ -17,7 +17,7 @@ from mobot_cli.sim.kinematic.world import PENETRATION, KinematicWorld
 from mobot_cli.sim.pb import p
 from tests.sim.test_contacts import box
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 
 
 @pytest.fixture(scope="module")

@@ -23,7 +23,7 @@ from mobot_cli.sim.kinematic.world import KinematicWorld
 from mobot_cli.timeline.records import Sample
 from tests.sim.test_contacts import box
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 RATE = 10
 SCRIPT = [(0.4, 0.2, 12), (0.0, 0.0, 8), (-0.3, -0.5, 10), (0.0, 0.9, 5), (0.25, 0.0, 9)]  # linear, angular, steps
 

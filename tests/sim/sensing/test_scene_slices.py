@@ -17,7 +17,7 @@ from mobot_cli.sim.sensing import lidar as lidar_rays
 from mobot_cli.sim.sensing.raycast import SLICE_BAND, StaticScene
 from tests.sim.sensor_world import lidar
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 
 
 def _whole(scene: StaticScene, origins, dirs, lengths) -> np.ndarray:
