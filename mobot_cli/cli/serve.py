@@ -29,6 +29,11 @@ def serve(
                                             "(and 3x as long in wall time)."),
     load_memory: int = typer.Option(1024, "--load-memory", metavar="MIB",
                                     help="Memory limit of the process that loads spawned descriptions."),
+    max_faces: int = typer.Option(100_000, "--max-faces", metavar="N",
+                                  help="Mesh faces (collision and visual) a spawned robot may have."),
+    max_links: int = typer.Option(200, "--max-links", metavar="N", help="Links a spawned robot may have."),
+    max_robots: int = typer.Option(100, "--max-robots", metavar="N",
+                                   help="Robots the world may hold; spawns beyond are refused."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),
     ros2_: bool = typer.Option(False, "--ros2", help=ros2.HELP),
     view: bool = typer.Option(False, "--view", help="Watch and drive the world in a local 3D web page "
@@ -53,6 +58,9 @@ def serve(
     if not 0 < load_timeout <= 3600 or not 256 <= load_memory <= 1 << 20:
         raise UsageError("--load-timeout must be above 0 and at most 3600 s, --load-memory at least 256 MiB",
                          hint="The defaults are 10 s and 1024 MiB.")
+    for option, value in (("--max-faces", max_faces), ("--max-links", max_links), ("--max-robots", max_robots)):
+        if not 1 <= value <= 10**9:
+            raise UsageError(f"{option} {value} must be at least 1 and at most 1000000000")
     if view:
         from mobot_cli.view.page import require_viser
 
@@ -66,7 +74,8 @@ def serve(
     server = LiveServer(plan, endpoint or default_endpoint(), rtf=pace, bind_any=bind_any,
                         out_dir=out, resolved_yaml=prepared.resolved_yaml, stop_after=stop_after,
                         attachments=bridges, watch=page.watch if page else None,
-                        paused=paused, limits=Limits(seconds=load_timeout, memory=load_memory * 2**20))
+                        paused=paused, limits=Limits(seconds=load_timeout, memory=load_memory * 2**20,
+                                                    faces=max_faces, links=max_links, robots=max_robots))
     if page:
         page.connect(server)
 

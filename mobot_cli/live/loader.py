@@ -42,11 +42,17 @@ _PACKAGE_PARENT = str(Path(__file__).resolve().parent.parent.parent)  # the fold
 
 @dataclass(frozen=True)
 class Limits:
-    """What one load may take: CPU seconds, bytes of address space; and how many run at once."""
+    """What one load may take (CPU seconds, bytes of address space), how many run at once, and
+    what one robot (mesh faces, links) and the world (robots) may cost the world's thread."""
 
     seconds: float = 10.0  # of CPU time; a load that waits is stopped after WALL_FACTOR times as long
     memory: int = 1 << 30  # 1 GiB
     workers: int = 2
+    # PyBullet parses a robot's meshes on the world's thread at 1.5-4 us a face (measured: a
+    # 200k-face collision mesh 0.8 s of CPU, a 1M-face one 7 s): 100k faces cost it ~0.3 s once.
+    faces: int = 100_000  # of all the robot's meshes, collision and visual, each use counted
+    links: int = 200
+    robots: int = 100  # in the world, scenario robots included: 1,000 bring it to 5 % of real time
 
     @property
     def wall(self) -> float:
@@ -99,6 +105,11 @@ class LoaderPool:
         self._dispatch()
         if self._failed_starts >= FAILED_STARTS and not self._workers:
             self._refuse_queue()
+
+    @property
+    def pending(self) -> int:
+        """Loads queued or running: robots that may join the world soon."""
+        return len(self._queue) + sum(w.job is not None for w in self._workers)
 
     @property
     def busy(self) -> bool:
@@ -162,7 +173,8 @@ class LoaderPool:
         try:
             process = subprocess.Popen(
                 [sys.executable, "-m", "mobot_cli.live.worker", str(theirs.fileno()),
-                 str(self.limits.memory), str(self.limits.seconds)],
+                 str(self.limits.memory), str(self.limits.seconds), str(self.limits.faces),
+                 str(self.limits.links)],
                 pass_fds=(theirs.fileno(),), stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                 env=env)
         finally:

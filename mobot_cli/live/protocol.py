@@ -3,7 +3,8 @@
 A request is ``{"op": OP, "id": ANY, ...fields}``; the reply echoes ``id`` and carries
 ``ok``, ``result`` (a name below) and ``message``, plus the op's own fields. Result names
 and numbers follow ROS 2's simulation_interfaces (``msg/Result`` and ``srv/SpawnEntity``),
-with ``INVALID_REQUEST`` added for messages that are not a valid request at all.
+with ``INVALID_REQUEST`` added for messages that are not a valid request at all and
+``LIMIT_EXCEEDED`` for a spawn beyond a bound the server sets (``mobot serve --max-...``).
 This module stays light (no pydantic, no zmq) so the CLI client imports it cheaply.
 """
 
@@ -71,6 +72,7 @@ class Result(IntEnum):
     UNSUPPORTED_ASSETS = 108
     INVALID_POSE = 109
     INVALID_REQUEST = 900  # not in simulation_interfaces: malformed, oversized, bad fields
+    LIMIT_EXCEEDED = 901  # not in simulation_interfaces: beyond a bound of `mobot serve` (faces, links, robots)
 
 
 class Refusal(Exception):

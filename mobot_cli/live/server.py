@@ -302,6 +302,10 @@ class LiveServer:
         if not request.allow_renaming:
             spawning.final_name(request, self.session.taken())
         self.session.reference(request.reference_frame)
+        robots = len(self.session.robots) + self._loader.pending
+        if robots >= self._loader.limits.robots:
+            raise Refusal(Result.LIMIT_EXCEEDED, f"the world has {robots} robot(s), spawned or being "
+                          f"loaded; it takes at most {self._loader.limits.robots} (`mobot serve --max-robots`)")
         self._loader.submit(Job(request, self.plan.physics.rate_hz, owner=envelope))
         self._finish_spawns()  # a load refused at once (no loader can start) is answered now
         return None

@@ -10,11 +10,13 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from mobot_cli.assets import sandbox
 from mobot_cli.assets.description.describe import resolve_description
 from mobot_cli.assets.resources import ResourceResolver
+from mobot_cli.common.meshfile import count_faces
 from mobot_cli.common.transforms import compose_poses, quat_from_rpy
 from mobot_cli.errors import DescriptionError, MobotError, ResourceError, SpawnError
 from mobot_cli.live.protocol import Refusal, Result
@@ -35,12 +37,17 @@ NO_END = 2**62
 MAX_LINKS = 1000
 MAX_URDF_CHARS = 16 * 1024 * 1024
 MAX_NOTICES, MAX_NOTICE_CHARS = 50, 2000  # xacro messages from a client come back as notices
+_FACES: dict[tuple[str, int, int], int] = {}  # faces of a mesh file, by path, mtime and size
 _MISSING_ASSET = re.compile(r"mesh '.*' of link '.*' (cannot be found|resolves to .* not a readable file)"
                             r"|^included file '.*' cannot be read", re.DOTALL)
 
 
-def load_plan(request: Spawn, rate_hz: int) -> tuple[RobotPlan, list[str]]:
-    """The robot of a spawn request, loaded confined and checked (not yet named or placed); plus notices."""
+def load_plan(request: Spawn, rate_hz: int, bounds: tuple[int, int] | None = None) -> tuple[RobotPlan, list[str]]:
+    """The robot of a spawn request, loaded confined and checked (not yet named or placed); plus notices.
+
+    ``bounds`` (mesh faces, links; `mobot serve --max-faces/--max-links`) refuse a robot that
+    would cost the world's thread too much to load, with LIMIT_EXCEEDED.
+    """
     base_dir = Path(request.base_dir) if request.base_dir else Path.cwd()
     description, label, files, roots = request.description, None, (), []
     if request.urdf is not None:
@@ -58,6 +65,8 @@ def load_plan(request: Spawn, rate_hz: int) -> tuple[RobotPlan, list[str]]:
         message = str(exc) if label is None else str(exc).replace(description, label)
         raise Refusal(classify(exc), message) from None
     _check_size(plan)
+    if bounds is not None:
+        check_bounds(plan, *bounds)
     notices = resolver.notices if label is None else [n.replace(description, label) for n in resolver.notices]
     return plan, [_short(notice, MAX_NOTICE_CHARS) for notice in notices[:MAX_NOTICES]]
 
@@ -96,6 +105,36 @@ def _check_size(plan: RobotPlan) -> None:
         raise Refusal(Result.RESOURCE_PARSE_ERROR, f"the expanded robot has {links} links and "
                       f"{len(plan.urdf)} characters; a live spawn takes at most {MAX_LINKS} links and "
                       f"{MAX_URDF_CHARS} characters")
+
+
+def check_bounds(plan: RobotPlan, max_faces: int, max_links: int) -> None:
+    """LIMIT_EXCEEDED for a robot with more links, or mesh faces, than the server allows."""
+    root = ET.fromstring(plan.urdf)
+    links = len(root.findall("link"))
+    if links > max_links:
+        raise Refusal(Result.LIMIT_EXCEEDED, f"the robot has {links} links; this world takes at most "
+                      f"{max_links} a robot (`mobot serve --max-links`)")
+    faces = 0
+    for mesh in root.iter("mesh"):
+        filename = mesh.get("filename", "")
+        try:
+            faces += _faces(filename)
+        except OSError:
+            continue  # a missing mesh is the loader's to report, not a cost
+        if faces > max_faces:
+            raise Refusal(Result.LIMIT_EXCEEDED, f"the robot's meshes have more than {max_faces} faces "
+                          f"(reached at {Path(filename).name}); this world takes at most {max_faces} a "
+                          "robot (`mobot serve --max-faces`): simplify its collision and visual meshes")
+
+
+def _faces(filename: str) -> int:
+    path = Path(filename.removeprefix("file://"))
+    stat = path.stat()
+    key = (str(path), stat.st_mtime_ns, stat.st_size)
+    if key not in _FACES:  # a warm loader spawns the same robot again without re-reading its meshes
+        _FACES[key] = count_faces(str(path))
+    return _FACES[key]
+
 
 
 def _short(text: str, limit: int) -> str:

@@ -1,6 +1,6 @@
 """A loader process: the robot descriptions that spawn requests send are expanded and checked here.
 
-LoaderPool (loader.py) starts it as ``python -m mobot_cli.live.worker FD MEMORY_BYTES SECONDS``.
+LoaderPool (loader.py) starts it as ``python -m mobot_cli.live.worker FD MEMORY_BYTES SECONDS FACES LINKS``.
 It limits its own address space (RLIMIT_AS) to MEMORY_BYTES, reads
 ``(Spawn request, rate_hz)`` pairs from the connection on FD and answers each with
 ``("ok", RobotPlan, notices)`` or ``("refused", Result, message)``, pickled. Descriptions are
@@ -21,6 +21,7 @@ import sys
 def main(argv: list[str]) -> int:
     """Serve load requests until the connection closes."""
     fd, memory, seconds = int(argv[0]), int(argv[1]), float(argv[2])
+    bounds = (int(argv[3]), int(argv[4])) if len(argv) > 4 else None  # faces, links
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C in the terminal is the server's to handle
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ[var] = "1"  # thread pools would reserve address space for nothing
@@ -38,15 +39,15 @@ def main(argv: list[str]) -> int:
         except (EOFError, OSError):
             return 0
         _cpu_budget(seconds)
-        outcome = _load(spawning, request, rate_hz, memory)
+        outcome = _load(spawning, request, rate_hz, memory, bounds)
         connection.send(outcome)
 
 
-def _load(spawning, request, rate_hz: int, memory: int) -> tuple:
+def _load(spawning, request, rate_hz: int, memory: int, bounds: tuple[int, int] | None) -> tuple:
     from mobot_cli.live.protocol import Refusal, Result
 
     try:
-        plan, notices = spawning.load_plan(request, rate_hz)
+        plan, notices = spawning.load_plan(request, rate_hz, bounds)
         return ("ok", plan, notices)
     except Refusal as exc:
         return ("refused", exc.result, exc.message)
