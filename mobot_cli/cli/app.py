@@ -47,32 +47,43 @@ def _root(
 ) -> None:
     # Declared here for parsing and --help; _execute has read --traceback already (_traceback_asked).
     del traceback, version
-    if ctx.invoked_subcommand != "run":  # a run starts it once its scenario is loaded (cli/runner.py)
+    if ctx.invoked_subcommand != "run":  # a run starts it once its scenario is loaded (cli/run.py)
         collect_garbage()
 
 
+# The commands by group, in the order `mobot --help` lists them. Commands whose arguments may be
+# negative numbers read dashes as values, not as options.
+NEGATIVES = {"ignore_unknown_options": True}
+
+# Scenario files: run to their end, check, look inside, plot, sweep.
 app.command("run")(run.run)
 app.command("check")(check.check)
 app.command("inspect")(inspect.inspect)
 app.command("xacro")(xacro.xacro)
 app.command("plot")(plot_command.plot)
 app.command("sweep")(sweep_command.sweep)
+
+# The live world (cli/serve.py) and its clients (cli/live/, sharing cli/live/common.py's options).
 app.command("serve")(serve.serve)
 app.command("spawn")(spawn.spawn)
 app.command("delete")(delete.delete)
 app.command("list")(list_command.list_)
 app.command("cmd")(cmd.cmd)
-app.command("goto", context_settings={"ignore_unknown_options": True})(goto.goto)  # X, Y may be negative
+app.command("goto", context_settings=NEGATIVES)(goto.goto)  # X, Y
 app.command("odom")(odom.odom)
 app.command("scan")(scan.scan)
 app.command("stop")(stop.stop)
+
+# Live clients for lockstep control, as ROS 2's simulation_interfaces (cli/live/lockstep.py).
 app.command("pause")(lockstep.pause)
 app.command("resume")(lockstep.resume)
-app.command("step", context_settings={"ignore_unknown_options": True})(lockstep.step)  # N may be negative: refused
+app.command("step", context_settings=NEGATIVES)(lockstep.step)  # N, refused when negative
 app.command("reset")(lockstep.reset)
 app.command("state")(lockstep.state)
 app.command("teleport")(lockstep.teleport)
 app.command("features")(lockstep.features)
+
+# The browser view of run folders.
 app.command("view")(view_command.view)
 
 

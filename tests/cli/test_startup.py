@@ -1,7 +1,7 @@
 """The garbage collector is held back while a command starts and running when it works.
 
 __main__.entry() disables it; the CLI starts it again, with start-up's objects frozen, once a
-run's scenario is loaded (cli/runner.py) or, for any other command, before it starts (cli/app.py).
+run's scenario is loaded (cli/run.py) or, for any other command, before it starts (cli/app.py).
 """
 
 from __future__ import annotations

@@ -101,7 +101,7 @@ def test_a_nan_is_refused_when_written():
 
 
 def test_writing_a_record_does_not_import_pydantic():
-    code = ("import sys; from mobot_cli.record.summary import *; import mobot_cli.run, mobot_cli.cli.runner; "
+    code = ("import sys; from mobot_cli.record.summary import *; import mobot_cli.run, mobot_cli.cli.run; "
             "print('pydantic' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"

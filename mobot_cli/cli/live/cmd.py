@@ -18,10 +18,10 @@ def cmd(
     for_: Optional[float] = typer.Option(None, "--for", metavar="S",
                                          help="Stop after S simulated seconds [default: hold until the next cmd]."),
     wait: bool = typer.Option(False, "--wait", help="With --for: return when the command has ended."),
-    endpoint: Optional[str] = common.ENDPOINT,
+    endpoint: common.Endpoint = None,
     timeout: float = typer.Option(5.0, "--timeout", help=common.TIMEOUT_HELP + " With --wait, "
                                   "the wait for the command to end comes on top."),
-    json_: bool = typer.Option(False, "--json", help="Print the reply as JSON."),
+    json_: common.Json = False,
 ) -> int:
     """Command a body twist; it holds until the next cmd, or for S seconds with --for."""
     env = ctx.obj

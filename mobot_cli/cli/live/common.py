@@ -1,4 +1,5 @@
-"""What the live-world commands share: the endpoint and timeout options, the client, the printing.
+"""What the live-world commands share: their common options (endpoint, timeout, --json, a pose),
+the client, the printing.
 
 Plain text only (no Rich), so `mobot list` and `mobot odom` answer fast.
 """
@@ -7,26 +8,33 @@ from __future__ import annotations
 
 import json
 import time
-from typing import Any, Callable, Optional
+from typing import Annotated, Any, Callable, Optional
 
 import typer
 
 from mobot_cli.cli.environment import Environment
 from mobot_cli.errors import ExitCode, RequestRefused, UsageError
 
-ENDPOINT = typer.Option(None, "--endpoint", "-e", metavar="ENDPOINT",
-                        help="Where the live world listens [default: $MOBOT_ENDPOINT, else "
-                             "ipc://$XDG_RUNTIME_DIR/mobot/mobot.sock].")
+# The options the live clients share, as types: a command declares one as `endpoint: Endpoint = None`,
+# its default in its own signature (Typer reads the flag and help from the Annotated metadata).
 TIMEOUT_HELP = "Seconds to wait for the reply (exit 4 when nothing answers)."
+ENDPOINT_HELP = ("Where the live world listens [default: $MOBOT_ENDPOINT, else "
+                 "ipc://$XDG_RUNTIME_DIR/mobot/mobot.sock].")
+Endpoint = Annotated[Optional[str], typer.Option("--endpoint", "-e", metavar="ENDPOINT", help=ENDPOINT_HELP)]
+ENDPOINT = typer.Option(None, "--endpoint", "-e", metavar="ENDPOINT", help=ENDPOINT_HELP)  # serve's, for now
+Timeout = Annotated[float, typer.Option("--timeout", help=TIMEOUT_HELP)]
+Json = Annotated[bool, typer.Option("--json", help="Print the reply as JSON.")]
+JsonLines = Annotated[bool, typer.Option("--json", help="Print replies as JSON (one line each with --follow).")]
 
 # A pose as spawn_entity.py takes it: shared by `mobot spawn` and `mobot teleport`.
-X = typer.Option(0.0, "-x", help="Position, m.")
-Y = typer.Option(0.0, "-y", help="Position, m.")
-Z = typer.Option(None, "-z", help="Height, m [default: rest on the floor].")
-ROLL = typer.Option(0.0, "-R", help="Roll, rad.")
-PITCH = typer.Option(0.0, "-P", help="Pitch, rad.")
-YAW = typer.Option(0.0, "-Y", help="Yaw, rad.")
-QUAT = typer.Option(None, "--quat", metavar="X Y Z W", help="Orientation as a quaternion instead of -R -P -Y.")
+X = Annotated[float, typer.Option("-x", help="Position, m.")]
+Y = Annotated[float, typer.Option("-y", help="Position, m.")]
+Z = Annotated[Optional[float], typer.Option("-z", help="Height, m [default: rest on the floor].")]
+Roll = Annotated[float, typer.Option("-R", help="Roll, rad.")]
+Pitch = Annotated[float, typer.Option("-P", help="Pitch, rad.")]
+Yaw = Annotated[float, typer.Option("-Y", help="Yaw, rad.")]
+Quat = Annotated[Optional[tuple[float, float, float, float]], typer.Option(
+    "--quat", metavar="X Y Z W", help="Orientation as a quaternion instead of -R -P -Y.")]
 
 
 def pose_fields(x: float, y: float, z: Optional[float], roll: float, pitch: float, yaw: float,

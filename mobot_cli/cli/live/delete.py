@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from typing import Optional
-
 import typer
 
 from mobot_cli.cli.live import common
@@ -13,9 +11,9 @@ from mobot_cli.errors import ExitCode
 def delete(
     ctx: typer.Context,
     name: str = typer.Argument(..., help="The robot to remove."),
-    endpoint: Optional[str] = common.ENDPOINT,
-    timeout: float = typer.Option(5.0, "--timeout", help=common.TIMEOUT_HELP),
-    json_: bool = typer.Option(False, "--json", help="Print the reply as JSON."),
+    endpoint: common.Endpoint = None,
+    timeout: common.Timeout = 5.0,
+    json_: common.Json = False,
 ) -> int:
     """Remove a robot from the live world."""
     with common.client(endpoint, timeout) as world:

@@ -27,10 +27,10 @@ def goto(
     max_linear: Optional[float] = typer.Option(None, "--max-linear", help="Top speed, m/s [default: 0.3]."),
     max_angular: Optional[float] = typer.Option(None, "--max-angular", help="Top turn rate, rad/s [default: 1.0]."),
     wait: bool = typer.Option(False, "--wait", help="Return when the goal has ended: reached, timed out or blocked."),
-    endpoint: Optional[str] = common.ENDPOINT,
+    endpoint: common.Endpoint = None,
     timeout: float = typer.Option(5.0, "--timeout", help=common.TIMEOUT_HELP + " With --wait, "
                                   "the wait for the goal comes on top."),
-    json_: bool = typer.Option(False, "--json", help="Print the reply as JSON."),
+    json_: common.Json = False,
 ) -> int:
     """Drive a robot of the live world to (X, Y) with the goal controller; exit 1 when --wait
     sees it end other than reached."""

@@ -5,27 +5,25 @@ and `features`. Each sends one request and prints its reply (``--json``: the rep
 from __future__ import annotations
 
 import math
-from typing import Any, Optional
+from typing import Annotated, Any, Optional
 
 import typer
 
 from mobot_cli.cli.live import common
 from mobot_cli.errors import ExitCode, UsageError
 
-JSON = typer.Option(False, "--json", help="Print the reply as JSON.")
-TIMEOUT = typer.Option(5.0, "--timeout", help=common.TIMEOUT_HELP)
-REFERENCE_FRAME = typer.Option(None, "--reference-frame", metavar="ENTITY",
-                               help="Give pose and twist relative to this robot [default: world].")
+ReferenceFrame = Annotated[Optional[str], typer.Option(
+    "--reference-frame", metavar="ENTITY", help="Give pose and twist relative to this robot [default: world].")]
 
 
-def pause(ctx: typer.Context, endpoint: Optional[str] = common.ENDPOINT, timeout: float = TIMEOUT,
-          json_: bool = JSON) -> int:
+def pause(ctx: typer.Context, endpoint: common.Endpoint = None, timeout: common.Timeout = 5.0,
+          json_: common.Json = False) -> int:
     """Pause the live world: it answers requests but takes no step until `mobot step` or `mobot resume`."""
     return _send(ctx.obj, endpoint, timeout, json_, "pause", {}, _state_line)
 
 
-def resume(ctx: typer.Context, endpoint: Optional[str] = common.ENDPOINT, timeout: float = TIMEOUT,
-           json_: bool = JSON) -> int:
+def resume(ctx: typer.Context, endpoint: common.Endpoint = None, timeout: common.Timeout = 5.0,
+           json_: common.Json = False) -> int:
     """Let a paused live world play on at its pace."""
     return _send(ctx.obj, endpoint, timeout, json_, "resume", {}, _state_line)
 
@@ -35,9 +33,9 @@ def step(
     steps: Optional[int] = typer.Argument(None, metavar="[N]", help="Physics steps to take [default: 1]."),
     seconds: Optional[float] = typer.Option(None, "--seconds", "-s", metavar="S",
                                             help="Simulated seconds instead: a whole number of steps."),
-    endpoint: Optional[str] = common.ENDPOINT,
-    timeout: float = typer.Option(60.0, "--timeout", help=common.TIMEOUT_HELP),
-    json_: bool = JSON,
+    endpoint: common.Endpoint = None,
+    timeout: common.Timeout = 60.0,
+    json_: common.Json = False,
 ) -> int:
     """Advance a paused world exactly N steps (or S seconds) as fast as it can; prints where it got."""
     if steps is not None and seconds is not None:
@@ -50,8 +48,8 @@ def step(
     return _send(ctx.obj, endpoint, timeout, json_, "step", fields, _step_lines)
 
 
-def reset(ctx: typer.Context, endpoint: Optional[str] = common.ENDPOINT, timeout: float = TIMEOUT,
-          json_: bool = JSON) -> int:
+def reset(ctx: typer.Context, endpoint: common.Endpoint = None, timeout: common.Timeout = 5.0,
+          json_: common.Json = False) -> int:
     """Put the world back as it started, at t = 0: the scenario's robots at their poses, scripts from the top."""
     return _send(ctx.obj, endpoint, timeout, json_, "reset", {},
                  lambda r: [f"reset to t=0.000 ({r['state']}); robots: {', '.join(r['robots']) or 'none'}"])
@@ -60,10 +58,10 @@ def reset(ctx: typer.Context, endpoint: Optional[str] = common.ENDPOINT, timeout
 def state(
     ctx: typer.Context,
     name: str = typer.Argument(..., help="The robot to read."),
-    reference_frame: Optional[str] = REFERENCE_FRAME,
-    endpoint: Optional[str] = common.ENDPOINT,
-    timeout: float = TIMEOUT,
-    json_: bool = JSON,
+    reference_frame: ReferenceFrame = None,
+    endpoint: common.Endpoint = None,
+    timeout: common.Timeout = 5.0,
+    json_: common.Json = False,
 ) -> int:
     """Print a robot's ground-truth pose and twist (GetEntityState)."""
     fields = {"name": name, **({"reference_frame": reference_frame} if reference_frame is not None else {})}
@@ -73,21 +71,21 @@ def state(
 def teleport(
     ctx: typer.Context,
     name: str = typer.Argument(..., help="The robot to move."),
-    x: float = common.X,
-    y: float = common.Y,
-    z: Optional[float] = common.Z,
-    roll: float = common.ROLL,
-    pitch: float = common.PITCH,
-    yaw: float = common.YAW,
-    quat: Optional[tuple[float, float, float, float]] = common.QUAT,
+    x: common.X = 0.0,
+    y: common.Y = 0.0,
+    z: common.Z = None,
+    roll: common.Roll = 0.0,
+    pitch: common.Pitch = 0.0,
+    yaw: common.Yaw = 0.0,
+    quat: common.Quat = None,
     linear: tuple[float, float, float] = typer.Option((0.0, 0.0, 0.0), "--linear", metavar="VX VY VZ",
                                                       help="Linear velocity afterwards, m/s [default: at rest]."),
     angular: tuple[float, float, float] = typer.Option((0.0, 0.0, 0.0), "--angular", metavar="WX WY WZ",
                                                        help="Angular velocity afterwards, rad/s."),
-    reference_frame: Optional[str] = REFERENCE_FRAME,
-    endpoint: Optional[str] = common.ENDPOINT,
-    timeout: float = TIMEOUT,
-    json_: bool = JSON,
+    reference_frame: ReferenceFrame = None,
+    endpoint: common.Endpoint = None,
+    timeout: common.Timeout = 5.0,
+    json_: common.Json = False,
 ) -> int:
     """Move a robot to a pose (SetEntityState), checked for collisions like a spawn."""
     pose = common.pose_fields(x, y, z, roll, pitch, yaw, quat)
@@ -101,8 +99,8 @@ def teleport(
     return _send(ctx.obj, endpoint, timeout, json_, "set_state", fields, lambda r: ["teleported " + _entity_line(r)])
 
 
-def features(ctx: typer.Context, endpoint: Optional[str] = common.ENDPOINT, timeout: float = TIMEOUT,
-             json_: bool = JSON) -> int:
+def features(ctx: typer.Context, endpoint: common.Endpoint = None, timeout: common.Timeout = 5.0,
+             json_: common.Json = False) -> int:
     """List what the live world supports (GetSimulatorFeatures): ids and names, and its requests."""
     return _send(ctx.obj, endpoint, timeout, json_, "features", {}, lambda r: [
         *(f"{f['id']:>3}  {f['name']}" for f in r["features"]),

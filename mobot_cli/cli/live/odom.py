@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from typing import Optional
-
 import typer
 
 from mobot_cli.cli.live import common
@@ -14,9 +12,9 @@ def odom(
     name: str = typer.Argument(..., help="The robot to read."),
     follow: bool = typer.Option(False, "--follow", "-f", help="Keep printing readings until Ctrl-C."),
     rate: float = typer.Option(10.0, "--rate", help="Readings per second (wall clock) with --follow."),
-    endpoint: Optional[str] = common.ENDPOINT,
-    timeout: float = typer.Option(5.0, "--timeout", help=common.TIMEOUT_HELP),
-    json_: bool = typer.Option(False, "--json", help="Print replies as JSON (one line each with --follow)."),
+    endpoint: common.Endpoint = None,
+    timeout: common.Timeout = 5.0,
+    json_: common.JsonLines = False,
 ) -> int:
     """Print a robot's odometry (odom frame = its spawn pose), ground truth and command."""
     env = ctx.obj

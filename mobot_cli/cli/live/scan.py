@@ -17,9 +17,9 @@ def scan(
                                          help="Its sensor [default: its first lidar, else its first sensor]."),
     follow: bool = typer.Option(False, "--follow", "-f", help="Print every new reading until Ctrl-C."),
     rate: float = typer.Option(10.0, "--rate", help="Polls per second (wall clock) with --follow."),
-    endpoint: Optional[str] = common.ENDPOINT,
-    timeout: float = typer.Option(5.0, "--timeout", help=common.TIMEOUT_HELP),
-    json_: bool = typer.Option(False, "--json", help="Print replies as JSON (one line each with --follow)."),
+    endpoint: common.Endpoint = None,
+    timeout: common.Timeout = 5.0,
+    json_: common.JsonLines = False,
 ) -> int:
     """Print a robot's latest lidar scan (or IMU or contact reading) from the live world."""
     env = ctx.obj

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from typing import Optional
-
 import typer
 
 from mobot_cli.cli.live import common
@@ -12,8 +10,8 @@ from mobot_cli.errors import ExitCode
 
 def stop(
     ctx: typer.Context,
-    endpoint: Optional[str] = common.ENDPOINT,
-    timeout: float = typer.Option(5.0, "--timeout", help=common.TIMEOUT_HELP),
+    endpoint: common.Endpoint = None,
+    timeout: common.Timeout = 5.0,
 ) -> int:
     """Stop the live world at the endpoint."""
     with common.client(endpoint, timeout) as world:
