@@ -44,9 +44,9 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
+from mobot_cli.sweep.execution import run_sweep  # noqa: E402
 from mobot_cli.sweep.executor_local import LocalExecutor  # noqa: E402
 from mobot_cli.sweep.expand import expand  # noqa: E402
-from mobot_cli.sweep.runner import run_sweep  # noqa: E402
 from mobot_cli.sweep.spec import build_spec  # noqa: E402
 from mobot_cli.timeline.loop import simulate  # noqa: E402
 

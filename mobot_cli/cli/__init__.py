@@ -18,7 +18,7 @@ from mobot_cli.errors import ExitCode, MobotError
 
 
 @dataclass(frozen=True)
-class Outcome:
+class CommandResult:
     """What one command did: its exit code and everything it printed."""
 
     exit_code: int
@@ -32,7 +32,7 @@ def main(argv: list[str] | None = None) -> int:
     sys.exit(int(_execute(args, Environment.from_process())))
 
 
-def invoke(args: Iterable[object], *, stdin: str | None = None, env: Environment | None = None) -> Outcome:
+def invoke(args: Iterable[object], *, stdin: str | None = None, env: Environment | None = None) -> CommandResult:
     """Run one mobot command in-process on captured streams; errors become exit codes as in main().
 
     Each argument is passed as str(arg), so paths and numbers may be given as they are. `stdin` is
@@ -44,7 +44,7 @@ def invoke(args: Iterable[object], *, stdin: str | None = None, env: Environment
     elif stdin is not None:
         raise TypeError("give stdin through env: Environment.captured(stdin=...)")
     code = _execute([str(a) for a in args], env)
-    return Outcome(int(code), env.stdout.getvalue(), env.stderr.getvalue())
+    return CommandResult(int(code), env.stdout.getvalue(), env.stderr.getvalue())
 
 
 def _execute(args: list[str], env: Environment) -> int:

@@ -49,8 +49,8 @@ def sweep(
 
         spec = build_spec(path, grid, zip_, random, samples, seed, set_)
         runner.prestart(run_count(spec))
+        from mobot_cli.sweep.execution import check_out_dir
         from mobot_cli.sweep.expand import expand
-        from mobot_cli.sweep.runner import check_out_dir
 
         prepared = expand(spec)  # every run prepared (and so checked) before any starts
         out_dir = out or default_out("sweeps", prepared.name)
@@ -74,7 +74,7 @@ def sweep(
 
 def _run(env, runner, prepared, out_dir: Path, done: dict, silent: bool):
     """The runs, with a progress bar unless ``silent``; Ctrl-C says where the finished rows are."""
-    from mobot_cli.sweep.runner import run_sweep
+    from mobot_cli.sweep.execution import run_sweep
 
     bar = None if silent else output.sweep_progress(env, len(prepared.variants), prepared.name)
     if bar:

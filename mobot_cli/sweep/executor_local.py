@@ -28,10 +28,10 @@ from typing import Callable, Iterable
 
 from mobot_cli.sweep.guard import die_with_sweep
 from mobot_cli.sweep.server import context, sigint_held, start_tracker
-from mobot_cli.sweep.task import Outcome, Task, failed, run_task
+from mobot_cli.sweep.task import Task, TaskResult, failed, run_task
 
-Runner = Callable[[Task], Outcome]
-OnDone = Callable[[Outcome], None]
+Runner = Callable[[Task], TaskResult]
+OnDone = Callable[[TaskResult], None]
 POLL_S = 0.5  # how often a wait wakes up to look at deadlines when none is closer
 READY = "ready"  # a worker's first message: imports done, the timeout clock may start
 

@@ -14,9 +14,9 @@ import time
 from typing import Callable
 
 from mobot_cli.errors import Location, UsageError
-from mobot_cli.sweep.task import Outcome, Task, failed, run_task_elsewhere
+from mobot_cli.sweep.task import Task, TaskResult, failed, run_task_elsewhere
 
-Runner = Callable[[Task], Outcome]
+Runner = Callable[[Task], TaskResult]
 POLL_S = 0.5
 REACH_TIMEOUT_S = 5.0
 
@@ -45,7 +45,7 @@ class RayExecutor:
             if self._started_here:
                 _connect(ray, self.address, self.jobs)
 
-    def run(self, tasks: list[Task], on_done: Callable[[Outcome], None]) -> None:
+    def run(self, tasks: list[Task], on_done: Callable[[TaskResult], None]) -> None:
         """Run every task on the cluster, calling ``on_done`` here as each one ends."""
         self.start()
         ray = require_ray()
@@ -57,7 +57,7 @@ class RayExecutor:
                 ray.shutdown()
             self._started_here = None
 
-    def _run(self, ray, tasks: list[Task], on_done: Callable[[Outcome], None]) -> None:
+    def _run(self, ray, tasks: list[Task], on_done: Callable[[TaskResult], None]) -> None:
         remote = ray.remote(num_cpus=1, max_retries=0)(self.runner)
         slots = max(1, int(ray.cluster_resources().get("CPU", self.jobs)))
         pending = list(reversed(tasks))
@@ -80,7 +80,7 @@ class RayExecutor:
                                        f"no result after {self.timeout:g} s: the run was stopped", now - started))
 
 
-def _result(ray, ref, task: Task, started: float) -> Outcome:
+def _result(ray, ref, task: Task, started: float) -> TaskResult:
     """The task's outcome, or a failed one saying how the Ray task died."""
     try:
         return ray.get(ref)

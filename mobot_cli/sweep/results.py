@@ -15,7 +15,7 @@ from typing import Any, Iterable
 from mobot_cli.common.files import write_json_atomic, write_text_atomic
 from mobot_cli.common.numbers import number  # not run.sinks: that imports PyBullet into the sweep
 from mobot_cli.sweep.expand import Sweep, Variant
-from mobot_cli.sweep.task import Outcome
+from mobot_cli.sweep.task import TaskResult
 
 ROBOT_FIELDS = ("distance", "x", "y", "yaw", "collisions")
 
@@ -29,7 +29,7 @@ def columns(keys: Iterable[str], robots: Iterable[str]) -> list[str]:
     return head + per_robot + ["folder", "reason"]
 
 
-def row(variant: Variant, outcome: Outcome, folder: str) -> dict[str, str]:
+def row(variant: Variant, outcome: TaskResult, folder: str) -> dict[str, str]:
     """The results.csv row of one finished run."""
     out = {"run": str(variant.index), "status": outcome.status, "failure": outcome.failure,
            "seed": str(variant.seed), "expect_passed": str(outcome.expect_passed),

@@ -1,7 +1,7 @@
 """One sweep run as a task: plain data in, plain data out, so any executor can carry it.
 
 ``run_task`` runs in a worker (a local process or a Ray task). It never raises: whatever
-goes wrong becomes a failed Outcome with the reason, and the sweep goes on.
+goes wrong becomes a failed TaskResult with the reason, and the sweep goes on.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ class Task:
 
 
 @dataclass(frozen=True)
-class Outcome:
+class TaskResult:
     """How one run went: what results.csv records of it."""
 
     index: int
@@ -47,12 +47,12 @@ class Outcome:
     files: dict[str, bytes] | None = None  # the run folder, when it was made on another machine
 
 
-def failed(index: int, failure: str, reason: str, wall_time: float = 0.0) -> Outcome:
+def failed(index: int, failure: str, reason: str, wall_time: float = 0.0) -> TaskResult:
     """An outcome for a run that did not finish."""
-    return Outcome(index, FAILED, failure, reason, round(wall_time, 3))
+    return TaskResult(index, FAILED, failure, reason, round(wall_time, 3))
 
 
-def run_task(task: Task) -> Outcome:
+def run_task(task: Task) -> TaskResult:
     """Run one task in this process and say how it went; never raises (but on Ctrl-C)."""
     from mobot_cli.run import execute  # imported once per warm worker
 
@@ -72,11 +72,11 @@ def run_task(task: Task) -> Outcome:
     if bad:
         reason = f"robot '{bad[0].robot}' was expected to {bad[0].expected}; it {bad[0].happened}"
         reason += f" (and {len(bad) - 1} more)" if len(bad) > 1 else ""
-    return Outcome(task.index, FAILED if bad else PASSED, "expectation" if bad else "", reason,
+    return TaskResult(task.index, FAILED if bad else PASSED, "expectation" if bad else "", reason,
                    round(wall, 3), robots, len(result.expectations) - len(bad), len(bad))
 
 
-def run_task_elsewhere(task: Task) -> Outcome:
+def run_task_elsewhere(task: Task) -> TaskResult:
     """Run a task into a scratch folder and return the folder's files with the outcome (Ray)."""
     scratch = Path(tempfile.mkdtemp(prefix="mobot-run-"))
     try:

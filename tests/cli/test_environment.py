@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from mobot_cli import __version__
-from mobot_cli.cli import Outcome, invoke
+from mobot_cli.cli import CommandResult, invoke
 from mobot_cli.cli.environment import Environment
 from mobot_cli.errors import ScenarioError
 
@@ -43,7 +43,7 @@ def test_a_progress_bar_is_drawn_only_when_stderr_is_a_terminal(tiny, tmp_path):
 
 def test_quiet_and_json_draw_no_bar_even_on_a_terminal(tiny, tmp_path):
     env = Environment.captured(stderr_isatty=True)
-    assert invoke(["run", tiny, "--out", tmp_path / "q", "--quiet"], env=env) == Outcome(0, "", "")
+    assert invoke(["run", tiny, "--out", tmp_path / "q", "--quiet"], env=env) == CommandResult(0, "", "")
     env = Environment.captured(stderr_isatty=True)
     done = invoke(["run", tiny, "--out", tmp_path / "j", "--json"], env=env)
     assert (done.exit_code, done.stderr) == (0, "")
@@ -63,7 +63,7 @@ def test_colour_and_width_follow_the_environment(tiny, tmp_path):
 
 
 def test_errors_go_to_stderr_with_exit_2():
-    assert invoke(["check", UNKNOWN_KEY]) == Outcome(2, "", UNKNOWN_KEY_ERROR)
+    assert invoke(["check", UNKNOWN_KEY]) == CommandResult(2, "", UNKNOWN_KEY_ERROR)
 
 
 def test_invoke_writes_nothing_to_the_process_streams(capfd):
@@ -89,7 +89,7 @@ def test_ctrl_c_is_exit_130(monkeypatch, tiny, tmp_path):
     monkeypatch.setattr("mobot_cli.scenario.prepare.prepare", interrupted)  # where Ctrl-C lands in a run
     # Typer turns Ctrl-C into a quiet exit 130; the console script's entry point says
     # `mobot: interrupted` (tests/cli/test_interrupt.py), in-process callers get the code.
-    assert invoke(["run", tiny, "--out", tmp_path / "r"]) == Outcome(130, "", "")
+    assert invoke(["run", tiny, "--out", tmp_path / "r"]) == CommandResult(130, "", "")
     assert not (tmp_path / "r").exists()
 
 
@@ -99,7 +99,7 @@ def test_help_version_and_usage_errors_land_on_the_environment():
     assert helped.stdout.startswith("Usage: mobot [OPTIONS] COMMAND [ARGS]...") and "--traceback" in helped.stdout
     bare = invoke([])  # no command: the help, on stderr, as a usage error
     assert (bare.exit_code, bare.stdout, bare.stderr) == (2, "", helped.stdout)
-    assert invoke(["--version"]) == Outcome(0, f"mobot {__version__}\n", "")
+    assert invoke(["--version"]) == CommandResult(0, f"mobot {__version__}\n", "")
     bogus = invoke(["bogus"])
     assert (bogus.exit_code, bogus.stdout) == (2, "") and "No such command 'bogus'" in bogus.stderr
 

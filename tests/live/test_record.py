@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from mobot_cli.cli import Outcome, invoke
+from mobot_cli.cli import CommandResult, invoke
 from mobot_cli.errors import RequestRefused
 from tests.live.live_server import REPO, LiveProcess, wait_for_step
 
@@ -44,7 +44,7 @@ def test_scenario_events_play_live_as_in_a_run(tmp_path, cache):
         assert server.wait() == 0, server.output()
     finally:
         server.kill()
-    assert invoke(["run", str(EVENTS), "--out", str(tmp_path / "run"), "--quiet"]) == Outcome(0, "", "")
+    assert invoke(["run", str(EVENTS), "--out", str(tmp_path / "run"), "--quiet"]) == CommandResult(0, "", "")
     live, run = tmp_path / "live", tmp_path / "run"
     for name in ("mobot_0", "mobot_1", "late"):
         ran = (run / "odom" / f"{name}.csv").read_text().splitlines()

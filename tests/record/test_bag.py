@@ -18,7 +18,7 @@ import mcap_ros2.decoder as mcap_ros2
 import pytest
 import yaml
 
-from mobot_cli.cli import Outcome, invoke
+from mobot_cli.cli import CommandResult, invoke
 
 DURATION, RATE, LOG_EVERY = 3.0, 240, 5  # log.rate_hz 48: every 5th step
 SAMPLES = int(DURATION * RATE) // LOG_EVERY + 1
@@ -48,7 +48,7 @@ NAMESPACE = {"alpha": "/alpha", "beta": "/team/beta"}
 
 
 def run(scenario: Path, out: Path) -> Path:
-    assert invoke(["run", str(scenario), "--out", str(out), "--quiet"]) == Outcome(0, "", "")
+    assert invoke(["run", str(scenario), "--out", str(out), "--quiet"]) == CommandResult(0, "", "")
     return out
 
 
@@ -230,7 +230,8 @@ def test_robots_that_come_and_go_get_their_topics_from_their_first_sample(tmp_pa
     """scenarios/events.yaml: mobot_1 is deleted at 3 s, 'late' spawns at 3.5 s."""
     scenario = Path(__file__).resolve().parents[2] / "scenarios" / "events.yaml"
     out = tmp_path / "events"
-    assert invoke(["run", scenario, "--out", out, "--quiet", "--set", "log.formats=[csv, mcap]"]) == Outcome(0, "", "")
+    result = invoke(["run", scenario, "--out", out, "--quiet", "--set", "log.formats=[csv, mcap]"])
+    assert result == CommandResult(0, "", "")
     msgs = messages(out / "bag")
     first = {}
     for topic, _, log_time, _, _ in msgs:

@@ -13,7 +13,7 @@ import pytest
 from PIL import Image
 
 from mobot_cli.assets.world.floorplan import BAND, convex_hull, floor_plan
-from mobot_cli.cli import Outcome, invoke
+from mobot_cli.cli import CommandResult, invoke
 from mobot_cli.plan import StaticBody, StaticShape, WorldPlan
 from mobot_cli.record.render import FLOOR, PALETTE, Track, dash_runs, nice_step, render
 
@@ -42,7 +42,7 @@ def plot_run(tmp_path_factory):
     base = tmp_path_factory.mktemp("plot")
     (base / "s.yaml").write_text(SCENARIO)
     out = base / "run"
-    assert invoke(["run", base / "s.yaml", "--out", out, "--quiet"]) == Outcome(0, "", "")
+    assert invoke(["run", base / "s.yaml", "--out", out, "--quiet"]) == CommandResult(0, "", "")
     return out
 
 
@@ -108,7 +108,7 @@ def test_plot_helpers():
 
 def test_mobot_plot_redraws_a_run_and_overlays_a_sweep(plot_run, tmp_path):
     out = tmp_path / "again.png"
-    assert invoke(["plot", plot_run, "--out", out]) == Outcome(0, f"wrote {out} (2 paths)\n", "")
+    assert invoke(["plot", plot_run, "--out", out]) == CommandResult(0, f"wrote {out} (2 paths)\n", "")
     redrawn, original = Image.open(out).convert("RGB"), Image.open(plot_run / "trajectory.png").convert("RGB")
     assert redrawn.size == original.size
     assert color_pixels(redrawn, PALETTE[0]) == pytest.approx(color_pixels(original, PALETTE[0]), rel=0.05)
@@ -117,7 +117,7 @@ def test_mobot_plot_redraws_a_run_and_overlays_a_sweep(plot_run, tmp_path):
         shutil.copytree(plot_run, sweep / "runs" / f"000{i}")
     runs = [{"run": i, "folder": f"runs/000{i}", "params": {"robots.r_0.pose.x": str(i)}} for i in range(3)]
     (sweep / "sweep.json").write_text(json.dumps({"runs": runs}))
-    assert invoke(["plot", sweep]) == Outcome(0, f"wrote {sweep / 'trajectory.png'} (6 paths from 3 runs)\n", "")
+    assert invoke(["plot", sweep]) == CommandResult(0, f"wrote {sweep / 'trajectory.png'} (6 paths from 3 runs)\n", "")
     assert color_pixels(Image.open(sweep / "trajectory.png").convert("RGB"), PALETTE[5]) > 400
     from mobot_cli.record.replot import _swept_values
 
@@ -125,14 +125,14 @@ def test_mobot_plot_redraws_a_run_and_overlays_a_sweep(plot_run, tmp_path):
 
 
 def test_mobot_plot_refuses_other_folders(tmp_path):
-    assert invoke(["plot", tmp_path]) == Outcome(2, "", f"mobot: error: '{tmp_path}' is neither a run folder nor "
+    assert invoke(["plot", tmp_path]) == CommandResult(2, "", f"mobot: error: '{tmp_path}' is neither a run folder nor "
                                                  "a sweep folder. Give the folder that mobot run --out or mobot "
                                                  "sweep --out wrote.\n")
 
 
 def test_mobot_check_says_how_a_run_folder_ended(plot_run, tmp_path):
-    assert invoke(["check", plot_run]) == Outcome(0, f"ok: run 'plottest' in {plot_run}: 4 s simulated, 2 robot(s), "
-                                                     "every file in place\n", "")
+    assert invoke(["check", plot_run]) == CommandResult(
+        0, f"ok: run 'plottest' in {plot_run}: 4 s simulated, 2 robot(s), every file in place\n", "")
     broken = shutil.copytree(plot_run, tmp_path / "broken")
     (broken / "trajectory.png").unlink()
     code, out, err = astuple(invoke(["check", broken]))

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from mobot_cli.cli import Outcome, invoke
+from mobot_cli.cli import CommandResult, invoke
 from mobot_cli.errors import ScenarioError
 from mobot_cli.scenario.prepare import prepare
 
@@ -32,7 +32,7 @@ def scenario(tmp_path: Path, body: str) -> Path:
 @pytest.fixture(scope="module")
 def events_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("events") / "run"
-    assert invoke(["run", str(EVENTS), "--out", str(out), "--quiet"]) == Outcome(0, "", "")
+    assert invoke(["run", str(EVENTS), "--out", str(out), "--quiet"]) == CommandResult(0, "", "")
     return out
 
 

@@ -13,7 +13,7 @@ import trimesh
 
 from mobot_cli.assets.description.describe import load_robot
 from mobot_cli.assets.world.worldplan import load_world
-from mobot_cli.cli import Outcome, invoke
+from mobot_cli.cli import CommandResult, invoke
 from mobot_cli.errors import ScenarioError, SpawnError
 from mobot_cli.plan import Physics, RobotPlan, SpawnPose
 from mobot_cli.scenario.prepare import prepare
@@ -104,7 +104,7 @@ def test_dolly_in_its_world_is_driven_by_name(corpus, tmp_path):
                                "duration: 6.0\nsettle: 1.0\nrobots:\n  - name: Dolly\n"
                                "    commands: [{at: 1.0, linear: 0.5, for: 4.0}]\n")
     out = tmp_path / "run"
-    assert invoke(["run", str(path), "--out", str(out), "--quiet"]) == Outcome(0, "", "")
+    assert invoke(["run", str(path), "--out", str(out), "--quiet"]) == CommandResult(0, "", "")
     with (out / "odom" / "Dolly.csv").open() as f:
         rows = list(csv.DictReader(f))
     assert float(rows[0]["true_z"]) == pytest.approx(0.33)  # the world's pose: it drops onto its wheels
@@ -113,7 +113,7 @@ def test_dolly_in_its_world_is_driven_by_name(corpus, tmp_path):
     resolved = (out / "scenario.yaml").read_text()
     assert "description" not in resolved.split("robots:")[1]  # still the world's own Dolly
     again = tmp_path / "again"
-    assert invoke(["run", str(out / "scenario.yaml"), "--out", str(again), "--quiet"]) == Outcome(0, "", "")
+    assert invoke(["run", str(out / "scenario.yaml"), "--out", str(again), "--quiet"]) == CommandResult(0, "", "")
     assert (again / "odom" / "Dolly.csv").read_bytes() == (out / "odom" / "Dolly.csv").read_bytes()
 
 
@@ -140,7 +140,8 @@ def test_sdf_model_files_are_robot_descriptions(corpus):
 
 def _summary_and_rows(tmp_path, name):
     out = tmp_path / name
-    assert invoke(["run", str(REPO / "scenarios" / f"{name}.yaml"), "--out", str(out), "--quiet"]) == Outcome(0, "", "")
+    result = invoke(["run", str(REPO / "scenarios" / f"{name}.yaml"), "--out", str(out), "--quiet"])
+    assert result == CommandResult(0, "", "")
     with (out / "odom" / "mobot.csv").open() as f:
         rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
     return json.loads((out / "summary.json").read_text()), rows
@@ -170,7 +171,7 @@ def test_skip_missing_flag_for_run_and_check(corpus, tmp_path):
     assert skipped.exit_code == 0 and skipped.stdout.startswith("ok: world ")
     assert "differs only in case" in skipped.stderr  # the left-out model, as a warning
     path = _scenario(tmp_path, f"world: {world}\nduration: 0.5\n")
-    assert invoke(["run", path, "--out", tmp_path / "no", "--quiet"]) == Outcome(2, "", refused.stderr)
+    assert invoke(["run", path, "--out", tmp_path / "no", "--quiet"]) == CommandResult(2, "", refused.stderr)
     assert not (tmp_path / "no").exists()
     out = tmp_path / "run"
     done = invoke(["run", path, "--out", out, "--skip-missing"])
@@ -242,7 +243,7 @@ def test_house_patrol_scenario_completes_its_patrol_and_scans_the_rooms(tmp_path
     """scenarios/house_patrol.yaml: the lidar switched on, a patrol that completes, CSV and MCAP."""
     out = tmp_path / "house_patrol"
     assert invoke(["run", str(REPO / "scenarios" / "house_patrol.yaml"), "--out", str(out), "--quiet"]) \
-        == Outcome(0, "", "")
+        == CommandResult(0, "", "")
     summary = json.loads((out / "summary.json").read_text())
     mobot = summary["robots"]["mobot"]
     [goal] = mobot["goals"]

@@ -15,10 +15,10 @@ from pathlib import Path
 
 import pytest
 
-from mobot_cli.cli import Outcome, invoke
+from mobot_cli.cli import CommandResult, invoke
+from mobot_cli.sweep.execution import run_sweep
 from mobot_cli.sweep.executor_local import LocalExecutor
 from mobot_cli.sweep.expand import expand
-from mobot_cli.sweep.runner import run_sweep
 from mobot_cli.sweep.spec import build_spec
 from mobot_cli.sweep.task import run_task
 from tests.sweep.test_guard import session
@@ -87,14 +87,16 @@ def test_close_stops_workers_that_no_run_took(scenario):
 def test_more_workers_than_runs_left_are_stopped(scenario, tmp_path):
     out = tmp_path / "out"
     grid = ["--grid", "robots.mobot.pose.x=0,1,2"]
-    assert invoke(["sweep", scenario, *grid, "-j", "2", "--out", out, "--quiet"]) == Outcome(0, "", "")
+    assert invoke(["sweep", scenario, *grid, "-j", "2", "--out", out, "--quiet"]) == CommandResult(0, "", "")
     assert multiprocessing.active_children() == []
     lines = (out / "results.csv").read_text().splitlines(keepends=True)
     (out / "results.csv").write_text("".join(lines[:3]))  # run 2 left: one worker of the two started
-    assert invoke(["sweep", scenario, *grid, "-j", "2", "--out", out, "--resume", "--quiet"]) == Outcome(0, "", "")
+    result = invoke(["sweep", scenario, *grid, "-j", "2", "--out", out, "--resume", "--quiet"])
+    assert result == CommandResult(0, "", "")
     assert len(rows(out)) == 3 and multiprocessing.active_children() == []
     # Nothing left: the workers started early run nothing and are stopped.
-    assert invoke(["sweep", scenario, *grid, "-j", "2", "--out", out, "--resume", "--quiet"]) == Outcome(0, "", "")
+    result = invoke(["sweep", scenario, *grid, "-j", "2", "--out", out, "--resume", "--quiet"])
+    assert result == CommandResult(0, "", "")
     assert multiprocessing.active_children() == []
 
 
@@ -135,6 +137,6 @@ def test_every_summary_is_flushed_to_disk_by_the_sweep(scenario, tmp_path, monke
     monkeypatch.setattr(os, "fsync", noting)  # this process only: the workers write without
     out = tmp_path / "out"
     assert invoke(["sweep", scenario, "--grid", "robots.mobot.pose.x=0,1,2", "--out", out, "--quiet"]) == \
-        Outcome(0, "", "")
+        CommandResult(0, "", "")
     for run in ("0000", "0001", "0002"):
         assert str((out / "runs" / run / "summary.json").resolve()) in synced

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from mobot_cli.cli import Outcome, invoke
+from mobot_cli.cli import CommandResult, invoke
 
 pytest.importorskip("ray", reason="Ray is an optional extra: pip install 'mobot-cli[ray]'")
 
@@ -35,9 +35,9 @@ def test_ray_and_local_sweeps_agree(tmp_path):
     local, ray = tmp_path / "local", tmp_path / "ray"
     failed = "mobot: 2 of 4 runs failed; see {}/results.csv\n"
     assert invoke(["sweep", scenario, *grid, "--jobs", "2", "--out", local, "--quiet"]) == \
-        Outcome(1, "", failed.format(local))
+        CommandResult(1, "", failed.format(local))
     assert invoke(["sweep", scenario, *grid, "--executor", "ray", "--jobs", "2", "--out", ray, "--quiet"]) == \
-        Outcome(1, "", failed.format(ray))
+        CommandResult(1, "", failed.format(ray))
     table = rows(ray)
     assert table == rows(local)
     assert [r["status"] for r in table] == ["passed", "passed", "failed", "failed"]  # 0.4 m/s goes 0.4 m

@@ -15,10 +15,10 @@ from pathlib import Path
 
 import pytest
 
-from mobot_cli.cli import Outcome, invoke
+from mobot_cli.cli import CommandResult, invoke
+from mobot_cli.sweep.execution import run_sweep
 from mobot_cli.sweep.executor_local import LocalExecutor
 from mobot_cli.sweep.expand import derive_seed, expand
-from mobot_cli.sweep.runner import run_sweep
 from mobot_cli.sweep.spec import build_spec, split_values
 from mobot_cli.sweep.task import run_task
 
@@ -58,7 +58,8 @@ def scenario(tmp_path_factory) -> Path:
 @pytest.fixture(scope="module")
 def two_jobs(scenario) -> Path:
     out = scenario.parent / "jobs2"
-    assert invoke(["sweep", scenario, *GRID, "--jobs", "2", "--out", out, "--quiet"]) == Outcome(1, "", failed(1, out))
+    result = invoke(["sweep", scenario, *GRID, "--jobs", "2", "--out", out, "--quiet"])
+    assert result == CommandResult(1, "", failed(1, out))
     return out
 
 
@@ -91,7 +92,8 @@ def test_grid_rows_match_speed_times_time(two_jobs):
 
 def test_one_job_gives_the_same_results_as_two(scenario, two_jobs, tmp_path):
     out = tmp_path / "jobs1"
-    assert invoke(["sweep", scenario, *GRID, "--jobs", "1", "--out", out, "--quiet"]) == Outcome(1, "", failed(1, out))
+    result = invoke(["sweep", scenario, *GRID, "--jobs", "1", "--out", out, "--quiet"])
+    assert result == CommandResult(1, "", failed(1, out))
     assert without_wall_time(rows(out)) == without_wall_time(rows(two_jobs))
     for run in ("0000", "0005"):
         for name in ("odom/mobot.csv", "scenario.yaml"):
@@ -105,7 +107,8 @@ def test_resume_runs_only_what_is_missing(scenario, two_jobs, tmp_path):
     (out / "results.csv").write_text("".join(lines[:3]) + lines[3][:20])  # runs 0, 1 and a torn line
     kept = (out / "runs" / "0000" / "odom" / "mobot.csv").stat().st_mtime_ns
     shutil.rmtree(out / "runs" / "0004")
-    assert invoke(["sweep", scenario, *GRID, "--out", out, "--resume", "--quiet"]) == Outcome(1, "", failed(1, out))
+    result = invoke(["sweep", scenario, *GRID, "--out", out, "--resume", "--quiet"])
+    assert result == CommandResult(1, "", failed(1, out))
     assert without_wall_time(rows(out)) == without_wall_time(rows(two_jobs))
     assert (out / "runs" / "0000" / "odom" / "mobot.csv").stat().st_mtime_ns == kept  # not run again
     assert (out / "runs" / "0004" / "odom" / "mobot.csv").is_file()  # run again
@@ -146,7 +149,7 @@ def test_a_run_that_raises_is_a_failed_row(tmp_path):
     out = tmp_path / "out"
     # b on top of a cannot be spawned: found in the worker, not while preparing.
     assert invoke(["sweep", path, "--grid", "robots.b.pose.x=2,0", "--out", out, "--quiet"]) == \
-        Outcome(1, "", f"mobot: 1 of 2 runs failed; see {out}/results.csv\n")
+        CommandResult(1, "", f"mobot: 1 of 2 runs failed; see {out}/results.csv\n")
     table = rows(out)
     assert [(r["status"], r["failure"]) for r in table] == [("passed", ""), ("failed", "error")]
     assert table[1]["reason"].startswith("robot 'b' spawned at x=0.000, y=0.000") and "into robot 'a'" in table[1]["reason"]
@@ -217,7 +220,7 @@ def test_sweeping_the_seed_writes_one_seed_column(scenario, tmp_path):
     out = tmp_path / "seeds"
     # 0x10 is YAML for 16: the column holds the seed the run used, not the text swept.
     assert invoke(["sweep", scenario, "--grid", "seed=3,0x10", "--grid", "robots.mobot.commands.0.for=1.0",
-                   "--jobs", "1", "--out", out, "--quiet"]) == Outcome(0, "", "")
+                   "--jobs", "1", "--out", out, "--quiet"]) == CommandResult(0, "", "")
     header = (out / "results.csv").read_text().splitlines()[0].split(",")
     assert header.count("seed") == 1
     assert header[:5] == ["run", "status", "failure", "seed", "robots.mobot.commands.0.for"]
@@ -287,7 +290,7 @@ def test_bad_sweep_input_is_exit_2_before_anything_runs(args, message, scenario,
 def test_a_sweep_file_naming_a_missing_scenario(tmp_path):
     sweep_file = tmp_path / "s.yaml"
     sweep_file.write_text("# a sweep\nscenario: nowhere.yaml\ngrid: {duration: [1, 2]}\n")
-    assert invoke(["sweep", sweep_file, "--out", tmp_path / "out"]) == Outcome(2, "", (
+    assert invoke(["sweep", sweep_file, "--out", tmp_path / "out"]) == CommandResult(2, "", (
         f"mobot: error: {sweep_file}:2, key 'scenario': scenario file not found: {tmp_path}/nowhere.yaml. "
         "Paths in a sweep file are relative to the sweep file.\n"))
     assert not (tmp_path / "out").exists()

@@ -1,4 +1,4 @@
-"""A prepared sweep, run: the sweep folder, resuming, and rows written as runs finish."""
+"""A sweep's execution: the Executor it runs on, the sweep folder, resuming, and rows written as runs finish."""
 
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ from mobot_cli.sweep.results import (
     write_document,
 )
 from mobot_cli.sweep.syncer import Syncer
-from mobot_cli.sweep.task import FAILED, Outcome, Task
+from mobot_cli.sweep.task import FAILED, Task, TaskResult
 
 Progress = Callable[[int, int, int], None]  # (runs done, runs failed, runs in the sweep)
 
@@ -42,7 +42,7 @@ class Executor(Protocol):
 
     def close(self) -> None: ...
 
-    def run(self, tasks: list[Task], on_done: Callable[[Outcome], None]) -> None: ...
+    def run(self, tasks: list[Task], on_done: Callable[[TaskResult], None]) -> None: ...
 
 
 @dataclass
@@ -115,7 +115,7 @@ def _run(sweep: Sweep, out_dir: Path, executor: Executor, done_rows: dict[int, d
     results = ResultsCsv(out_dir / "results.csv", header)
     syncer = Syncer()  # each run's summary.json to disk, while the next runs go on
 
-    def on_done(outcome: Outcome) -> None:
+    def on_done(outcome: TaskResult) -> None:
         run_dir = folder(outcome.index, total)
         if outcome.files is not None:
             _unpack(out_dir / run_dir, outcome.files)
