@@ -1,4 +1,4 @@
-"""Small pose maths for the view: ROS quaternions (x, y, z, w) and roll-pitch-yaw to viser's wxyz."""
+"""Small pose maths for the view: transforms of ROS poses, rotations as viser's (w, x, y, z) quaternions."""
 
 from __future__ import annotations
 
@@ -7,35 +7,6 @@ import math
 import numpy as np
 
 Quat = tuple[float, float, float, float]
-
-
-def wxyz(quat: Quat) -> tuple[float, float, float, float]:
-    """A ROS (x, y, z, w) quaternion in viser's order."""
-    x, y, z, w = quat
-    return (w, x, y, z)
-
-
-def rpy_wxyz(roll: float, pitch: float, yaw: float) -> tuple[float, float, float, float]:
-    """URDF's fixed-axis roll, pitch, yaw as a (w, x, y, z) quaternion."""
-    cr, sr = math.cos(roll / 2), math.sin(roll / 2)
-    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
-    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
-    return (cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
-            cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy)
-
-
-def axis_angle_wxyz(axis: np.ndarray, angle: float) -> tuple[float, float, float, float]:
-    """The rotation by ``angle`` about the unit ``axis``."""
-    s = math.sin(angle / 2)
-    return (math.cos(angle / 2), axis[0] * s, axis[1] * s, axis[2] * s)
-
-
-def quat_mul(a: tuple[float, ...], b: tuple[float, ...]) -> tuple[float, float, float, float]:
-    """The product a * b of two (w, x, y, z) quaternions."""
-    aw, ax, ay, az = a
-    bw, bx, by, bz = b
-    return (aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw)
 
 
 def matrix(xyz: tuple[float, ...], quat: Quat) -> np.ndarray:

@@ -67,29 +67,6 @@ def spec_points(spec: SensorSpec, ranges: np.ndarray) -> np.ndarray:
     return xyz[keep]
 
 
-def scan_points(ranges: Any, angle_min: float, angle_increment: float, range_min: float,
-                range_max: float) -> np.ndarray:
-    """A sensor_msgs/LaserScan's hits in its own frame."""
-    r = np.asarray(ranges, float)
-    a = angle_min + angle_increment * np.arange(len(r))
-    keep = np.isfinite(r) & (r >= range_min) & (r <= range_max)
-    r = np.where(keep, r, 0.0)
-    return np.stack([r * np.cos(a), r * np.sin(a), np.zeros_like(r)], axis=1)[keep]
-
-
-def cloud_points(msg: Any) -> np.ndarray:
-    """A sensor_msgs/PointCloud2's x, y, z (float32 fields) in its own frame."""
-    fields = {f.name: f.offset for f in msg.fields if f.datatype == 7}  # 7: FLOAT32
-    if not {"x", "y", "z"} <= fields.keys() or msg.point_step == 0:
-        return np.zeros((0, 3))
-    count = msg.width * msg.height
-    dtype = np.dtype({"names": ["x", "y", "z"], "formats": ["<f4"] * 3,
-                      "offsets": [fields["x"], fields["y"], fields["z"]], "itemsize": msg.point_step})
-    data = np.frombuffer(bytes(msg.data), dtype=dtype, count=count)
-    points = np.stack([data["x"], data["y"], data["z"]], axis=1).astype(float)
-    return points[np.isfinite(points).all(axis=1)]
-
-
 def draw(server: Any, cloud: Cloud, link_pose: np.ndarray) -> Any:
     """Add (or replace) the cloud's points, placed at its link's world pose (4x4)."""
     return server.scene.add_point_cloud(f"/readings/{cloud.robot}/{cloud.sensor}", cloud.points.astype(np.float32),

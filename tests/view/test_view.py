@@ -139,7 +139,7 @@ def lidar(samples: int = 4):
 
 
 def test_a_lidar_reading_becomes_points_on_its_link():
-    from mobot_cli.view.readings import cloud_of, scan_points
+    from mobot_cli.view.readings import cloud_of
 
     cloud = cloud_of(Reading(0, "mobot", lidar(), np.array([1.0, 2.0, np.inf, 0.05])))
     # -90 deg: 1 m to the right; -30 deg: 2 m; inf and below range_min are no hits; offset by the mount.
@@ -147,7 +147,6 @@ def test_a_lidar_reading_becomes_points_on_its_link():
     assert cloud.points == pytest.approx(np.array([[0.1, -1.0, 0.2], [0.1 + 2 * np.cos(np.pi / 6), -1.0, 0.2]]),
                                          abs=1e-6)
     assert cloud_of(Reading(0, "mobot", "not a spec", np.ones(4))) is None
-    assert scan_points([1.0, 9.0], 0.0, np.pi / 2, 0.1, 8.0) == pytest.approx(np.array([[1.0, 0.0, 0.0]]))
 
 
 def test_the_live_view_draws_states_and_readings_on_the_page(page):

@@ -80,17 +80,6 @@ class LinkTree:
         self._frames[link] = frame
         return frame
 
-    def fixed_to_root(self, link: str) -> bool:
-        """True when only fixed joints lie between the root and ``link``."""
-        current, seen = link, set()
-        while current in self.parent_joint and current not in seen:
-            seen.add(current)
-            joint = self.parent_joint[current]
-            if joint.type != "fixed":
-                return False
-            current = joint.parent
-        return True
-
 
 def _joint_row(joint: ET.Element) -> JointRow:
     parent = joint.find("parent")
