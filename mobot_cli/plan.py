@@ -16,8 +16,8 @@ class Physics:
     rate_hz: int = 240
     gravity: tuple[float, float, float] = (0.0, 0.0, -9.81)
     solver_iterations: int = 50
-    # "bullet": wheels driven by torques through PyBullet's solver (sim/world.py);
-    # "kinematic": robots follow their commanded twist (sim/kinematic.py)
+    # "bullet": wheels driven by torques through PyBullet's solver (sim/bullet/world.py);
+    # "kinematic": robots follow their commanded twist (sim/kinematic/world.py)
     engine: str = "bullet"
 
     @property
@@ -47,7 +47,7 @@ class DriveSpec:
     max_wheel_torque: float = 20.0  # N*m per wheel
     max_wheel_acceleration: float | None = None  # rad/s^2 at the wheel; None = unlimited
     odometry: str = "encoder"  # "encoder" | "ground_truth": what odom_* reports
-    # Trim wheel speeds until the measured body twist matches the command (sim/twist_trim.py);
+    # Trim wheel speeds until the measured body twist matches the command (sim/bullet/twist_trim.py);
     # None: on for skid steer (more than one wheel per side), off for two wheels.
     twist_feedback: bool | None = None
     # Where the wheel layout came from ("urdf" | "plugin" | "scenario"): a note, not a setting.
@@ -69,7 +69,7 @@ class CommandStep:
 
 @dataclass(frozen=True)
 class GoalControl:
-    """How a goal command drives (see run/pursuit.py): limits, tolerances, what pose it trusts."""
+    """How a goal command drives (see timeline/pursuit.py): limits, tolerances, what pose it trusts."""
 
     max_linear: float = 0.3  # m/s
     max_angular: float = 1.0  # rad/s
@@ -216,7 +216,7 @@ class Event:
 
 @dataclass(frozen=True)
 class Expectation:
-    """A check on a run's samples (see run/expect.py), from a scenario's ``expect:`` list."""
+    """A check on a run's samples (see timeline/expect.py), from a scenario's ``expect:`` list."""
 
     robot: str  # a robot's name, or "all": every robot, each checked on its own
     # "within" | "collisions" | "distance" | "upright" | "odom_error" | "clearance" | "reaches"

@@ -15,7 +15,7 @@ from mobot_cli.timeline.expect import Result
 from mobot_cli.timeline.loop import Attachment, Timeline
 
 if TYPE_CHECKING:
-    from mobot_cli.record.summary import RunRecord  # made at the end (run/outcome.py)
+    from mobot_cli.record.summary import RunRecord  # made at the end (record/outcome.py)
 
 Progress = Callable[[int, int], None]
 

@@ -4,7 +4,7 @@ cmd and skipped scenario event, refused ones too.
 Request fields come from clients, so a line keeps them bounded: a string longer than
 MAX_CHARS is cut and marked with its length, lists and objects keep their first MAX_ITEMS
 items, and a line still longer than MAX_LINE has each structured field cut to a piece of its
-JSON text. Everything else in DIR is the run folder `mobot run` writes (run/recording.py).
+JSON text. Everything else in DIR is the run folder `mobot run` writes (record/recording.py).
 """
 
 from __future__ import annotations

@@ -63,7 +63,7 @@ class LiveServer:
                  attachments: Sequence[Attachment] = (), watch: Callable[[Timeline], None] | None = None,
                  paused: bool = False, limits: Limits = Limits()):
         self.plan, self.rtf, self.stop_after = plan, rtf, stop_after
-        self.attachments = attachments  # ride along the timeline (the ROS 2 bridge): run/timeline.py
+        self.attachments = attachments  # ride along the timeline (the ROS 2 bridge): timeline/loop.py
         # watch: called with the timeline before the first spawn (a view attaches there).
         self.watch = watch
         self.control = Lockstep(paused)  # pause, resume, step: the protocol's and the view's buttons

@@ -3,8 +3,8 @@
 Written with rosbags: storage plugin mcap with zstd chunks, metadata version 8 (Iron's; Jazzy
 reads it, and its QoS profiles are YAML strings as Humble's reader expects), CDR encoded, every
 message definition embedded. Its connections and metadata.yaml are written as its Writer writes
-them, without ruamel.yaml (run/bag_metadata.py), and messages go into its open MCAP chunk
-directly (run/mcap_records.py). Topics, per sample at the log rate unless noted:
+them, without ruamel.yaml (ros/bag_metadata.py), and messages go into its open MCAP chunk
+directly (ros/mcap_records.py). Topics, per sample at the log rate unless noted:
 
 * ``/clock`` (rosgraph_msgs/Clock): the sim time;
 * ``/tf`` (tf2_msgs/TFMessage): per robot ``<prefix>odom -> <prefix><root link>`` from its
@@ -16,7 +16,7 @@ directly (run/mcap_records.py). Topics, per sample at the log rate unless noted:
   (std_msgs/String, transient local; mesh paths as file:// URIs);
 * per sensor, at its own rate: ``<ns>/scan`` (LaserScan), ``<ns>/points`` (PointCloud2),
   ``<ns>/imu`` (Imu), ``<ns>/bumper`` (gazebo_msgs/ContactsState), named and framed as
-  run/sensor_topics.py says, each sensor frame on /tf_static.
+  ros/sensor_topics.py says, each sensor frame on /tf_static.
 
 Message log times and header stamps are both sim time (nanoseconds from the start), so the
 same run gives the same bytes. Samples are recorded ``CHUNK_EVERY_SAMPLES`` at a time, each

@@ -1,6 +1,6 @@
 """How a run ended and the file that says so: all a run needs of its record until it ends.
 
-The record's classes (run/record.py) are imported only when a run writes its summary.
+The record's classes (record/summary.py) are imported only when a run writes its summary.
 """
 
 from __future__ import annotations

@@ -30,7 +30,7 @@ from mobot_cli.timeline.expect import Checker, Result, odom_error
 from mobot_cli.timeline.goals import GoalEnded, GoalStarted
 from mobot_cli.timeline.records import Deleted, Reading, Record, Sample, Sink, Spawned
 
-if TYPE_CHECKING:  # the record's classes are made when it is written (run/outcome.py)
+if TYPE_CHECKING:  # the record's classes are made when it is written (record/outcome.py)
     from mobot_cli.record.summary import LiveInfo, RobotRecord, RunRecord, SensorRecord
 
 

@@ -53,7 +53,7 @@ def sensor_file(key: str, spec: SensorSpec) -> str:
 
 class NpyRows:
     """A lidar's .npy file of (t, ranges) rows that grows as scans come. Scans wait until the
-    chunk is written, so that their ranges are read (and cast, sim/sensors.py) a chunk at a time."""
+    chunk is written, so that their ranges are read (and cast, sim/sensing/rig.py) a chunk at a time."""
 
     def __init__(self, path: Path, dtype: np.dtype):
         self.dtype, self.rows = dtype, 0

@@ -97,7 +97,7 @@ class _Points:
 
 class Drawn(NamedTuple):
     """One robot's track as the picture takes it, from a run or from a run folder's CSV files
-    (run/replot.py). ``swept`` holds (x0, y0, cell, covered mask, area) per coverage area."""
+    (record/replot.py). ``swept`` holds (x0, y0, cell, covered mask, area) per coverage area."""
 
     label: str
     true: list

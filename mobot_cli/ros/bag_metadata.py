@@ -4,7 +4,7 @@ rosbags' ``Writer`` dumps every stored QoS profile and, when the bag closes, its
 (metadata.yaml and the copy inside the MCAP file) through ruamel.yaml: ~12 ms of a one-robot
 run, most of what the bag costs besides its messages. The documents are always the same shape
 (block mappings with sorted keys, a few kinds of scalars), so they are written here as ruamel
-writes them: the same bytes (tests/run/test_bag_bytes.py compares them with rosbags' own).
+writes them: the same bytes (tests/record/test_bag_bytes.py compares them with rosbags' own).
 
 Anything this module was not written for (another metadata version or storage, a custom QoS, a
 topic name that is not a plain YAML word) goes through rosbags' own methods: slower, the same

@@ -3,11 +3,11 @@
 A run records thousands of messages whose frame names, joint names and covariances never
 change; only stamps, poses and joint values do. rosbags' serializer builds a message object
 and walks it for every message (~18 us for an Odometry); laying the bytes out once and
-filling in the numbers is ~1 us. tests/run/test_bag.py checks every layout byte for byte against
+filling in the numbers is ~1 us. tests/record/test_bag.py checks every layout byte for byte against
 rosbags' own serializer.
 
 Layouts also join end to end (``include``): a bag's log row, every message of it with its MCAP
-record header, is one layout packed in one call (run/mcap_records.py ``Row``), its messages'
+record header, is one layout packed in one call (ros/mcap_records.py ``Row``), its messages'
 variables drawn from one list of values, so a stamp that five messages carry is passed once.
 """
 

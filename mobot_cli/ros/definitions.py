@@ -1,7 +1,7 @@
 """ROS 2 message definitions and type hashes of the topics mobot records (generated).
 
 The same in Humble, Jazzy and Kilted. Generated once from rosbags' typestore and kept here so
-that a run does not build a typestore (~0.1 s); tests/run/test_bag.py checks them against it.
+that a run does not build a typestore (~0.1 s); tests/record/test_bag.py checks them against it.
 """
 
 from __future__ import annotations

@@ -6,9 +6,9 @@ connection until it matches) and packs each field through its own BytesIO, and i
 bookkeeping its McapWriter keeps (the chunk's message index and time span, per-channel counts,
 the bag's time span, a chunk closed when it passes 1 MiB) and writes the same bytes, a
 sample's messages in one go: the bag is identical byte for byte
-(tests/run/test_bag_bytes.py compares the two writers). A log row whose messages all have fixed
+(tests/record/test_bag_bytes.py compares the two writers). A log row whose messages all have fixed
 shapes is a ``Row``: the records of all its messages, headers included, laid out once
-(run/cdr.py) and packed in one struct call per row.
+(ros/cdr.py) and packed in one struct call per row.
 
 With a rosbags whose writer does not look as expected, every message goes through
 ``Writer.write``: slower, the same file.

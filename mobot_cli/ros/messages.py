@@ -3,7 +3,7 @@
 One place builds them so that a recorded bag and a live ROS 2 topic carry the same bytes:
 ``/clock``, ``/tf`` (every robot's odom -> base and moving joints in one message),
 ``/tf_static`` (``world -> <prefix>odom`` and the fixed joints) and per robot odom, cmd_vel,
-joint_states and robot_description. Shapes are laid out once per robot (run/cdr.py); a
+joint_states and robot_description. Shapes are laid out once per robot (ros/cdr.py); a
 message is then one ``struct.pack``. A bag packs a whole log row at once: each robot gives its
 numbers in one block (``RobotMessages.row_values``) and says where each message's variables
 are in it (``row_messages``, ``tf_sources``).

@@ -8,7 +8,7 @@ as many intensities, all 0; a 3D lidar's LaserScan would be its middle vertical 
 PointCloud2 is unordered (height 1) and dense: x, y, z, intensity float32 (16 bytes a point),
 vertical rows outer, beams inner, points without a return left out. Imu covariances are the
 noise variances on the diagonal (0 without noise). Every packer is independent of the bag, so
-a live ROS 2 publisher can send the same bytes. tests/run/test_sensor_records.py checks each
+a live ROS 2 publisher can send the same bytes. tests/record/test_sensor_records.py checks each
 against rosbags' serializer.
 """
 

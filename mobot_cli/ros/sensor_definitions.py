@@ -2,7 +2,7 @@
 
 Generated once from rosbags' typestore (sensor_msgs as in Humble, Jazzy and Kilted;
 gazebo_msgs/ContactsState as gazebo_ros_bumper publishes it, registered from its .msg text),
-so that a run does not build a typestore. tests/run/test_sensor_records.py checks them.
+so that a run does not build a typestore. tests/record/test_sensor_records.py checks them.
 """
 
 from __future__ import annotations

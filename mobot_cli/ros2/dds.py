@@ -1,6 +1,6 @@
 """A ROS 2 participant on Cyclone DDS that sends and takes CDR bytes as they are.
 
-mobot already lays out every message as CDR (run/cdr.py), so nothing is serialized twice:
+mobot already lays out every message as CDR (ros/cdr.py), so nothing is serialized twice:
 cyclonedds' ``DataWriter.write`` only hands the bytes its type's ``serialize`` returns to
 ``ddspy_write``, so this writer hands over mobot's bytes instead; a reader takes bytes the
 same way. The topic's type is the IDL struct of ros2/idl.py, which gives the DDS type name

@@ -1,6 +1,6 @@
 """The ROS 2 message types mobot sends and takes, declared as cyclonedds IDL structs.
 
-mobot writes the bytes itself (run/ros_messages.py), but cyclonedds makes a topic only for a
+mobot writes the bytes itself (ros/messages.py), but cyclonedds makes a topic only for a
 type it can describe: its DDS name and its XTypes type information, which discovery carries
 and which Cyclone uses to check incoming samples. These structs are that description, field
 for field as the ROS .msg files (``char`` is ``uint8`` in ROS 2 IDL). Tests also use them as

@@ -1,13 +1,13 @@
 """What the ROS 2 node publishes, from the timeline's records (ros2/bridge.py hands them over).
 
-The same bytes as the bag (run/ros_messages.py): ``/clock`` and ``/tf`` every sample,
+The same bytes as the bag (ros/messages.py): ``/clock`` and ``/tf`` every sample,
 ``/tf_static`` (every robot's fixed frames in one message, re-sent when a robot arrives or
 leaves, as tf2's static broadcaster does), per robot ``<ns>/odom`` and ``<ns>/joint_states``
 every sample and ``<ns>/robot_description`` once. Each robot's ``<ns>/cmd_vel`` reader is made
 here too, so that the node's endpoints in the graph are always the ones that exist.
 
 Every sensor's readings go out on its bag topic (``<ns>/scan``, ``<ns>/points``, ``<ns>/imu``,
-``<ns>/bumper``: run/sensor_topics.py), at the sensor's rate, the bag's bytes
+``<ns>/bumper``: ros/sensor_topics.py), at the sensor's rate, the bag's bytes
 (``RobotMessages.reading``), reliable, volatile, keep last 10 as ros_gz_bridge publishes
 them (a reliable writer also serves the best-effort readers nav2 and slam_toolbox make);
 their writers exist from the robot's arrival, so the graph lists them before the first reading.
@@ -46,8 +46,8 @@ from mobot_cli.ros2 import dds, graph, idl, names
 from mobot_cli.sim.state import RobotState
 from mobot_cli.timeline.records import Deleted, Reading, Record, Sample, Spawned
 
-# Type hashes of the types mobot sends that the bag does not record (tests/ros2/test_wire.py
-# checks them); the others come with the bag's definitions (run/ros_msgs.py, run/ros_sensor_msgs.py).
+# Type hashes of the types mobot sends that the bag does not record (tests/ros/test_wire.py
+# checks them); the others come with the bag's definitions (ros/definitions.py, ros/sensor_definitions.py).
 HASHES = {graph.MSGTYPE: graph.RIHS01}
 TWIST_FIELDS = struct.Struct("<4x6d")  # encapsulation header, linear xyz, angular xyz
 Handler = Callable[["Topics", Record], None]

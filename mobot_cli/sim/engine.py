@@ -7,7 +7,7 @@ from mobot_cli.sim.bullet.world import World
 
 
 def open_world(physics: Physics, world: WorldPlan, seed: int = 0) -> World:
-    """A World for ``physics.engine``: "bullet" (sim/world.py) or "kinematic" (sim/kinematic.py)."""
+    """A World for ``physics.engine``: "bullet" (sim/bullet/world.py) or "kinematic" (sim/kinematic/world.py)."""
     if physics.engine == "kinematic":
         from mobot_cli.sim.kinematic.world import KinematicWorld  # the physics engine never loads it
 

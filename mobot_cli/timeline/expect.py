@@ -4,8 +4,8 @@ Every robot keeps running figures (distance, worst tilt, worst odometry drift, c
 an expectation at a time reads a snapshot taken on that log row, one at the end reads the
 last figures. ``robot: all`` checks every robot on its own: ``within`` the robots in the
 world at that moment, the other checks every robot seen until then. Checks over time
-(reaches, visits, coverage, goal) follow each robot in trackers (run/expect_time.py); the
-footprint sweeps that coverage needs (run/sweep.py) are kept here for trajectory.png too.
+(reaches, visits, coverage, goal) follow each robot in trackers (timeline/expect_time.py); the
+footprint sweeps that coverage needs (timeline/coverage.py) are kept here for trajectory.png too.
 """
 
 from __future__ import annotations

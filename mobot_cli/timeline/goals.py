@@ -2,7 +2,7 @@
 
 A driver wakes only when something is due: a command's start, a twist's end, or, while a goal
 runs, every control period (``CONTROL_RATE_HZ``, whole physics steps). On each control tick it
-reads the robot once, turns the pose it trusts into a twist (run/pursuit.py) and commands it.
+reads the robot once, turns the pose it trusts into a twist (timeline/pursuit.py) and commands it.
 A goal ends ``reached``, ``timed_out`` (its ``timeout``), ``blocked`` (the robot's true pose
 moved less than ``BLOCKED_DISTANCE`` and turned less than ``BLOCKED_TURN`` in
 ``BLOCKED_SECONDS``: it pushes against something) or ``cancelled`` (a live command or goal

@@ -1,4 +1,4 @@
-"""The bag's direct MCAP records (run/mcap_records.py) are the bytes rosbags' Writer.write makes.
+"""The bag's direct MCAP records (ros/mcap_records.py) are the bytes rosbags' Writer.write makes.
 
 Each run is recorded twice, once with messages appended to rosbags' open chunk directly (what
 `mobot run` does) and once through ``Writer.write``, and the two folders must be equal byte for

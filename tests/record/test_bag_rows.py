@@ -1,6 +1,6 @@
-"""A bag packs a log row at once (run/bag.py ``log_row``, run/mcap_records.py ``Row``): its
+"""A bag packs a log row at once (record/bag.py ``log_row``, ros/mcap_records.py ``Row``): its
 messages must be the bytes the one-message packers give (what ``--ros2`` publishes, checked
-against rosbags' serializer in tests/ros2/test_wire.py), its records what rosbags' Writer writes."""
+against rosbags' serializer in tests/ros/test_wire.py), its records what rosbags' Writer writes."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The coverage metric (run/sweep.py) on shapes whose area is known by hand."""
+"""The coverage metric (timeline/coverage.py) on shapes whose area is known by hand."""
 
 from __future__ import annotations
 

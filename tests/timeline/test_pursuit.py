@@ -1,4 +1,4 @@
-"""The goal controller (run/pursuit.py) on an ideal unicycle: it gets there, within its limits."""
+"""The goal controller (timeline/pursuit.py) on an ideal unicycle: it gets there, within its limits."""
 
 from __future__ import annotations
 

@@ -11,7 +11,7 @@
 * Gazebo friction (<gazebo reference="LINK"><mu1>/<mu2>) becomes PyBullet's
   <contact><lateral_friction>: the smaller of mu1 and mu2, because PyBullet's friction is
   isotropic and a robot should never get more grip than Gazebo gives it. Links without mu
-  are left alone: the simulation layer (sim/world.py) gives them Gazebo's default, or caster
+  are left alone: the simulation layer (sim/bullet/world.py) gives them Gazebo's default, or caster
   friction, and treats a <lateral_friction> in the text as the author's choice.
 """
 

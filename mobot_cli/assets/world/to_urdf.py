@@ -3,7 +3,7 @@
 The URDF's root link frame is the model frame, every other link's frame is its joint's frame
 (URDF has no separate joint pose), and shapes and inertials are re-expressed accordingly.
 Joint axes come out in the joint frame. Ball joints become fixed: the caster sphere then
-slides with mobot's low caster friction (sim/world.py), which is how URDF robots model
+slides with mobot's low caster friction (sim/bullet/world.py), which is how URDF robots model
 casters too. The diff-drive <plugin> is kept as a <gazebo><plugin> block so drive detection
 reads it exactly as it reads gazebo_ros plugins in URDF; each link's <sensor>s likewise become
 <gazebo reference="LINK"><sensor> blocks, their <pose> re-expressed in the URDF link frame.

@@ -1,6 +1,6 @@
 """Friction as Gazebo users expect it: defaults, casters that slide, skid-steer wheels that scrub.
 
-World (sim/world.py) applies these when it builds static bodies and spawns robots.
+World (sim/bullet/world.py) applies these when it builds static bodies and spawns robots.
 """
 
 from __future__ import annotations

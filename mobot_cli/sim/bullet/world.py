@@ -319,7 +319,7 @@ class World:
                 hint="Is there a floor under its spawn pose?")
 
     def sense(self, due: list[tuple[str, str]]) -> list[object]:
-        """Readings of the (robot, sensor name) pairs due now, computed together (sim/sensors.py)."""
+        """Readings of the (robot, sensor name) pairs due now, computed together (sim/sensing/rig.py)."""
         return (self._sensing or self._sensors()).read(self._steps, due)
 
     def _sensors(self) -> Sensing:

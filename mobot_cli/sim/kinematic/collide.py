@@ -28,10 +28,10 @@ QUERY_REACH = 0.25  # m
 SUPPORT_BAND = 0.02  # m
 # Points no higher than this above a robot's lowest point carry it (wheels, casters): the
 # floor is looked for under them.
-FOOT_BAND = 0.005  # m, as sim/friction.py's CASTER_BAND
+FOOT_BAND = 0.005  # m, as sim/bullet/friction.py's CASTER_BAND
 # Floor rays start SUPPORT_BAND above the current floor and look down this far.
 FLOOR_DEPTH = 100.0  # m
-STATIC_GROUP = 2  # PyBullet's collision filter group of static bodies (robots are 1, see sim/lidar.py)
+STATIC_GROUP = 2  # PyBullet's collision filter group of static bodies (robots are 1, see sim/sensing/lidar.py)
 
 
 # A static body near a robot is asked about only when one of its shapes' boxes, widened by this
@@ -89,7 +89,7 @@ def _gap(boxes: list[tuple[float, ...]] | None, x: float, y: float, low: float, 
 
 def static_boxes(cid: int, world: WorldPlan, uids: list[int]) -> dict[int, list[tuple[float, ...]]]:
     """Each static body's shapes as boxes (x0, y0, z0, x1, y1, z1), widened by BOX_SLACK, given
-    the world's static bodies' ids in the order they were made (sim/world.py): a body of boxes,
+    the world's static bodies' ids in the order they were made (sim/bullet/world.py): a body of boxes,
     cylinders, capsules and spheres has one box a shape; any other (a mesh, a plane, URDF
     text) one box, PyBullet's own."""
     from mobot_cli.common.transforms import compose_poses, quat_matrix

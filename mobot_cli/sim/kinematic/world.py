@@ -1,13 +1,13 @@
 """The kinematic engine: robots follow their commanded twist; nothing is simulated by PyBullet.
 
 ``physics: {engine: kinematic}``. The World's interface, records and checks are the physics
-engine's (sim/world.py): robots are loaded, placed and checked the same way, sensors read the
+engine's (sim/bullet/world.py): robots are loaded, placed and checked the same way, sensors read the
 same PyBullet bodies. What differs is ``step``: each robot's wheel rates ramp toward its
-command (sim/kinematic_body.py) and the body moves along the exact arc they give, unless
+command (sim/kinematic/body.py) and the body moves along the exact arc they give, unless
 its collision shapes would then overlap a static body or another robot more than
 ``PENETRATION``; then it makes the largest part of the step that does not (found by
 bisection), or stays put. It rests on the highest floor under its footprint (it climbs what
-its contacts count as support, sim/kinematic_collide.py) and keeps its spawn roll and pitch.
+its contacts count as support, sim/kinematic/collide.py) and keeps its spawn roll and pitch.
 Touching counts as a collision exactly as in the physics engine (sim/contacts.py).
 
 Cost: a robot in open space costs a few microseconds a step: the clearance measured at its

@@ -1,7 +1,7 @@
 """Lidar rays: beam directions as Gazebo lays them out, and one batched cast for every scan due.
 
 Every scan due at a step is cast together: all their rays against the static world in one
-Embree call (sim/raycast.py), then only the rays that pass through another robot's bounding
+Embree call (sim/sensing/raycast.py), then only the rays that pass through another robot's bounding
 box (in front of the static hit) go to PyBullet's ``rayTestBatch``, in batches as large as it
 allows, with its worker threads on. A robot never sees itself: a ray that meets its own
 links is cast on from just beyond the hit, so links in front of the sensor are transparent,

@@ -5,7 +5,7 @@ which do. PyBullet's ``rayTestBatch`` answers both but spends 3-8 us a ray in th
 house (its broadphase walk and the Python tuples it returns), so a 360-beam scan at 10 Hz
 would cost more than the physics. Embree traces the same static triangles at about 9 M
 rays/s (bench/bench_sensors.py), so the static world is cast here and only rays that can
-reach a robot go to PyBullet (sim/lidar.py).
+reach a robot go to PyBullet (sim/sensing/lidar.py).
 
 Shapes become triangles as PyBullet collides with them: boxes exactly, cylinders, capsules
 and spheres as polygons whose faces lie within ``ROUND_TOLERANCE`` of the true surface,
@@ -18,7 +18,7 @@ heights are cast at a slice of the scene, the triangles that reach into the band
 around it, so that one slice serves a robot driving on): a smaller BVH, about 20 % less of
 Embree's work in the bundled house and 25 % in the AWS small house. A ray can meet only a triangle that reaches
 its height, so the answers are those of the whole scene, bit for bit
-(tests/sim/test_scene_slices.py).
+(tests/sim/sensing/test_scene_slices.py).
 
 A scene depends on the world plan alone, so the last world's scene is kept (``static_scene``)
 for the next World of that plan: a sweep worker's runs, a Gymnasium environment's episodes

@@ -2,7 +2,7 @@
 
 The World owns one ``Sensing`` once a robot with sensors arrives; the timeline asks it for
 the readings due at a step (each sensor at its own rate), and every lidar due at that step
-is cast in one batch (sim/lidar.py). With one robot in the world only the static world can
+is cast in one batch (sim/sensing/lidar.py). With one robot in the world only the static world can
 be in a scan's way: the scan keeps its pose and waits, and the waiting scans are cast
 together when one of them is first read (``ScanData.ranges``) or 50 wait. Noise comes from a generator per sensor, seeded by the
 run's seed and the robot's and sensor's names: the same seed gives the same readings.
@@ -35,7 +35,7 @@ from mobot_cli.sim.sensing import lidar
 KINDS = ("lidar", "imu", "contact")
 # Scans waiting to be cast (ScanData): at most this many, and this many rays (a VLP-16 scan
 # has 30,000), so readers that never read still see memory stay flat.
-MAX_WAITING_SCANS = 50  # a chunk of the .npy (run/sensor_files.py) reads them all at once
+MAX_WAITING_SCANS = 50  # a chunk of the .npy (record/sensor_files.py) reads them all at once
 MAX_WAITING_RAYS = 65536
 
 
