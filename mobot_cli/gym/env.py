@@ -4,7 +4,13 @@ Observation: the robot's odometry ``[x, y, yaw, vx, wz]`` in its odom frame (its
 and the goal in that frame ``[gx, gy]``, one flat Box of 7; for a robot with a lidar, a Dict
 ``{"odom": Box(5), "goal": Box(2), "scan": Box(beams, 0, range_max)}`` whose scan is the
 lidar's latest reading with no return (+inf) as ``range_max``. Action: ``[linear, angular]``
-(m/s, rad/s), held for one control period (``physics rate / control_hz`` whole steps). Reward
+(m/s, rad/s), held for one control period (``physics rate / control_hz`` whole steps).
+
+``normalize=True`` (the default) puts both in the ranges learning libraries assume (Stable-
+Baselines3 warns otherwise, and PPO with its defaults learns nothing from raw m/s): the action
+is in [-1, 1], scaled to ``max_linear`` and ``max_angular``; positions and the goal are divided
+by the goal's distance from the spawn pose (at least 1 m), yaw by pi, speeds by the maximum
+speeds, ranges by the lidar's ``range_max``. ``normalize=False`` keeps SI units. Reward
 and termination are yours to give (callables of an ``Outcome``); by default the reward is
 minus the distance to the goal per control period, and an episode ends when the robot is
 within ``goal_tolerance``. Every ``reset`` builds the world afresh, so ``reset(seed=s)``
@@ -57,7 +63,8 @@ class MobotEnv(gym.Env):
                  goal_tolerance: float = 0.1, control_hz: float = 10.0, max_linear: float = 0.5,
                  max_angular: float = 2.0, settle: float = 0.5, reward: Optional[Reward] = None,
                  terminated: Optional[Termination] = None, args: Optional[dict[str, str]] = None,
-                 scan: bool = True, scan_sensor: Optional[str] = None, out: str | Path | None = None):
+                 scan: bool = True, scan_sensor: Optional[str] = None, out: str | Path | None = None,
+                 normalize: bool = True):
         self.world, self.description, self.robot = str(world), description, robot
         self.pose, self.goal = tuple(pose), (float(goal[0]), float(goal[1]))
         self.goal_tolerance, self.control_hz, self.settle = goal_tolerance, control_hz, settle
@@ -67,11 +74,18 @@ class MobotEnv(gym.Env):
         self.out = None if out is None else Path(out)  # episode k's run folder: out/episode_000k
         self._lidar = self._find_lidar(scan_sensor) if scan else None
         high = np.array([max_linear, max_angular], dtype=np.float32)
-        self.action_space = spaces.Box(-high, high, dtype=np.float32)
+        self.normalize = normalize
+        self._goal = self._goal_in_odom()
+        # Observations are divided by these (all ones in SI units): x, y, yaw, vx, wz, gx, gy.
+        length = max(math.hypot(*self._goal), 1.0)
+        self._scale = (np.array([length, length, np.pi, max_linear, max_angular, length, length], np.float32)
+                       if normalize else np.ones(7, np.float32))
+        unit = np.ones(2, np.float32)
+        self.action_space = spaces.Box(-unit if normalize else -high, unit if normalize else high, dtype=np.float32)
         # Odometry is bounded by the farthest spawn a scenario allows and by what a robot can do.
         far, turn = 2e6, np.float32(np.pi)
-        odom = np.array([far, far, turn, 1e3, 1e3], dtype=np.float32)
-        goal = np.array([far, far], dtype=np.float32)
+        odom = np.array([far, far, turn, 1e3, 1e3], dtype=np.float32) / self._scale[:5]
+        goal = np.array([far, far], dtype=np.float32) / self._scale[5:]
         if self._lidar is None:
             bound = np.concatenate([odom, goal])
             self.observation_space = spaces.Box(-bound, bound, dtype=np.float32)
@@ -79,12 +93,12 @@ class MobotEnv(gym.Env):
             rows = self._lidar.vertical.samples if self._lidar.vertical is not None else 1
             beams = self._lidar.horizontal.samples if self._lidar.horizontal is not None else 1
             self._range_max = np.float32(self._lidar.range_max)
+            top = np.float32(1.0) if normalize else self._range_max
             self.observation_space = spaces.Dict({
                 "odom": spaces.Box(-odom, odom, dtype=np.float32),
                 "goal": spaces.Box(-goal, goal, dtype=np.float32),
-                "scan": spaces.Box(0.0, self._range_max, (beams,) if rows <= 1 else (rows, beams), np.float32)})
+                "scan": spaces.Box(0.0, top, (beams,) if rows <= 1 else (rows, beams), np.float32)})
         self._low, self._high = tuple(float(v) for v in -high), tuple(float(v) for v in high)
-        self._goal = self._goal_in_odom()
         self._sim: Simulation | None = None
         self._steps_per_action = 0
         self._count = 0
@@ -116,13 +130,16 @@ class MobotEnv(gym.Env):
         """Hold ``action`` for one control period."""
         if self._sim is None:
             raise UsageError("call reset() before step()")
+        if self.normalize:  # [-1, 1] to the robot's limits
+            action = [min(max(float(v), -1.0), 1.0) * hi for v, hi in zip(action, self._high)]
         linear, angular = (min(max(float(v), lo), hi) for v, lo, hi in zip(action, self._low, self._high))
         self._sim.command(self.robot, linear, angular)
         self._sim.step(self._steps_per_action)
         self._count += 1
         state, scan = self._sim.state(self.robot), self._scan()
         obs = self._observation(state, scan)
-        outcome = Outcome(state, self._goal, (linear, angular), self._count, obs["scan"] if self._lidar else None)
+        scan_m = self._finite(scan) if self._lidar else None
+        outcome = Outcome(state, self._goal, (linear, angular), self._count, scan_m)
         reward = float(self.reward_fn(outcome))
         return obs, reward, bool(self.terminated_fn(outcome)), False, self._info(scan)
 
@@ -150,14 +167,16 @@ class MobotEnv(gym.Env):
         """The ranges in the observation: no return as range_max (a full-range scan before the first)."""
         if scan is None:
             return np.full(self.observation_space["scan"].shape, self._range_max, np.float32)
-        return np.minimum(scan.ranges, self._range_max)
+        return np.minimum(scan.ranges, self._range_max).astype(np.float32)
 
     def _observation(self, s: RobotState, scan: Scan | None):
         gx, gy = self._goal
+        flat = np.array([s.odom_x, s.odom_y, s.odom_yaw, s.odom_vx, s.odom_wz, gx, gy], dtype=np.float32) / self._scale
         if self._lidar is None:
-            return np.array([s.odom_x, s.odom_y, s.odom_yaw, s.odom_vx, s.odom_wz, gx, gy], dtype=np.float32)
-        return {"odom": np.array([s.odom_x, s.odom_y, s.odom_yaw, s.odom_vx, s.odom_wz], dtype=np.float32),
-                "goal": np.array([gx, gy], dtype=np.float32), "scan": self._finite(scan)}
+            return flat
+        ranges = self._finite(scan)
+        return {"odom": flat[:5], "goal": flat[5:],
+                "scan": ranges / self._range_max if self.normalize else ranges}
 
     def _info(self, scan: Scan | None) -> dict[str, Any]:
         """The time now, and when the observed scan was taken (the sensor runs at its own rate)."""

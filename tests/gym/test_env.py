@@ -35,7 +35,7 @@ def test_reset_with_a_seed_replays_the_same_episode():
 
 
 def test_driving_at_the_goal_reaches_it_and_the_reward_is_the_distance():
-    env = MobotEnv(goal=(1.0, 0.0), goal_tolerance=0.1)
+    env = MobotEnv(goal=(1.0, 0.0), goal_tolerance=0.1, normalize=False)  # SI units
     obs, _ = env.reset(seed=1)
     assert obs[5:] == pytest.approx([1.0, 0.0])
     rewards, done = [], False
@@ -60,7 +60,7 @@ def test_user_reward_and_termination():
 
 
 def test_runs_in_an_async_vector_env():
-    envs = gymnasium.vector.AsyncVectorEnv([lambda: MobotEnv(goal=(1.0, 0.0)) for _ in range(2)])
+    envs = gymnasium.vector.AsyncVectorEnv([lambda: MobotEnv(goal=(1.0, 0.0), normalize=False) for _ in range(2)])
     try:
         obs, _ = envs.reset(seed=[3, 3])
         assert np.array_equal(obs[0], obs[1])

@@ -27,7 +27,7 @@ def room(tmp_path):
 
 
 def test_a_lidar_robot_passes_the_env_checker_with_a_dict_observation():
-    env = gymnasium.make("mobot_cli.gym:" + ENV_ID, args=LIDAR).unwrapped
+    env = gymnasium.make("mobot_cli.gym:" + ENV_ID, args=LIDAR, normalize=False).unwrapped
     space = env.observation_space
     assert isinstance(space, spaces.Dict) and list(space) == ["goal", "odom", "scan"]
     assert space["scan"].shape == (360,) and space["scan"].low.min() == 0.0 and space["scan"].high.max() == 12.0
@@ -45,7 +45,7 @@ def test_without_a_lidar_or_with_scan_off_the_observation_stays_one_box():
 
 
 def test_no_return_is_range_max_inside_the_box():
-    env = MobotEnv(args=LIDAR)  # the empty world: no beam returns
+    env = MobotEnv(args=LIDAR, normalize=False)  # the empty world: no beam returns
     obs, _ = env.reset(seed=0)
     assert obs["scan"].dtype == np.float32 and (obs["scan"] == 12.0).all()
     assert env.observation_space.contains(obs)
@@ -53,7 +53,7 @@ def test_no_return_is_range_max_inside_the_box():
 
 
 def test_every_step_at_10_hz_sees_a_fresh_scan_of_the_walls(room):
-    env = MobotEnv(room, pose=(0.5, -0.5, 0.0), goal=(2.0, -0.5), args=LIDAR)
+    env = MobotEnv(room, pose=(0.5, -0.5, 0.0), goal=(2.0, -0.5), args=LIDAR, normalize=False)
     obs, info = env.reset(seed=4)
     assert info == {"t": 0.5, "scan_t": 0.5}
     scans, times = [obs["scan"]], []
@@ -74,7 +74,7 @@ def test_every_step_at_10_hz_sees_a_fresh_scan_of_the_walls(room):
 
 def test_reset_with_a_seed_replays_the_scan_noise_too(room):
     def episode(seed):
-        env = MobotEnv(room, pose=(0.0, 0.0, 0.3), args=LIDAR)
+        env = MobotEnv(room, pose=(0.0, 0.0, 0.3), args=LIDAR, normalize=False)
         obs, _ = env.reset(seed=seed)
         trace = [obs["scan"]]
         for i in range(6):
@@ -89,7 +89,7 @@ def test_reset_with_a_seed_replays_the_scan_noise_too(room):
 
 
 def test_the_observed_scan_is_the_run_folders_row(room, tmp_path):
-    env = MobotEnv(room, pose=(-1.0, 0.5, 0.2), args=LIDAR, out=tmp_path / "runs")
+    env = MobotEnv(room, pose=(-1.0, 0.5, 0.2), args=LIDAR, normalize=False, out=tmp_path / "runs")
     seen = {}
     obs, info = env.reset(seed=1)
     seen[info["t"]] = obs["scan"]
@@ -107,7 +107,7 @@ def test_the_observed_scan_is_the_run_folders_row(room, tmp_path):
 
 
 def test_the_reward_sees_the_scan(room):
-    env = MobotEnv(room, args=LIDAR, reward=lambda o: float(o.scan.min()), terminated=lambda o: o.scan.min() < 0.4)
+    env = MobotEnv(room, args=LIDAR, normalize=False, reward=lambda o: float(o.scan.min()), terminated=lambda o: o.scan.min() < 0.4)
     env.reset(seed=0)
     _, reward, terminated, _, _ = env.step(np.array([0.0, 0.0], dtype=np.float32))
     env.close()
@@ -115,7 +115,7 @@ def test_the_reward_sees_the_scan(room):
 
 
 def test_two_lidar_envs_in_an_async_vector_env(room):
-    envs = gymnasium.vector.AsyncVectorEnv([lambda: MobotEnv(room, args=LIDAR) for _ in range(2)])
+    envs = gymnasium.vector.AsyncVectorEnv([lambda: MobotEnv(room, args=LIDAR, normalize=False) for _ in range(2)])
     try:
         obs, _ = envs.reset(seed=[3, 3])
         assert obs["scan"].shape == (2, 360) and np.array_equal(obs["scan"][0], obs["scan"][1])
