@@ -94,7 +94,7 @@ def gym_vs_physics(periods: int, lidar: bool, room: Path) -> tuple[float, float,
     from mobot_cli.gym import MobotEnv
 
     env = MobotEnv(room if lidar else "empty", pose=(-2.5, 0.0, 0.0), goal=(2.5, 0.0),
-                   args={"lidar": "true"} if lidar else None)
+                   args={"lidar": "true"} if lidar else None, normalize=False)
     env.reset(seed=0)
     sim = env._sim  # the same world, stepped bare
     action = np.array([0.05, 0.2], dtype=np.float32)  # slow, in a circle: it stays in the room

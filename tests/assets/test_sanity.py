@@ -25,14 +25,12 @@ def refused(path: Path) -> str:
     return outcome.stderr
 
 
-def test_a_visual_only_robot_runs_resting_its_base_frame_on_the_floor(tmp_path):
-    """It used to fail with `min() arg is an empty sequence`; now it spawns like any robot."""
-    robot(tmp_path, f'<link name="base_link"><visual>{BOX}</visual>{INERTIAL}</link>')
-    scenario = tmp_path / "s.yaml"
-    scenario.write_text("version: 1\nduration: 1\nrobots:\n  - {name: r, description: r.urdf, pose: {x: 1}}\n")
-    outcome = invoke(["run", scenario, "--out", tmp_path / "out", "--quiet"])
-    assert outcome.exit_code == 0 and "Traceback" not in outcome.stderr, outcome.stderr
-    assert (tmp_path / "out" / "odom" / "r.csv").is_file()
+def test_a_robot_without_collision_geometry_is_refused(tmp_path):
+    """It used to spawn, fall through the floor and end asking whether there is a floor (issue 26)."""
+    path = robot(tmp_path, f'<link name="base_link"><visual>{BOX}</visual>{INERTIAL}</link>')
+    err = refused(path)
+    assert err.startswith(f"mobot: error: {path}: the robot has no collision geometry: "), err
+    assert "Add <collision> to its links" in err
 
 
 @pytest.mark.parametrize("element", ['<origin xyz="nan 0 0"/>', '<origin rpy="0 inf 0"/>'])

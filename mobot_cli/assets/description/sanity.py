@@ -2,8 +2,9 @@
 
 Every number a URDF gives (origins, sizes, scales, masses, inertias, axes, limits) must be
 finite; masses and inertia diagonals must not be negative; its collision meshes must be meshes;
-and it may have at most MAX_LINKS links. (A robot with no collision geometry at all is placed
-with its base frame on the floor: sim/placement.py.) Each refusal names the file, the link or joint and the element.
+it may have at most MAX_LINKS links, and at least one of them a collision shape (with none,
+nothing holds it up: it falls through the floor). Each refusal names the file, the link or
+joint and the element.
 """
 
 from __future__ import annotations
@@ -35,6 +36,10 @@ def check_sanity(robot: ET.Element, source: Path) -> None:
         raise DescriptionError(f"the robot has {len(links)} links, more than mobot's limit of {MAX_LINKS}",
                                location=Location(file=source),
                                hint="Merge links joined by fixed joints, or split the model.")
+    if links and not any(link.find("collision") is not None for link in links):
+        raise DescriptionError("the robot has no collision geometry: nothing would hold it up and it "
+                               "would fall through the floor", location=Location(file=source),
+                               hint="Add <collision> to its links (a box the size of its body will do).")
     for element in (*links, *robot.findall("joint")):
         _check_numbers(element, source)
     for link in links:
