@@ -8,12 +8,12 @@ end at their last flush and its bag at its last MCAP chunk, which this module me
 
 from __future__ import annotations
 
-import csv
 import struct
 from pathlib import Path
 from typing import Any
 
-from mobot_cli.errors import ExitCode, UsageError, cannot_write
+from mobot_cli.errors import ExitCode, cannot_write
+from mobot_cli.record.reader import RunFolder, RunFolderError, is_run_folder, is_sweep_folder  # noqa: F401
 from mobot_cli.record.summary import SUMMARY, RunRecord, Status
 from mobot_cli.ros.bag_repair import needs_repair, repair_bag
 
@@ -21,25 +21,15 @@ MCAP_MAGIC = b"\x89MCAP0\r\n"
 _CHUNK, _RECORD = 0x06, struct.Struct("<BQ")
 
 
-def is_run_folder(path: Path) -> bool:
-    """A folder that ``mobot run`` wrote (or began to write)."""
-    return path.is_dir() and ((path / "summary.json").is_file() or (path / "scenario.yaml").is_file())
-
-
-def is_sweep_folder(path: Path) -> bool:
-    """A folder that ``mobot sweep`` wrote: sweep.json and runs/NNNN/ folders."""
-    return path.is_dir() and (path / "sweep.json").is_file() and (path / "runs").is_dir()
-
-
 def run_status(folder: Path) -> dict[str, Any]:
     """How the run in ``folder`` ended: status ok / failed / incomplete / fault, and why."""
-    if not is_run_folder(folder):
-        raise UsageError(f"'{folder}' is not a run folder (it has no summary.json or scenario.yaml)",
-                         hint="Give the folder that mobot run --out wrote.")
+    run = RunFolder.open(folder)
     result: dict[str, Any] = {"kind": "run", "path": str(folder), "problems": [],
-                              "csv": csv_extents(folder), "bag": bag_status(folder / "bag"),
-                              "sensors": sensor_extents(folder)}
-    record = RunRecord.load(folder)
+                              "csv": csv_extents(run), "bag": bag_status(run), "sensors": sensor_extents(run)}
+    try:
+        record = run.summary()
+    except RunFolderError:
+        record = None
     if record is None:
         result["problems"].append("summary.json is not a record mobot wrote" if (folder / SUMMARY).exists()
                                   else "no summary.json: the run was killed, or is still running")
@@ -50,7 +40,7 @@ def run_status(folder: Path) -> dict[str, Any]:
         error = f": {record.error}" if record.error else ""
         result["problems"].append(f"summary.json says '{record.status.value}'{error}")
         return _verdict(result, "fault" if record.status == Status.FAULT else "incomplete")
-    result["problems"] += _missing(folder, record, result)
+    result["problems"] += _missing(run, record, result)
     if result["problems"]:
         return _verdict(result, "incomplete")
     failed = record.failed_expectations
@@ -67,8 +57,9 @@ def _verdict(result: dict[str, Any], status: str) -> dict[str, Any]:
     return result
 
 
-def _missing(folder: Path, record: RunRecord, result: dict[str, Any]) -> list[str]:
+def _missing(run: RunFolder, record: RunRecord, result: dict[str, Any]) -> list[str]:
     """What a complete run folder must hold but this one lacks."""
+    folder = run.path
     problems = [f"{name} is missing" for name in ("scenario.yaml", "trajectory.png")
                 if not (folder / name).is_file()]
     if (folder / "odom").is_dir():
@@ -82,43 +73,50 @@ def _missing(folder: Path, record: RunRecord, result: dict[str, Any]) -> list[st
     return problems
 
 
-def csv_extents(folder: Path) -> dict[str, dict[str, Any]]:
+def csv_extents(run: RunFolder) -> dict[str, dict[str, Any]]:
     """Per odom CSV: how many whole rows it holds and the time of the last one."""
     out = {}
-    for path in sorted((folder / "odom").glob("*.csv")):
-        with path.open(encoding="utf-8", newline="") as f:
-            rows = [row for row in csv.reader(f)][1:]
+    for path in run.odometry():
+        header, rows = run.csv_rows(path)
         whole = [row for row in rows if len(row) == 16]
-        out[path.stem] = {"rows": len(whole), "last_t": float(whole[-1][0]) if whole else None,
+        out[path.stem] = {"rows": len(whole), "last_t": _time(whole[-1][0]) if whole else None,
                           "partial_rows": len(rows) - len(whole)}
     return out
 
 
-def sensor_extents(folder: Path) -> dict[str, dict[str, Any]]:
+def sensor_extents(run: RunFolder) -> dict[str, dict[str, Any]]:
     """Per sensor file (``sensors/<robot>/<sensor>.npy`` or ``.csv``): whole readings or rows in it,
     and the time of the last one."""
     out: dict[str, dict[str, Any]] = {}
-    for path in sorted((folder / "sensors").glob("*/*.npy")):
+    for path in run.listing("sensors", "*/*.npy"):
         import numpy as np
 
+        checked = run.checked(path, run.limits.sensors)
         try:
-            rows = np.load(path, mmap_mode="r")
-            out[path.relative_to(folder).as_posix()] = {
-                "rows": len(rows), "last_t": float(rows["t"][-1]) if len(rows) else None}
-        except (OSError, ValueError, KeyError):
-            out[path.relative_to(folder).as_posix()] = {"rows": 0, "last_t": None}
-    for path in sorted((folder / "sensors").glob("*/*.csv")):
-        with path.open(encoding="utf-8", newline="") as f:
-            rows = [row for row in csv.reader(f)][1:]
+            rows = np.load(checked, mmap_mode="r", allow_pickle=False)
+            out[path.as_posix()] = {"rows": len(rows), "last_t": _time(rows["t"][-1]) if len(rows) else None}
+        except (OSError, ValueError, KeyError, IndexError, TypeError):
+            out[path.as_posix()] = {"rows": 0, "last_t": None}
+    for path in run.listing("sensors", "*/*.csv"):
+        _, rows = run.csv_rows(path)
         whole = [row for row in rows if len(row) > 1]
-        out[path.relative_to(folder).as_posix()] = {
-            "rows": len(whole), "last_t": float(whole[-1][0]) if whole else None}
+        out[path.as_posix()] = {"rows": len(whole), "last_t": _time(whole[-1][0]) if whole else None}
     return out
 
 
-def bag_status(bag: Path) -> dict[str, Any] | None:
+def _time(value) -> float | None:
+    """A row's time, or None when the last row is damaged (text, NaN)."""
+    try:
+        t = float(value)
+    except (TypeError, ValueError):
+        return None
+    return t if t == t and abs(t) != float("inf") else None
+
+
+def bag_status(run: RunFolder) -> dict[str, Any] | None:
     """Whether a bag folder was closed, and how far its MCAP file can be read."""
-    if not bag.is_dir():
+    bag = run.bag_folder()
+    if bag is None:
         return None
     files = sorted(bag.glob("*.mcap"))
     status: dict[str, Any] = {"complete": (bag / "metadata.yaml").is_file(), "file": files[0].name if files else None}
@@ -131,11 +129,8 @@ def bag_status(bag: Path) -> dict[str, Any] | None:
 def repair_run(folder: Path) -> dict[str, Any]:
     """Make the bag of a killed run readable (``mobot check DIR --repair``): what it now holds,
     or why there was nothing to do."""
-    if not is_run_folder(folder):
-        raise UsageError(f"'{folder}' is not a run folder (it has no summary.json or scenario.yaml)",
-                         hint="--repair takes the folder that mobot run --out wrote.")
-    bag = folder / "bag"
-    if not bag.is_dir():
+    bag = RunFolder.open(folder).bag_folder()
+    if bag is None:
         return {"done": False, "why": "the run has no bag"}
     if not needs_repair(bag):
         return {"done": False, "why": "the bag was closed: it needs no repair"}

@@ -2,14 +2,11 @@
 
 from __future__ import annotations
 
-import csv
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from mobot_cli.errors import MobotError, UsageError
-from mobot_cli.record.folder import is_run_folder, is_sweep_folder
-from mobot_cli.record.summary import RunRecord
+from mobot_cli.errors import UsageError
+from mobot_cli.record.reader import RunFolder, is_run_folder, is_sweep_folder, sweep_runs
 from mobot_cli.record.trajectory import draw, drawn
 
 MAX_ODOMETRY_TRACKS = 10  # more dashed lines than this (a sweep) hide the true paths
@@ -38,10 +35,9 @@ class _Points:
 def replot(folder: Path, out: Path | None = None) -> PlotResult:
     """Draw the run (or every run of the sweep) in ``folder`` to ``out`` (default: folder/trajectory.png)."""
     if is_sweep_folder(folder):
-        runs = sorted(p for p in (folder / "runs").iterdir() if is_run_folder(p))
-        prefix = True
+        runs, prefix = [RunFolder.open(p) for p in sweep_runs(folder)], True
     elif is_run_folder(folder):
-        runs, prefix = [folder], False
+        runs, prefix = [RunFolder.open(folder)], False
     else:
         raise UsageError(f"'{folder}' is neither a run folder nor a sweep folder",
                          hint="Give the folder that mobot run --out or mobot sweep --out wrote.")
@@ -50,7 +46,8 @@ def replot(folder: Path, out: Path | None = None) -> PlotResult:
     for run in runs:
         for track in read_tracks(run):
             if prefix:  # "0001/mobot (yaw=0.5)"
-                track.label = f"{run.name}/{track.label}" + (f" ({params[run.name]})" if params.get(run.name) else "")
+                name = run.path.name
+                track.label = f"{name}/{track.label}" + (f" ({params[name]})" if params.get(name) else "")
             tracks.append(track)
     if not tracks:
         raise UsageError(f"'{folder}' holds no odometry CSV files to draw",
@@ -60,11 +57,11 @@ def replot(folder: Path, out: Path | None = None) -> PlotResult:
         for track in tracks:
             track.odom = []
         result.notices.append(f"{len(tracks)} paths: odometry (dashed) is left out above {MAX_ODOMETRY_TRACKS}")
-    plan = _plan(runs[0] / "scenario.yaml", result.notices)
+    plan = runs[0].plan(result.notices, "drawn without the floor plan", "drawn without the floor plan")
     world = plan.world if plan is not None else None
     if plan is not None and not prefix:
         _sweep(plan, tracks)
-    record = RunRecord.load(runs[0])
+    record = runs[0].summary()
     title = record.scenario if record else folder.name
     if prefix:
         subtitle = f"sweep: {len(runs)} runs, {len(tracks)} paths"
@@ -77,24 +74,24 @@ def replot(folder: Path, out: Path | None = None) -> PlotResult:
     return result
 
 
-def read_tracks(run: Path) -> list[_Points]:
+def read_tracks(run: RunFolder) -> list[_Points]:
     """Each odom CSV of a run folder as a track; odometry mapped into the world like the run does."""
     from mobot_cli.record.trajectory import odom_to_world
 
     tracks = []
-    for path in sorted((run / "odom").glob("*.csv")):
+    for path in run.odometry():
         track, to_world = _Points(path.stem), None
-        with path.open(encoding="utf-8", newline="") as f:
-            for row in csv.DictReader(f):
-                try:
-                    state = _State(*(float(row[k]) for k in _State.FIELDS))
-                except (KeyError, TypeError, ValueError):
-                    continue  # a row cut short by a killed run
-                if to_world is None:
-                    to_world, track.start_z = odom_to_world(state), state.true_z
-                track.true.append((state.true_x, state.true_y))
-                track.odom.append(to_world(state.odom_x, state.odom_y))
-                track.yaw.append(state.true_yaw)
+        header, rows = run.numeric_rows(path)
+        column = {name: i for i, name in enumerate(header)}
+        if not set(_State.FIELDS) <= set(column):
+            continue
+        for row in rows:
+            state = _State(*(row[column[k]] for k in _State.FIELDS))
+            if to_world is None:
+                to_world, track.start_z = odom_to_world(state), state.true_z
+            track.true.append((state.true_x, state.true_y))
+            track.odom.append(to_world(state.odom_x, state.odom_y))
+            track.yaw.append(state.true_yaw)
         if track.true:
             tracks.append(track)
     return tracks
@@ -116,7 +113,8 @@ class _State:
 
 def _swept_values(folder: Path) -> dict[str, str]:
     """Each run folder's swept values from sweep.json, e.g. {"0001": "yaw=0.5"}."""
-    runs = (_read_json(folder / "sweep.json") or {}).get("runs")
+    document = RunFolder(folder).json("sweep.json")
+    runs = document.get("runs") if isinstance(document, dict) else None
     values = {}
     for run in runs if isinstance(runs, list) else []:
         try:
@@ -141,24 +139,3 @@ def _sweep(plan, tracks: list[_Points]) -> None:
             for (x, y), yaw in zip(track.true, track.yaw):
                 sweep.add(x, y, yaw)
             track.swept.append(sweep)
-
-
-def _plan(scenario: Path, notices: list[str]):
-    """The run's plan, resolved again from its scenario.yaml; None (no floor plan) if that fails."""
-    from mobot_cli.scenario.prepare import prepare
-
-    if not scenario.is_file():
-        notices.append(f"{scenario} is missing: drawn without the floor plan")
-        return None
-    try:
-        return prepare(scenario).plan
-    except MobotError as exc:
-        notices.append(f"drawn without the floor plan: {exc}")
-        return None
-
-
-def _read_json(path: Path):
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None

@@ -209,8 +209,16 @@ class RunRecord(_Record):
     def load(cls, folder: Path) -> Optional["RunRecord"]:
         """The record in ``folder``, or None when it is missing or not a record mobot wrote."""
         try:
-            return _reader().validate_json((folder / SUMMARY).read_bytes())
-        except (OSError, ValueError):  # pydantic's ValidationError is a ValueError
+            return cls.parse((folder / SUMMARY).read_bytes())
+        except OSError:
+            return None
+
+    @classmethod
+    def parse(cls, data: bytes) -> Optional["RunRecord"]:
+        """summary.json's bytes as a record, or None when they are not a record mobot wrote."""
+        try:
+            return _reader().validate_json(data)
+        except (ValueError, RecursionError):  # pydantic's ValidationError is a ValueError
             return None
 
 

@@ -8,7 +8,6 @@ notice: a folder that still has its CSV files can be viewed.
 
 from __future__ import annotations
 
-import csv
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,9 +16,9 @@ import numpy as np
 
 from mobot_cli.errors import MobotError, UsageError
 from mobot_cli.plan import Plan, RobotPlan
-from mobot_cli.record.folder import is_run_folder, is_sweep_folder
+from mobot_cli.record.bagtopics import Joints
+from mobot_cli.record.reader import NOT_A_RUN_HINT, RunFolder, is_run_folder, is_sweep_folder, sweep_runs
 from mobot_cli.record.summary import RunRecord
-from mobot_cli.view.bagread import Joints
 from mobot_cli.view.readings import Cloud
 
 TRUE = ("true_x", "true_y", "true_z", "true_roll", "true_pitch", "true_yaw")
@@ -67,47 +66,34 @@ class RunView:
 def runs_of(folder: Path) -> list[Path]:
     """The run folders to offer: the folder itself, or each run of a sweep folder."""
     if is_sweep_folder(folder):
-        runs = sorted(p for p in (folder / "runs").iterdir() if is_run_folder(p))
+        runs = sweep_runs(folder)
         if runs:
             return runs
     elif is_run_folder(folder):
         return [folder]
-    raise UsageError(f"'{folder}' is neither a run folder nor a sweep folder with runs",
-                     hint="Give the folder that mobot run --out, mobot serve --out or mobot sweep --out wrote.")
+    raise UsageError(f"'{folder}' is neither a run folder nor a sweep folder with runs", hint=NOT_A_RUN_HINT)
 
 
 def read_run(folder: Path) -> RunView:
     """Read one run folder for the view (UsageError when it has no odometry to show)."""
     notices: list[str] = []
-    plan = _plan(folder / "scenario.yaml", notices)
-    record = RunRecord.load(folder)
-    robots = _robot_plans(plan)
-    tracks = [t for t in (_track(p, robots, record) for p in sorted((folder / "odom").glob("*.csv"))) if t]
+    run = RunFolder.open(folder)
+    record = run.summary()
+    tracks = [t for t in (_track(run, p) for p in run.odometry()) if t]
     if not tracks:
         raise UsageError(f"'{folder}' holds no odometry rows to show",
                          hint="Record with log.formats including csv, and let the run start.")
-    bag = folder / "bag"
-    if (bag / "metadata.yaml").is_file():
+    plan = run.plan(notices, "no world, and robots drawn as boxes", "no world, and robots drawn as boxes")
+    _attach(tracks, _robot_plans(plan), record)
+    bag = run.bag_folder()
+    if bag is not None and (bag / "metadata.yaml").is_file():
         _read_bag(bag, tracks, notices)
-    elif bag.is_dir():
+    elif bag is not None:
         notices.append(f"{bag} was not closed (no metadata.yaml): wheels are drawn without turning")
     duration = max(float(t.t[-1]) for t in tracks)
     rate = record.log_rate_hz if record else 1.0 / max(float(np.median(np.diff(tracks[0].t))), 1e-3) \
         if len(tracks[0].t) > 1 else 1.0
     return RunView(folder, plan, record, tracks, duration, rate, notices)
-
-
-def _plan(scenario: Path, notices: list[str]) -> Plan | None:
-    from mobot_cli.scenario.prepare import prepare
-
-    if not scenario.is_file():
-        notices.append(f"{scenario} is missing: no world, and robots drawn as boxes")
-        return None
-    try:
-        return prepare(scenario).plan
-    except MobotError as exc:
-        notices.append(f"no world, and robots drawn as boxes: {exc}")
-        return None
 
 
 def _robot_plans(plan: Plan | None) -> dict[str, RobotPlan]:
@@ -117,12 +103,11 @@ def _robot_plans(plan: Plan | None) -> dict[str, RobotPlan]:
     return {r.name: r for r in (*plan.robots, *spawned)}
 
 
-def _track(path: Path, robots: dict[str, RobotPlan], record: RunRecord | None) -> Track | None:
-    rows = _rows(path)
-    if not rows:
+def _track(run: RunFolder, path: Path) -> Track | None:
+    columns, rows = run.numeric_rows(path)
+    if not rows or not {"t", *TRUE, *ODOM, "cmd_linear", "cmd_angular"} <= set(columns):
         return None
     a = np.array(rows)
-    columns = rows_header(path)
     col = {name: i for i, name in enumerate(columns)}
     t, true = a[:, col["t"]], a[:, [col[k] for k in TRUE]]
     ox, oy, oyaw = (a[:, col[k]] for k in ODOM)
@@ -132,59 +117,66 @@ def _track(path: Path, robots: dict[str, RobotPlan], record: RunRecord | None) -
     y0 = true[0, 1] - (s * ox[0] + c * oy[0])
     odom = np.stack([x0 + c * ox - s * oy, y0 + s * ox + c * oy], axis=1)
     name = path.stem
-    match = _LIFE.match(name)
-    plan = robots.get(name) or (robots.get(match.group(1)) if match else None)
-    robot_record = record.robots.get(name) if record else None
-    track = Track(name, t, true, odom, np.hypot(*(odom - true[:, :2]).T),
-                  a[:, [col["cmd_linear"], col["cmd_angular"]]])
-    if plan is not None:
-        track.urdf, track.frame_prefix, track.namespace = plan.urdf, plan.frame_prefix, plan.namespace
-    if robot_record is not None:
-        track.collisions, track.namespace = robot_record.collisions, robot_record.namespace
-        track.frame_prefix = track.frame_prefix or robot_record.namespace.strip("/") + "/"
-    return track
+    return Track(name, t, true, odom, np.hypot(*(odom - true[:, :2]).T),
+                 a[:, [col["cmd_linear"], col["cmd_angular"]]])
 
 
-def rows_header(path: Path) -> list[str]:
-    """The CSV's column names."""
-    with path.open(encoding="utf-8", newline="") as f:
-        return next(csv.reader(f), [])
-
-
-def _rows(path: Path) -> list[list[float]]:
-    out = []
-    with path.open(encoding="utf-8", newline="") as f:
-        reader = csv.reader(f)
-        header = next(reader, None)
-        if not header or not {"t", *TRUE, *ODOM, "cmd_linear", "cmd_angular"} <= set(header):
-            return []
-        for row in reader:
-            try:
-                values = [float(v) for v in row]
-            except ValueError:
-                continue  # a row cut short by a killed run
-            if len(values) == len(header):
-                out.append(values)
-    return out
+def _attach(tracks: list[Track], robots: dict[str, RobotPlan], record: RunRecord | None) -> None:
+    """Each track's model and frames from the plan; the record's namespace wins, as the run wrote it."""
+    for track in tracks:
+        match = _LIFE.match(track.name)
+        plan = robots.get(track.name) or (robots.get(match.group(1)) if match else None)
+        robot_record = record.robots.get(track.name) if record else None
+        if plan is not None:
+            track.urdf, track.frame_prefix, track.namespace = plan.urdf, plan.frame_prefix, plan.namespace
+        if robot_record is not None:
+            track.collisions, track.namespace = robot_record.collisions, robot_record.namespace
+            track.frame_prefix = track.frame_prefix or robot_record.namespace.strip("/") + "/"
 
 
 def _read_bag(bag: Path, tracks: list[Track], notices: list[str]) -> None:
     """Joint states, robot descriptions and sensor readings per namespace, from the rosbag2 folder."""
-    from mobot_cli.view.bagread import read_topics
+    from mobot_cli.record.bagtopics import read_topics
 
     by_ns: dict[str, list[Track]] = {}
     for track in tracks:
         by_ns.setdefault(track.namespace, []).append(track)
     try:
         topics = read_topics(bag, set(by_ns))
-    except Exception as exc:  # noqa: BLE001 - a bag the view cannot read still leaves the CSV paths
+    except MobotError as exc:  # a bag the view cannot read still leaves the CSV paths
         notices.append(f"{bag} could not be read ({exc}): wheels are drawn without turning")
         return
+    _attach_topics(topics, by_ns, _roots(bag.parent))
+
+
+def _attach_topics(topics: dict, by_ns: dict[str, list[Track]], roots: tuple[Path, ...]) -> None:
     for ns, found in topics.items():
         for track in by_ns.get(ns, ()):
             track.joints = found.joints
-            track.urdf = track.urdf or found.description
+            track.urdf = track.urdf or _drawable(found.description, roots)
             prefix = track.frame_prefix
             track.readings = [(t, Cloud(track.name, sensor, frame[len(prefix):] if frame.startswith(prefix)
                                         else frame, points)) for t, sensor, frame, points in found.readings
                               if track.t[0] - 1e-9 <= t <= track.t[-1] + 1e-9]
+
+
+def _roots(folder: Path) -> tuple[Path, ...]:
+    from mobot_cli.assets.resources import ResourceResolver
+
+    return (folder.resolve(), *ResourceResolver(folder).roots)
+
+
+def _drawable(urdf: str | None, roots: tuple[Path, ...]) -> str | None:
+    """A bag's robot_description, when every mesh it names is a regular file the run folder's
+    scenario could have named (inside the folder or the resource search path); else None (a box)."""
+    if urdf is None:
+        return None
+    for name in re.findall(r'filename="([^"]*)"', urdf):
+        path = Path(name.removeprefix("file://"))
+        try:
+            resolved = path.resolve(strict=True)
+        except (OSError, RuntimeError):
+            return None
+        if not resolved.is_file() or not any(resolved.is_relative_to(root) for root in roots):
+            return None
+    return urdf
