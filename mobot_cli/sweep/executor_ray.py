@@ -9,6 +9,8 @@ from when a run starts, not from when it was queued.
 
 from __future__ import annotations
 
+import contextlib
+import os
 import socket
 import time
 from typing import Callable
@@ -105,6 +107,7 @@ def _connect(ray, address: str | None, jobs: int) -> None:
     """Join the cluster at ``address``, or start a local instance of ``jobs`` CPUs."""
     if address:
         _check_reachable(address)
+        _check_token(ray, address)
     try:
         if address:
             ray.init(address=address, include_dashboard=False, log_to_driver=False, logging_level="ERROR")
@@ -114,6 +117,47 @@ def _connect(ray, address: str | None, jobs: int) -> None:
         raise UsageError(f"cannot reach a Ray cluster at {address or 'a new local instance'}: "
                          f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}",
                          hint="Check --address (e.g. ray://HOST:10001 or HOST:6379) and that the cluster is up.") from None
+
+
+def _check_token(ray, address: str) -> None:
+    """Refuse at once a cluster that wants a token this process does not give (Ray >= 2.5x enables
+    token authentication by default): ray.init would log 20 auth errors over 20 s and then say it
+    cannot connect. One GCS client call asks the cluster in milliseconds."""
+    if "://" in address or ":" not in address:
+        return  # ray:// clients and "auto" authenticate otherwise
+    try:
+        from ray._private.authentication.authentication_token_setup import (
+            maybe_enable_token_auth_if_token_available)
+        from ray._raylet import GcsClient
+    except ImportError:
+        return  # a Ray without token authentication
+    maybe_enable_token_auth_if_token_available(warn_if_disabled=False)  # as ray.init does
+    try:
+        with _quiet_stderr():  # Ray's core logs the refusal on fd 2 as well
+            GcsClient(address=address)
+    except ray.exceptions.AuthenticationError:
+        token = os.environ.get("RAY_AUTH_MODE", "").lower() == "token"
+        what = ("refused the token given (RAY_AUTH_TOKEN, RAY_AUTH_TOKEN_PATH or ~/.ray/auth_token)" if token
+                else "uses token authentication and this process gives no token")
+        raise UsageError(f"the Ray cluster at {address} {what}", location=Location(file="--address"),
+                         hint="Set RAY_AUTH_MODE=token and the cluster's token in RAY_AUTH_TOKEN (or a file "
+                              "named by RAY_AUTH_TOKEN_PATH, or ~/.ray/auth_token); `ray get-auth-token` "
+                              "on the head node prints it.") from None
+    except Exception:  # noqa: BLE001 - anything else is ray.init's to report, as before
+        return
+
+
+@contextlib.contextmanager
+def _quiet_stderr():
+    """File descriptor 2 to /dev/null for the block (C++ logging does not go through sys.stderr)."""
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
 
 
 def _check_reachable(address: str) -> None:

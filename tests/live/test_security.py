@@ -173,7 +173,8 @@ def test_refusals_say_why(live, body, message):
 def test_meshes_outside_the_allowed_folders_are_refused(live, outside):
     mesh = outside / "part.stl"
     mesh.write_text("solid x\nendsolid x\n")
-    body = f'<link name="a"><visual><geometry><mesh filename="file://{mesh}"/></geometry></visual></link>'
+    body = (f'<link name="a"><visual><geometry><mesh filename="file://{mesh}"/></geometry></visual>'
+            '<collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>')
     with live.client() as client:
         reply = client.call("spawn", name="evil", urdf=robot(body))
         missing = client.call("spawn", name="evil", urdf=robot(body.replace("part.stl", "none.stl")))
