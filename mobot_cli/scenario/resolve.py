@@ -7,6 +7,7 @@ from pathlib import Path
 
 from mobot_cli.assets.world.loaded import LoadedWorld
 from mobot_cli.assets.world.worldplan import load_world
+from mobot_cli.common import cache
 from mobot_cli.errors import MobotError, ScenarioError
 from mobot_cli.plan import Physics, Plan, Ros2Settings
 from mobot_cli.scenario.events import resolve_events
@@ -47,6 +48,7 @@ def resolve(scenario: Scenario, source: Source) -> Plan:
     robots, events = resolve_events(scenario.events, robots, ctx)
     notices.extend(unlisted_robots(world, [*robots, *(e.spawn for e in events if e.spawn is not None)]))
     notices.extend(ctx.notices)
+    notices.extend([cache.warning()] if cache.warning() else [])  # an unsafe cache folder: off, said once
     expectations, expect_notices = resolve_expectations(scenario, source, robots, events, log_every, total)
     notices.extend(expect_notices)
     return Plan(name=scenario.name, physics=physics, world=world.plan, robots=robots,

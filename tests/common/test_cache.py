@@ -37,7 +37,7 @@ def test_keys_separate_their_parts_and_a_read_only_cache_costs_nothing(monkeypat
 
 
 def test_keys_change_with_the_code_that_builds_documents_only(monkeypatch, tmp_path):
-    for name in ("__init__.py", "common/cache.py", "assets/world/build.py", "sim/plan.py", "cli/run.py"):
+    for name in ("__init__.py", "common/cache.py", "assets/world/build.py", "plan.py", "cli/run.py"):
         (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
         (tmp_path / name).write_text("# v1\n", encoding="utf-8")
     monkeypatch.setattr(cache, "_PACKAGE", tmp_path)

@@ -9,12 +9,12 @@ STL and OBJ files are used as they are.
 
 from __future__ import annotations
 
+import hashlib
 import logging
 from dataclasses import dataclass
 from pathlib import Path
 
 from mobot_cli.common import cache
-from mobot_cli.common.files import write_text_atomic
 from mobot_cli.errors import Location, WorldError
 
 
@@ -29,11 +29,6 @@ class MeshFile:
     converted: bool  # a COLLADA file turned into OBJ
 
 
-def mesh_dir() -> Path:
-    """Where converted meshes live."""
-    return cache.cache_dir() / "meshes"
-
-
 def collision_mesh(source: Path, where: Location) -> MeshFile:
     """The PyBullet-ready version of a collision mesh (converted and cached when COLLADA)."""
     source = Path(source)
@@ -45,23 +40,40 @@ def collision_mesh(source: Path, where: Location) -> MeshFile:
     collada = source.suffix.lower() == ".dae"
     key = cache.digest("mesh", data)
     meta = cache.load("meshes", key)
-    obj = mesh_dir() / f"{key}.obj"
-    if meta is not None and (not collada or obj.is_file()):
-        return _from_meta(meta, source, obj if collada else source, collada)
+    obj = None
+    if isinstance(meta, dict) and collada:  # the OBJ is used only if its bytes are the ones noted
+        obj = cache.load_file("meshes", f"{key}.obj", str(meta.get("obj_sha256")))
+    hit = _from_meta(meta, source, obj if collada else source, collada) \
+        if meta is not None and (obj is not None or not collada) else None
+    if hit is not None:
+        return hit
     vertices, faces = _load(source, data, collada, where)
-    if collada:
-        _write_obj(obj, vertices, faces, source)
     meta = {"triangles": int(len(faces)),
             "bounds": [[float(v) for v in vertices.min(axis=0)],
                        [float(v) for v in vertices.max(axis=0)]]}
+    if collada:
+        text = _obj_text(vertices, faces, source).encode("utf-8")
+        meta["obj_sha256"] = hashlib.sha256(text).hexdigest()
+        try:
+            obj = cache.store_file("meshes", f"{key}.obj", text)
+        except OSError as exc:
+            raise WorldError(f"cannot write the converted mesh of {source.name}: {exc.strerror}",
+                             location=where, hint="Free some disk space or set TMPDIR.") from None
     cache.store("meshes", key, meta)
-    return _from_meta(meta, source, obj if collada else source, collada)
+    return _from_meta(meta, source, obj if collada else source, collada)  # type: ignore[return-value]
 
 
-def _from_meta(meta: dict, source: Path, path: Path, collada: bool) -> MeshFile:
-    lo, hi = meta["bounds"]
-    return MeshFile(path=str(path), source=str(source), triangles=meta["triangles"],
-                    bounds=(tuple(lo), tuple(hi)), converted=collada)  # type: ignore[arg-type]
+def _from_meta(meta, source: Path, path, collada: bool) -> MeshFile | None:
+    """A MeshFile from cached facts, or None when they are not what this code writes."""
+    try:
+        (lo, hi), triangles = meta["bounds"], int(meta["triangles"])
+        bounds = (tuple(float(v) for v in lo), tuple(float(v) for v in hi))
+        if len(bounds[0]) != 3 or len(bounds[1]) != 3:
+            return None
+    except (KeyError, TypeError, ValueError):
+        return None
+    return MeshFile(path=str(path), source=str(source), triangles=triangles,
+                    bounds=bounds, converted=collada)  # type: ignore[arg-type]
 
 
 def _load(source: Path, data: bytes, collada: bool, where: Location):
@@ -108,10 +120,9 @@ def _collada_unit(data: bytes) -> float:
     return meter if meter > 0 else 1.0
 
 
-def _write_obj(path: Path, vertices, faces, source: Path) -> None:
-    """Write a minimal OBJ (vertices and triangles only) atomically."""
+def _obj_text(vertices, faces, source: Path) -> str:
+    """A minimal OBJ: vertices and triangles only."""
     lines = [f"# mobot: collision mesh from {source.name}, in metres\n"]
     lines.extend(f"v {x:.9g} {y:.9g} {z:.9g}\n" for x, y, z in vertices.tolist())
     lines.extend(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces.tolist())
-    path.parent.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(path, "".join(lines))
+    return "".join(lines)

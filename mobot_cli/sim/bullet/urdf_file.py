@@ -15,18 +15,14 @@ def urdf_path(text: str, folder: str = "urdf") -> Path:
     """
     import hashlib
 
-    from mobot_cli.common.cache import cache_dir, prune, touch
-    from mobot_cli.common.files import write_text_atomic
+    from mobot_cli.common import cache
 
-    digest = hashlib.sha256(text.encode("utf-8")).hexdigest()[:32]
-    path = cache_dir() / folder / f"{digest}.urdf"
-    if path.is_file():
-        touch(path)
-        return path
-    path.parent.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(path, text)  # parallel sweep workers may write the same file
-    prune(path.parent)
-    return path
+    data = text.encode("utf-8")
+    digest = hashlib.sha256(data).hexdigest()[:32]
+    # A hit is checked against its name; the cache off or faulty, the file goes to a private
+    # temporary folder instead (a cache only costs time). Parallel sweep workers may write it too.
+    return cache.load_file(folder, f"{digest}.urdf", digest) or \
+        cache.store_file(folder, f"{digest}.urdf", data, bounded=True)
 
 
 def links_with_friction(text: str) -> frozenset[str]:
