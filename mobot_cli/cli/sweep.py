@@ -53,6 +53,9 @@ def sweep(
         from mobot_cli.sweep.expand import expand
 
         prepared = expand(spec)  # every run prepared (and so checked) before any starts
+        from mobot_cli.common import cache
+
+        output.notices(env, [cache.warning()] if cache.warning() else [], quiet=quiet or json_)  # once, not per run
         out_dir = out or default_out("sweeps", prepared.name)
         done = check_out_dir(prepared, out_dir, resume)
         runner.start()  # e.g. join the Ray cluster: a failure here leaves no sweep folder behind

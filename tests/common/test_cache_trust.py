@@ -176,3 +176,15 @@ def test_a_cache_that_cannot_be_written_only_costs_time(fresh, fault):
     finally:
         if fault != "a file":
             subprocess.run(["umount", str(fresh / "mnt")], check=False)
+
+
+def test_a_sweep_warns_once_not_per_run(fresh):
+    shared = fresh / "shared"
+    shared.mkdir()
+    shared.chmod(0o777)
+    env = {**os.environ, "MOBOT_CACHE_DIR": str(shared)}
+    done = subprocess.run([sys.executable, "-m", "mobot_cli", "sweep", str(REPO / "scenarios" / "sweeps" / "engines.yaml"),
+                           "--out", str(fresh / "sweep")], env=env, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
+    assert len(warnings(done)) == 1, done.stderr
+    assert os.listdir(shared) == []
