@@ -15,6 +15,7 @@ from typing import Iterable, Mapping
 
 from pydantic import ValidationError
 
+from mobot_cli.api.numbers import bounded
 from mobot_cli.api.sensors import Latest, Scan, pick, robot_plan
 from mobot_cli.errors import MobotError, UsageError, did_you_mean
 from mobot_cli.plan import Plan
@@ -22,6 +23,7 @@ from mobot_cli.record.recording import Recording
 from mobot_cli.record.summary import RunRecord, Status
 from mobot_cli.scenario.goal_model import GoalFields, GotoSpec
 from mobot_cli.scenario.goals import goal_step
+from mobot_cli.scenario.limits import MAX_ANGULAR_SPEED, MAX_SECONDS, MAX_SPEED
 from mobot_cli.scenario.prepare import Prepared, prepare_target
 from mobot_cli.scenario.units import steps
 from mobot_cli.sim.engine import open_world
@@ -96,7 +98,8 @@ class Simulation:
 
     def run_for(self, seconds: float) -> None:
         """Advance ``seconds`` of simulated time (rounded to whole steps)."""
-        self.step(steps(seconds, self.rate_hz))
+        self._open()
+        self.step(steps(bounded("run_for: seconds", seconds, "s", MAX_SECONDS, low=0.0), self.rate_hz))
 
     # -- robots -----------------------------------------------------------------------------
 
@@ -116,8 +119,13 @@ class Simulation:
         self._known(name)
         if not self._world.has_drive(name):
             raise UsageError(f"robot '{name}' has no drive wheels: it does not take velocity commands")
+        # Checked before the world sees them: a NaN or 1e308 twist would poison the robot's state.
+        linear = bounded(f"command '{name}': linear", linear, "m/s", MAX_SPEED)
+        angular = bounded(f"command '{name}': angular", angular, "rad/s", MAX_ANGULAR_SPEED)
+        if duration is not None:
+            duration = bounded(f"command '{name}': duration", duration, "s", MAX_SECONDS, low=0.0, strict=True)
         span = None if duration is None else steps(duration, self.rate_hz)
-        self._timeline.command(name, float(linear), float(angular), span)
+        self._timeline.command(name, linear, angular, span)
 
     def goto(self, name: str, x: float, y: float, yaw: float | None = None, **settings) -> None:
         """Drive to (x, y) (then turn to ``yaw``) with the goal controller of a scenario's
@@ -200,13 +208,19 @@ class Simulation:
         self._closed = True
         try:
             if self._recording is not None:
-                if status != Status.FAULT:
-                    self._timeline.tick()  # what is due now, and the final row
-                    self._timeline.log()
-                self.record = self._recording.close(status, error, self.step_count)
+                self.record = self._finish(status, error)
         finally:
             self._world.close()
         return self.record
+
+    def _finish(self, status: Status, error: str | None) -> RunRecord:
+        try:
+            if status != Status.FAULT:
+                self._timeline.tick()  # what is due now, and the final row
+                self._timeline.log()
+        except Exception as exc:  # noqa: BLE001 - a world gone bad still gets its summary, saying why
+            status, error = Status.ERROR, error or f"{type(exc).__name__}: {exc}"
+        return self._recording.close(status, error, self.step_count)  # type: ignore[union-attr]
 
     def __enter__(self) -> "Simulation":
         return self

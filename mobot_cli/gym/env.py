@@ -29,8 +29,16 @@ import numpy as np
 from gymnasium import spaces
 
 from mobot_cli.api import RobotState, Scan, Simulation
+from mobot_cli.api.numbers import bounded
 from mobot_cli.api.sensors import pick, robot_plan
 from mobot_cli.errors import UsageError
+from mobot_cli.scenario.limits import (
+    MAX_ANGULAR_SPEED,
+    MAX_COORDINATE,
+    MAX_RATE_HZ,
+    MAX_SECONDS,
+    MAX_SPEED,
+)
 
 
 @dataclass(frozen=True)
@@ -66,7 +74,15 @@ class MobotEnv(gym.Env):
                  scan: bool = True, scan_sensor: Optional[str] = None, out: str | Path | None = None,
                  normalize: bool = True):
         self.world, self.description, self.robot = str(world), description, robot
-        self.pose, self.goal = tuple(pose), (float(goal[0]), float(goal[1]))
+        # Every number checked here, before a world exists (docs/errors.md "Limits").
+        pose = tuple(bounded(f"pose[{i}]", v, "m" if i < 2 else "rad", MAX_COORDINATE) for i, v in enumerate(pose))
+        goal = tuple(bounded(f"goal[{i}]", v, "m", MAX_COORDINATE) for i, v in enumerate(goal))
+        goal_tolerance = bounded("goal_tolerance", goal_tolerance, "m", MAX_COORDINATE, low=0.0, strict=True)
+        control_hz = bounded("control_hz", control_hz, "Hz", MAX_RATE_HZ, low=0.0, strict=True)
+        max_linear = bounded("max_linear", max_linear, "m/s", MAX_SPEED, low=0.0, strict=True)
+        max_angular = bounded("max_angular", max_angular, "rad/s", MAX_ANGULAR_SPEED, low=0.0, strict=True)
+        settle = bounded("settle", settle, "s", MAX_SECONDS, low=0.0)
+        self.pose, self.goal = pose, (goal[0], goal[1])
         self.goal_tolerance, self.control_hz, self.settle = goal_tolerance, control_hz, settle
         self.reward_fn = reward or (lambda o: -o.distance)
         self.terminated_fn = terminated or (lambda o: o.distance < self.goal_tolerance)
@@ -130,6 +146,7 @@ class MobotEnv(gym.Env):
         """Hold ``action`` for one control period."""
         if self._sim is None:
             raise UsageError("call reset() before step()")
+        action = self._action(action)
         if self.normalize:  # [-1, 1] to the robot's limits
             action = [min(max(float(v), -1.0), 1.0) * hi for v, hi in zip(action, self._high)]
         linear, angular = (min(max(float(v), lo), hi) for v, lo, hi in zip(action, self._low, self._high))
@@ -145,6 +162,18 @@ class MobotEnv(gym.Env):
 
     def close(self) -> None:
         self._close_sim()
+
+    def _action(self, action) -> list[float]:
+        """Two finite numbers, or a UsageError before the world is touched (NaN would not clip)."""
+        try:
+            values = np.asarray(action, dtype=np.float64).reshape(-1).tolist()
+        except (TypeError, ValueError):
+            raise UsageError(f"step: the action must be [linear, angular] numbers, got {action!r:.60}") from None
+        if len(values) != 2:
+            raise UsageError(f"step: the action must be [linear, angular], got {len(values)} numbers")
+        if not all(math.isfinite(v) for v in values):
+            raise UsageError(f"step: the action {values} holds a number that is not finite")
+        return values
 
     def _goal_in_odom(self) -> tuple[float, float]:
         """The goal (world frame) in the robot's odom frame, whose origin is its spawn pose."""

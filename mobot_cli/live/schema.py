@@ -11,7 +11,16 @@ from typing import Annotated, Any, Literal, Optional, Union
 from pydantic import BaseModel, ConfigDict, Field, StrictInt, TypeAdapter, ValidationError
 
 from mobot_cli.live.protocol import OPS, Refusal, Result
-from mobot_cli.scenario.limits import MAX_NAME_LENGTH
+from mobot_cli.scenario.limits import (
+    MAX_ANGULAR_SPEED,
+    MAX_NAME_LENGTH,
+    MAX_SECONDS,
+    MAX_SPEED,
+    AngularSpeed,
+    Coordinate,
+    at_most,
+)
+from mobot_cli.scenario.limits import Speed as LinearSpeed
 from mobot_cli.scenario.model import NAME_RE, NAMESPACE_RE, PoseSpec
 
 MAX_NAME = 256
@@ -62,8 +71,8 @@ class Scan(Request):
 class Cmd(Request):
     op: Literal["cmd"]
     name: Name
-    linear: float = 0.0
-    angular: float = 0.0
+    linear: LinearSpeed = 0.0  # the scenario's bounds (docs/errors.md "Limits")
+    angular: AngularSpeed = 0.0
     for_: Optional[Annotated[float, Field(gt=0, le=1e6)]] = Field(default=None, alias="for")
     wait: bool = False  # with 'for': reply when the command has ended
 
@@ -73,14 +82,14 @@ class Cmd(Request):
 class Goto(Request):
     op: Literal["goto"]
     name: Name
-    x: float  # the goal, in the world frame
-    y: float
+    x: Coordinate  # the goal, in the world frame
+    y: Coordinate
     yaw: Optional[float] = None  # turn to this heading once there
     tolerance: Optional[Annotated[float, Field(gt=0)]] = None  # m
     timeout: Optional[Annotated[float, Field(gt=0, le=1e6)]] = None  # simulated s
     localization: Optional[Literal["odometry", "ground_truth"]] = None
-    max_linear: Optional[Annotated[float, Field(gt=0)]] = None
-    max_angular: Optional[Annotated[float, Field(gt=0)]] = None
+    max_linear: Optional[Annotated[float, Field(gt=0), at_most(MAX_SPEED, "m/s")]] = None
+    max_angular: Optional[Annotated[float, Field(gt=0), at_most(MAX_ANGULAR_SPEED, "rad/s")]] = None
     wait: bool = False  # reply when the goal has ended
 
 
@@ -119,7 +128,7 @@ class Step(Request):
 
     op: Literal["step"]
     steps: Optional[Annotated[StrictInt, Field(ge=1, le=MAX_STEPS)]] = None
-    seconds: Optional[Annotated[float, Field(gt=0)]] = None
+    seconds: Optional[Annotated[float, Field(gt=0, le=MAX_SECONDS)]] = None
     states: bool = True  # the reply carries every robot's pose and twist
 
 

@@ -11,7 +11,19 @@ from typing import Annotated, Any, Literal, Optional, Union
 from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, model_validator
 
 from mobot_cli.common.polygon import area
-from mobot_cli.scenario.limits import Coordinate, Float, Int, PositiveFloat
+from mobot_cli.scenario.limits import (
+    MAX_ACCELERATION,
+    MAX_ANGULAR_SPEED,
+    MAX_COORDINATE,
+    MAX_LANES,
+    MAX_SPEED,
+    MIN_SPACING,
+    Coordinate,
+    Float,
+    Int,
+    PositiveFloat,
+    at_most,
+)
 
 GOALS = ("goto", "path", "patrol", "coverage")
 # Settings that only a goal command takes.
@@ -55,16 +67,20 @@ class CoverageSpec(_Strict):
     """Sweep an area lawn-mower style: lanes at most ``spacing`` apart over its free space."""
 
     area: Area
-    spacing: PositiveFloat  # m
+    spacing: Annotated[PositiveFloat, at_most(MAX_COORDINATE, "m", MIN_SPACING)]
 
     @model_validator(mode="after")
     def _not_empty(self) -> "CoverageSpec":
-        check_area(self.area)
+        side = check_area(self.area)
+        if side / self.spacing > MAX_LANES:  # planning (and sweeping) grows with the lanes
+            raise ValueError(f"spacing {self.spacing:g} m over an area {side:g} m across makes "
+                             f"{side / self.spacing:.0f} lanes, more than the limit of {MAX_LANES}")
         return self
 
 
-def check_area(value) -> None:
-    """ValueError for a box with its sides the wrong way round or a polygon with no inside."""
+def check_area(value) -> float:
+    """The area's longest side (m); ValueError for a box with its sides the wrong way round or a
+    polygon with no inside."""
     if len(value) == 4 and all(isinstance(v, (int, float)) for v in value):
         xmin, xmax, ymin, ymax = value
         if not (xmin < xmax and ymin < ymax):
@@ -79,6 +95,7 @@ def check_area(value) -> None:
         side = max(max(p[i] for p in value) - min(p[i] for p in value) for i in (0, 1))
     if side > MAX_AREA_SIDE:
         raise ValueError(f"area is {side:g} m across, more than the limit of {MAX_AREA_SIDE:g} m")
+    return side
 
 
 Waypoints = Annotated[list[Point2], Field(min_length=1, max_length=MAX_WAYPOINTS)]
@@ -95,10 +112,10 @@ class GoalFields(_Strict):
     timeout: Optional[Annotated[Float, Field(gt=0, le=1e6)]] = None  # s
     tolerance: Optional[PositiveFloat] = None  # m (goto takes its own inside goto:)
     localization: Optional[Literal["odometry", "ground_truth"]] = None
-    max_linear: Optional[PositiveFloat] = None  # m/s
-    max_angular: Optional[PositiveFloat] = None  # rad/s
-    acceleration: Optional[PositiveFloat] = None  # m/s^2
-    angular_acceleration: Optional[PositiveFloat] = None  # rad/s^2
+    max_linear: Optional[Annotated[PositiveFloat, at_most(MAX_SPEED, "m/s")]] = None
+    max_angular: Optional[Annotated[PositiveFloat, at_most(MAX_ANGULAR_SPEED, "rad/s")]] = None
+    acceleration: Optional[Annotated[PositiveFloat, at_most(MAX_ACCELERATION, "m/s^2")]] = None
+    angular_acceleration: Optional[Annotated[PositiveFloat, at_most(MAX_ACCELERATION, "rad/s^2")]] = None
 
     @property
     def goal(self) -> Optional[str]:

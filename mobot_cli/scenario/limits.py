@@ -24,6 +24,18 @@ MAX_COORDINATE = 1e6  # m, any spawn position component
 MAX_NAME_LENGTH = 64  # robot and scenario names: file names (odom/<name>.csv) and ROS names
 MAX_NAMESPACE_LENGTH = 256
 MAX_REFERENCE_LENGTH = 1024  # a world or description: a bundled name or a path
+# Physical bounds (docs/errors.md "Limits"): far beyond any ground robot, well inside what the
+# physics and the odometry can carry without overflowing to inf.
+MAX_SPEED = 100.0  # m/s, a command's linear speed and a goal's max_linear
+MAX_ANGULAR_SPEED = 100.0  # rad/s, a command's angular speed and a goal's max_angular
+MAX_ACCELERATION = 1000.0  # m/s^2 and rad/s^2, a goal's acceleration and angular_acceleration
+MAX_WHEEL_RADIUS = 10.0  # m
+MAX_WHEEL_SEPARATION = 100.0  # m
+MAX_MULTIPLIER = 100.0  # wheel_radius_multiplier and wheel_separation_multiplier, both ways
+MAX_WHEEL_TORQUE = 1e6  # N m
+MAX_WHEEL_ACCELERATION = 1e5  # rad/s^2
+MIN_SPACING = 0.005  # m, a coverage goal's lane spacing
+MAX_LANES = 10_000  # a coverage area's longest side over its spacing
 
 NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 FLEET_NAME_RE = re.compile(r"^[A-Za-z_]([A-Za-z0-9_]|\{i\})*$")
@@ -48,6 +60,19 @@ def _coordinate(value: float) -> float:
     if abs(value) > MAX_COORDINATE:
         raise ValueError(f"{value:g} m is farther than {MAX_COORDINATE:g} m from the origin")
     return value
+
+
+def at_most(limit: float, unit: str, at_least: float = 0.0):
+    """An AfterValidator: |value| within ``limit`` (and, when given, at least ``at_least``), the unit named."""
+    unit = f" {unit}" if unit else ""
+
+    def check(value: float) -> float:
+        if abs(value) > limit:
+            raise ValueError(f"{value:g}{unit} is beyond the limit of {limit:g}{unit}")
+        if 0 < abs(value) < at_least:
+            raise ValueError(f"{value:g}{unit} is below the limit of {at_least:g}{unit}")
+        return value
+    return AfterValidator(check)
 
 
 def check_reference(value: str) -> str:
@@ -90,6 +115,8 @@ Seconds = Annotated[Float, Field(ge=0), AfterValidator(_seconds)]  # a moment: a
 Duration = Annotated[Float, Field(gt=0), AfterValidator(_seconds)]  # a span: duration, for
 Coordinate = Annotated[Float, AfterValidator(_coordinate)]
 Vector3 = tuple[Float, Float, Float]
+Speed = Annotated[Float, at_most(MAX_SPEED, "m/s")]
+AngularSpeed = Annotated[Float, at_most(MAX_ANGULAR_SPEED, "rad/s")]
 Reference = Annotated[str, AfterValidator(check_reference)]  # a world or description: bundled name or path
 
 

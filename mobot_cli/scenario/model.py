@@ -17,12 +17,18 @@ from mobot_cli.scenario.expect_model import ExpectSpec
 from mobot_cli.scenario.goal_model import GoalFields
 from mobot_cli.scenario.limits import (
     FLEET_NAME_RE,
+    MAX_MULTIPLIER,
     MAX_NAMESPACE_LENGTH,
     MAX_RATE_HZ,
+    MAX_WHEEL_ACCELERATION,
+    MAX_WHEEL_RADIUS,
+    MAX_WHEEL_SEPARATION,
+    MAX_WHEEL_TORQUE,
     MIN_LOG_RATE_HZ,
     NAME_RE,  # noqa: F401 - live/schema.py imports the name rule from here
     NAMESPACE_RE,
     SCENARIO_NAME_RE,
+    AngularSpeed,
     Coordinate,
     Duration,
     Float,
@@ -30,7 +36,9 @@ from mobot_cli.scenario.limits import (
     PositiveFloat,
     Reference,
     Seconds,
+    Speed,
     Vector3,
+    at_most,
     check_engine,
     check_name,
     gravity_length,
@@ -93,12 +101,12 @@ class DriveOverrides(Strict):
     odometry: Literal["encoder", "ground_truth"] = "encoder"
     left_joints: Optional[list[str]] = None
     right_joints: Optional[list[str]] = None
-    wheel_radius: Optional[PositiveFloat] = None
-    wheel_separation: Optional[PositiveFloat] = None
-    wheel_separation_multiplier: Optional[PositiveFloat] = None
-    wheel_radius_multiplier: Optional[PositiveFloat] = None
-    max_wheel_torque: Optional[PositiveFloat] = None
-    max_wheel_acceleration: Optional[PositiveFloat] = None
+    wheel_radius: Optional[Annotated[PositiveFloat, at_most(MAX_WHEEL_RADIUS, "m")]] = None
+    wheel_separation: Optional[Annotated[PositiveFloat, at_most(MAX_WHEEL_SEPARATION, "m")]] = None
+    wheel_separation_multiplier: Optional[Annotated[PositiveFloat, at_most(MAX_MULTIPLIER, "", 1 / MAX_MULTIPLIER)]] = None
+    wheel_radius_multiplier: Optional[Annotated[PositiveFloat, at_most(MAX_MULTIPLIER, "", 1 / MAX_MULTIPLIER)]] = None
+    max_wheel_torque: Optional[Annotated[PositiveFloat, at_most(MAX_WHEEL_TORQUE, "N m")]] = None
+    max_wheel_acceleration: Optional[Annotated[PositiveFloat, at_most(MAX_WHEEL_ACCELERATION, "rad/s^2")]] = None
     twist_feedback: Optional[bool] = None
 
 
@@ -110,8 +118,8 @@ class CommandSpec(GoalFields):
     """
 
     at: Optional[Seconds] = None
-    linear: Float = 0.0
-    angular: Float = 0.0
+    linear: Speed = 0.0
+    angular: AngularSpeed = 0.0
     for_: Optional[Duration] = Field(default=None, alias="for")
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True, populate_by_name=True, defer_build=True)
