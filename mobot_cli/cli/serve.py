@@ -39,6 +39,8 @@ def serve(
     view: bool = typer.Option(False, "--view", help="Watch and drive the world in a local 3D web page "
                               "(extra 'view'): pause, resume, step, a teleop pad."),
     view_port: int = typer.Option(8080, "--view-port", help="Port of the --view page on 127.0.0.1 (0: any)."),
+    view_max_steps: int = typer.Option(10_000, "--view-max-steps", metavar="N",
+                                       help="Physics steps one Step click of the --view page may take."),
     paused: bool = typer.Option(False, "--paused", help="Start paused: the world moves only when asked to "
                                 "(`mobot step`, `mobot resume`), for lockstep clients."),
 ) -> int:
@@ -58,7 +60,8 @@ def serve(
     if not 0 < load_timeout <= 3600 or not 256 <= load_memory <= 1 << 20:
         raise UsageError("--load-timeout must be above 0 and at most 3600 s, --load-memory at least 256 MiB",
                          hint="The defaults are 10 s and 1024 MiB.")
-    for option, value in (("--max-faces", max_faces), ("--max-links", max_links), ("--max-robots", max_robots)):
+    for option, value in (("--max-faces", max_faces), ("--max-links", max_links), ("--max-robots", max_robots),
+                          ("--view-max-steps", view_max_steps)):
         if not 1 <= value <= 10**9:
             raise UsageError(f"{option} {value} must be at least 1 and at most 1000000000")
     if view:
@@ -70,7 +73,7 @@ def serve(
     output.notices(env, plan.notices, quiet=quiet)
     stop_after = steps(duration, plan.physics.rate_hz) if duration is not None else None
     bridges = ros2.bridges(plan, ros2_)
-    page = _Page(env, plan, view_port) if view else None
+    page = _Page(env, plan, view_port, view_max_steps) if view else None
     server = LiveServer(plan, endpoint or default_endpoint(), rtf=pace, bind_any=bind_any,
                         out_dir=out, resolved_yaml=prepared.resolved_yaml, stop_after=stop_after,
                         attachments=bridges, watch=page.watch if page else None,
@@ -118,12 +121,12 @@ def _pace(realtime: bool, fast: bool, rtf: Optional[float]) -> Optional[float]:
 class _Page:
     """--view: the live page, its World buttons on the server's own pause state, its pad sending `cmd`."""
 
-    def __init__(self, env, plan, port: int):
+    def __init__(self, env, plan, port: int, max_steps: int):
         from mobot_cli.view.live import LiveView
         from mobot_cli.view.page import open_page, url
 
         self.server = open_page(port, label=f"mobot serve: {plan.name}")
-        self.plan, self.live_server = plan, None
+        self.plan, self.live_server, self.max_steps = plan, None, max_steps
         self.live = LiveView(self.server, plan)
         output.view_live(env, url(self.server))
 
@@ -136,7 +139,7 @@ class _Page:
 
         self.live_server = server
         state = add_controls(self.server, GateControl(server.control, self._cmd),
-                             lambda: self.live.robot_list.selected, self.plan.physics.rate_hz)
+                             lambda: self.live.robot_list.selected, self.plan.physics.rate_hz, self.max_steps)
 
         def show_state() -> None:  # a `mobot pause` or `resume` from any client shows on the page
             text = "paused" if server.control.paused else "running"

@@ -29,7 +29,7 @@ if available():
 
 ARTEFACTS = Path(os.environ.get("MOBOT_TEST_ARTEFACTS", REPO / ".artefacts")) / "view"
 WIDTH, HEIGHT = 1000, 700
-URL = re.compile(r"http://127\.0\.0\.1:\d+/")
+URL = re.compile(r"http://127\.0\.0\.1:\d+/\?token=[\w-]+")  # the token only the owner sees
 
 
 @pytest.fixture(scope="module", autouse=True)
