@@ -309,24 +309,23 @@ def test_no_live_world_exits_4(tmp_path, verb):
     assert done.exit_code == 4 and done.stdout == "" and "no live world" in done.stderr
 
 
-def test_the_readme_wall_follower_runs_in_lockstep(cache, monkeypatch):
-    """The README's lockstep example, as written, against `mobot serve house --paused`."""
+def test_the_docs_wall_follower_runs_in_lockstep(cache, monkeypatch):
+    """docs/live-world.md's lockstep example, as written, against `mobot serve house --paused`."""
     import re
 
-    readme = (REPO / "README.md").read_text()
-    section = readme[readme.index("## Lockstep control"):]
+    page = (REPO / "docs" / "live-world.md").read_text()
+    section = page[page.index("## Lockstep control"):]
     block = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    assert 'world.spawn("r1"' in block and "pose={\"x\": -3.0, \"y\": -4.3}" in block
     server = LiveProcess("house", "--paused", "--fast", cache_dir=cache)
     try:
-        with server.client() as client:
-            client.spawn("r1", description="mobot", args={"lidar": "true"}, pose={"x": -3.0, "y": -4.3}, timeout=120)
-            start = client.get_state("r1")
         monkeypatch.setenv("MOBOT_ENDPOINT", server.endpoint)
-        exec(compile(block, "README.md", "exec"), {})
+        exec(compile(block, "docs/live-world.md", "exec"), {})  # spawns r1 at (-3, -4.3), then 100 steps
         with server.client() as client:
             end = client.get_state("r1")
     finally:
         server.kill()
+    start = {"t": 0.0, "pose": {"x": -3.0}}
     assert end["t"] == start["t"] + 10.0  # 100 x 24 steps at 240 Hz
     assert end["pose"]["x"] - start["pose"]["x"] > 1.5  # along the south wall (y = -5), 0.5 m from it
     assert -4.6 < end["pose"]["y"] < -4.0, end["pose"]  # neither into the wall nor away from it

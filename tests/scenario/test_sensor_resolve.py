@@ -299,13 +299,15 @@ def test_any_rate_becomes_whole_steps_and_reloads_to_the_same(tmp_path, rate, ph
     assert prepare(again).plan.robots == first.plan.robots
 
 
-def test_the_readme_sensors_example(tmp_path):
-    readme = (REPO / "README.md").read_text()
-    section = readme[readme.index("### Where sensors come from"):]
+def test_the_docs_sensors_example(tmp_path):
+    page = (REPO / "docs" / "sensors.md").read_text()
+    section = page[page.index("## Where sensors come from"):]
     example = next(b for b in section.split("```yaml\n")[1:] if "sensors:" in b).split("```")[0]
-    plan = prepare(scenario(tmp_path, example)).plan
+    path = tmp_path / "s.yaml"
+    path.write_text(example if example.startswith("version:") else "version: 1\nduration: 2\n" + example)
+    plan = prepare(path).plan
     assert [(s.name, s.kind, s.every) for s in plan.robots[0].sensors] == \
-        [("lidar", "lidar", 24), ("bumper", "contact", 1)]
+        [("lidar", "lidar", 24), ("imu", "imu", 2), ("bumper", "contact", 1)]  # 10 Hz, 120 Hz, every step
     assert plan.robots[0].sensors[0].range_max == 8.0
 
 
