@@ -52,7 +52,6 @@ from mobot_cli.ros.messages import (
     tf_shape,
     tf_static,
 )
-from mobot_cli.ros.sensor_definitions import SENSOR_MESSAGES
 from mobot_cli.sim.state import RobotState
 from mobot_cli.timeline.records import Reading, Sample, Sink
 
@@ -96,7 +95,7 @@ class BagSink(Sink):
 
     def topic(self, name: str, msgtype: str, latched: bool = False):
         """Add a connection, with its message definition and type hash embedded."""
-        msgdef, rihs01 = MESSAGES[msgtype] if msgtype in MESSAGES else SENSOR_MESSAGES[msgtype]
+        msgdef, rihs01 = MESSAGES[msgtype]
         return bag_metadata.add_connection(self.writer, name, msgtype, msgdef, rihs01,
                                            bag_metadata.latched_qos() if latched else ())
 

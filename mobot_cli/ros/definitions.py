@@ -1,10 +1,26 @@
-"""ROS 2 message definitions and type hashes of the topics mobot records (generated).
+"""Every ROS 2 message type mobot records, publishes or takes: one table, and how to read it.
 
-The same in Humble, Jazzy and Kilted. Generated once from rosbags' typestore and kept here so
-that a run does not build a typestore (~0.1 s); tests/record/test_bag.py checks them against it.
+``MESSAGES`` maps a type to its message definition as rosbag2 embeds it (the .msg text of
+the type, then each type it uses after a line of '=') and its RIHS01 type description hash.
+The bag embeds both (record/bag.py), the ROS 2 node announces the hash (ros2/publisher.py),
+and ros2/idl.py builds the cyclonedds structs that describe the topics on DDS from the texts
+(``structs``). Generated once from rosbags' typestore, the same in Humble, Jazzy and Kilted,
+so that a run does not build a typestore (~0.1 s): tests/ros/test_definitions.py checks every
+text and hash against rosbags and the .msg files of gazebo_msgs and rmw_dds_common.
+gazebo_msgs/ContactsState is what gazebo_ros_bumper publishes. rmw_dds_common's Gid is Jazzy's
+``char[16]``, Humble's is ``char[24]`` (ros2/idl.py); its hash is the one rmw_dds_common ships,
+which reads ``char`` as ``uint8`` as ROS 2's IDL does (rosbags hashes it as a char).
 """
 
 from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+LASER_SCAN, POINT_CLOUD2 = "sensor_msgs/msg/LaserScan", "sensor_msgs/msg/PointCloud2"
+IMU, CONTACTS_STATE = "sensor_msgs/msg/Imu", "gazebo_msgs/msg/ContactsState"
+PARTICIPANT_ENTITIES_INFO = "rmw_dds_common/msg/ParticipantEntitiesInfo"
+SEPARATOR = "=" * 80 + "\n"
 
 # msgtype -> (message definition as rosbag2 embeds it, RIHS01 type description hash)
 MESSAGES: dict[str, tuple[str, str]] = {
@@ -119,4 +135,178 @@ MESSAGES: dict[str, tuple[str, str]] = {
     "std_msgs/msg/String": (
         "string data\n",
         "RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18"),
+    "sensor_msgs/msg/LaserScan": (
+        "std_msgs/Header header\n"
+        "float32 angle_min\n"
+        "float32 angle_max\n"
+        "float32 angle_increment\n"
+        "float32 time_increment\n"
+        "float32 scan_time\n"
+        "float32 range_min\n"
+        "float32 range_max\n"
+        "float32[] ranges\n"
+        "float32[] intensities\n"
+        "================================================================================\n"
+        "MSG: std_msgs/Header\n"
+        "builtin_interfaces/Time stamp\n"
+        "string frame_id\n"
+        "================================================================================\n"
+        "MSG: builtin_interfaces/Time\n"
+        "int32 sec\n"
+        "uint32 nanosec\n",
+        "RIHS01_64c191398013af96509d518dac71d5164f9382553fce5c1f8cca5be7924bd828"),
+    "sensor_msgs/msg/PointCloud2": (
+        "std_msgs/Header header\n"
+        "uint32 height\n"
+        "uint32 width\n"
+        "sensor_msgs/PointField[] fields\n"
+        "bool is_bigendian\n"
+        "uint32 point_step\n"
+        "uint32 row_step\n"
+        "uint8[] data\n"
+        "bool is_dense\n"
+        "================================================================================\n"
+        "MSG: std_msgs/Header\n"
+        "builtin_interfaces/Time stamp\n"
+        "string frame_id\n"
+        "================================================================================\n"
+        "MSG: builtin_interfaces/Time\n"
+        "int32 sec\n"
+        "uint32 nanosec\n"
+        "================================================================================\n"
+        "MSG: sensor_msgs/PointField\n"
+        "uint8 INT8=1\n"
+        "uint8 UINT8=2\n"
+        "uint8 INT16=3\n"
+        "uint8 UINT16=4\n"
+        "uint8 INT32=5\n"
+        "uint8 UINT32=6\n"
+        "uint8 FLOAT32=7\n"
+        "uint8 FLOAT64=8\n"
+        "string name\n"
+        "uint32 offset\n"
+        "uint8 datatype\n"
+        "uint32 count\n",
+        "RIHS01_9198cabf7da3796ae6fe19c4cb3bdd3525492988c70522628af5daa124bae2b5"),
+    "sensor_msgs/msg/Imu": (
+        "std_msgs/Header header\n"
+        "geometry_msgs/Quaternion orientation\n"
+        "float64[9] orientation_covariance\n"
+        "geometry_msgs/Vector3 angular_velocity\n"
+        "float64[9] angular_velocity_covariance\n"
+        "geometry_msgs/Vector3 linear_acceleration\n"
+        "float64[9] linear_acceleration_covariance\n"
+        "================================================================================\n"
+        "MSG: std_msgs/Header\n"
+        "builtin_interfaces/Time stamp\n"
+        "string frame_id\n"
+        "================================================================================\n"
+        "MSG: builtin_interfaces/Time\n"
+        "int32 sec\n"
+        "uint32 nanosec\n"
+        "================================================================================\n"
+        "MSG: geometry_msgs/Quaternion\n"
+        "float64 x\n"
+        "float64 y\n"
+        "float64 z\n"
+        "float64 w\n"
+        "================================================================================\n"
+        "MSG: geometry_msgs/Vector3\n"
+        "float64 x\n"
+        "float64 y\n"
+        "float64 z\n",
+        "RIHS01_7d9a00ff131080897a5ec7e26e315954b8eae3353c3f995c55faf71574000b5b"),
+    "gazebo_msgs/msg/ContactsState": (
+        "std_msgs/Header header\n"
+        "gazebo_msgs/ContactState[] states\n"
+        "================================================================================\n"
+        "MSG: std_msgs/Header\n"
+        "builtin_interfaces/Time stamp\n"
+        "string frame_id\n"
+        "================================================================================\n"
+        "MSG: builtin_interfaces/Time\n"
+        "int32 sec\n"
+        "uint32 nanosec\n"
+        "================================================================================\n"
+        "MSG: gazebo_msgs/ContactState\n"
+        "string info\n"
+        "string collision1_name\n"
+        "string collision2_name\n"
+        "geometry_msgs/Wrench[] wrenches\n"
+        "geometry_msgs/Wrench total_wrench\n"
+        "geometry_msgs/Vector3[] contact_positions\n"
+        "geometry_msgs/Vector3[] contact_normals\n"
+        "float64[] depths\n"
+        "================================================================================\n"
+        "MSG: geometry_msgs/Wrench\n"
+        "geometry_msgs/Vector3 force\n"
+        "geometry_msgs/Vector3 torque\n"
+        "================================================================================\n"
+        "MSG: geometry_msgs/Vector3\n"
+        "float64 x\n"
+        "float64 y\n"
+        "float64 z\n",
+        "RIHS01_1dc585e627c16551e50102b983ec513212ef81bad3b9e9f2423f549df190a40c"),
+    "rmw_dds_common/msg/ParticipantEntitiesInfo": (
+        "rmw_dds_common/Gid gid\n"
+        "rmw_dds_common/NodeEntitiesInfo[] node_entities_info_seq\n"
+        "================================================================================\n"
+        "MSG: rmw_dds_common/Gid\n"
+        "char[16] data\n"
+        "================================================================================\n"
+        "MSG: rmw_dds_common/NodeEntitiesInfo\n"
+        "string<=256 node_namespace\n"
+        "string<=256 node_name\n"
+        "rmw_dds_common/Gid[] reader_gid_seq\n"
+        "rmw_dds_common/Gid[] writer_gid_seq\n",
+        "RIHS01_91a0593bacdcc50ea9bdcf849a938b128412cc1ea821245c663bcd26f83c295e"),
 }
+
+_FIELD = re.compile(r"(?P<type>[A-Za-z_][\w/]*)(?:<=(?P<bound>\d+))?(?:\[(?P<length>\d*)\])?")
+
+
+@dataclass(frozen=True)
+class Field:
+    """One field of a message: a primitive ('float64', 'string', ...) or a message 'pkg/Name'."""
+
+    name: str
+    type: str
+    length: int | None = None  # T[N]: a fixed-length array
+    sequence: bool = False  # T[]: an unbounded sequence
+    bound: int | None = None  # string<=N
+
+
+def structs(msgtype: str, definition: str | None = None) -> dict[str, tuple[Field, ...]]:
+    """Each message type in ``msgtype``'s definition ('pkg/Name' -> its fields), the ones a
+    type uses before it, ``msgtype`` last. Constants are left out: they are not on the wire."""
+    parts = (MESSAGES[msgtype][0] if definition is None else definition).split(SEPARATOR)
+    package, _, name = msgtype.split("/")
+    texts = {f"{package}/{name}": parts[0]}
+    for part in parts[1:]:
+        head, _, body = part.partition("\n")
+        texts[head.removeprefix("MSG: ")] = body
+    ordered: dict[str, tuple[Field, ...]] = {}
+
+    def visit(key: str) -> None:
+        if key not in ordered:
+            fields = tuple(_fields(key, texts[key]))
+            for field in fields:
+                if "/" in field.type:
+                    visit(field.type)
+            ordered[key] = fields
+
+    visit(f"{package}/{name}")
+    return ordered
+
+
+def _fields(key: str, text: str):
+    for line in text.splitlines():
+        words = line.split()
+        if not words or "=" in "".join(words[1:2]):  # a constant: 'uint8 FLOAT32=7'
+            continue
+        match = _FIELD.fullmatch(words[0])
+        if len(words) != 2 or match is None:
+            raise ValueError(f"{key}: cannot read the field {line!r}")
+        length = match["length"]
+        yield Field(words[1], match["type"], int(length) if length else None, length == "",
+                    int(match["bound"]) if match["bound"] else None)

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 from mobot_cli.plan import RobotPlan, SensorSpec
-from mobot_cli.ros.sensor_definitions import CONTACTS_STATE, IMU, LASER_SCAN, POINT_CLOUD2
+from mobot_cli.ros.definitions import CONTACTS_STATE, IMU, LASER_SCAN, POINT_CLOUD2
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9_]")
 IDENTITY = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))

@@ -13,10 +13,11 @@ from __future__ import annotations
 import struct
 from typing import Sequence
 
+from mobot_cli.ros.definitions import MESSAGES
+from mobot_cli.ros.definitions import PARTICIPANT_ENTITIES_INFO as MSGTYPE
+
 TOPIC = "ros_discovery_info"
-MSGTYPE = "rmw_dds_common/msg/ParticipantEntitiesInfo"
-# From rmw_dds_common's generated type description (Jazzy 3.1.0; the same in Kilted).
-RIHS01 = "RIHS01_91a0593bacdcc50ea9bdcf849a938b128412cc1ea821245c663bcd26f83c295e"
+RIHS01 = MESSAGES[MSGTYPE][1]  # rmw_dds_common's generated type description (Jazzy 3.1.0, Kilted)
 
 
 def participant_entities_info(participant: bytes, node_namespace: str, node_name: str,

@@ -41,14 +41,10 @@ from mobot_cli.ros.messages import (
     tf_layout,
     tf_static,
 )
-from mobot_cli.ros.sensor_definitions import SENSOR_MESSAGES
 from mobot_cli.ros2 import dds, graph, idl, names
 from mobot_cli.sim.state import RobotState
 from mobot_cli.timeline.records import Deleted, Reading, Record, Sample, Spawned
 
-# Type hashes of the types mobot sends that the bag does not record (tests/ros/test_wire.py
-# checks them); the others come with the bag's definitions (ros/definitions.py, ros/sensor_definitions.py).
-HASHES = {graph.MSGTYPE: graph.RIHS01}
 TWIST_FIELDS = struct.Struct("<4x6d")  # encapsulation header, linear xyz, angular xyz
 Handler = Callable[["Topics", Record], None]
 _HANDLERS: dict[type, Handler] = {}
@@ -61,10 +57,7 @@ def register(record_type: type, handler: Handler) -> None:
 
 def type_hash(msgtype: str) -> str:
     """The RIHS01 hash ROS 2 Jazzy and later expect in an endpoint's USER_DATA."""
-    for table in (MESSAGES, SENSOR_MESSAGES):
-        if msgtype in table:
-            return table[msgtype][1]
-    return HASHES[msgtype]
+    return MESSAGES[msgtype][1]
 
 
 def twist(data: bytes) -> tuple[float, float]:

@@ -203,18 +203,6 @@ def test_messages_are_the_bytes_rosbags_serializer_writes(bag_run):
     assert len(seen) == len(TOPICS)
 
 
-def test_message_definitions_match_rosbags_typestores():
-    from rosbags.typesys import Stores, get_typestore
-
-    from mobot_cli.ros.definitions import MESSAGES
-
-    for store_name in (Stores.ROS2_HUMBLE, Stores.ROS2_JAZZY):
-        store = get_typestore(store_name)
-        for kind, (msgdef, rihs01) in MESSAGES.items():
-            assert msgdef == store.generate_msgdef(kind, ros_version=2)[0]
-            assert rihs01 == store.hash_rihs01(kind)
-
-
 def test_same_inputs_give_a_byte_identical_bag_and_a_rerun_replaces_it(bag_run, tmp_path):
     out, _ = bag_run
     scenario = out.parent / "s.yaml"

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from mobot_cli.plan import RayAxis, SensorSpec
 from mobot_cli.ros import sensor_cdr
-from mobot_cli.ros.sensor_definitions import CONTACTS_STATE, IMU, POINT_CLOUD2
+from mobot_cli.ros.definitions import CONTACTS_STATE, IMU, POINT_CLOUD2
 from mobot_cli.ros2 import names
 from mobot_cli.sim.sensing.lidar import Beams
 from mobot_cli.sim.sensing.rig import Contact

@@ -15,12 +15,13 @@ from mobot_cli.errors import UsageError
 from mobot_cli.plan import RobotPlan, SpawnPose
 from mobot_cli.ros import messages as rm
 from mobot_cli.ros.cdr import ENCAPSULATION
+from mobot_cli.ros.definitions import MESSAGES
 from mobot_cli.ros2 import graph, names
 from mobot_cli.sim.state import RobotState
 
 pytest.importorskip("cyclonedds")
 from mobot_cli.ros2 import idl  # noqa: E402 - needs cyclonedds
-from mobot_cli.ros2.publisher import HASHES, twist, type_hash  # noqa: E402
+from mobot_cli.ros2.publisher import twist, type_hash  # noqa: E402
 
 GOLDEN = Path(__file__).parents[1] / "golden" / "ros2_messages.json"
 URDF = """<robot name="r"><link name="base_link"/><link name="wheel"/><link name="lidar"/>
@@ -186,7 +187,7 @@ def test_type_hashes_are_rosbags_rihs01(store):
         # rmw_dds_common and gazebo_msgs are checked with their own definitions (above, test_sensor_wire.py)
         if msgtype not in (graph.MSGTYPE, "gazebo_msgs/msg/ContactsState"):
             assert type_hash(msgtype) == store.hash_rihs01(msgtype), msgtype
-    assert set(HASHES) <= set(idl.TYPES)
+    assert set(idl.TYPES) == set(MESSAGES)  # a struct for every type in the table
 
 
 def test_dds_type_names_are_ros2s():
