@@ -12,7 +12,7 @@ import sys
 from dataclasses import dataclass, replace
 from typing import Iterable
 
-from mobot_cli.cli.environment import Environment
+from mobot_cli.cli.environment import Environment, OutputClosed
 from mobot_cli.cli.output import report_error
 from mobot_cli.errors import ExitCode, MobotError
 
@@ -52,20 +52,30 @@ def _execute(args: list[str], env: Environment) -> int:
     if _traceback_asked(args):
         env = replace(env, traceback=True)
     try:
-        # Click prints --help itself, to sys.stdout: point the sys streams at env's for the call.
-        with contextlib.redirect_stdout(env.stdout), contextlib.redirect_stderr(env.stderr):
-            from mobot_cli.cli.app import dispatch
+        try:
+            # Click prints --help itself, to sys.stdout: point the sys streams at env's for the call.
+            with contextlib.redirect_stdout(env.stdout), contextlib.redirect_stderr(env.stderr):
+                from mobot_cli.cli.app import dispatch
 
-            return dispatch(args, env)
-    except MobotError as exc:
-        if env.traceback:
-            raise
-        report_error(env, exc)
-        return exc.exit_code
-    except KeyboardInterrupt:  # `mobot: interrupted` is said once, by the entry point (__main__.py)
-        if env.traceback:
-            raise
-        return ExitCode.INTERRUPTED
+                return dispatch(args, env)
+        except MobotError as exc:
+            if env.traceback:
+                raise
+            try:
+                report_error(env, exc)
+            except OutputClosed as closed:  # the error's exit code still says what went wrong
+                closed.stream.discard()
+            return exc.exit_code
+        except KeyboardInterrupt:  # `mobot: interrupted` is said once, by the entry point (__main__.py)
+            if env.traceback:
+                raise
+            return ExitCode.INTERRUPTED
+    except OutputClosed as closed:
+        # `mobot odom --follow | head -2`: the reader has what it wanted. Quiet and 0, as the reader
+        # asked for no more, rather than the shell's 141 for a process killed by SIGPIPE
+        # (git log | head, ls | head), which `set -o pipefail` would take for a failure.
+        closed.stream.discard()
+        return ExitCode.OK
 
 
 def _traceback_asked(args: list[str]) -> bool:

@@ -8,6 +8,7 @@ sys.stdin, sys.stdout and sys.stderr); tests and scripts build one on io.StringI
 from __future__ import annotations
 
 import io
+import os
 import sys
 from dataclasses import dataclass
 from typing import Any, Optional, TextIO
@@ -29,7 +30,7 @@ class Environment:
     @classmethod
     def from_process(cls) -> "Environment":
         """The real streams of this process, each asked once whether it is a terminal."""
-        return cls(stdin=sys.stdin, stdout=sys.stdout, stderr=sys.stderr,
+        return cls(stdin=sys.stdin, stdout=ProcessStream(sys.stdout), stderr=ProcessStream(sys.stderr),
                    stdout_isatty=_isatty(sys.stdout), stderr_isatty=_isatty(sys.stderr))
 
     @classmethod
@@ -44,3 +45,48 @@ def _isatty(stream: Optional[TextIO]) -> bool:
         return stream is not None and stream.isatty()
     except (AttributeError, ValueError):  # closed, or not a real stream
         return False
+
+
+class OutputClosed(Exception):
+    """The reader of stdout or stderr has gone, as `mobot odom --follow | head -2`'s does once it has
+    read two lines: not an error (cli._execute exits 0)."""
+
+    def __init__(self, stream: "ProcessStream"):
+        super().__init__(f"the reader of {stream.name} has gone")
+        self.stream = stream
+
+
+class ProcessStream:
+    """sys.stdout or sys.stderr, whose broken pipe raises OutputClosed.
+
+    A plain BrokenPipeError would be taken for any other one (a sweep worker's pipe, a socket),
+    and Typer turns every EPIPE into a silent exit 1; OutputClosed is neither an OSError nor
+    Click's, so it reaches cli._execute, which knows it was this stream.
+    """
+
+    def __init__(self, stream: TextIO):
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            raise OutputClosed(self) from None
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            raise OutputClosed(self) from None
+
+    def discard(self) -> None:
+        """Point the stream's file descriptor at /dev/null, so that what is still buffered, flushed
+        at exit, goes nowhere instead of raising again (as Python's docs on SIGPIPE advise)."""
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        try:
+            os.dup2(devnull, self._stream.fileno())
+        finally:
+            os.close(devnull)
+
+    def __getattr__(self, name: str) -> Any:  # isatty, fileno, encoding, name, ... as the stream's
+        return getattr(self._stream, name)
