@@ -16,7 +16,7 @@ def serve(
     ctx: typer.Context,
     target: Optional[str] = typer.Argument(None, metavar="[WORLD or SCENARIO]",
                                            help="A world (bundled name or file) or a scenario .yaml [default: empty]."),
-    endpoint: Optional[str] = common.ENDPOINT,
+    endpoint: common.Endpoint = None,
     bind_any: bool = typer.Option(False, "--bind-any", help="Allow a TCP endpoint that is not loopback."),
     realtime: bool = typer.Option(False, "--realtime", help="Step in real time (the default)."),
     fast: bool = typer.Option(False, "--fast", help="Step as fast as possible."),

@@ -11,7 +11,7 @@ Baselines3 warns otherwise, and PPO with its defaults learns nothing from raw m/
 is in [-1, 1], scaled to ``max_linear`` and ``max_angular``; positions and the goal are divided
 by the goal's distance from the spawn pose (at least 1 m), yaw by pi, speeds by the maximum
 speeds, ranges by the lidar's ``range_max``. ``normalize=False`` keeps SI units. Reward
-and termination are yours to give (callables of an ``Outcome``); by default the reward is
+and termination are yours to give (callables of a ``StepOutcome``); by default the reward is
 minus the distance to the goal per control period, and an episode ends when the robot is
 within ``goal_tolerance``. Every ``reset`` builds the world afresh, so ``reset(seed=s)``
 always starts the same episode, the lidar's noise included.
@@ -42,7 +42,7 @@ from mobot_cli.scenario.limits import (
 
 
 @dataclass(frozen=True)
-class Outcome:
+class StepOutcome:
     """What the reward and termination callables see after a control period."""
 
     state: RobotState  # odometry and ground truth (see RobotState)
@@ -57,8 +57,8 @@ class Outcome:
         return math.hypot(self.goal[0] - self.state.odom_x, self.goal[1] - self.state.odom_y)
 
 
-Reward = Callable[[Outcome], float]
-Termination = Callable[[Outcome], bool]
+Reward = Callable[[StepOutcome], float]
+Termination = Callable[[StepOutcome], bool]
 
 
 class MobotEnv(gym.Env):
@@ -156,7 +156,7 @@ class MobotEnv(gym.Env):
         state, scan = self._sim.state(self.robot), self._scan()
         obs = self._observation(state, scan)
         scan_m = self._finite(scan) if self._lidar else None
-        outcome = Outcome(state, self._goal, (linear, angular), self._count, scan_m)
+        outcome = StepOutcome(state, self._goal, (linear, angular), self._count, scan_m)
         reward = float(self.reward_fn(outcome))
         return obs, reward, bool(self.terminated_fn(outcome)), False, self._info(scan)
 

@@ -21,7 +21,6 @@ TIMEOUT_HELP = "Seconds to wait for the reply (exit 4 when nothing answers)."
 ENDPOINT_HELP = ("Where the live world listens [default: $MOBOT_ENDPOINT, else "
                  "ipc://$XDG_RUNTIME_DIR/mobot/mobot.sock].")
 Endpoint = Annotated[Optional[str], typer.Option("--endpoint", "-e", metavar="ENDPOINT", help=ENDPOINT_HELP)]
-ENDPOINT = typer.Option(None, "--endpoint", "-e", metavar="ENDPOINT", help=ENDPOINT_HELP)  # serve's, for now
 Timeout = Annotated[float, typer.Option("--timeout", help=TIMEOUT_HELP)]
 Json = Annotated[bool, typer.Option("--json", help="Print the reply as JSON.")]
 JsonLines = Annotated[bool, typer.Option("--json", help="Print replies as JSON (one line each with --follow).")]
