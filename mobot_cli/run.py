@@ -69,7 +69,7 @@ def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | 
         finally:
             for attachment in opened:
                 attachment.close()
-            record = recording.close(status, error)
+            record = recording.close(status, error, said=timeline.notices)
     return RunResult(out_dir=out_dir, record=record, expectations=recording.results)
 
 

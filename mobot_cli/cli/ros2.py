@@ -41,5 +41,7 @@ def report(env: Environment, bridges: list, quiet: bool) -> None:
             env.stderr.write(f"mobot: warning: {line}\n")
         if not quiet:
             dropped = f", {stats.dropped_samples} sample(s) dropped" if stats.dropped_samples else ""
+            refused = sum(n for _, n in stats.dropped_input)
+            dropped += f", {refused} cmd_vel sample(s) refused (see summary.json's notices)" if refused else ""
             env.stderr.write(f"mobot: ROS 2: {stats.messages} message(s) sent, {stats.commands} cmd_vel "
                              f"taken{dropped}\n")

@@ -262,7 +262,7 @@ class Session:
         self.history_file.close()
         if status != Status.FAULT:
             self.timeline.log()
-        return self.recording.close(status, error, self.step, live)
+        return self.recording.close(status, error, self.step, live, said=self.timeline.notices)
 
 
 def _healthy(world: World, name: str) -> bool:

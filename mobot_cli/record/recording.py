@@ -16,7 +16,7 @@ import platform
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Optional
+from typing import TYPE_CHECKING, Optional, Sequence
 
 from mobot_cli import __version__
 from mobot_cli.common.files import write_text_atomic
@@ -200,8 +200,8 @@ class Recording:
         self.last_step = sample.step
 
     def close(self, status: Status, error: str | None = None, steps: int | None = None,
-              live: LiveInfo | None = None) -> RunRecord:
-        """Close every writer and write summary.json last; returns the record.
+              live: LiveInfo | None = None, said: Sequence[str] = ()) -> RunRecord:
+        """Close every writer and write summary.json last (``said``: notices from during the run); returns the record.
 
         Raises OutputError when a file could not be written here (an earlier failure was
         raised when it happened); every writer is closed all the same."""
@@ -217,7 +217,7 @@ class Recording:
                 status, error = Status.ERROR, str(self.failure)
             elif self.plan.expectations and status == Status.OK:
                 self.results = self.checker.results()
-            record = self._record(status, error, self.last_step if steps is None else steps, live)
+            record = self._record(status, error, self.last_step if steps is None else steps, live, said)
             self._save(record)
         if self.failure is not raised:
             raise self.failure
@@ -230,7 +230,8 @@ class Recording:
         except OSError as exc:
             self._failed(exc)
 
-    def _record(self, status: Status, error: str | None, steps: int, live: LiveInfo | None) -> RunRecord:
+    def _record(self, status: Status, error: str | None, steps: int, live: LiveInfo | None,
+                said: Sequence[str] = ()) -> RunRecord:
         from mobot_cli.record.summary import ExpectationResult, Expectations, RunRecord, Versions
 
         wall = time.perf_counter() - self._started
@@ -246,7 +247,7 @@ class Recording:
             steps=steps, sim_time=_r(sim_time), wall_time=round(wall, 3),
             real_time_factor=round(sim_time / wall, 2) if wall > 0 else None,
             physics_rate_hz=plan.physics.rate_hz, log_rate_hz=_r(plan.physics.rate_hz / plan.log_every),
-            notices=list(plan.notices),
+            notices=[*plan.notices, *said],
             robots={key: life.record(life.deleted_at if life.deleted_at is not None else sim_time,
                                      plan.physics.rate_hz)
                     for key, life in self._lives.items() if life.last is not None},

@@ -11,6 +11,9 @@ the thread costs the world more than it saves, so it is not the default.
 ``/cmd_vel`` arrives on Cyclone's receive thread, waits in a deque, and enters the world
 through ``Timeline.command`` at the start of the next tick, on the world's thread, as a live
 `mobot cmd` does: it holds until the next one, or for ``cmd_vel_timeout`` when one is set.
+Any participant on the domain may publish there, so every sample is checked first
+(ros2/inputs.py): one that is malformed, not finite or beyond the limits is dropped, counted per
+topic in the stats and said once per topic in summary.json's notices.
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ from typing import Mapping
 
 from mobot_cli.errors import Location, UsageError
 from mobot_cli.plan import Plan, Ros2Settings
-from mobot_cli.ros2 import names
+from mobot_cli.ros2 import inputs, names
 from mobot_cli.timeline.loop import Timeline
 from mobot_cli.timeline.records import Record, Sample
 
@@ -51,6 +54,7 @@ class BridgeStats:
     busy_seconds: float  # CPU seconds spent publishing (the thread that did it)
     error: str | None = None
     left_out: tuple[str, ...] = ()  # robots that got no topics, and why
+    dropped_input: tuple[tuple[str, int], ...] = ()  # (topic, cmd_vel samples dropped: malformed, NaN, too fast)
 
 
 class Bridge:
@@ -88,6 +92,7 @@ class Bridge:
         self._published = 0.0  # monotonic time of the last batch
         self._topics = None
         self._dropped = self._commands = 0
+        self._drops = inputs.Drops()
         self._busy = 0.0
         self._error: str | None = None
         self.stats: BridgeStats | None = None  # set by close
@@ -99,7 +104,7 @@ class Bridge:
         from mobot_cli.ros2.publisher import RecordPublisher, Topics
 
         self._topics = Topics(self._participant, self.settings.node, self.settings.namespace, self.gid_size)
-        publisher = RecordPublisher(self._topics, self.rate, self._twist, self.settings.world_frame)
+        publisher = RecordPublisher(self._topics, self.rate, self._cmd_vel, self.settings.world_frame)
         publisher.arriving.update(timeline.robots)  # robots placed before the bridge opened
         self._publisher = publisher
         self._timeline = timeline
@@ -138,6 +143,7 @@ class Bridge:
     def _drain(self) -> None:
         """Apply the /cmd_vel messages that arrived since the last tick."""
         twists, timeline = self._twists, self._timeline
+        self._drops.say(timeline.notices)
         while twists:
             name, linear, angular = twists.popleft()
             if name in timeline.robots:  # it may have left since
@@ -156,17 +162,24 @@ class Bridge:
             self._thread.join(timeout=10.0)
             self._thread = None
         self._participant.close()
+        if self._timeline is not None:  # drops since the last tick: said before summary.json is written
+            self._drops.say(self._timeline.notices)
         topics = self._topics
         self.stats = BridgeStats(self.domain_id, self.settings.node, topics.sent if topics else 0,
                                  topics.unsent if topics else 0, self._dropped, self._commands, self._busy,
-                                 self._error, tuple(self._publisher.left_out) if self._publisher else ())
+                                 self._error, tuple(self._publisher.left_out) if self._publisher else (),
+                                 tuple(self._drops.by_topic().items()))
         return self.stats
 
     # -- other threads ------------------------------------------------------------------------
 
-    def _twist(self, name: str, linear: float, angular: float) -> None:
-        """A /cmd_vel for robot ``name`` (Cyclone's receive thread)."""
-        self._twists.append((name, linear, angular))
+    def _cmd_vel(self, name: str, topic: str, data: bytes) -> None:
+        """A /cmd_vel sample for robot ``name`` (Cyclone's receive thread): queued, or dropped and counted."""
+        checked = inputs.cmd_vel(data)
+        if isinstance(checked, str):
+            self._drops.count(topic, checked)
+        else:
+            self._twists.append((name, *checked))
 
     def _run(self, publisher) -> None:
         """The bridge's thread: publish records until told to stop."""

@@ -62,7 +62,8 @@ def type_hash(msgtype: str) -> str:
 
 def twist(data: bytes) -> tuple[float, float]:
     """(linear.x, angular.z) of a geometry_msgs/Twist in CDR; ValueError if it is not one."""
-    if len(data) < TWIST_FIELDS.size or data[1] != 1:  # little-endian plain CDR only, as ROS 2 sends
+    # Little-endian plain CDR only, as ROS 2 sends; a writer may pad it to 4 or 8 bytes, no more.
+    if not TWIST_FIELDS.size <= len(data) <= TWIST_FIELDS.size + 4 or data[1] != 1:
         raise ValueError("not a little-endian CDR geometry_msgs/Twist")
     lx, _, _, _, _, az = TWIST_FIELDS.unpack_from(data)
     return lx, az
@@ -141,11 +142,11 @@ class _Robot:
 class RecordPublisher:
     """Turns records into messages: robots get their topics with their first sample."""
 
-    def __init__(self, topics: Topics, rate_hz: int, on_twist: Callable[[str, float, float], None],
+    def __init__(self, topics: Topics, rate_hz: int, on_cmd_vel: Callable[[str, str, bytes], None],
                  world_frame: bool = True):
         self.topics, self.rate = topics, rate_hz
         self.world_frame = world_frame  # publish world -> <prefix>odom (off: a localizer owns the odom's parent)
-        self.on_twist = on_twist  # (robot, linear, angular), called on Cyclone's thread
+        self.on_cmd_vel = on_cmd_vel  # (robot, topic, CDR bytes as they came), called on Cyclone's thread
         self.arriving: dict[str, RobotPlan] = {}
         self.robots: dict[str, _Robot] = {}
         self.left_out: list[str] = []  # robots with no ROS 2 topics, and why
@@ -233,15 +234,9 @@ class RecordPublisher:
         self.statics[plan.name] = statics if self.world_frame else statics[1:]
         self.publish_statics(stamp)
         if plan.drive is not None:
-            name = plan.name
-
-            def take(data: bytes) -> None:
-                try:
-                    self.on_twist(name, *twist(data))
-                except ValueError:
-                    pass  # not a Twist we can read: ignored, as a ROS subscriber would fail to decode it
-
-            self.topics.subscribe(names.join(namespace, "cmd_vel"), TWIST, take)
+            name, topic = plan.name, names.join(namespace, "cmd_vel")
+            # The bytes go to the bridge as they came: it checks them (ros2/inputs.py) and counts what it drops.
+            self.topics.subscribe(topic, TWIST, lambda data: self.on_cmd_vel(name, topic, data))
 
     def leave(self, name: str) -> None:
         """A robot left: its topics leave the graph, its frames leave /tf_static."""

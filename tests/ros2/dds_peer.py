@@ -8,6 +8,8 @@ one JSON document:
     python3 tests/ros2/dds_peer.py graph SECONDS          every endpoint and participant seen
     python3 tests/ros2/dds_peer.py take TOPIC TYPE SECONDS  the samples of one topic, as dicts
     python3 tests/ros2/dds_peer.py drive TOPIC LINEAR ANGULAR SECONDS  publish a Twist at 20 Hz
+    python3 tests/ros2/dds_peer.py send TOPIC HEX...     publish each payload's bytes as they are
+                                                         (a hostile or broken participant)
 """
 
 from __future__ import annotations
@@ -145,12 +147,38 @@ def drive(topic: str, linear: float, angular: float, seconds: float) -> dict:
     return {"sent": sent, "matched": len(writer.get_matched_subscriptions())}
 
 
+def send(topic: str, payloads: list[bytes], wait: float = 10.0) -> dict:
+    """Publish raw CDR ``payloads`` on a Twist ``topic`` once a reader matches, 0.1 s apart."""
+    from cyclonedds._clayer import ddspy_write
+    from cyclonedds.domain import DomainParticipant
+    from cyclonedds.pub import DataWriter
+    from cyclonedds.qos import Policy, Qos
+    from cyclonedds.topic import Topic
+
+    from mobot_cli.ros2 import idl
+
+    dp = DomainParticipant(int(os.environ.get("ROS_DOMAIN_ID", "0")))
+    writer = DataWriter(dp, Topic(dp, topic, idl.Twist), qos=Qos(Policy.Reliability.Reliable(max_blocking_time=10**9)))
+    end = time.monotonic() + wait
+    while not writer.get_matched_subscriptions() and time.monotonic() < end:
+        time.sleep(0.05)
+    time.sleep(1.0)  # the reader's side of the match may come later: samples before it are lost
+    written = []  # per payload: whether Cyclone took it (it refuses some bytes no Twist can be)
+    for data in payloads:
+        written.append(ddspy_write(writer._ref, data) >= 0)  # noqa: SLF001 - bytes as they are
+        time.sleep(0.1)
+    time.sleep(0.5)  # reliable: let the last ones be acknowledged before the participant goes
+    return {"written": written, "matched": len(writer.get_matched_subscriptions())}
+
+
 if __name__ == "__main__":
     verb, args = sys.argv[1], sys.argv[2:]
     if verb == "graph":
         result = graph(float(args[0]))
     elif verb == "take":
         result = take(args[0], args[1], float(args[2]), transient_local=len(args) > 3)
+    elif verb == "send":
+        result = send(args[0], [bytes.fromhex(h) for h in args[1:]])
     else:
         result = drive(args[0], float(args[1]), float(args[2]), float(args[3]))
     print(json.dumps(result, default=lambda o: list(o) if isinstance(o, (bytes, bytearray)) else str(o)))
