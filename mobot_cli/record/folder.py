@@ -67,9 +67,13 @@ def _missing(run: RunFolder, record: RunRecord, result: dict[str, Any]) -> list[
                      if not (folder / "odom" / f"{robot}.csv").is_file()]
     problems += [f"{sensor.file} is missing" for robot in record.robots.values() for sensor in robot.sensors
                  if sensor.readings and not (folder / sensor.file).is_file()]
+    problems += [f"odom/{robot}.csv has {extent['partial_rows']} damaged row(s)"
+                 for robot, extent in result["csv"].items() if extent["partial_rows"]]
     bag = result["bag"]
     if bag is not None and not bag["complete"]:
         problems.append("bag/ has no metadata.yaml: it was not closed")
+    elif bag is not None and bag["file"] and not bag.get("footer"):
+        problems.append(f"bag/{bag['file']} ends before its footer: it is damaged or cut short")
     return problems
 
 
@@ -78,7 +82,7 @@ def csv_extents(run: RunFolder) -> dict[str, dict[str, Any]]:
     out = {}
     for path in run.odometry():
         header, rows = run.csv_rows(path)
-        whole = [row for row in rows if len(row) == 16]
+        whole = [row for row in rows if len(row) == 16 and all(_time(v) is not None for v in row)]
         out[path.stem] = {"rows": len(whole), "last_t": _time(whole[-1][0]) if whole else None,
                           "partial_rows": len(rows) - len(whole)}
     return out

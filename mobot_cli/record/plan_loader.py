@@ -18,7 +18,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from mobot_cli.errors import Location, MobotError, UsageError
+from mobot_cli.errors import Location, MobotError
 
 _PACKAGE_PARENT = str(Path(__file__).resolve().parent.parent.parent)  # the folder holding mobot_cli/
 WALL_FACTOR = 6  # CPU time is the limit; wall time only catches a load that waits (busy machines wait too)
@@ -28,13 +28,13 @@ _SANDBOX_FAULTS = ("OutsideRoots", "Forbidden", "LimitExceeded", "Refused")
 _BOOT = "import sys; sys.path[0] = {!r}; from mobot_cli.record.plan_loader import main; sys.exit(main(sys.argv[1:]))"
 
 
-class PlanRefused(UsageError):
+class PlanRefused(MobotError):
     """The sandbox refused what a run folder's scenario.yaml names, or a limit stopped resolving it."""
 
 
 def load_plan(folder: Path, limits):
-    """The Plan of ``folder/scenario.yaml``; PlanRefused when the sandbox refused it or a limit
-    stopped it, MobotError (a notice for the caller) when it does not resolve."""
+    """The Plan of ``folder/scenario.yaml``; PlanRefused when the sandbox refused it, a limit
+    stopped it or it does not resolve."""
     wall = WALL_FACTOR * limits.plan_seconds
     command = [sys.executable, "-c", _BOOT.format(_PACKAGE_PARENT), str(folder.resolve()),
                str(limits.plan_memory), str(limits.plan_seconds)]
@@ -52,9 +52,11 @@ def load_plan(folder: Path, limits):
     if kind == "ok":
         return payload
     name, message = payload
+    message = " ".join(message.split())  # one line, whatever the loaders said
     if name in _SANDBOX_FAULTS:
         raise PlanRefused(f"refused: {message}", location=where, hint=hint)
-    raise MobotError(message)
+    raise PlanRefused(f"does not resolve: {message}", location=where,
+                      hint="A run folder's robots and world must load as they did when it was written.")
 
 
 def main(argv: list[str]) -> int:
@@ -76,12 +78,13 @@ def main(argv: list[str]) -> int:
 
     roots = [folder, *ResourceResolver(folder).roots]
     readable = [*roots, cache_dir(), *(p for p in sys.path[1:] if p), sys.prefix, sys.base_prefix]
-    _guard_opens([str(Path(p).resolve()) for p in readable])
+    refusals = _guard_opens([str(Path(p).resolve()) for p in readable])
     try:
         with sandbox.confined(roots):
             answer = ("ok", prepare(folder / "scenario.yaml").plan)
     except MobotError as exc:
-        answer = ("error", (type(exc).__name__, str(exc)))
+        refused = refusals or _refused(exc, (sandbox.OutsideRoots, sandbox.Forbidden, sandbox.LimitExceeded))
+        answer = ("error", ("Refused" if refused else type(exc).__name__, str(exc)))
     except MemoryError:
         answer = ("error", ("LimitExceeded", f"it needs more than {memory >> 20} MiB of memory"))
     except RecursionError:
@@ -94,21 +97,38 @@ def main(argv: list[str]) -> int:
     return 0
 
 
-def _guard_opens(readable: list[str]) -> None:
-    """Refuse (PermissionError) to open a file outside ``readable`` and the system's folders, or a FIFO."""
+def _refused(exc: BaseException, kinds: tuple[type, ...]) -> bool:
+    """True when the sandbox refused something on the way to ``exc`` (loaders wrap its errors)."""
+    seen: BaseException | None = exc
+    for _ in range(20):
+        if seen is None:
+            return False
+        if isinstance(seen, kinds) or "a live spawn may" in str(seen):
+            return True
+        seen = seen.__cause__ or seen.__context__
+    return False
+
+
+def _guard_opens(readable: list[str]) -> list[str]:
+    """Refuse (PermissionError) to open a file outside ``readable`` and the system's folders, or a
+    FIFO; the refused paths are listed in the list returned (a loader may turn the error into its own)."""
     allowed = tuple(p.rstrip("/") + "/" for p in readable) + _SYSTEM
+    refusals: list[str] = []
 
     def hook(event: str, args: tuple) -> None:
         if event != "open" or not isinstance(args[0], (str, bytes, os.PathLike)):
             return
         path = os.path.realpath(os.fsdecode(args[0]))
         if not (path + "/").startswith(allowed):
+            refusals.append(path)
             raise PermissionError(f"{path} is outside the folders a run folder's scenario may read")
         try:
             mode = os.stat(path).st_mode
         except OSError:
             return
         if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)) and not path.startswith(("/dev/", "/proc/", "/sys/")):
+            refusals.append(path)
             raise PermissionError(f"{path} is not a regular file")
 
     sys.addaudithook(hook)
+    return refusals

@@ -141,22 +141,15 @@ class RunFolder:
             raise self._fault(SUMMARY, "is not a record mobot wrote")
         return record
 
-    def plan(self, notices: list[str], missing: str, failed: str):
-        """The plan resolved again from scenario.yaml, confined; None (with a notice) when that fails."""
-        from mobot_cli.errors import MobotError
-        from mobot_cli.record.plan_loader import PlanRefused, load_plan
+    def plan(self, notices: list[str], missing: str):
+        """The plan resolved again from scenario.yaml, confined; None (with a notice) when there is
+        none, RunFolderError when it is refused or does not resolve."""
+        from mobot_cli.record.plan_loader import load_plan
 
-        scenario = self.checked("scenario.yaml", self.limits.scenario)
-        if scenario is None:
+        if self.checked("scenario.yaml", self.limits.scenario) is None:
             notices.append(f"{self.path / 'scenario.yaml'} is missing: {missing}")
             return None
-        try:
-            return load_plan(self.path, self.limits)
-        except PlanRefused:
-            raise
-        except MobotError as exc:
-            notices.append(f"{failed}: {exc}")
-            return None
+        return load_plan(self.path, self.limits)
 
     def csv_rows(self, relative: str | Path) -> tuple[list[str], list[list[str]]]:
         """A CSV file's header and rows as text (a row cut short by a killed run included)."""

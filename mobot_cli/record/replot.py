@@ -57,7 +57,7 @@ def replot(folder: Path, out: Path | None = None) -> PlotResult:
         for track in tracks:
             track.odom = []
         result.notices.append(f"{len(tracks)} paths: odometry (dashed) is left out above {MAX_ODOMETRY_TRACKS}")
-    plan = runs[0].plan(result.notices, "drawn without the floor plan", "drawn without the floor plan")
+    plan = runs[0].plan(result.notices, "drawn without the floor plan")
     world = plan.world if plan is not None else None
     if plan is not None and not prefix:
         _sweep(plan, tracks)

@@ -14,10 +14,17 @@ from pathlib import Path
 
 import numpy as np
 
-from mobot_cli.errors import MobotError, UsageError
+from mobot_cli.errors import Location, MobotError, UsageError
 from mobot_cli.plan import Plan, RobotPlan
 from mobot_cli.record.bagtopics import Joints
-from mobot_cli.record.reader import NOT_A_RUN_HINT, RunFolder, is_run_folder, is_sweep_folder, sweep_runs
+from mobot_cli.record.reader import (
+    NOT_A_RUN_HINT,
+    RunFolder,
+    RunFolderError,
+    is_run_folder,
+    is_sweep_folder,
+    sweep_runs,
+)
 from mobot_cli.record.summary import RunRecord
 from mobot_cli.view.readings import Cloud
 
@@ -83,7 +90,7 @@ def read_run(folder: Path) -> RunView:
     if not tracks:
         raise UsageError(f"'{folder}' holds no odometry rows to show",
                          hint="Record with log.formats including csv, and let the run start.")
-    plan = run.plan(notices, "no world, and robots drawn as boxes", "no world, and robots drawn as boxes")
+    plan = run.plan(notices, "no world, and robots drawn as boxes")
     _attach(tracks, _robot_plans(plan), record)
     bag = run.bag_folder()
     if bag is not None and (bag / "metadata.yaml").is_file():
@@ -143,9 +150,9 @@ def _read_bag(bag: Path, tracks: list[Track], notices: list[str]) -> None:
         by_ns.setdefault(track.namespace, []).append(track)
     try:
         topics = read_topics(bag, set(by_ns))
-    except MobotError as exc:  # a bag the view cannot read still leaves the CSV paths
-        notices.append(f"{bag} could not be read ({exc}): wheels are drawn without turning")
-        return
+    except MobotError as exc:  # a closed bag that does not read is damaged: refused like any damaged file
+        raise RunFolderError(f"bag/ does not read ({exc})", location=Location(file=bag.parent),
+                             hint="The run folder is damaged or was not written by mobot.") from None
     _attach_topics(topics, by_ns, _roots(bag.parent))
 
 
