@@ -1,7 +1,7 @@
 """A live spawn request to a RobotPlan, through the same RobotResolver scenario robots use.
 
-Loading (xacro, checks, meshes) runs in a loader process (worker.py), confined to the
-folders the request may read (assets/sandbox.py); naming, the reference frame and the spawn
+Loading (xacro, checks, meshes, their bounds and their convex hulls: hulls.py) runs in a
+loader process (worker.py), confined to the folders the request may read (assets/sandbox.py); naming, the reference frame and the spawn
 itself happen on the world's thread, against the robots alive at that moment.
 """
 
@@ -19,6 +19,7 @@ from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.common.meshfile import count_faces
 from mobot_cli.common.transforms import compose_poses, quat_from_rpy
 from mobot_cli.errors import DescriptionError, MobotError, ResourceError, SpawnError
+from mobot_cli.live.hulls import hulled
 from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.live.schema import Spawn, normalize_namespace
 from mobot_cli.plan import RobotPlan, SpawnPose
@@ -67,6 +68,8 @@ def load_plan(request: Spawn, rate_hz: int, bounds: tuple[int, int] | None = Non
     _check_size(plan)
     if bounds is not None:
         check_bounds(plan, *bounds)
+    plan = dataclasses.replace(plan, urdf=hulled(plan.urdf))  # built here, not on the world's thread
+    urdf_path(plan.urdf)  # written here too: the world's thread finds the file PyBullet loads
     notices = resolver.notices if label is None else [n.replace(description, label) for n in resolver.notices]
     return plan, [_short(notice, MAX_NOTICE_CHARS) for notice in notices[:MAX_NOTICES]]
 
