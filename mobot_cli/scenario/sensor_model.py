@@ -25,7 +25,6 @@ from mobot_cli.scenario.limits import MAX_COORDINATE, MAX_RATE_HZ, Float, Int, N
 MAX_LABEL_LENGTH = 256  # a sensor key, topic, frame, link or collision name
 KEY_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_.-]*(/[A-Za-z_][A-Za-z0-9_.-]*)*$")
 TOPIC_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$")
-SENSOR_TYPES = ("ray", "gpu_ray", "lidar", "gpu_lidar", "imu", "contact")
 LIDAR_FIELDS = ("samples", "min_angle", "max_angle", "vertical_samples", "vertical_min_angle",
                 "vertical_max_angle", "range_min", "range_max", "range_resolution")
 

@@ -28,15 +28,14 @@ from typing import Callable, Iterable
 
 from mobot_cli.sweep.guard import die_with_sweep
 from mobot_cli.sweep.server import context, sigint_held, start_tracker
-from mobot_cli.sweep.task import Task, TaskResult, failed, run_task
+from mobot_cli.sweep.task import RunTask, Task, TaskResult, failed, run_task
 
-Runner = Callable[[Task], TaskResult]
 OnDone = Callable[[TaskResult], None]
 POLL_S = 0.5  # how often a wait wakes up to look at deadlines when none is closer
 READY = "ready"  # a worker's first message: imports done, the timeout clock may start
 
 
-def _worker_main(conn: Connection, runner: Runner, sweep_pid: int) -> None:
+def _worker_main(conn: Connection, runner: RunTask, sweep_pid: int) -> None:
     """A worker's life: take tasks from the pipe until told to stop (None), or the sweep ends."""
     # Ctrl-C reaches the whole process group; the parent decides what stops, not each worker.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -65,7 +64,7 @@ def _worker_main(conn: Connection, runner: Runner, sweep_pid: int) -> None:
 class _Worker:
     """One worker process, its pipe end and the task it is running."""
 
-    def __init__(self, ctx, runner: Runner):
+    def __init__(self, ctx, runner: RunTask):
         self.conn, child = ctx.Pipe()
         self.process = ctx.Process(target=_worker_main, args=(child, runner, os.getpid()), daemon=True)
         with sigint_held():
@@ -95,7 +94,7 @@ class LocalExecutor:
 
     name = "local"
 
-    def __init__(self, jobs: int, timeout: float | None = None, runner: Runner = run_task):
+    def __init__(self, jobs: int, timeout: float | None = None, runner: RunTask = run_task):
         self.jobs = max(1, jobs)
         self.timeout = timeout
         self.runner = runner

@@ -16,9 +16,8 @@ import time
 from typing import Callable
 
 from mobot_cli.errors import Location, UsageError
-from mobot_cli.sweep.task import Task, TaskResult, failed, run_task_elsewhere
+from mobot_cli.sweep.task import RunTask, Task, TaskResult, failed, run_task_elsewhere
 
-Runner = Callable[[Task], TaskResult]
 POLL_S = 0.5
 REACH_TIMEOUT_S = 5.0
 
@@ -29,7 +28,7 @@ class RayExecutor:
     name = "ray"
 
     def __init__(self, jobs: int, timeout: float | None = None, address: str | None = None,
-                 runner: Runner = run_task_elsewhere):
+                 runner: RunTask = run_task_elsewhere):
         self.jobs, self.timeout, self.address, self.runner = max(1, jobs), timeout, address, runner
         self._started_here: bool | None = None  # None: not connected yet
 

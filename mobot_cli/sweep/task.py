@@ -11,7 +11,7 @@ import tempfile
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Callable
 
 from mobot_cli.errors import MobotError, SimulationFault
 
@@ -45,6 +45,10 @@ class TaskResult:
     expect_passed: int = 0
     expect_failed: int = 0
     files: dict[str, bytes] | None = None  # the run folder, when it was made on another machine
+
+
+# What an executor calls for each task: run_task here, run_task_elsewhere on Ray, a test's stand-in.
+RunTask = Callable[[Task], TaskResult]
 
 
 def failed(index: int, failure: str, reason: str, wall_time: float = 0.0) -> TaskResult:

@@ -36,8 +36,8 @@ Quat = Annotated[Optional[tuple[float, float, float, float]], typer.Option(
     "--quat", metavar="X Y Z W", help="Orientation as a quaternion instead of -R -P -Y.")]
 
 
-def pose_fields(x: float, y: float, z: Optional[float], roll: float, pitch: float, yaw: float,
-                quat: Optional[tuple[float, float, float, float]]) -> dict:
+def requested_pose(x: float, y: float, z: Optional[float], roll: float, pitch: float, yaw: float,
+                   quat: Optional[tuple[float, float, float, float]]) -> dict:
     """The request's pose from the pose options (z None: rest on the floor); UsageError for both
     a quaternion and roll/pitch/yaw."""
     if quat is not None and (roll or pitch or yaw):

@@ -88,7 +88,7 @@ def teleport(
     json_: common.Json = False,
 ) -> int:
     """Move a robot to a pose (SetEntityState), checked for collisions like a spawn."""
-    pose = common.pose_fields(x, y, z, roll, pitch, yaw, quat)
+    pose = common.requested_pose(x, y, z, roll, pitch, yaw, quat)
     numbers = [x, y, roll, pitch, yaw, *(quat or ()), *linear, *angular, *(() if z is None else (z,))]
     if not all(math.isfinite(v) for v in numbers):
         raise UsageError("teleport takes finite numbers: NaN and infinity are not a pose or a twist")

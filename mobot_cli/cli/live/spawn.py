@@ -42,7 +42,7 @@ def spawn(
     if len(sources) != 1:
         raise UsageError("give exactly one of --file, --string and --stdin",
                          hint="For example: mobot spawn r1 --file mobot -x 1.0 -y 2.0")
-    pose = common.pose_fields(x, y, z, roll, pitch, yaw, quat)
+    pose = common.requested_pose(x, y, z, roll, pitch, yaw, quat)
     text = env.stdin.read() if stdin else string
     fields = {"description": file, "urdf": text, "pose": pose, "args": parse_mappings(mappings or []),
               "namespace": namespace, "reference_frame": reference_frame, "allow_renaming": allow_renaming,
