@@ -62,8 +62,10 @@ def _hull_file(path: Path) -> Path | None:
 
 
 def _make(path: Path) -> Path | None:
-    from scipy.spatial import ConvexHull, QhullError
-
+    try:  # a loader at a low --load-memory may not fit scipy: the mesh goes as it is (within --max-faces)
+        from scipy.spatial import ConvexHull, QhullError
+    except (ImportError, MemoryError):
+        return None
     try:
         parts = _obj_parts(path) if path.suffix.lower() == ".obj" else [_stl_points(path)]
         lines: list[str] = []

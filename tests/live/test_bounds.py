@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from mobot_cli.cli import invoke
 from mobot_cli.common.meshfile import count_faces
 from tests.live.live_server import LiveProcess
 
@@ -111,3 +112,10 @@ def test_spawns_beyond_the_robot_bound_are_refused(bounded, tmp_path):
         client.request("spawn", name="again", urdf=urdf(), pose={"y": -10.0})
         for name in [f"r{i}" for i in range(1, MAX_ROBOTS - alive)] + ["again"]:
             client.delete(name)
+
+
+@pytest.mark.parametrize("option", ["--max-faces", "--max-links", "--max-robots"])
+def test_a_bound_below_one_is_a_usage_error(option):
+    outcome = invoke(["serve", option, "0"])
+    assert outcome.exit_code == 2 and "Traceback" not in outcome.stderr
+    assert outcome.stderr.startswith(f"mobot: error: {option} 0 must be at least 1"), outcome.stderr

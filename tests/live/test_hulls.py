@@ -9,8 +9,10 @@ from pathlib import Path
 import numpy as np
 import pybullet as p
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
-from mobot_cli.common.meshfile import read_mesh
+from mobot_cli.common.meshfile import count_faces, read_mesh
 from mobot_cli.live.hulls import MAX_HULL_VERTICES, hulled
 from tests.live.test_bounds import sheet
 
@@ -90,3 +92,14 @@ def test_static_links_and_collada_keep_their_meshes(tmp_path):
     dae = tmp_path / "m.dae"
     dae.write_text("<COLLADA/>")
     assert hulled(urdf(dae)) == urdf(dae)
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(data=st.binary(max_size=400), suffix=st.sampled_from([".obj", ".stl", ".dae"]))
+def test_any_bytes_are_counted_or_kept_never_a_crash(tmp_path, data, suffix):
+    """What a client's mesh file holds is untrusted: counting and hulling it never raise."""
+    path = tmp_path / f"m{suffix}"
+    path.write_bytes(data)
+    assert count_faces(str(path)) >= 0
+    text = urdf(path)
+    assert hulled(text) == text or ".obj" in hulled(text)
