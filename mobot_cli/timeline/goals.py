@@ -20,7 +20,7 @@ from mobot_cli.common.transforms import Planar
 from mobot_cli.plan import GoalStep, TwistStep
 from mobot_cli.sim.bullet.world import World
 from mobot_cli.sim.state import RobotState
-from mobot_cli.timeline.pursuit import Pose, Pursuit
+from mobot_cli.timeline.pursuit import PlanarPose, Pursuit
 
 CONTROL_RATE_HZ = 20  # nav2's controller_frequency default
 BLOCKED_SECONDS = 1.0
@@ -171,9 +171,9 @@ class Driver:
         self.current, self.pursuit, self.lap_ends = None, None, []
         self.wake = step
 
-    def _pose(self, state: RobotState, goal: GoalStep) -> Pose:
+    def _pose(self, state: RobotState, goal: GoalStep) -> PlanarPose:
         """The pose the goal's controller trusts: odometry mapped into the world, or the truth."""
         if goal.control.localization == "ground_truth":
-            return Pose(state.true_x, state.true_y, state.true_yaw)
+            return PlanarPose(state.true_x, state.true_y, state.true_yaw)
         x, y = self.odom(state.odom_x, state.odom_y)
-        return Pose(x, y, self.odom.yaw + state.odom_yaw)
+        return PlanarPose(x, y, self.odom.yaw + state.odom_yaw)

@@ -51,7 +51,7 @@ HOLD_GAIN = 1.0  # 1/s: forward speed per metre the goal lies ahead while turnin
 
 
 @dataclass
-class Pose:
+class PlanarPose:
     """Where the robot thinks it is: world x, y (m) and yaw (rad)."""
 
     x: float
@@ -89,7 +89,7 @@ class Pursuit:
                 return k
         return len(route) - 1
 
-    def update(self, pose: Pose) -> tuple[float, float]:
+    def update(self, pose: PlanarPose) -> tuple[float, float]:
         """The twist for this control tick (both zero once ``done``)."""
         if not self.at_end:
             self._advance(pose)
@@ -104,7 +104,7 @@ class Pursuit:
             return self._limit(0.0, 0.0)
         return self._pursue(pose)
 
-    def _advance(self, pose: Pose) -> None:
+    def _advance(self, pose: PlanarPose) -> None:
         """Carry the progress forward, across every stop vertex the robot has arrived on."""
         last, tol = len(self.route) - 1, self.control.tolerance
         while self.seg < last:
@@ -121,7 +121,7 @@ class Pursuit:
             self.seg = self.passed = stop
         self.at_end = True
 
-    def _progress(self, pose: Pose, stop: int) -> None:
+    def _progress(self, pose: PlanarPose, stop: int) -> None:
         """Move ``seg`` forward to the segment nearest the robot, up to the stop vertex."""
         best, best_d = self.seg, _segment_distance(pose, self.route[self.seg], self.route[self.seg + 1])
         for k in range(self.seg + 1, stop):
@@ -132,7 +132,7 @@ class Pursuit:
             self.seg = best
             self.passed = max(self.passed, best)
 
-    def _pursue(self, pose: Pose) -> tuple[float, float]:
+    def _pursue(self, pose: PlanarPose) -> tuple[float, float]:
         c = self.control
         stop = self.stop
         lookahead = min(max(abs(self.v) * LOOKAHEAD_TIME, LOOKAHEAD[0]), LOOKAHEAD[1])
@@ -154,7 +154,7 @@ class Pursuit:
             w = math.copysign(c.max_angular, w)
         return self._limit(v, w)
 
-    def _lookahead(self, pose: Pose, distance: float, stop: int) -> tuple[Point, float]:
+    def _lookahead(self, pose: PlanarPose, distance: float, stop: int) -> tuple[Point, float]:
         """The point ``distance`` along the route from the robot's projection (not past ``stop``),
         and how far the stop vertex is along the route."""
         route = self.route
@@ -203,14 +203,14 @@ def _turn(a: Point, b: Point, c: Point) -> float:
     return abs(_wrap(h2 - h1))
 
 
-def _in_frame(pose: Pose, point: Point) -> Point:
+def _in_frame(pose: PlanarPose, point: Point) -> Point:
     """``point`` in the robot's frame (x ahead, y to the left)."""
     dx, dy = point[0] - pose.x, point[1] - pose.y
     c, s = math.cos(pose.yaw), math.sin(pose.yaw)
     return c * dx + s * dy, -s * dx + c * dy
 
 
-def _projection(pose: Pose, a: Point, b: Point) -> float:
+def _projection(pose: PlanarPose, a: Point, b: Point) -> float:
     """Where the robot's nearest point on segment a-b lies, 0 (at a) to 1 (at b)."""
     dx, dy = b[0] - a[0], b[1] - a[1]
     length2 = dx * dx + dy * dy
@@ -219,6 +219,6 @@ def _projection(pose: Pose, a: Point, b: Point) -> float:
     return min(1.0, max(0.0, ((pose.x - a[0]) * dx + (pose.y - a[1]) * dy) / length2))
 
 
-def _segment_distance(pose: Pose, a: Point, b: Point) -> float:
+def _segment_distance(pose: PlanarPose, a: Point, b: Point) -> float:
     t = _projection(pose, a, b)
     return math.hypot(pose.x - (a[0] + t * (b[0] - a[0])), pose.y - (a[1] + t * (b[1] - a[1])))

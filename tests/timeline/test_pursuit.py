@@ -8,13 +8,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mobot_cli.plan import GoalControl
-from mobot_cli.timeline.pursuit import MIN_APPROACH_SPEED, Pose, Pursuit
+from mobot_cli.timeline.pursuit import MIN_APPROACH_SPEED, PlanarPose, Pursuit
 
 DT = 0.05
 CONTROL = GoalControl()
 
 
-def drive(route, pose: Pose, yaw=None, ticks: int = 4000):
+def drive(route, pose: PlanarPose, yaw=None, ticks: int = 4000):
     """Run the controller on a unicycle that does exactly what it is told; (pursuit, poses, twists)."""
     pursuit = Pursuit([(pose.x, pose.y), *route], CONTROL, DT, yaw=yaw)
     poses, twists = [], []
@@ -23,7 +23,7 @@ def drive(route, pose: Pose, yaw=None, ticks: int = 4000):
         twists.append((v, w))
         if pursuit.done:
             break
-        pose = Pose(pose.x + v * math.cos(pose.yaw) * DT, pose.y + v * math.sin(pose.yaw) * DT, pose.yaw + w * DT)
+        pose = PlanarPose(pose.x + v * math.cos(pose.yaw) * DT, pose.y + v * math.sin(pose.yaw) * DT, pose.yaw + w * DT)
         poses.append(pose)
     return pursuit, poses, twists
 
@@ -35,9 +35,9 @@ coordinate = st.floats(-5, 5)
 @given(x=coordinate, y=coordinate, heading=st.floats(-math.pi, math.pi), gx=coordinate, gy=coordinate,
        yaw=st.one_of(st.none(), st.floats(-math.pi, math.pi)))
 def test_every_goal_is_reached_within_the_limits(x, y, heading, gx, gy, yaw):
-    pursuit, poses, twists = drive([(gx, gy)], Pose(x, y, heading), yaw)
+    pursuit, poses, twists = drive([(gx, gy)], PlanarPose(x, y, heading), yaw)
     assert pursuit.done
-    end = poses[-1] if poses else Pose(x, y, heading)
+    end = poses[-1] if poses else PlanarPose(x, y, heading)
     assert math.hypot(end.x - gx, end.y - gy) <= CONTROL.tolerance
     if yaw is not None:
         assert abs(math.remainder(end.yaw - yaw, math.tau)) <= CONTROL.yaw_tolerance + 1e-9
@@ -51,7 +51,7 @@ def test_every_goal_is_reached_within_the_limits(x, y, heading, gx, gy, yaw):
 
 def test_sharp_corners_are_driven_onto_and_gentle_ones_cut():
     zigzag = [(2.0, 0.0), (2.0, 1.0), (3.0, 1.2), (4.0, 1.2)]  # 90 deg at (2, 0); 11 deg at (3, 1.2)
-    pursuit, poses, _ = drive(zigzag, Pose(0.0, 0.0, 0.0))
+    pursuit, poses, _ = drive(zigzag, PlanarPose(0.0, 0.0, 0.0))
     assert pursuit.done
     assert min(math.hypot(p.x - 2.0, p.y) for p in poses) <= CONTROL.tolerance
     passing = min(math.hypot(p.x - 3.0, p.y - 1.2) for p in poses)
