@@ -168,6 +168,7 @@ class _Watcher:
         from mobot_cli.view.live import LiveView
         from mobot_cli.view.page import open_page, url
 
+        self.plan = plan  # the replay draws the world from it: the user's own, not read back confined
         self.env, self.server = env, open_page(port, label=f"mobot run: {plan.name}")
         self.url = url(self.server)
         self.live = LiveView(self.server, plan)
@@ -187,7 +188,7 @@ class _Watcher:
         try:
             self.server.scene.reset()
             self.live.clock.content = "the run finished: replay it below"
-            replay = Replay(self.server, [out_dir], read_run(out_dir),
+            replay = Replay(self.server, [out_dir], read_run(out_dir, self.plan),
                             on_notice=lambda line: output.notices(self.env, [line]), robot_list=self.live.robot_list)
             output.view_held(self.env, self.url, out_dir)
             wait_for_interrupt()

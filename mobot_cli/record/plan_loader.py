@@ -46,7 +46,7 @@ def load_plan(folder: Path, limits):
         raise PlanRefused(f"resolving it took more than {wall:g} s", location=where, hint=hint) from None
     if done.returncode != 0 or not done.stdout:
         why = (f"more than {limits.plan_seconds:g} s of CPU time" if done.returncode == -24  # SIGXCPU
-               else f"an exit code of {done.returncode}")
+               else f"an exit code of {done.returncode}" + _last_line(done.stderr))
         raise PlanRefused(f"resolving it stopped with {why}", location=where, hint=hint)
     kind, payload = pickle.loads(done.stdout)
     if kind == "ok":
@@ -57,6 +57,11 @@ def load_plan(folder: Path, limits):
         raise PlanRefused(f"refused: {message}", location=where, hint=hint)
     raise PlanRefused(f"does not resolve: {message}", location=where,
                       hint="A run folder's robots and world must load as they did when it was written.")
+
+
+def _last_line(stderr: bytes) -> str:
+    lines = stderr.decode("utf-8", "replace").strip().splitlines()
+    return f" ({' '.join(lines[-1].split())[:200]})" if lines else ""
 
 
 def main(argv: list[str]) -> int:

@@ -91,7 +91,10 @@ class RunFolder:
             raise self._fault(relative, "is a broken or looping symlink") from None
         if not resolved.is_relative_to(self.root):
             raise self._fault(relative, "points outside the run folder")
-        info = resolved.stat()
+        try:
+            info = resolved.stat()
+        except OSError as exc:
+            raise self._fault(relative, f"cannot be read ({exc.strerror})") from None
         self._check_stat(relative, info, limit)
         return resolved
 
@@ -104,9 +107,12 @@ class RunFolder:
             fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOCTTY", 0))
         except OSError as exc:
             raise self._fault(relative, f"cannot be read ({exc.strerror})") from None
-        with os.fdopen(fd, "rb") as f:
-            self._check_stat(relative, os.fstat(fd), limit)  # the file opened, not the one looked at
-            data = f.read(limit + 1)
+        try:
+            with os.fdopen(fd, "rb") as f:
+                self._check_stat(relative, os.fstat(fd), limit)  # the file opened, not the one looked at
+                data = f.read(limit + 1)
+        except OSError as exc:
+            raise self._fault(relative, f"cannot be read ({exc.strerror})") from None
         if len(data) > limit:
             raise self._too_large(relative, limit)
         return data

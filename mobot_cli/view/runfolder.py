@@ -81,8 +81,11 @@ def runs_of(folder: Path) -> list[Path]:
     raise UsageError(f"'{folder}' is neither a run folder nor a sweep folder with runs", hint=NOT_A_RUN_HINT)
 
 
-def read_run(folder: Path) -> RunView:
-    """Read one run folder for the view (UsageError when it has no odometry to show)."""
+def read_run(folder: Path, plan: Plan | None = None) -> RunView:
+    """Read one run folder for the view (UsageError when it has no odometry to show).
+
+    ``plan``: the plan the run was made from, when this process made it (`mobot run --view`): the
+    user's own scenario is not resolved again, confined, as an untrusted folder's is."""
     notices: list[str] = []
     run = RunFolder.open(folder)
     record = run.summary()
@@ -90,7 +93,7 @@ def read_run(folder: Path) -> RunView:
     if not tracks:
         raise UsageError(f"'{folder}' holds no odometry rows to show",
                          hint="Record with log.formats including csv, and let the run start.")
-    plan = run.plan(notices, "no world, and robots drawn as boxes")
+    plan = plan or run.plan(notices, "no world, and robots drawn as boxes")
     _attach(tracks, _robot_plans(plan), record)
     bag = run.bag_folder()
     if bag is not None and (bag / "metadata.yaml").is_file():
