@@ -246,3 +246,19 @@ def test_damaged_files_never_give_a_traceback(clean_run, tmp_path_factory, name,
         assert "Traceback" not in outcome.stderr + outcome.stdout
         if outcome.exit_code == 2 and args[0] == "plot":
             assert outcome.stderr.count("\n") == 1
+
+
+def test_a_sweep_does_not_follow_a_run_linked_from_outside(clean_run, tmp_path):
+    sweep = tmp_path / "sweep"
+    (sweep / "runs").mkdir(parents=True)
+    (sweep / "sweep.json").write_text('{"runs": [{"folder": "runs/0000", "params": {"robots.mobot.pose.yaw": 1}}]}')
+    shutil.copytree(clean_run, sweep / "runs" / "0000")
+    (sweep / "runs" / "0001").symlink_to(clean_run)  # a run outside the sweep folder
+    outcome = invoke(["plot", sweep, "--out", tmp_path / "sweep.png"])
+    assert (outcome.exit_code, outcome.stdout) == (0, f"wrote {tmp_path / 'sweep.png'} (1 path)\n"), outcome
+
+
+def test_history_lines_that_are_not_events_are_left_out(run):
+    (run / "history.jsonl").write_text('{"op": "spawn", "name": "a"}\n[1, 2]\nnot json\n{"op": "delete"\n'
+                                       '{"op": "delete", "name": "a"}\n')
+    assert [e["op"] for e in RunFolder.open(run).history()] == ["spawn", "delete"]
