@@ -60,8 +60,13 @@ def _verdict(result: dict[str, Any], status: str) -> dict[str, Any]:
 def _missing(run: RunFolder, record: RunRecord, result: dict[str, Any]) -> list[str]:
     """What a complete run folder must hold but this one lacks."""
     folder = run.path
-    problems = [f"{name} is missing" for name in ("scenario.yaml", "trajectory.png")
-                if not (folder / name).is_file()]
+    problems = []
+    for name, limit in (("scenario.yaml", run.limits.scenario), ("trajectory.png", run.limits.sensors)):
+        try:
+            if not (folder / name).is_file() or run.checked(name, limit) is None:
+                problems.append(f"{name} is missing")
+        except RunFolderError as exc:  # a symlink out, or too large to read back
+            problems.append(exc.message)
     if (folder / "odom").is_dir():
         problems += [f"odom/{robot}.csv is missing" for robot in record.robots
                      if not (folder / "odom" / f"{robot}.csv").is_file()]

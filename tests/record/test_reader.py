@@ -128,7 +128,8 @@ def test_includes_of_files_outside_the_folder_are_refused(run, tmp_path):
     for body in (f'<xacro:include filename="{secret}"/>', '<xacro:include filename="/etc/passwd"/>',
                  '<xacro:include filename="$(find mobot_description)/../../../../../../etc/passwd"/>',
                  '<link name="m"><collision><geometry><mesh filename="file:///etc/passwd"/></geometry></collision>'
-                 '<inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>'
+                 '<inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/>'
+                 '</inertial></link>'
                  '<joint name="j" type="fixed"><parent link="base_link"/><child link="m"/></joint>'):
         evil_robot(run, body)
         assert_refused(run, tmp_path, expect="scenario.yaml: refused: ", view_too="ssh" in body, check_too=False)
@@ -262,3 +263,18 @@ def test_history_lines_that_are_not_events_are_left_out(run):
     (run / "history.jsonl").write_text('{"op": "spawn", "name": "a"}\n[1, 2]\nnot json\n{"op": "delete"\n'
                                        '{"op": "delete", "name": "a"}\n')
     assert [e["op"] for e in RunFolder.open(run).history()] == ["spawn", "delete"]
+
+
+@pytest.mark.parametrize("damage", ["fifo", "huge", "symlink"])
+def test_a_damaged_scenario_yaml(run, tmp_path, damage):
+    scenario = run / "scenario.yaml"
+    scenario.unlink()
+    if damage == "fifo":
+        os.mkfifo(scenario)
+    elif damage == "huge":
+        scenario.write_text("#" * (ReadLimits().scenario + 1))
+    else:
+        scenario.symlink_to("/etc/passwd")
+    assert_refused(run, tmp_path, expect="scenario.yaml", view_too=damage == "fifo", check_too=False)
+    check = invoke(["check", run])  # the run's verdict: scenario.yaml is not a file it can count on
+    assert check.exit_code == 2 and "Traceback" not in check.stderr + check.stdout
