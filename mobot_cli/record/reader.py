@@ -10,6 +10,7 @@ larger than its limit; the plan is resolved again from scenario.yaml in a confin
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import json
 import math
@@ -23,6 +24,7 @@ from mobot_cli.errors import Location, UsageError
 from mobot_cli.record.summary import SUMMARY, RunRecord
 
 MIB = 1 << 20
+LIMITS_VARIABLE = "MOBOT_RUN_FOLDER_LIMITS"
 NOT_A_RUN_HINT = "Give the folder that mobot run --out, mobot serve --out or mobot sweep --out wrote."
 
 
@@ -37,8 +39,29 @@ class ReadLimits:
     sensors: int = 1024 * MIB  # one sensors/<robot>/<sensor> file
     bag: int = 4096 * MIB  # every file of bag/ together
     json: int = 16 * MIB  # sweep.json, history.jsonl
-    plan_seconds: float = 10.0  # CPU seconds to resolve scenario.yaml (wall: three times as long)
+    plan_seconds: float = 10.0  # CPU seconds to resolve scenario.yaml (wall: six times as long)
     plan_memory: int = 1024 * MIB
+
+    @classmethod
+    def from_env(cls) -> "ReadLimits":
+        """The defaults, with $MOBOT_RUN_FOLDER_LIMITS ("csv=512,bag=8192,plan_seconds=30": MiB;
+        seconds for plan_seconds, characters for csv_line) over them; UsageError naming a bad entry."""
+        text = os.environ.get(LIMITS_VARIABLE, "").strip()
+        values: dict[str, Any] = {}
+        names = {f.name for f in dataclasses.fields(cls)}
+        for entry in filter(None, (part.strip() for part in text.split(","))):
+            name, _, value = entry.partition("=")
+            try:
+                number = float(value)
+            except ValueError:
+                number = math.nan
+            if name.strip() not in names or not math.isfinite(number) or not 0 < number <= 1 << 20:
+                raise UsageError(f"{LIMITS_VARIABLE}: '{entry}' is not NAME=NUMBER with a NAME of "
+                                 f"{', '.join(sorted(names))} and a number above 0",
+                                 hint="Sizes are in MiB, plan_seconds in seconds of CPU time, csv_line in characters.")
+            name = name.strip()
+            values[name] = {"plan_seconds": number, "csv_line": int(number)}.get(name, int(number * MIB))
+        return cls(**values)
 
 
 class RunFolderError(UsageError):
@@ -74,7 +97,7 @@ class RunFolder:
         if not is_run_folder(path):
             raise UsageError(f"'{path}' is not a run folder (it has no summary.json or scenario.yaml)",
                              hint="Give the folder that mobot run --out wrote.")
-        return cls(path, limits or ReadLimits())
+        return cls(path, limits or ReadLimits.from_env())
 
     @property
     def root(self) -> Path:
@@ -237,7 +260,10 @@ class RunFolder:
             raise self._too_large(relative, limit)
 
     def _too_large(self, relative: str | Path, limit: int) -> RunFolderError:
-        return self._fault(relative, f"is larger than {limit // MIB or 1} MiB, the most mobot reads of it")
+        size = f"{limit // MIB} MiB" if limit % MIB == 0 else f"{limit} bytes"
+        error = self._fault(relative, f"is larger than {size}, the most mobot reads of it")
+        error.hint = f"If the file is genuine, raise the limit: {LIMITS_VARIABLE}=NAME=MIB (see docs/security.md)."
+        return error
 
     def _fault(self, relative: str | Path, what: str, line: int | None = None) -> RunFolderError:
         where = Location(file=self.path / relative, line=line) if line else Location(file=self.path)

@@ -278,3 +278,16 @@ def test_a_damaged_scenario_yaml(run, tmp_path, damage):
     assert_refused(run, tmp_path, expect="scenario.yaml", view_too=damage == "fifo", check_too=False)
     check = invoke(["check", run])  # the run's verdict: scenario.yaml is not a file it can count on
     assert check.exit_code == 2 and "Traceback" not in check.stderr + check.stdout
+
+
+def test_limits_are_settings(run, tmp_path, monkeypatch):
+    """MOBOT_RUN_FOLDER_LIMITS lowers (or raises) a limit; a bad entry is one line, exit 2."""
+    out = tmp_path / "out.png"
+    assert invoke(["plot", run, "--out", out]).exit_code == 0
+    monkeypatch.setenv("MOBOT_RUN_FOLDER_LIMITS", "csv=0.001")
+    small = invoke(["plot", run, "--out", out])
+    assert small.exit_code == 2 and "odom/mobot.csv is larger than 1048 bytes" in small.stderr
+    monkeypatch.setenv("MOBOT_RUN_FOLDER_LIMITS", "csv=nan")
+    bad = invoke(["plot", run, "--out", out])
+    assert (bad.exit_code, bad.stderr.count("\n")) == (2, 1)
+    assert bad.stderr.startswith("mobot: error: MOBOT_RUN_FOLDER_LIMITS: 'csv=nan' is not NAME=NUMBER")
