@@ -81,12 +81,13 @@ def test_scan_prints_one_line_and_reads_other_sensors(endpoint):
 
 
 def test_scan_refusals_name_what_is_wrong(endpoint):
-    unknown = invoke(["scan", "mobot", "--sensor", "sonar", "--endpoint", endpoint])
+    # Generous timeouts: a busy machine may answer slowly, and only a hang should fail here.
+    unknown = invoke(["scan", "mobot", "--sensor", "sonar", "--endpoint", endpoint, "--timeout", "120"])
     assert unknown.exit_code == 2 and "NOT_FOUND" in unknown.stderr
     assert "robot 'mobot' has no sensor 'sonar'; it has scan, imu, bumper" in unknown.stderr
-    missing = invoke(["scan", "ghost", "--endpoint", endpoint])
+    missing = invoke(["scan", "ghost", "--endpoint", endpoint, "--timeout", "120"])
     assert missing.exit_code == 2 and "no robot named 'ghost'" in missing.stderr
-    with Client(endpoint) as client:
+    with Client(endpoint, timeout=120) as client:
         plain = ('<robot name="plain"><link name="base_link"><collision><geometry><box size="0.2 0.2 0.1"/>'
                  '</geometry></collision><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" '
                  'ixy="0" ixz="0" iyz="0"/></inertial></link></robot>')
