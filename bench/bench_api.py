@@ -119,8 +119,8 @@ def gym_vs_physics(periods: int, lidar: bool, room: Path) -> tuple[float, float,
 def gym_own_work(periods: int, lidar: bool, room: Path) -> tuple[float, float]:
     """(µs of the gym's own work per step, µs of the physics and sensing it advances), from one
     world: the time inside ``Simulation.step`` and ``Simulation.scan`` (the scan taken, its rays
-    cast, at the observation's step) is the physics and sensing; the rest of ``env.step`` is the gym's. Timed within each call, so a change of
-    load between two calls does not enter."""
+    cast, at the observation's step) is the physics and sensing; the rest of ``env.step`` is the gym's.
+    Timed within each call, so a change of load between two calls does not enter."""
     import numpy as np
 
     from mobot_cli.gym import MobotEnv

@@ -20,7 +20,6 @@ Windows are interleaved (rest, attack, rest, attack, ...) over --rounds; medians
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import statistics
 import subprocess

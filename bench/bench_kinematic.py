@@ -168,7 +168,8 @@ def raw_rtf(path: Path) -> float:
     robot = plan.robots[0]
     uid = p.loadURDF(str(urdf_path(robot.urdf)), robot.pose.xyz, robot.pose.quat, physicsClientId=cid,
                      flags=p.URDF_USE_INERTIA_FROM_FILE | p.URDF_USE_IMPLICIT_CYLINDER)
-    names = {p.getJointInfo(uid, j, physicsClientId=cid)[1].decode(): j for j in range(p.getNumJoints(uid, physicsClientId=cid))}
+    names = {p.getJointInfo(uid, j, physicsClientId=cid)[1].decode(): j
+             for j in range(p.getNumJoints(uid, physicsClientId=cid))}
     wheels = [names[n] for n in robot.drive.left_joints + robot.drive.right_joints]
     half, r = robot.drive.wheel_separation / 2, robot.drive.wheel_radius
     changes = {round(at * plan.physics.rate_hz): ((v - w * half) / r, (v + w * half) / r) for at, v, w in SCRIPT}
@@ -297,7 +298,8 @@ def main() -> None:
     hits: dict[str, int] = {}
     jobs = [("kin", lambda: mobot_rtf(files["kin"])), ("phys", lambda: mobot_rtf(files["phys"])),
             ("raw", lambda: (raw_rtf(files["phys"]), 0)),
-            ("kin-lidar", lambda: mobot_rtf(files["kin-lidar"])), ("phys-lidar", lambda: mobot_rtf(files["phys-lidar"])),
+            ("kin-lidar", lambda: mobot_rtf(files["kin-lidar"])),
+            ("phys-lidar", lambda: mobot_rtf(files["phys-lidar"])),
             ("irsim", lambda: (peer_rtf(args.peers_venv, "irsim"), 0)),
             ("irsim-lidar", lambda: (peer_rtf(args.peers_venv, "irsim-lidar"), 0)),
             ("pyrobosim", lambda: (peer_rtf(args.peers_venv, "pyrobosim"), 0)),

@@ -87,7 +87,8 @@ def isolated_cost(prepared, repeat: int) -> None:
     started = time.thread_time()
     records = list(simulate(prepared.plan))
     sim = time.thread_time() - started
-    blind = dataclasses.replace(prepared.plan, robots=tuple(dataclasses.replace(r, sensors=()) for r in prepared.plan.robots))
+    blind = dataclasses.replace(prepared.plan,
+                                robots=tuple(dataclasses.replace(r, sensors=()) for r in prepared.plan.robots))
     started = time.thread_time()
     for _ in simulate(blind):
         pass
@@ -114,8 +115,9 @@ def isolated_cost(prepared, repeat: int) -> None:
     participant.close()
     cost, python, sent = (statistics.median(c[i] for c in costs) for i in range(3))
     print(f"  apart, CPU of one thread: simulating {sim:.3f} s ({sim_blind:.3f} s without casting the lidars' rays); "
-          f"publishing {cost:.3f} s = {cost / sim * 100:.1f} % of it ({cost / sim_blind * 100:.1f} % of the run without "
-          f"rays) ({python:.3f} s mobot's Python, {cost - python:.3f} s DDS writes); {sent:.0f} messages, "
+          f"publishing {cost:.3f} s = {cost / sim * 100:.1f} % of it "
+          f"({cost / sim_blind * 100:.1f} % of the run without rays) "
+          f"({python:.3f} s mobot's Python, {cost - python:.3f} s DDS writes); {sent:.0f} messages, "
           f"{sent / cost:,.0f} per CPU second, {sent / (sim + cost):,.0f}/s at this run's pace")
 
 
@@ -131,7 +133,8 @@ def main() -> None:
     modes = {"no bridge": (False, False), "bridge, sim thread": (True, False), "bridge, own thread": (True, True)}
     results: dict[str, list] = {label: [] for label in modes}
     env = {**os.environ, "PYTHONPATH": str(REPO)}
-    listener = subprocess.Popen([sys.executable, "-c", LISTENER, str(ROBOTS)], env=env, stdout=subprocess.PIPE, text=True)
+    listener = subprocess.Popen([sys.executable, "-c", LISTENER, str(ROBOTS)], env=env, stdout=subprocess.PIPE,
+                                text=True)
     listener.stdout.readline()
     print(f"{ROBOTS} robots, {args.seconds:g} s simulated, 250 Hz physics, 50 Hz odometry, "
           f"{RAYS}-ray scans at 10 Hz; a subscriber takes every odom, scan and /tf")
@@ -155,8 +158,9 @@ def main() -> None:
             messages = statistics.median(s.messages for s in stats)
             busy = statistics.median(s.busy_seconds for s in stats)
             dropped = max(s.dropped_samples for s in stats)
-            line += (f"  (+{(cpu - base_cpu) / base_cpu * 100:4.1f} % CPU, +{(wall - base_wall) / base_wall * 100:4.1f} % "
-                     f"wall); {messages:.0f} msgs, {messages / wall:,.0f} msg/s, publishing {busy:.2f} s, "
+            line += (f"  (+{(cpu - base_cpu) / base_cpu * 100:4.1f} % CPU, "
+                     f"+{(wall - base_wall) / base_wall * 100:4.1f} % wall); "
+                     f"{messages:.0f} msgs, {messages / wall:,.0f} msg/s, publishing {busy:.2f} s, "
                      f"{dropped} samples dropped")
         print(line)
 

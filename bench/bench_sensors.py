@@ -115,8 +115,9 @@ def house_share(seconds: float, repeat: int, work: Path) -> None:
     pairs = sorted(c / b for (_, b), (_, c) in zip(results["no sensors"], results["2D lidar 10 Hz"]))
     quarter = len(pairs) // 4
     print(f"  lidar / no sensors, CPU, run by run: median x{statistics.median(pairs):5.3f}, middle half "
-          f"x{pairs[quarter]:5.3f}-x{pairs[-1 - quarter]:5.3f}, all x{pairs[0]:5.3f}-x{pairs[-1]:5.3f} ({len(pairs)} pairs; "
-          f"load average {load:.1f} before, {os.getloadavg()[0]:.1f} after, on {os.cpu_count()} cores)")
+          f"x{pairs[quarter]:5.3f}-x{pairs[-1 - quarter]:5.3f}, all x{pairs[0]:5.3f}-x{pairs[-1]:5.3f} "
+          f"({len(pairs)} pairs; load average {load:.1f} before, {os.getloadavg()[0]:.1f} after, "
+          f"on {os.cpu_count()} cores)")
 
 
 def jackal_plan(seconds: float, formats: tuple[str, ...]):

@@ -136,8 +136,8 @@ def command_main(trees: list[Path], repeat: int, runs: int) -> None:
         print(f"{'tree':<40} {'wall s':>7} {'runs/s':>7} {'CPU s':>6} {'sweep CPU s':>11} {'one run ms':>10}")
         for tree, rows in figures.items():
             wall, cpu, parent, per_run = (statistics.median(r[k] for r in rows) for k in range(4))
-            print(f"{str(tree):<40} {wall:>7.3f} {runs / wall:>7.1f} {cpu:>6.2f} {parent:>11.2f} {per_run * 1000:>10.0f}"
-                  f"   (walls {', '.join(f'{r[0]:.2f}' for r in rows)})")
+            print(f"{str(tree):<40} {wall:>7.3f} {runs / wall:>7.1f} {cpu:>6.2f} {parent:>11.2f} "
+                  f"{per_run * 1000:>10.0f}   (walls {', '.join(f'{r[0]:.2f}' for r in rows)})")
             print(f"{'':<40} {bytecode_state(tree)}")
     finally:
         shutil.rmtree(work, ignore_errors=True)

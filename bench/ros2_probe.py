@@ -28,7 +28,10 @@ except ImportError:
 
 
 def stamp(msg) -> float:
-    s = msg.clock if isinstance(msg, Clock) else msg.header.stamp if hasattr(msg, "header") else msg.transforms[0].header.stamp
+    if isinstance(msg, Clock):
+        s = msg.clock
+    else:
+        s = msg.header.stamp if hasattr(msg, "header") else msg.transforms[0].header.stamp
     return s.sec + s.nanosec * 1e-9
 
 
@@ -95,7 +98,8 @@ def graph(node: Node, robot: str) -> dict:
     hashes = {}
     for topic in (f"/{robot}/odom", f"/{robot}/scan", f"/{robot}/imu"):
         hashes[topic] = [{"node": i.node_name, "namespace": i.node_namespace, "type": i.topic_type,
-                          "hash": str(getattr(i, "topic_type_hash", ""))} for i in node.get_publishers_info_by_topic(topic)]
+                          "hash": str(getattr(i, "topic_type_hash", ""))}
+                         for i in node.get_publishers_info_by_topic(topic)]
     return {"seconds_to_discover": time.monotonic() - started, "nodes": nodes,
             "publishers": {t: types for t, types in pubs}, "subscribers": {t: types for t, types in subs},
             "odom_publishers": hashes[f"/{robot}/odom"], "endpoints": hashes}
@@ -133,7 +137,8 @@ def drive(node: Node, robot: str, metres: float, speed: float) -> dict:
         pub.publish(stop)
         spin_for(node, 0.05)
     spin_for(node, 1.0)
-    return {"odom_moved": math.hypot(odom[-1].x - start.x, odom[-1].y - start.y), "subscribers": pub.get_subscription_count()}
+    return {"odom_moved": math.hypot(odom[-1].x - start.x, odom[-1].y - start.y),
+            "subscribers": pub.get_subscription_count()}
 
 
 def main() -> None:

@@ -96,7 +96,8 @@ def probe(python: Path, seconds: float, overrides: list[str]) -> dict:
         deadline = time.monotonic() + 60
         while mobot("list", "--endpoint", endpoint).returncode != 0:
             if time.monotonic() > deadline or server.poll() is not None:
-                raise SystemExit(f"mobot serve did not start: {server.stderr.read() if server.poll() is not None else ''}")
+                output = server.stderr.read() if server.poll() is not None else ""
+                raise SystemExit(f"mobot serve did not start: {output}")
             time.sleep(0.5)
         time.sleep(1.0)  # settle
         before = truth(endpoint)

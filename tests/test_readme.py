@@ -44,7 +44,8 @@ def test_the_commands_are_whole_shell_lines_that_name_real_files():
         assert words[:4] == ["python3", "-m", "venv", ".venv"]  # a fresh system's pip refuses otherwise
     assert (REPO / "scenarios" / "quickstart.yaml").is_file()
     pyproject = (REPO / "pyproject.toml").read_text()
-    assert re.search(r'^test = \[.*"pytest', pyproject, re.M) and re.search(r'^docs = \[.*mkdocs-material', pyproject, re.M)
+    assert re.search(r'^test = \[.*"pytest', pyproject, re.M)
+    assert re.search(r'^docs = \[.*mkdocs-material', pyproject, re.M)
     ignored = (REPO / ".gitignore").read_text().split()
     assert ".venv/" in ignored and "/site/" in ignored
 

@@ -16,6 +16,10 @@ Inside ``confined(roots, files)`` (live spawns; a user's own scenario files neve
 Time and memory are limited by the process that loads (mobot_cli/live/worker.py), not here.
 """
 
+# xacro has no public hook for its evaluation and substitutions: mobot confines its private
+# _eval_* table, _global_symbols and _DictWrapper.
+# ruff: noqa: SLF001
+
 from __future__ import annotations
 
 import ast
@@ -179,7 +183,8 @@ def xacro_limits(xacro: types.ModuleType) -> Iterator[None]:
         functions = {"arg": lambda name: sa.convert_value(sa._eval_arg(name, args=args), "auto"),
                      "dirname": lambda: sa._eval_dirname(context["filename"]),
                      **{k: v for k, v in sa._eval_dict.items() if not k.startswith("_")}}
-        return str(eval(expr, {"__builtins__": _plain_builtins()}, sa._DictWrapper(args, functions)))
+        return str(eval(expr, {"__builtins__": _plain_builtins()},  # noqa: S307 - checked above, plain builtins only
+                        sa._DictWrapper(args, functions)))
 
     xacro.safe_eval, xacro.load_yaml, xacro.parse = safe_eval, load_yaml, parse
     xacro.glob = types.SimpleNamespace(glob=_confined_glob)

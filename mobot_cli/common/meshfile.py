@@ -1,7 +1,7 @@
 """Vertices and triangles of OBJ and STL files, read with numpy alone.
 
-The floor plan and the lidar's world scene need only triangles; importing trimesh costs
-~0.8 s, more than drawing a whole house. World meshes reach the plan as OBJ (COLLADA is
+The floor plan and the lidar's world scene need only triangles; importing trimesh is slow,
+slower than drawing a whole house. World meshes reach the plan as OBJ (COLLADA is
 converted to OBJ by the world loader) or STL, which these readers cover; anything else goes
 to trimesh.
 """

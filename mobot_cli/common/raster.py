@@ -49,7 +49,7 @@ class Grid:
         ix, iy = math.floor((x - self.x0) / self.cell), math.floor((y - self.y0) / self.cell)
         return (ix, iy) if 0 <= ix < self.nx and 0 <= iy < self.ny else None
 
-    def _span(self, low: float, high: float, origin: float, n: int) -> tuple[int, int]:
+    def span(self, low: float, high: float, origin: float, n: int) -> tuple[int, int]:
         """Indices whose centres may lie in [low, high], clipped to the grid."""
         first = max(0, math.floor((low - origin) / self.cell - 0.5))
         last = min(n, math.ceil((high - origin) / self.cell + 0.5))
@@ -61,8 +61,8 @@ def fill_polygon(mask: np.ndarray, grid: Grid, polygon) -> None:
     pts = np.asarray(polygon, dtype=float)
     if len(pts) < 3:
         return
-    x0, x1 = grid._span(pts[:, 0].min(), pts[:, 0].max(), grid.x0, grid.nx)
-    y0, y1 = grid._span(pts[:, 1].min(), pts[:, 1].max(), grid.y0, grid.ny)
+    x0, x1 = grid.span(pts[:, 0].min(), pts[:, 0].max(), grid.x0, grid.nx)
+    y0, y1 = grid.span(pts[:, 1].min(), pts[:, 1].max(), grid.y0, grid.ny)
     if x0 >= x1 or y0 >= y1:
         return
     xs = grid.x0 + (np.arange(x0, x1) + 0.5) * grid.cell

@@ -2,8 +2,8 @@
 
 PyBullet collides the mesh of a moving link as the convex hull of its vertices (one hull per
 ``o``/``g`` group of an OBJ, tested), and builds it on the world's thread when the robot is
-loaded: 0.31 s of CPU for a 95k-face OBJ, 0.82 s for 200k, against 2 ms for the 348-vertex
-hull of the same 95k faces (measured). So the loader process computes the hulls and the robot
+loaded, at a cost that grows with every face, while a hull already built has few vertices and
+costs it little. So the loader process computes the hulls and the robot
 reaches the world with small OBJ files of them: the same collision shape, its cost paid off the
 world's thread. A hull of more than MAX_HULL_VERTICES vertices (a finely tessellated sphere
 keeps all of them) is the hull of an even subset of them, slightly inside the original.

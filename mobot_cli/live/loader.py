@@ -4,9 +4,10 @@ The world's thread never expands or checks a description a client sent: it hands
 to an idle worker process and goes on stepping. A load that uses more CPU time than the limit
 is ended by the kernel (RLIMIT_CPU), one that waits three times as long in wall time is killed
 here, and one that needs more memory than the limit fails in the worker (RLIMIT_AS). Either
-way the spawn is refused with RESOURCE_PARSE_ERROR and a fresh worker takes the dead one's place. Workers are reused between loads, so a warm load costs
-milliseconds; one is started with the server, and while every worker is loading one more is
-started (up to ``Limits.workers``), so a slow or hostile load never makes the next one cold.
+way the spawn is refused with RESOURCE_PARSE_ERROR and a fresh worker takes the dead one's place.
+Workers are reused between loads, so a warm load costs milliseconds; one is started with the
+server, and while every worker is loading one more is started (up to ``Limits.workers``), so a
+slow or hostile load never makes the next one cold.
 Workers run at normal priority, so a spawn is quick on a busy machine too; a load that has used
 DEMOTE_AFTER seconds of CPU time drops to nice 19 and its worker is replaced when it is done.
 CPU time, not wall time: on a busy machine a legitimate load waits for the CPU, and demoting it
@@ -48,8 +49,8 @@ class Limits:
     seconds: float = 10.0  # of CPU time; a load that waits is stopped after WALL_FACTOR times as long
     memory: int = 1 << 30  # 1 GiB
     workers: int = 2
-    # PyBullet parses a robot's meshes on the world's thread at 1.5-4 us a face (measured: a
-    # 200k-face collision mesh 0.8 s of CPU, a 1M-face one 7 s): 100k faces cost it ~0.3 s once.
+    # PyBullet parses a robot's meshes on the world's thread, at a cost for every face: the limit
+    # keeps what a spawn holds the world up short.
     faces: int = 100_000  # of all the robot's meshes, collision and visual, each use counted
     links: int = 200
     robots: int = 100  # in the world, scenario robots included: 1,000 bring it to 5 % of real time

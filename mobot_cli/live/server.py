@@ -226,7 +226,7 @@ class LiveServer:
             answer = protocol.reply(request_id, exc.result, exc.message)
             if op in ("spawn", "delete", "cmd", "set_state", "reset"):  # the history keeps what was refused, too
                 self.history(op=op, name=name, result=exc.result.name, message=exc.message)
-        except Exception as exc:  # a bug must cost one request, never the world
+        except Exception as exc:  # noqa: BLE001 - a bug must cost one request, never the world
             answer = protocol.reply(request_id, Result.OPERATION_FAILED, f"internal error: {exc!r}"[:500])
         if answer is not None:
             self._send(envelope, answer)
@@ -324,7 +324,7 @@ class LiveServer:
                 answer = protocol.reply(request.id, exc.result, exc.message)
             except MobotError as exc:
                 answer = protocol.reply(request.id, spawning.classify(exc), str(exc))
-            except Exception as exc:
+            except Exception as exc:  # noqa: BLE001 - a bug must cost one spawn, never the world
                 answer = protocol.reply(request.id, Result.OPERATION_FAILED, f"internal error: {exc!r}")
             if not answer["ok"]:
                 self.history(op="spawn", name=request.name, result=answer["result"], message=answer["message"])
@@ -335,7 +335,7 @@ class LiveServer:
             self._waits.remove(wait)
             try:
                 answer = wait.answer()
-            except Exception as exc:  # a bug must cost one reply, never the world
+            except Exception as exc:  # noqa: BLE001 - a bug must cost one reply, never the world
                 answer = protocol.reply(wait.request.id, Result.OPERATION_FAILED, f"internal error: {exc!r}"[:500])
             self._send(wait.envelope, answer)
 

@@ -128,7 +128,8 @@ class Session:
         the reply when it ends. Refused for a goal inside an obstacle."""
         self.known(request.name)
         if not self.world.has_drive(request.name):
-            raise Refusal(Result.OPERATION_FAILED, f"robot '{request.name}' has no drive wheels: it cannot drive to a goal")
+            raise Refusal(Result.OPERATION_FAILED,
+                          f"robot '{request.name}' has no drive wheels: it cannot drive to a goal")
         try:
             fields = GoalFields(goto=GotoSpec(x=request.x, y=request.y, yaw=request.yaw, tolerance=request.tolerance),
                                 timeout=request.timeout, localization=request.localization,
@@ -189,7 +190,8 @@ class Session:
         except MobotError as exc:
             raise Refusal(Result.INVALID_POSE, str(exc)) from None
         state = self.world.kinematics(request.name)
-        self.history(op="set_state", name=request.name, result="OK", pose=spawning.pose_fields(self.world.read(request.name)))
+        self.history(op="set_state", name=request.name, result="OK",
+                     pose=spawning.pose_fields(self.world.read(request.name)))
         return protocol.reply(request.id, name=request.name, reference_frame="world", step=self.step,
                               t=self.step / self.rate_hz, **entity_state.fields(state))
 

@@ -1,8 +1,8 @@
 """A live spawn request to a RobotPlan, through the same RobotResolver scenario robots use.
 
 Loading (xacro, checks, meshes, their bounds and their convex hulls: hulls.py) runs in a
-loader process (worker.py), confined to the folders the request may read (assets/sandbox.py); naming, the reference frame and the spawn
-itself happen on the world's thread, against the robots alive at that moment.
+loader process (worker.py), confined to the folders the request may read (assets/sandbox.py);
+naming, the reference frame and the spawn itself happen on the world's thread, against the robots alive at that moment.
 """
 
 from __future__ import annotations

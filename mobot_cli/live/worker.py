@@ -56,7 +56,7 @@ def _load(spawning, request, rate_hz: int, memory: int, bounds: tuple[int, int] 
                 f"the loader's memory limit of {memory // 2**20} MiB")
     except RecursionError:
         return ("refused", Result.RESOURCE_PARSE_ERROR, "the description nests too deeply to load")
-    except Exception as exc:  # a bug costs this request only
+    except Exception as exc:  # noqa: BLE001 - a bug costs this request only
         return ("refused", Result.OPERATION_FAILED, f"internal error while loading: {exc!r}")
 
 

@@ -103,8 +103,9 @@ def _font(size: int):
 
 def _bounds(tracks: list[Track], floor: list[Polygon]) -> tuple[float, float, float, float]:
     areas = [p for t in tracks for s in t.swept for p in s.area]
-    xs = [p[0] for t in tracks for p in (*t.true, *t.odom, *t.scan)] + [p[0] for poly in floor for p in poly] + [p[0] for p in areas]
-    ys = [p[1] for t in tracks for p in (*t.true, *t.odom, *t.scan)] + [p[1] for poly in floor for p in poly] + [p[1] for p in areas]
+    points = [p for t in tracks for p in (*t.true, *t.odom, *t.scan)] + [p for poly in floor for p in poly] + areas
+    xs = [p[0] for p in points]
+    ys = [p[1] for p in points]
     if not xs:
         return -1.0, -1.0, 1.0, 1.0
     x0, x1, y0, y1 = min(xs), max(xs), min(ys), max(ys)

@@ -1,8 +1,8 @@
 """The bag's connections and ``metadata.yaml`` as rosbags' Writer makes them, without its YAML.
 
 rosbags' ``Writer`` dumps every stored QoS profile and, when the bag closes, its metadata twice
-(metadata.yaml and the copy inside the MCAP file) through ruamel.yaml: ~12 ms of a one-robot
-run, most of what the bag costs besides its messages. The documents are always the same shape
+(metadata.yaml and the copy inside the MCAP file) through ruamel.yaml, which is slow: most of
+what the bag costs besides its messages. The documents are always the same shape
 (block mappings with sorted keys, a few kinds of scalars), so they are written here as ruamel
 writes them: the same bytes (tests/record/test_bag_bytes.py compares them with rosbags' own).
 

@@ -5,7 +5,7 @@ the type, then each type it uses after a line of '=') and its RIHS01 type descri
 The bag embeds both (record/bag.py), the ROS 2 node announces the hash (ros2/publisher.py),
 and ros2/idl.py builds the cyclonedds structs that describe the topics on DDS from the texts
 (``structs``). Generated once from rosbags' typestore, the same in Humble, Jazzy and Kilted,
-so that a run does not build a typestore (~0.1 s): tests/ros/test_definitions.py checks every
+so that a run does not build a typestore (slow, and the same every time): tests/ros/test_definitions.py checks every
 text and hash against rosbags and the .msg files of gazebo_msgs and rmw_dds_common.
 gazebo_msgs/ContactsState is what gazebo_ros_bumper publishes. rmw_dds_common's Gid is Jazzy's
 ``char[16]``, Humble's is ``char[24]`` (ros2/idl.py); its hash is the one rmw_dds_common ships,

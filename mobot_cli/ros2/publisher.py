@@ -227,7 +227,8 @@ class RecordPublisher:
         messages = RobotMessages(plan, state)
         sensors = {spec.name: self.topics.writer(sensor_topics.topic(plan, spec), sensor_topics.message_type(spec))
                    for spec in plan.sensors}
-        self.robots[plan.name] = _Robot(messages, namespace, self.topics.writer(names.join(namespace, "odom"), ODOMETRY),
+        self.robots[plan.name] = _Robot(messages, namespace,
+                                        self.topics.writer(names.join(namespace, "odom"), ODOMETRY),
                                         self.topics.writer(names.join(namespace, "joint_states"), JOINT_STATE), sensors)
         self.topics.publish(names.join(namespace, "robot_description"), STRING, messages.description(), dds.LATCHED)
         statics = messages.statics(state)

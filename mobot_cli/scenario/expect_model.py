@@ -17,7 +17,8 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 from mobot_cli.scenario.goal_model import Area, Waypoints, check_area
 from mobot_cli.scenario.limits import Coordinate, Float, Int, NonNegativeFloat, PositiveFloat, Seconds
 
-KINDS = ("within", "collisions", "distance", "upright", "odom_error", "reaches", "visits", "coverage", "goal", "clearance")
+KINDS = ("within", "collisions", "distance", "upright", "odom_error", "reaches", "visits", "coverage", "goal",
+         "clearance")
 OVER_TIME = ("reaches", "visits", "coverage")  # deadline: within: SECONDS
 GOAL_STATUSES = ("reached", "timed_out", "blocked", "cancelled", "unfinished")
 DEFAULT_VISIT_RADIUS = 0.3  # m

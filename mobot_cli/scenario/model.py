@@ -86,7 +86,8 @@ class PoseSpec(Strict):
         if self.xyz is None and (self.rpy is not None or self.quat is not None):
             raise ValueError("'rpy' and 'quat' need 'xyz' beside them")
         if self.xyz is not None and flat:
-            raise ValueError(f"mixes the xyz form with '{flat[0]}': use either x/y/z/roll/pitch/yaw or xyz with rpy or quat")
+            raise ValueError(f"mixes the xyz form with '{flat[0]}': "
+                             "use either x/y/z/roll/pitch/yaw or xyz with rpy or quat")
         if self.rpy is not None and self.quat is not None:
             raise ValueError("gives both 'rpy' and 'quat': use one")
         if self.quat is not None and math.sqrt(sum(q * q for q in self.quat)) < 1e-9:
@@ -103,7 +104,8 @@ class DriveOverrides(Strict):
     right_joints: Optional[list[str]] = None
     wheel_radius: Optional[Annotated[PositiveFloat, at_most(MAX_WHEEL_RADIUS, "m")]] = None
     wheel_separation: Optional[Annotated[PositiveFloat, at_most(MAX_WHEEL_SEPARATION, "m")]] = None
-    wheel_separation_multiplier: Optional[Annotated[PositiveFloat, at_most(MAX_MULTIPLIER, "", 1 / MAX_MULTIPLIER)]] = None
+    wheel_separation_multiplier: Optional[
+        Annotated[PositiveFloat, at_most(MAX_MULTIPLIER, "", 1 / MAX_MULTIPLIER)]] = None
     wheel_radius_multiplier: Optional[Annotated[PositiveFloat, at_most(MAX_MULTIPLIER, "", 1 / MAX_MULTIPLIER)]] = None
     max_wheel_torque: Optional[Annotated[PositiveFloat, at_most(MAX_WHEEL_TORQUE, "N m")]] = None
     max_wheel_acceleration: Optional[Annotated[PositiveFloat, at_most(MAX_WHEEL_ACCELERATION, "rad/s^2")]] = None

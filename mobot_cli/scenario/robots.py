@@ -189,7 +189,8 @@ class RobotResolver:
                 window = (f"the first {self.settle / rate:g} s" if spawn_step == 0 else
                           f"{self.settle / rate:g} s from its spawn at {spawn_step / rate:g} s")
                 raise ScenarioError(f"command at {cmd.at:g} s falls inside the settle window ({window})",
-                                    location=where, hint="Robots hold still while they settle; start commands at or after 'settle'.")
+                                    location=where,
+                                    hint="Robots hold still while they settle; start commands at or after 'settle'.")
             if at >= self.total:  # e.g. a run shortened with --duration: say so, don't refuse
                 self.notices.append(f"{where}: command at {at / rate:g} s is at or after the end of the run "
                                     f"({self.total / rate:g} s) and is never sent")

@@ -37,7 +37,7 @@ LOOSE_AABB = 0.005  # m
 class Probes:
     """Plane collision shapes, without bodies, that measure a robot: made once per world.
 
-    PyBullet takes ~7 ms to create a body (it serialises each one), a spawn measured with
+    PyBullet is slow to create a body (it serialises each one), and a spawn measured with
     six temporary half-space bodies, twice; getClosestPoints between a body and a shape placed
     in the query costs microseconds and gives the same points to the last bit.
     """

@@ -79,8 +79,9 @@ def check_out_dir(sweep: Sweep, out_dir: Path, resume: bool) -> dict[int, dict[s
                          hint="Give --out the folder of the sweep to finish.")
     try:
         before = json.loads(stored.read_text(encoding="utf-8"))
-        same = [(r["run"], r["seed"], r["params"]) for r in before["runs"]] == \
-            [(v.index, v.seed, dict(v.params)) for v in sweep.variants] and before["scenario"] == str(sweep.spec.scenario)
+        same = ([(r["run"], r["seed"], r["params"]) for r in before["runs"]]
+                == [(v.index, v.seed, dict(v.params)) for v in sweep.variants]
+                and before["scenario"] == str(sweep.spec.scenario))
         rows = read_rows(out_dir / "results.csv", header) if same else None
     except (OSError, ValueError, KeyError, TypeError):
         same, rows = False, None

@@ -56,7 +56,7 @@ def _worker_main(conn: Connection, runner: RunTask, sweep_pid: int) -> None:
             return
         try:
             outcome = runner(task)
-        except Exception as exc:  # run_task never raises; a runner that does must not kill the worker
+        except Exception as exc:  # noqa: BLE001 - run_task never raises; a runner that does must not kill the worker
             outcome = failed(task.index, "error", f"{type(exc).__name__}: {exc}")
         conn.send(outcome)
 

@@ -115,7 +115,8 @@ def _connect(ray, address: str | None, jobs: int) -> None:
     except (ConnectionError, RuntimeError, ValueError) as exc:
         raise UsageError(f"cannot reach a Ray cluster at {address or 'a new local instance'}: "
                          f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}",
-                         hint="Check --address (e.g. ray://HOST:10001 or HOST:6379) and that the cluster is up.") from None
+                         hint="Check --address (e.g. ray://HOST:10001 or HOST:6379) "
+                              "and that the cluster is up.") from None
 
 
 def _check_token(ray, address: str) -> None:
@@ -125,8 +126,7 @@ def _check_token(ray, address: str) -> None:
     if "://" in address or ":" not in address:
         return  # ray:// clients and "auto" authenticate otherwise
     try:
-        from ray._private.authentication.authentication_token_setup import (
-            maybe_enable_token_auth_if_token_available)
+        from ray._private.authentication.authentication_token_setup import maybe_enable_token_auth_if_token_available
         from ray._raylet import GcsClient
     except ImportError:
         return  # a Ray without token authentication
@@ -170,4 +170,5 @@ def _check_reachable(address: str) -> None:
     except OSError as exc:
         raise UsageError(f"cannot reach a Ray cluster at {address}: {exc.strerror or exc}",
                          location=Location(file="--address"),
-                         hint="Check the address (HOST:6379, or ray://HOST:10001) and that the cluster is up.") from None
+                         hint="Check the address (HOST:6379, or ray://HOST:10001) "
+                              "and that the cluster is up.") from None

@@ -114,7 +114,7 @@ def _without_seed(overrides: Iterable[str]) -> tuple[str, ...]:
 
 def _reseeded(prepared: Prepared | None, overrides: list[str]) -> Prepared | None:
     """``prepared`` (made with the same overrides but for the seed) with the seed these overrides
-    set, without preparing the scenario again (~4 ms a run): a scenario's seed changes its plan's
+    set, without preparing the scenario again (every run would pay for it): a scenario's seed changes its plan's
     seed and one line of the resolved YAML, nothing else. None when that cannot be sure: no
     prepared twin, no seed given, a seed written other than as a plain whole number in range (the full
     preparation then checks it and names the flag), or a resolved YAML without one such line."""

@@ -17,7 +17,7 @@ from mobot_cli.scenario.limits import SCENARIO_NAME_RE, check_name, check_refere
 from mobot_cli.scenario.yamlsafe import read_yaml_file
 from mobot_cli.scenario.yamlsource import Source, parse_value, parse_yaml, read_source
 
-MAX_RUNS = 10_000  # runs of one sweep (each is prepared up front, ~10 ms apiece)
+MAX_RUNS = 10_000  # runs of one sweep (each is prepared up front: more would keep the first run waiting)
 SWEEP_FILE_KEYS = ("scenario", "name", "seed", "set", "grid", "zip", "random", "samples")
 
 

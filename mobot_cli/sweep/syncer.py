@@ -1,6 +1,6 @@
 """Run folders' summary.json flushed to disk by the sweep, off the workers' clocks.
 
-`mobot run` flushes summary.json itself (an fsync, ~4 ms here). A sweep's workers write it
+`mobot run` flushes summary.json itself (an fsync, which holds the run up). A sweep's workers write it
 without, and the sweep flushes each one from a thread as its run is reported, while the next
 runs go on; the sweep waits for the last ones before it writes its final results.csv and
 sweep.json. So, as with `mobot run`, a finished sweep's summaries are on disk; a power cut in

@@ -62,12 +62,12 @@ def run_task(task: Task) -> TaskResult:
 
     started = time.perf_counter()
     try:
-        # summary.json is flushed to disk by the sweep (runner.Syncer): an fsync held a run ~4 ms.
+        # summary.json is flushed to disk by the sweep (runner.Syncer): an fsync here would hold the run up.
         result = execute(task.plan, task.resolved_yaml, Path(task.out_dir), durable=False)
     except MobotError as exc:
         kind = "fault" if isinstance(exc, SimulationFault) else "error"
         return failed(task.index, kind, str(exc), time.perf_counter() - started)
-    except Exception as exc:  # a bug or a broken robot: this run fails, the sweep goes on
+    except Exception as exc:  # noqa: BLE001 - a bug or a broken robot: this run fails, the sweep goes on
         return failed(task.index, "error", f"{type(exc).__name__}: {exc}", time.perf_counter() - started)
     wall = time.perf_counter() - started
     robots = {name: _figures(robot) for name, robot in result.record.robots.items()}

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import Any, Optional
+from typing import TYPE_CHECKING, Any, Optional
 
 from mobot_cli.common.transforms import Planar
 from mobot_cli.plan import Expectation, Plan, RobotPlan
@@ -21,6 +21,9 @@ from mobot_cli.sim.state import RobotState
 from mobot_cli.timeline.expect_time import Tracker, coverage_areas, tracker
 from mobot_cli.timeline.goals import GoalEnded
 from mobot_cli.timeline.records import Sample, Sink
+
+if TYPE_CHECKING:
+    from mobot_cli.timeline.coverage import Sweep
 
 
 @dataclass

@@ -88,7 +88,8 @@ def test_nested_models_relative_to_and_frames(tmp_path):
           <collision name='c'><geometry><sphere><radius>0.5</radius></sphere></geometry></collision></link>
         <model name='inner'><pose>0 0 2 0 0 3.141592653589793</pose>
           <link name='l'><pose>1 0 0 0 0 0</pose>
-            <collision name='c'><geometry><cylinder><radius>0.1</radius><length>1</length></cylinder></geometry></collision>
+            <collision name='c'>
+              <geometry><cylinder><radius>0.1</radius><length>1</length></cylinder></geometry></collision>
           </link></model>
       </model>""", "frames.sdf")
     world = load_world(str(path), tmp_path)
@@ -345,7 +346,8 @@ def test_sdf_robot_joint_axes_end_up_in_the_joint_frame(tmp_path, axis, expected
     (tmp_path / "r.sdf").write_text(sdf(f"""<model name='r'>
       <link name='base'><collision name='c'><geometry><box><size>0.3 0.2 0.1</size></box></geometry></collision></link>
       <link name='wheel'><pose>0 0.15 0 -1.5707963267948966 0 0</pose>
-        <collision name='c'><geometry><cylinder><radius>0.05</radius><length>0.02</length></cylinder></geometry></collision></link>
+        <collision name='c'>
+          <geometry><cylinder><radius>0.05</radius><length>0.02</length></cylinder></geometry></collision></link>
       <joint name='j' type='revolute'><parent>base</parent><child>wheel</child><axis>{axis}</axis></joint>
     </model>""", version="1.8"))
     expansion = expand_sdf(tmp_path / "r.sdf", ResourceResolver(tmp_path))

@@ -183,8 +183,9 @@ def test_a_sweep_warns_once_not_per_run(fresh):
     shared.mkdir()
     shared.chmod(0o777)
     env = {**os.environ, "MOBOT_CACHE_DIR": str(shared)}
-    done = subprocess.run([sys.executable, "-m", "mobot_cli", "sweep", str(REPO / "scenarios" / "sweeps" / "engines.yaml"),
-                           "--out", str(fresh / "sweep")], env=env, capture_output=True, text=True, timeout=600)
+    sweep = REPO / "scenarios" / "sweeps" / "engines.yaml"
+    done = subprocess.run([sys.executable, "-m", "mobot_cli", "sweep", str(sweep), "--out", str(fresh / "sweep")],
+                          env=env, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
     assert len(warnings(done)) == 1, done.stderr
     assert os.listdir(shared) == []

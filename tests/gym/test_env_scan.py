@@ -107,7 +107,8 @@ def test_the_observed_scan_is_the_run_folders_row(room, tmp_path):
 
 
 def test_the_reward_sees_the_scan(room):
-    env = MobotEnv(room, args=LIDAR, normalize=False, reward=lambda o: float(o.scan.min()), terminated=lambda o: o.scan.min() < 0.4)
+    env = MobotEnv(room, args=LIDAR, normalize=False, reward=lambda o: float(o.scan.min()),
+                   terminated=lambda o: o.scan.min() < 0.4)
     env.reset(seed=0)
     _, reward, terminated, _, _ = env.step(np.array([0.0, 0.0], dtype=np.float32))
     env.close()

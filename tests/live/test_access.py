@@ -162,7 +162,8 @@ def test_history_lines_stay_small(tmp_path):
     first = json.loads(lines[0])
     assert first["name"] == "n" * 256 + "...[cut: 3000000 chars]" and first["result"] == "NAME_INVALID"
     squeezed = json.loads(lines[2])["name"]  # 100 long items: the field is a cut piece of its JSON
-    assert squeezed.startswith('{"a": ["nnnn') and squeezed.endswith("...[cut: 8987 chars]")  # 32 items of 256 + markers
+    # 32 items of 256 + markers
+    assert squeezed.startswith('{"a": ["nnnn') and squeezed.endswith("...[cut: 8987 chars]")
 
 
 def test_the_spawned_description_cache_keeps_the_most_recently_used(tmp_path, monkeypatch):

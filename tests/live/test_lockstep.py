@@ -197,7 +197,8 @@ def test_teleport_moves_the_robot_and_a_teleport_into_a_wall_is_invalid_pose(cac
     try:
         assert mobot(server, "spawn", "r1", "--file", "mobot", "-x", "-3", "-y", "-2.5")[0] == 0
         moved = reply_of(server, "teleport", "r1", "-x", "2", "-y", "-4", "-Y", "0.5")
-        assert (moved["pose"]["x"], moved["pose"]["y"], moved["pose"]["yaw"]) == pytest.approx((2.0, -4.0, 0.5), abs=1e-6)
+        assert (moved["pose"]["x"], moved["pose"]["y"], moved["pose"]["yaw"]) \
+            == pytest.approx((2.0, -4.0, 0.5), abs=1e-6)
         assert moved["pose"]["z"] == pytest.approx(0.0, abs=2e-3)  # rested on the floor slab
         code, out, err = mobot(server, "teleport", "r1", "-x", "0", "-y", "-5")  # into wall_south
         assert (code, out) == (2, "")
@@ -295,7 +296,8 @@ def test_nan_and_infinity_are_invalid_requests(paused, raw):
     (["state", "mobot", "--reference-frame", "nowhere"], "NOT_FOUND: reference frame 'nowhere'"),
     (["teleport", "nobody", "-x", "1"], "NOT_FOUND: no robot named 'nobody'"),
     (["teleport", "mobot", "-Y", "1", "--quat", "0", "0", "0", "1"], "either as --quat or as -R -P -Y, not both"),
-    (["spawn", "r2", "-f", "mobot", "-R", "1", "--quat", "0", "0", "0", "1"], "either as --quat or as -R -P -Y, not both"),
+    (["spawn", "r2", "-f", "mobot", "-R", "1", "--quat", "0", "0", "0", "1"],
+     "either as --quat or as -R -P -Y, not both"),
 ])
 def test_bad_cli_input_exits_2_with_one_line(paused, args, text):
     code, out, err = mobot(paused, *args)

@@ -104,7 +104,8 @@ def test_random_lockstep_requests_always_get_a_known_result(tmp_path_factory):
             assert client.call("ping")["ok"]
     finally:
         socket.close()
-        print(f"\nlockstep fuzz: {sum(results.values())} replies; " + ", ".join(f"{k} {v}" for k, v in results.most_common()))
+        print(f"\nlockstep fuzz: {sum(results.values())} replies; "
+              + ", ".join(f"{k} {v}" for k, v in results.most_common()))
         server.kill()
     assert not failures, failures[:5]
     assert sum(results.values()) == EXAMPLES

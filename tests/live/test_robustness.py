@@ -70,7 +70,8 @@ def test_unknown_op_is_feature_unsupported(live, raw):
     reply = exchange(raw, b'{"op": "teleport", "id": "t1"}')
     assert (reply["id"], reply["result"], reply["code"]) == ("t1", "FEATURE_UNSUPPORTED", 0)
     assert reply["message"] == ("unknown request op 'teleport': this server knows ping, spawn, delete, "
-                                "list, cmd, odom, scan, stop, goto, pause, resume, step, reset, get_state, set_state, features")
+                                "list, cmd, odom, scan, stop, goto, pause, resume, step, reset, get_state, "
+                                "set_state, features")
 
 
 def test_more_than_one_frame_or_no_delimiter(live, raw):
@@ -149,7 +150,7 @@ def test_a_thousand_rapid_lists_from_several_clients(live):
                 for _ in range(n):
                     reply = client.request("list")
                     answers.append(len(reply["robots"]) >= 0)
-        except Exception as exc:  # collected and asserted below
+        except Exception as exc:  # noqa: BLE001 - collected and asserted below
             failures.append(repr(exc))
 
     with live.client() as client:

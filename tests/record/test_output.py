@@ -49,7 +49,8 @@ def on_tmpfs(options: str, mount: Path, copy: Path, *args, fill: bool = False) -
     it wrote is copied to ``copy`` before the namespace, and the tmpfs, go away. ``fill``: a file
     takes all its space first."""
     mount.mkdir()
-    script = ('mount -t tmpfs -o "$1" mobot-test "$2" || exit 99; [ -z "$FILL" ] || cat /dev/zero > "$2/fill" 2>/dev/null; '
+    script = ('mount -t tmpfs -o "$1" mobot-test "$2" || exit 99; '
+              '[ -z "$FILL" ] || cat /dev/zero > "$2/fill" 2>/dev/null; '
               'shift 3; "$@"; rc=$?; cp -a "$MNT/." "$COPY"; exit $rc')
     copy.mkdir()
     return subprocess.run(["unshare", "--mount", "--map-root-user", "sh", "-c", script, "sh", options, str(mount),

@@ -81,7 +81,8 @@ def rosbags_odom(store, stamp, state, cov):
                                          orientation=Q(x=0.0, y=0.0, z=math.sin(half), w=math.cos(half))),
         covariance=np.array(cov))
     tw = t["geometry_msgs/msg/TwistWithCovariance"](
-        twist=t["geometry_msgs/msg/Twist"](linear=V(x=state.odom_vx, y=0.0, z=0.0), angular=V(x=0.0, y=0.0, z=state.odom_wz)),
+        twist=t["geometry_msgs/msg/Twist"](linear=V(x=state.odom_vx, y=0.0, z=0.0),
+                                           angular=V(x=0.0, y=0.0, z=state.odom_wz)),
         covariance=np.array(cov))
     msg = t["nav_msgs/msg/Odometry"](header=header(store, stamp, "r1/odom"), child_frame_id="r1/base_link",
                                      pose=pose, twist=tw)
@@ -99,7 +100,8 @@ def test_odometry_bytes_equal_rosbags_and_cyclonedds(store, x, y, yaw, vx, wz, s
     cov = list(messages.frames.covariance)
     theirs = idl.Odometry(
         idl.Header(idl.Time(sec, nsec), "r1/odom"), "r1/base_link",
-        idl.PoseWithCovariance(idl.Pose(idl.Point(x, y, 0.0), idl.Quaternion(0.0, 0.0, math.sin(half), math.cos(half))), cov),
+        idl.PoseWithCovariance(idl.Pose(idl.Point(x, y, 0.0),
+                                        idl.Quaternion(0.0, 0.0, math.sin(half), math.cos(half))), cov),
         idl.TwistWithCovariance(idl.Twist(idl.Vector3(vx, 0.0, 0.0), idl.Vector3(0.0, 0.0, wz)), cov)).serialize()
     assert ours == theirs
 
@@ -113,7 +115,8 @@ def test_cmd_vel_bytes_and_their_decoding(store, linear, angular):
     V = t["geometry_msgs/msg/Vector3"]
     msg = t["geometry_msgs/msg/Twist"](linear=V(x=linear, y=0.0, z=0.0), angular=V(x=0.0, y=0.0, z=angular))
     assert ours == bytes(store.serialize_cdr(msg, rm.TWIST))
-    assert twist(idl.Twist(idl.Vector3(linear, 5.0, 6.0), idl.Vector3(7.0, 8.0, angular)).serialize()) == (linear, angular)
+    message = idl.Twist(idl.Vector3(linear, 5.0, 6.0), idl.Vector3(7.0, 8.0, angular))
+    assert twist(message.serialize()) == (linear, angular)
 
 
 def test_twist_that_is_not_little_endian_cdr_is_refused():

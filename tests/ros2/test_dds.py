@@ -281,7 +281,8 @@ def test_a_dds_configuration_cyclone_refuses_is_bad_input_before_any_output(monk
 def test_a_lidar_scan_reaches_another_participant_as_the_bag_has_it(tmp_path, cache):
     """<ns>/scan (sensor_msgs/LaserScan) from the bundled robot's lidar, at its 10 Hz, stamped in sim time."""
     scenario = tmp_path / "world.yaml"
-    scenario.write_text(WORLD.format(ros2="").replace("description: mobot,", "description: mobot, args: {lidar: 'true'},"))
+    scenario.write_text(WORLD.format(ros2="").replace("description: mobot,",
+                                                      "description: mobot, args: {lidar: 'true'},"))
     live = LiveProcess(str(scenario), "--ros2", cache_dir=cache)
     try:
         scans = peer("take", "rt/r1/scan", "sensor_msgs/msg/LaserScan", "2")

@@ -58,7 +58,8 @@ def test_quickstart_ends_where_the_physics_engine_ends_it(tmp_path):
     assert math.hypot(b["true_x"] - k["true_x"], b["true_y"] - k["true_y"]) < 0.05
     assert abs(b["true_yaw"] - k["true_yaw"]) < 0.01
     # No slip: the kinematic robot's encoders are its ground truth.
-    assert (k["odom_x"], k["odom_y"], k["odom_yaw"]) == pytest.approx((k["true_x"], k["true_y"], k["true_yaw"]), abs=1e-6)
+    assert (k["odom_x"], k["odom_y"], k["odom_yaw"]) \
+        == pytest.approx((k["true_x"], k["true_y"], k["true_yaw"]), abs=1e-6)
 
 
 def test_a_low_step_rate_is_allowed_and_exact(tmp_path):

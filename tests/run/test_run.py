@@ -39,7 +39,8 @@ def quickstart_run(tmp_path_factory):
 
 
 def test_run_folder_layout_and_exact_csv_header(quickstart_run):
-    assert sorted(p.name for p in quickstart_run.iterdir()) == ["odom", "scenario.yaml", "summary.json", "trajectory.png"]
+    assert sorted(p.name for p in quickstart_run.iterdir()) \
+        == ["odom", "scenario.yaml", "summary.json", "trajectory.png"]
     csv_path = quickstart_run / "odom" / "mobot.csv"
     assert csv_path.read_text().splitlines(keepends=True)[0] == HEADER
     data = rows(csv_path)

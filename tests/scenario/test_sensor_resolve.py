@@ -140,14 +140,17 @@ def test_adding_sensors(tmp_path):
 
 @pytest.mark.parametrize("off", ["false", "off", "{enabled: false}"])
 def test_turning_a_sensor_off(tmp_path, off):
-    plan = prepare(scenario(tmp_path, f"robots:\n  - {{name: mobot, args: {{imu: 'true'}}, sensors: {{imu: {off}}}}}\n")).plan
+    text = f"robots:\n  - {{name: mobot, args: {{imu: 'true'}}, sensors: {{imu: {off}}}}}\n"
+    plan = prepare(scenario(tmp_path, text)).plan
     assert plan.robots[0].sensors == ()
 
 
 @pytest.mark.parametrize("on", ["true", "on", "{}", "{enabled: true}"])
 def test_on_keeps_a_sensor_as_described(tmp_path, on):
-    plan = prepare(scenario(tmp_path, f"robots:\n  - {{name: mobot, args: {{imu: 'true'}}, sensors: {{imu: {on}}}}}\n")).plan
-    assert plan.robots[0].sensors == prepare(scenario(tmp_path, "robots:\n  - {name: mobot, args: {imu: 'true'}}\n")).plan.robots[0].sensors
+    text = f"robots:\n  - {{name: mobot, args: {{imu: 'true'}}, sensors: {{imu: {on}}}}}\n"
+    plan = prepare(scenario(tmp_path, text)).plan
+    described = prepare(scenario(tmp_path, "robots:\n  - {name: mobot, args: {imu: 'true'}}\n")).plan
+    assert plan.robots[0].sensors == described.robots[0].sensors
 
 
 def test_keys_by_name_topic_and_last_segment(corpus, tmp_path, monkeypatch):
@@ -289,7 +292,8 @@ def test_any_rate_becomes_whole_steps_and_reloads_to_the_same(tmp_path, rate, ph
     if rate > physics:
         return
     os.makedirs(tmp_path, exist_ok=True)
-    path = scenario(tmp_path, f"robots:\n  - {{name: mobot, args: {{imu: 'true'}}, sensors: {{imu: {{rate_hz: {rate!r}}}}}}}\n",
+    path = scenario(tmp_path,
+                    f"robots:\n  - {{name: mobot, args: {{imu: 'true'}}, sensors: {{imu: {{rate_hz: {rate!r}}}}}}}\n",
                     physics=physics)
     first = prepare(path)
     every = first.plan.robots[0].sensors[0].every

@@ -62,7 +62,8 @@ def test_standing_on_a_static_floor_or_ramp_is_not_a_collision(bundled, floor):
         world_plan = WorldPlan(ground_plane=False, bodies=(box("slab", (10, 10, 0.1), (0, 0, -0.05)),))
     else:  # a 10 degree ramp to drive up
         a = math.radians(10)
-        world_plan = WorldPlan(bodies=(box("ramp", (3, 2, 0.1), (1.8, 0, 0.05), (0, -math.sin(a / 2), 0, math.cos(a / 2))),))
+        ramp = box("ramp", (3, 2, 0.1), (1.8, 0, 0.05), (0, -math.sin(a / 2), 0, math.cos(a / 2)))
+        world_plan = WorldPlan(bodies=(ramp,))
     with World(physics, world_plan) as world:
         world.spawn(robot)
         assert drive(world, ["mobot"], 6.0) == {"mobot": 0}

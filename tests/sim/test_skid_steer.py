@@ -65,7 +65,7 @@ SKID = [name for name, case in CASES.items() if case.skid]
 
 @pytest.mark.parametrize("fraction", [0.5, 1.0])
 @pytest.mark.parametrize("name", SKID)
-def test_corpus_skid_steer_holds_arc_radius_and_speed(robot_plans, name, fraction):
+def test_corpus_skid_steer_holds_arc_radius_and_speed(robot_plans, name, fraction):  # noqa: F811 - the fixture imported above
     speed = CASES[name].speed * fraction
     radius, v = arc(robot_plans[name], speed)
     assert radius == pytest.approx(1.0, rel=0.05)

@@ -152,7 +152,8 @@ def test_a_run_that_raises_is_a_failed_row(tmp_path):
         CommandResult(1, "", f"mobot: 1 of 2 runs failed; see {out}/results.csv\n")
     table = rows(out)
     assert [(r["status"], r["failure"]) for r in table] == [("passed", ""), ("failed", "error")]
-    assert table[1]["reason"].startswith("robot 'b' spawned at x=0.000, y=0.000") and "into robot 'a'" in table[1]["reason"]
+    assert table[1]["reason"].startswith("robot 'b' spawned at x=0.000, y=0.000")
+    assert "into robot 'a'" in table[1]["reason"]
     assert table[1]["a.x"] == "" and float(table[0]["b.x"]) == pytest.approx(2.0, abs=1e-3)
 
 

@@ -171,7 +171,8 @@ def test_expectations_over_time_say_what_happened_and_when(tmp_path):
     assert results[3]["happened"].startswith("visited 2 of 3 ((1.00, 0.00) at ")
     assert results[3]["happened"].endswith("never came within 0.1 m of (1.00, 0.00) after that "
                                            "(closest 0.9" + results[3]["happened"].split("(closest 0.9")[1])
-    assert results[4]["passed"] and results[4]["happened"].startswith("ended 'timed_out' at 14 s, 2 s after it started, 2.5")
+    assert results[4]["passed"]
+    assert results[4]["happened"].startswith("ended 'timed_out' at 14 s, 2 s after it started, 2.5")
     assert results[4]["expected"] == "end goal command 1 'timed_out'"
     assert results[5]["passed"] and results[5]["happened"].startswith("ended 'reached' at ")
     # Straight along y = 0 through the area: the footprint (0.34 m wide) sweeps 0.34 of its 2 m^2.

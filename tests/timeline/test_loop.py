@@ -170,7 +170,8 @@ def test_a_reset_timeline_replays_its_scenario_to_the_last_bit(name):
             before = timeline.robots.copy()
             timeline.reset()
             assert timeline.step == 0 and timeline.resets == len(lives)
-            assert [r.name for r in records if isinstance(r, Deleted) and r.by == "reset"][-len(before):] == list(before)
-            assert [r.robot.name for r in records if isinstance(r, Spawned) and r.by == "reset"][-len(plan.robots):] \
-                == [robot.name for robot in plan.robots]
+            deleted = [r.name for r in records if isinstance(r, Deleted) and r.by == "reset"]
+            assert deleted[-len(before):] == list(before)
+            respawned = [r.robot.name for r in records if isinstance(r, Spawned) and r.by == "reset"]
+            assert respawned[-len(plan.robots):] == [robot.name for robot in plan.robots]
     assert lives[0] == lives[1] and len(lives[0]) > 10

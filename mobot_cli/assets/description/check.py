@@ -150,8 +150,8 @@ def check_with_yourdfpy(text: str, source: Path) -> None:
     try:
         parser = etree.XMLParser(remove_blank_text=True, remove_comments=True)
         element = etree.fromstring(text.encode("utf-8"), parser=parser)
-        model = yourdfpy.URDF(robot=yourdfpy.URDF._parse_robot(xml_element=element),
-                              build_scene_graph=False, load_meshes=False)
+        robot = yourdfpy.URDF._parse_robot(xml_element=element)  # noqa: SLF001 - no public hook in yourdfpy
+        model = yourdfpy.URDF(robot=robot, build_scene_graph=False, load_meshes=False)
         valid = model.validate(validation_fn=lambda errors: not errors)
     except DescriptionError:
         raise

@@ -102,8 +102,8 @@ def describe_expansion(source: Path, expansion: Expansion, resolver: ResourceRes
     The search paths (the scenario's folder among them) matter only through where the mesh
     URIs lead, so an entry serves any search paths under which each of its URIs leads to the
     same file (or to none) as when it was made: a scenario in a new folder does not check the
-    description again (~0.8 s with yourdfpy's import). Search paths seen to agree are noted in
-    the entry, so their next run skips the comparison."""
+    description again (slow: the check imports yourdfpy). Search paths seen to agree are noted
+    in the entry, so their next run skips the comparison."""
     key = cache.digest("robot", expansion.text, str(source), *(["skip_missing"] if skip_missing else []))
     document = cache.load("robot", key)
     loaded = _from_document(document)

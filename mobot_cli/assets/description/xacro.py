@@ -4,6 +4,9 @@ Results are cached on disk, keyed by the content of every file the expansion rea
 arguments, the environment variables it looked at and the search roots.
 """
 
+# xacro has no public hook for $(find)/$(env)/$(optenv): mobot swaps its private _eval_* table.
+# ruff: noqa: SLF001
+
 from __future__ import annotations
 
 import contextlib

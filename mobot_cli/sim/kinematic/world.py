@@ -108,7 +108,8 @@ class KinematicWorld(World):
             (lo, hi) = body_bounds(self._probes, sim.body)
             x, y, z = sim.link_pose()[0]
             reach = float(np.hypot(max(x - lo[0], hi[0] - x), max(y - lo[1], hi[1] - y)))
-            mover = Mover(sim, self.physics.dt, lo[2], reach, feet(self._probes, sim.body, lo, (x, y, sim.spawn_xy_yaw[2])))
+            mover = Mover(sim, self.physics.dt, lo[2], reach,
+                          feet(self._probes, sim.body, lo, (x, y, sim.spawn_xy_yaw[2])))
             mover.above = hi[2] - z  # its highest point above its link origin
             floor = self._floor_under([mover], mover.floor + SUPPORT_BAND)[0]
             if not np.isfinite(floor):

@@ -118,7 +118,8 @@ def cast(cid: int, scene: StaticScene | None, jobs: list[ScanJob],
     if len(jobs) == 1:  # t is a fresh array: the range_min is added in place
         t += np.float32(jobs[0].spec.range_min)
         return [t.reshape(jobs[0].beams.shape)]
-    return [(part + np.float32(job.spec.range_min)).reshape(job.beams.shape) for job, part in zip(jobs, _split(t, jobs))]
+    return [(part + np.float32(job.spec.range_min)).reshape(job.beams.shape)
+            for job, part in zip(jobs, _split(t, jobs))]
 
 
 def cast_scans(scene: StaticScene, spec: SensorSpec, beams: Beams, positions: np.ndarray,

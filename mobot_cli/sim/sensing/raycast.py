@@ -23,7 +23,7 @@ its height, so the answers are those of the whole scene, bit for bit
 A scene depends on the world plan alone, so the last world's scene is kept (``static_scene``)
 for the next World of that plan: a sweep worker's runs, a Gymnasium environment's episodes
 and the benchmark's runs follow one another in one process, and building the triangles and
-their BVHs again cost a few ms a run (~10 % of what a 10 Hz lidar adds to a 60 s run).
+their BVHs again would cost every run a good part of what its lidar adds.
 """
 
 from __future__ import annotations

@@ -4,8 +4,9 @@ The World owns one ``Sensing`` once a robot with sensors arrives; the timeline a
 the readings due at a step (each sensor at its own rate), and every lidar due at that step
 is cast in one batch (sim/sensing/lidar.py). With one robot in the world only the static world can
 be in a scan's way: the scan keeps its pose and waits, and the waiting scans are cast
-together when one of them is first read (``ScanData.ranges``) or 50 wait. Noise comes from a generator per sensor, seeded by the
-run's seed and the robot's and sensor's names: the same seed gives the same readings.
+together when one of them is first read (``ScanData.ranges``) or 50 wait. Noise comes from a
+generator per sensor, seeded by the run's seed and the robot's and sensor's names: the same seed
+gives the same readings.
 
 * lidar: ranges (m, float32) on Gazebo's beam grid, +inf for no return, with gaussian noise
   and range quantisation as the ``<ray>`` block asks, clamped to [range_min, range_max];
@@ -134,7 +135,7 @@ class _Waiting:
         with self.lock:
             self.items += scans
             for rig, data in scans:
-                data._waiting = self
+                data._waiting = self  # noqa: SLF001 - ScanData's lazy state is this module's to fill
                 self.rays += rig.rays
             full = len(self.items) >= MAX_WAITING_SCANS or self.rays >= MAX_WAITING_RAYS
         if full:
@@ -154,7 +155,7 @@ class _Waiting:
                                      dtype=np.float32).reshape(-1, 3, 3)
                 ranges = _lidar_noise(rig, lidar.cast_scans(self.scene, rig.spec, rig.beams, positions, rotations))
                 for (_, data), values in zip(scans, ranges):
-                    data._ranges = values
+                    data._ranges = values  # noqa: SLF001 - behind ScanData.ranges, filled by this module
 
 
 def noise_rng(seed: int, robot: str, sensor: str) -> np.random.Generator:
@@ -235,7 +236,7 @@ class Sensing:
     def _scans(self, scans: list[tuple[_Rig, ScanData]]) -> None:
         """Give the scans due their ranges: later, when only the static world can be in their
         way (one robot in the world), else now, robots and all."""
-        # Runs once per lidar reading: a 10 Hz lidar adds ~1 % to a run per 10 us spent here.
+        # Runs once per lidar reading: whatever it spends, every scan of a run pays.
         waiting = self._waiting
         if waiting is None:
             scene = self.scene
@@ -253,7 +254,7 @@ class Sensing:
         boxes = {body: _aabb(self.cid, body) for body in bodies} if len(bodies) > 1 else {}
         ranges = lidar.cast(self.cid, self.scene, jobs, boxes)
         for (rig, data), values in zip(scans, ranges):
-            data._ranges = _lidar_noise(rig, values)
+            data._ranges = _lidar_noise(rig, values)  # noqa: SLF001 - behind ScanData.ranges, filled here
 
     def _pose(self, rig: _Rig) -> tuple[tuple[float, ...], tuple[float, ...]]:
         """The sensor frame's world pose: its link's URDF frame composed with the sensor pose."""

@@ -11,7 +11,8 @@ from mobot_cli.sim.sensing import lidar
 def test_more_rays_than_one_batch_all_come_back():
     cid = p.connect(p.DIRECT)
     try:
-        box = p.createMultiBody(0.0, p.createCollisionShape(p.GEOM_BOX, halfExtents=(0.5, 0.5, 0.5), physicsClientId=cid),
+        shape = p.createCollisionShape(p.GEOM_BOX, halfExtents=(0.5, 0.5, 0.5), physicsClientId=cid)
+        box = p.createMultiBody(0.0, shape,
                                 basePosition=(2.0, 0.0, 0.0), physicsClientId=cid)
         n = 2 * lidar.MAX_BATCH + 5
         starts = np.zeros((n, 3))

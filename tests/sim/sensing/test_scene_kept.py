@@ -86,8 +86,10 @@ def test_a_mesh_file_rewritten_between_two_worlds_is_read_again(tmp_path):
     must see the file as it is now, as PyBullet does."""
     mesh = tmp_path / "wall.obj"
     _wall(mesh, 2.0)
-    world = WorldPlan(name="walls", bodies=(StaticBody(name="wall", shapes=(StaticShape("mesh", (1, 1, 1), mesh=str(mesh)),)),))
-    ray = (np.array([[0.0, 0.0, 0.5]], np.float32), np.array([[1.0, 0.0, 0.0]], np.float32), np.array([10.0], np.float32))
+    wall = StaticBody(name="wall", shapes=(StaticShape("mesh", (1, 1, 1), mesh=str(mesh)),))
+    world = WorldPlan(name="walls", bodies=(wall,))
+    ray = (np.array([[0.0, 0.0, 0.5]], np.float32), np.array([[1.0, 0.0, 0.0]], np.float32),
+           np.array([10.0], np.float32))
     first = raycast.static_scene(world)
     assert raycast.static_scene(world)._scene is first._scene  # kept while the file is the same
     assert first.cast(*ray)[0] == pytest.approx(2.0, abs=1e-6)  # Embree's float32 (4.x: one ulp short)
@@ -100,7 +102,8 @@ def test_a_mesh_file_rewritten_between_two_worlds_is_read_again(tmp_path):
 def test_a_forgotten_scene_is_built_again(tmp_path):
     mesh = tmp_path / "wall.obj"
     _wall(mesh, 2.0)
-    world = WorldPlan(name="walls", bodies=(StaticBody(name="wall", shapes=(StaticShape("mesh", (1, 1, 1), mesh=str(mesh)),)),))
+    wall = StaticBody(name="wall", shapes=(StaticShape("mesh", (1, 1, 1), mesh=str(mesh)),))
+    world = WorldPlan(name="walls", bodies=(wall,))
     first = raycast.static_scene(world)
     raycast.forget_kept()
     assert raycast.static_scene(world)._scene is not first._scene
