@@ -20,8 +20,8 @@ SKIP_HELP = ("Leave out world models and robot visuals/collisions whose files ar
 
 def check(
     ctx: typer.Context,
-    path: Path = typer.Argument(..., help="A scenario (.yaml), robot (.urdf, .xacro, .sdf model or model folder), world "
-                                         "(.world, .sdf, bundled name), or run folder."),
+    path: Path = typer.Argument(..., help="A scenario (.yaml), robot (.urdf, .xacro, .sdf model or model folder), "
+                                         "world (.world, .sdf, bundled name), or run folder."),
     mappings: list[str] = typer.Argument(None, metavar="[NAME:=VALUE]...", help="xacro arguments for a robot."),
     json_: bool = typer.Option(False, "--json", help="Print the result as JSON."),
     skip_missing: bool = typer.Option(False, "--skip-missing", help=SKIP_HELP),

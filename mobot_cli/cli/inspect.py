@@ -16,8 +16,8 @@ def inspect(
     robot: str = typer.Argument(..., help="A bundled robot name or a .urdf/.xacro path."),
     mappings: list[str] = typer.Argument(None, metavar="[NAME:=VALUE]...", help="xacro arguments."),
     json_: bool = typer.Option(False, "--json", help="Print the result as JSON."),
-    skip_missing: bool = typer.Option(False, "--skip-missing",
-                                      help="Leave out visuals and collisions whose meshes are missing, with a warning."),
+    skip_missing: bool = typer.Option(
+        False, "--skip-missing", help="Leave out visuals and collisions whose meshes are missing, with a warning."),
 ) -> int:
     """Show a robot's link/joint tree, total mass, footprint and detected drive."""
     from mobot_cli.assets.description.describe import load_robot

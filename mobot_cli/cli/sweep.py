@@ -20,8 +20,10 @@ def sweep(
     ctx: typer.Context,
     path: Path = typer.Argument(..., help="A scenario, or a sweep file (YAML naming a base 'scenario:' and "
                                           "grid/zip/random)."),
-    grid: list[str] = typer.Option([], "--grid", help="KEY=V1,V2,...: one axis; several --grid make every combination."),
-    zip_: list[str] = typer.Option([], "--zip", help="KEY=V1,V2,...: lists paired by position; all --zip form one axis."),
+    grid: list[str] = typer.Option([], "--grid",
+                                   help="KEY=V1,V2,...: one axis; several --grid make every combination."),
+    zip_: list[str] = typer.Option([], "--zip",
+                                   help="KEY=V1,V2,...: lists paired by position; all --zip form one axis."),
     random: list[str] = typer.Option([], "--random", help="KEY=LOW:HIGH: uniform draws (whole numbers when both "
                                                           "ends are); all --random form one axis."),
     samples: Optional[int] = typer.Option(None, "--samples", help="How many random draws."),
