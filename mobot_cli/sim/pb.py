@@ -3,21 +3,9 @@ import, which would land in front of every error message and in scripts' logs.""
 
 from __future__ import annotations
 
-import os
-import sys
+import importlib
 
+from mobot_cli.common.streams import silenced
 
-def _import_quietly():
-    sys.stderr.flush()
-    saved, devnull = os.dup(2), os.open(os.devnull, os.O_WRONLY)
-    try:
-        os.dup2(devnull, 2)
-        import pybullet
-    finally:
-        os.dup2(saved, 2)
-        os.close(saved)
-        os.close(devnull)
-    return pybullet
-
-
-p = _import_quietly()
+with silenced(2):
+    p = importlib.import_module("pybullet")

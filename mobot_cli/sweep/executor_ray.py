@@ -9,12 +9,12 @@ from when a run starts, not from when it was queued.
 
 from __future__ import annotations
 
-import contextlib
 import os
 import socket
 import time
 from typing import Callable
 
+from mobot_cli.common.streams import silenced
 from mobot_cli.errors import Location, UsageError
 from mobot_cli.sweep.task import RunTask, Task, TaskResult, failed, run_task_elsewhere
 
@@ -132,7 +132,7 @@ def _check_token(ray, address: str) -> None:
         return  # a Ray without token authentication
     maybe_enable_token_auth_if_token_available(warn_if_disabled=False)  # as ray.init does
     try:
-        with _quiet_stderr():  # Ray's core logs the refusal on fd 2 as well
+        with silenced(2):  # Ray's core logs the refusal on fd 2 as well
             GcsClient(address=address)
     except ray.exceptions.AuthenticationError:
         token = os.environ.get("RAY_AUTH_MODE", "").lower() == "token"
@@ -144,19 +144,6 @@ def _check_token(ray, address: str) -> None:
                               "on the head node prints it.") from None
     except Exception:  # noqa: BLE001 - anything else is ray.init's to report, as before
         return
-
-
-@contextlib.contextmanager
-def _quiet_stderr():
-    """File descriptor 2 to /dev/null for the block (C++ logging does not go through sys.stderr)."""
-    saved = os.dup(2)
-    try:
-        with open(os.devnull, "w") as null:
-            os.dup2(null.fileno(), 2)
-        yield
-    finally:
-        os.dup2(saved, 2)
-        os.close(saved)
 
 
 def _check_reachable(address: str) -> None:

@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
-import os
-import sys
 from pathlib import Path
 
 
@@ -35,21 +32,3 @@ def links_with_friction(text: str) -> frozenset[str]:
         for link in root.findall("link")
         if link.find("contact/lateral_friction") is not None
     )
-
-
-@contextlib.contextmanager
-def quiet_stdout():
-    """Silence C-level prints (PyBullet's URDF importer writes to fd 1) for the duration."""
-    try:
-        sys.stdout.flush()
-        saved = os.dup(1)
-    except (OSError, ValueError):  # no real fd 1 (embedded interpreters): nothing to protect
-        yield
-        return
-    try:
-        with open(os.devnull, "w") as null:
-            os.dup2(null.fileno(), 1)
-            yield
-    finally:
-        os.dup2(saved, 1)
-        os.close(saved)

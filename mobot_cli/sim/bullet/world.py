@@ -11,13 +11,14 @@ import math
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
+from mobot_cli.common.streams import silenced
 from mobot_cli.errors import SimulationFault, SpawnError, WorldError, did_you_mean
 from mobot_cli.plan import Physics, RobotPlan, SpawnPose, WorldPlan
 from mobot_cli.sim import clearance, entity, parts, placement, static_shapes, surroundings
 from mobot_cli.sim.bullet import friction
 from mobot_cli.sim.bullet.clients import Stage, connect, release
 from mobot_cli.sim.bullet.robot import SimRobot
-from mobot_cli.sim.bullet.urdf_file import links_with_friction, quiet_stdout, urdf_path
+from mobot_cli.sim.bullet.urdf_file import links_with_friction, urdf_path
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, ContactCounter
 from mobot_cli.sim.pb import p
 from mobot_cli.sim.state import RobotState
@@ -126,7 +127,7 @@ class World:
     def _load(self, urdf: str, xyz, quat, fixed: bool = False) -> int:
         """Load URDF text; -1 when PyBullet refuses it."""
         try:
-            with quiet_stdout():  # the importer prints its warnings to stdout
+            with silenced(1):  # the importer prints its warnings to stdout
                 return p.loadURDF(str(urdf_path(urdf)), xyz, quat, useFixedBase=fixed,
                                   flags=URDF_FLAGS, physicsClientId=self._cid)
         except p.error:
