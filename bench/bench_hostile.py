@@ -20,9 +20,7 @@ Windows are interleaved (rest, attack, rest, attack, ...) over --rounds; medians
 from __future__ import annotations
 
 import argparse
-import os
 import statistics
-import subprocess
 import sys
 import tempfile
 import threading
@@ -34,8 +32,8 @@ sys.path.insert(0, str(REPO))
 
 import numpy as np  # noqa: E402
 import zmq  # noqa: E402
+from common import Server  # noqa: E402  (bench/common.py)
 
-from mobot_cli.errors import LiveWorldError  # noqa: E402
 from mobot_cli.live.client import Client  # noqa: E402
 from mobot_cli.live.loader import Limits  # noqa: E402
 
@@ -60,32 +58,6 @@ def sheet(path: Path, faces: int) -> Path:
         np.savetxt(obj, np.stack([x.ravel(), y.ravel(), z.ravel()], 1), fmt="v %.5f %.5f %.5f")
         np.savetxt(obj, tris, fmt="f %d %d %d")
     return path
-
-
-class Server:
-    """`mobot serve` in a subprocess with its own socket and cache folder."""
-
-    def __init__(self, *args: str, cache: Path):
-        self.folder = Path(tempfile.mkdtemp(prefix="mobot-h-"))
-        self.endpoint = f"ipc://{self.folder / 's.sock'}"
-        env = {**os.environ, "MOBOT_CACHE_DIR": str(cache)}
-        self.process = subprocess.Popen([sys.executable, "-m", "mobot_cli", "serve", *args, "--quiet",
-                                         "--endpoint", self.endpoint], cwd=REPO, env=env)
-        deadline = time.monotonic() + 120
-        while True:
-            try:
-                with Client(self.endpoint, timeout=0.5) as client:
-                    client.ping()
-                return
-            except LiveWorldError:
-                if time.monotonic() > deadline:
-                    raise
-                time.sleep(0.05)
-
-    def stop(self) -> None:
-        with Client(self.endpoint, timeout=60) as client:
-            client.stop()
-        self.process.wait(60)
 
 
 def pace(endpoint: str, seconds: float, key: str, attack=None) -> float:

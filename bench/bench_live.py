@@ -19,7 +19,6 @@ import argparse
 import json
 import os
 import statistics
-import subprocess
 import sys
 import tempfile
 import threading
@@ -30,8 +29,8 @@ REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 import zmq  # noqa: E402
+from common import Server  # noqa: E402  (bench/common.py)
 
-from mobot_cli.errors import LiveWorldError  # noqa: E402
 from mobot_cli.live.client import Client  # noqa: E402
 
 HOSTILE = {  # what an attacker sent: seconds of big-int arithmetic; a loop only the load limit ends
@@ -40,32 +39,6 @@ HOSTILE = {  # what an attacker sent: seconds of big-int arithmetic; a loop only
 }
 
 TUTORIAL = [(0.0, 0.0), (1.0, 1.0), (2.0, 0.0), (1.0, 2.0), (0.0, 2.0)]
-
-
-class Server:
-    """`mobot serve` in a subprocess with its own socket and cache folder."""
-
-    def __init__(self, *args: str, cache: Path):
-        self.folder = Path(tempfile.mkdtemp(prefix="mobot-b-"))
-        self.endpoint = f"ipc://{self.folder / 's.sock'}"
-        env = {**os.environ, "MOBOT_CACHE_DIR": str(cache)}
-        self.process = subprocess.Popen([sys.executable, "-m", "mobot_cli", "serve", *args, "--quiet",
-                                         "--endpoint", self.endpoint], cwd=REPO, env=env)
-        deadline = time.monotonic() + 60
-        while True:
-            try:
-                with Client(self.endpoint, timeout=0.5) as client:
-                    client.ping()
-                return
-            except LiveWorldError:
-                if time.monotonic() > deadline:
-                    raise
-                time.sleep(0.05)
-
-    def stop(self) -> None:
-        with Client(self.endpoint) as client:
-            client.stop()
-        self.process.wait(30)
 
 
 def spawn_latencies(endpoint: str, count: int) -> list[float]:
