@@ -35,8 +35,15 @@ def read_mesh(path: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _obj(text: str) -> tuple[np.ndarray, np.ndarray]:
+    vertices, groups = obj_groups(text)
+    return vertices, np.concatenate(groups) if groups else np.zeros((0, 3), dtype=int)
+
+
+def obj_groups(text: str) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Vertices (n, 3) and the triangles of each part, parts split at ``o``/``g`` lines as
+    PyBullet's OBJ loader splits them; a part without faces is left out."""
     vertices: list[list[float]] = []
-    faces: list[tuple[int, int, int]] = []
+    groups: list[list[tuple[int, int, int]]] = [[]]
     for line in text.splitlines():
         if line.startswith("v "):
             vertices.append([float(v) for v in line.split()[1:4]])
@@ -44,10 +51,17 @@ def _obj(text: str) -> tuple[np.ndarray, np.ndarray]:
             # "f 1 2 3", "f 1/1/1 2/2/2 3/3/3", negative = from the end; polygons become fans
             idx = [int(part.split("/")[0]) for part in line.split()[1:]]
             idx = [i - 1 if i > 0 else len(vertices) + i for i in idx]
-            faces.extend((idx[0], idx[k], idx[k + 1]) for k in range(1, len(idx) - 1))
+            groups[-1].extend((idx[0], idx[k], idx[k + 1]) for k in range(1, len(idx) - 1))
+        elif (line.startswith(("o ", "g ")) or line in ("o", "g")) and groups[-1]:
+            groups.append([])
     v = np.array(vertices, dtype=float).reshape(-1, 3)
-    f = np.array(faces, dtype=int).reshape(-1, 3)
-    return v, f[(f >= 0).all(axis=1) & (f < len(v)).all(axis=1)]
+    out = []
+    for faces in groups:
+        f = np.array(faces, dtype=int).reshape(-1, 3)
+        f = f[(f >= 0).all(axis=1) & (f < len(v)).all(axis=1)]
+        if len(f):
+            out.append(f)
+    return v, out
 
 
 def _stl(data: bytes) -> tuple[np.ndarray, np.ndarray]:

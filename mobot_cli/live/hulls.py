@@ -89,26 +89,12 @@ def _make(path: Path) -> Path | None:
 
 def _obj_parts(path: Path) -> list[np.ndarray]:
     """The vertices each part of an OBJ uses, parts split at ``o``/``g`` lines as PyBullet's loader does."""
-    vertices: list[list[float]] = []
-    parts: list[list[int]] = [[]]
-    with open(path, "rb") as obj:
-        for line in obj:
-            if line.startswith(b"v "):
-                vertices.append([float(v) for v in line.split()[1:4]])
-            elif line.startswith(b"f "):
-                parts[-1].extend(int(p.split(b"/")[0]) for p in line.split()[1:])
-            elif line.startswith((b"o ", b"g ", b"o\n", b"g\n")) and parts[-1]:
-                parts.append([])
-    v = np.array(vertices, dtype=float).reshape(-1, 3)
-    out = []
-    for part in parts:
-        if part:
-            idx = np.array(part)
-            idx = np.where(idx > 0, idx - 1, len(v) + idx)
-            out.append(v[np.unique(idx)])
-    if not out:
+    from mobot_cli.common.meshfile import obj_groups
+
+    vertices, groups = obj_groups(path.read_text(encoding="utf-8", errors="replace"))
+    if not groups:
         raise ValueError("no faces")
-    return out
+    return [vertices[np.unique(faces)] for faces in groups]
 
 
 def _stl_points(path: Path) -> np.ndarray:
