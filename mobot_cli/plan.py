@@ -36,7 +36,15 @@ class SpawnPose:
 
 @dataclass(frozen=True)
 class DriveSpec:
-    """A differential (or skid-steer) drive, fully resolved: detected values merged with overrides."""
+    """A robot's drive, fully resolved: detected values merged with overrides.
+
+    ``kind`` says how wheel speeds follow a body twist (docs/drives.md has the table):
+    "diff" (one wheel a side), "skid" (several a side, scrubbing in turns), "mecanum" and "omni"
+    (holonomic: they also take a sideways ``linear_y``), "ackermann" (steered front wheels,
+    ``steering_joints``, driven ``left_joints``/``right_joints``). Every kind lists its wheels in
+    ``left_joints`` and ``right_joints``, front first. A scenario's ``drive.type`` (DESIGN.md) is
+    ``diff`` (diff or skid), ``holonomic`` (mecanum or omni) or ``ackermann``.
+    """
 
     left_joints: tuple[str, ...]
     right_joints: tuple[str, ...]
@@ -56,6 +64,10 @@ class DriveSpec:
     # forward (+x of the root link). A wheel whose axis points along -y needs -1.0.
     # Joints not listed count as +1.0.
     joint_signs: tuple[tuple[str, float], ...] = ()
+    kind: str = "diff"  # "diff" | "skid" | "mecanum" | "omni" | "ackermann"
+    wheelbase: float = 0.0  # metres between the front and rear axles (mecanum, omni, ackermann)
+    steering_joints: tuple[str, ...] = ()  # ackermann: (left, right) steering joints
+    max_steering_angle: float | None = None  # rad, ackermann: the steering joints' limit
 
 
 @dataclass(frozen=True)
@@ -65,6 +77,7 @@ class CommandStep:
     step: int
     linear: float
     angular: float
+    linear_y: float = 0.0  # m/s sideways (+y, left): holonomic drives only
 
 
 @dataclass(frozen=True)
@@ -107,6 +120,7 @@ class TwistStep:
     linear: float
     angular: float
     hold: int | None = None
+    linear_y: float = 0.0  # m/s sideways: holonomic drives only
 
 
 @dataclass(frozen=True)
