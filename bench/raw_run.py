@@ -8,6 +8,11 @@ runs this file as a whole process to time the raw loop's fixed cost (interpreter
 import, the URDF's load) beside ``mobot run``'s:
 
     python3 bench/raw_run.py SPEC.json OUT_DIR   # prints the loop's own wall seconds
+    python3 bench/raw_run.py SPEC.json OUT_DIR --libraries   # the same, importing mobot's libraries first
+
+``--libraries`` imports what any `mobot run` imports before it does anything of its own (Typer,
+which builds its parameters with pydantic, pydantic itself, PyYAML and Pillow) and then runs the
+same loop: the floor a command line built on these libraries starts from.
 
 SPEC.json holds what ``spec(plan)`` in bench_run.py writes: the URDF path, poses, rates, the
 drive's joints and the one command.
@@ -71,5 +76,19 @@ def raw_loop(spec: dict, out_dir: Path) -> float:
     return loop
 
 
+def import_libraries() -> None:
+    """What a `mobot run` process imports of its chosen libraries before any mobot code runs."""
+    import PIL.Image  # noqa: F401
+    import PIL.ImageDraw  # noqa: F401
+    import PIL.ImageFont  # noqa: F401
+    import pydantic
+    import typer  # noqa: F401
+    import yaml  # noqa: F401
+
+    pydantic.TypeAdapter(int)  # Typer coerces each parameter through a pydantic TypeAdapter
+
+
 if __name__ == "__main__":
+    if "--libraries" in sys.argv[3:]:
+        import_libraries()
     print(f"{raw_loop(json.loads(Path(sys.argv[1]).read_text()), Path(sys.argv[2])):.6f}")
