@@ -146,7 +146,7 @@ class _Drive:
         self.max_step = (spec.max_wheel_acceleration or 0.0) * robot.dt
         self.forces = [spec.max_wheel_torque] * len(self.wheels)
         self.twist = (0.0, 0.0)  # the commanded body twist
-        self.trim = TwistTrim() if _twist_feedback(spec) else None
+        self.trim = TwistTrim(self.separation / 2.0) if _twist_feedback(spec) else None
         self.trim_from: tuple | None = None  # link pose at the start of the control period
         self._apply()
 

@@ -206,7 +206,8 @@ class World:
                    if h - bottom <= friction.CASTER_BAND and link not in wheels and friction.rigid(cid, uid, link)}
         if robot.drive is not None and max(len(robot.drive.left_joints),
                                            len(robot.drive.right_joints)) > 1:
-            friction.soften_axial_friction(cid, uid, wheels, friction.SKID_AXIAL_FRICTION)
+            fraction = friction.skid_axial_fraction(cid, uid, wheels, robot.drive.wheel_separation)
+            friction.soften_axial_friction(cid, uid, wheels, fraction)
         explicit = links_with_friction(robot.urdf)
         friction.set_friction(cid, uid, explicit, {link: friction.CASTER_FRICTION for link in casters},
                               friction.DEFAULT_FRICTION)
