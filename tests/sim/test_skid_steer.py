@@ -55,7 +55,7 @@ def own_plans(tmp_path_factory):
     mp.setenv("MOBOT_CACHE_DIR", str(tmp_path_factory.mktemp("skid-cache")))
     try:
         plans = {}
-        for name, args in {**OWN, **LONG}.items():
+        for name, args in {**OWN, **LONG, "square": {}}.items():
             desc = load_robot(str(SKID4), args)
             plans[name] = RobotPlan(name=name, namespace=f"/{name}", frame_prefix=f"{name}/",
                                     urdf=desc.urdf, root_link=desc.root_link,
@@ -102,8 +102,9 @@ def test_long_skid_base_turns_ninety_degrees_in_place(own_plans, name, rate):
     assert turned(before, after) == pytest.approx(90.0, abs=3.0)
 
 
-def arc_after(plan: RobotPlan, turn_first: bool, heading: float) -> float:
-    """Fitted radius of a 1 m arc (0.3 m/s) started at ``heading``, after a turn in place or fresh."""
+def after_a_turn(plan: RobotPlan, turn_first: bool, heading: float, seconds: float):
+    """A 1 m arc at 0.3 m/s for ``seconds`` from ``heading``, after a 90 deg turn in place or
+    fresh: (fitted radius of its last three quarters, degrees turned, the heading it began at)."""
     plan = replace(plan, pose=replace(plan.pose, quat=(0.0, 0.0, math.sin(heading / 2), math.cos(heading / 2))))
     with World(Physics(rate_hz=RATE), WorldPlan()) as world:
         world.spawn(plan)
@@ -113,28 +114,47 @@ def arc_after(plan: RobotPlan, turn_first: bool, heading: float) -> float:
             world.set_command(plan.name, 0.0, 0.5)
             for _ in range(round(math.pi * RATE)):
                 world.step()
-        start = world.read(plan.name).true_yaw
+        start = world.read(plan.name)
         world.set_command(plan.name, 0.3, 0.3)
         points = []
-        steps = round(1.5 * math.pi / 0.3 * RATE)
+        steps = round(seconds * RATE)
         for i in range(steps):
             world.step()
             if i % 12 == 0 and i > steps // 4:
                 state = world.read(plan.name)
                 points.append((state.true_x, state.true_y))
-        return circle_radius(points), start
+        world.set_command(plan.name, 0.0, 0.0)
+        for _ in range(RATE):
+            world.step()
+        return circle_radius(points), turned(start, world.read(plan.name)), start.true_yaw
+
+
+def over_turning(plan: RobotPlan) -> RobotPlan:
+    """The base with a separation multiplier of 2 (as a user may set it): it over-turns by half."""
+    return replace(plan, drive=replace(plan.drive, wheel_separation_multiplier=2.0))
 
 
 def test_arc_after_a_turn_is_the_fresh_arc(own_plans):
-    """Gains learnt turning in place do not bend the next arc (8.2 % wider when they did).
+    """Rotating faster than the next command asks once froze the loop (it adapted only within
+    30 % of the command): this arc was 35.9 % tight after a turn, 0.03 % fresh.
 
     The fresh arc starts at the heading the turn ended at: PyBullet's friction pyramid alone
     moves a fitted radius by up to 2.5 % with the heading."""
-    plan = own_plans["2.0"]
-    after, heading = arc_after(plan, True, 0.0)
-    fresh, _ = arc_after(plan, False, heading)
+    plan = over_turning(own_plans["square"])
+    after, _, heading = after_a_turn(plan, True, 0.0, 1.5 * math.pi / 0.3)
+    fresh, _, _ = after_a_turn(plan, False, heading, 1.5 * math.pi / 0.3)
     assert after == pytest.approx(fresh, rel=0.03)
     assert fresh == pytest.approx(1.0, rel=0.05)
+
+
+@pytest.mark.parametrize("name", ["square", "2.0"])
+def test_quarter_arc_after_a_turn_turns_as_a_fresh_one(own_plans, name):
+    """Gains learnt turning in place are not the arc's: with one pair for every command this
+    quarter arc turned 3.4 deg (square) and 2.6 deg (wheelbase/track 2) less after a turn."""
+    plan = over_turning(own_plans[name])
+    _, after, heading = after_a_turn(plan, True, 0.0, (math.pi / 2) / 0.3)
+    _, fresh, _ = after_a_turn(plan, False, heading, (math.pi / 2) / 0.3)
+    assert after == pytest.approx(fresh, abs=1.0)
 
 
 def test_trim_adapts_only_near_the_command():
