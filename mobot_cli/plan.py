@@ -163,6 +163,23 @@ class SensorSpec:
 
 
 @dataclass(frozen=True)
+class JointHold:
+    """A movable joint (not a drive wheel) that something holds, as Gazebo would.
+
+    "spring": Gazebo's springStiffness / SDF spring_stiffness pulls it toward ``target`` with
+    ``stiffness`` (N*m/rad or N/m); its damping stays the URDF's. "position": a position
+    controller (ros2_control, a joint plugin) holds it at ``target`` with at most ``effort``.
+    """
+
+    joint: str
+    kind: str  # "spring" | "position"
+    target: float = 0.0  # rad or m: the spring's reference, or the position held (its initial one)
+    stiffness: float = 0.0  # spring only
+    effort: float = 0.0  # position only: N*m or N, from the joint's <limit effort>
+    source: str = ""  # what holds it ("springStiffness", "ros2_control", a plugin's filename)
+
+
+@dataclass(frozen=True)
 class RobotPlan:
     """One robot to spawn: its expanded URDF text and everything needed to drive it."""
 
@@ -179,6 +196,7 @@ class RobotPlan:
     source: str = ""  # the description file, for messages
     sensors: tuple[SensorSpec, ...] = ()
     footprint: tuple[float, float, float, float] | None = None  # xmin, xmax, ymin, ymax in its root frame
+    holds: tuple[JointHold, ...] = ()  # springs and held joints (sim/bullet/joints.py)
 
 
 @dataclass(frozen=True)

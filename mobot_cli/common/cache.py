@@ -27,7 +27,8 @@ CACHE_FORMAT = 3
 _PACKAGE = Path(__file__).resolve().parent.parent  # mobot_cli/
 # The code that builds cached documents (asset loading, the plan types it fills, this folder)
 # and the version number; paths, not imports: the cache sits below all of them.
-_BUILDERS = ("__init__.py", "common", "assets", "plan.py")
+# sim/drive.py: drive detection takes its skid-steer multiplier from there.
+_BUILDERS = ("__init__.py", "common", "assets", "plan.py", "sim/drive.py")
 
 
 # Kinds with one entry per distinct robot text (which live clients choose): bounded by prune().

@@ -78,7 +78,8 @@ class RobotResolver:
             out.append(RobotPlan(name=name, namespace=namespace, frame_prefix=namespace.lstrip("/") + "/",
                                  urdf=desc.urdf, root_link=desc.root_link, pose=pose, drive=drive,
                                  commands=commands, spawn_step=spawn_step, source=str(desc.source),
-                                 sensors=sensors, footprint=tuple(desc.footprint)))
+                                 sensors=sensors, footprint=tuple(desc.footprint),
+                                 holds=desc.holds))
         return out
 
     def claim(self, name: str, namespace: str, path: tuple) -> None:

@@ -10,12 +10,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-# Skid-steer fit: multiplier = 1 + SKID_STEER_GAIN * (wheelbase / track)^2.
+# Skid-steer fit: multiplier = 1 + SKID_STEER_GAIN * min(wheelbase / track, 1)^2.
 SKID_STEER_GAIN = 0.3
 
 
 def default_separation_multiplier(track: float, wheelbase: float) -> float:
-    """Wheel-separation multiplier for skid steer: 1 + 0.3 * (wheelbase / track)^2 (measured).
+    """Wheel-separation multiplier for skid steer: 1 + 0.3 * min(wheelbase / track, 1)^2 (measured).
 
     Skid-steer bases (several wheels per side) turn slower than their wheel speeds say, as the
     wheels scrub sideways. The (wheelbase/track)^2 shape is the classic effective-track result;
@@ -26,10 +26,14 @@ def default_separation_multiplier(track: float, wheelbase: float) -> float:
       this model:       husky 1.241 -> 90.2, jackal 1.146 -> 89.0, linorobot2 4wd 1.235 -> 93.1;
                         over 0.3..1.5 rad/s: husky 80..92, jackal 89..91, linorobot2 4wd 92..93.
     1 + (wheelbase/track)^2 (1.49..1.80) would over-turn by 25-35 %.
+    Bases longer than wide scrub with less sideways friction (sim/bullet/friction.py,
+    skid_axial_fraction), which makes them turn as a square base does: open loop at
+    multiplier 1.0, 0.5 and 1 rad/s, a 4-wheel base of our own turned 0.72..0.75 of its wheel
+    kinematics at wheelbase/track 1.0, 1.4, 1.6 and 2.0 alike; so the ratio stops at 1.
     """
     if track <= 0.0:
         raise ValueError(f"track must be positive, got {track}")
-    return 1.0 + SKID_STEER_GAIN * (wheelbase / track) ** 2
+    return 1.0 + SKID_STEER_GAIN * min(wheelbase / track, 1.0) ** 2
 
 
 def wheel_speeds(linear: float, angular: float, separation: float,

@@ -17,6 +17,7 @@ from mobot_cli.assets import sandbox
 from mobot_cli.assets.description.check import check_geometry, check_tree, check_with_yourdfpy, parse_urdf
 from mobot_cli.assets.description.drive import detect_drive
 from mobot_cli.assets.description.frames import LinkTree, floats
+from mobot_cli.assets.description.joints import read_holds
 from mobot_cli.assets.description.process import (
     apply_friction,
     collision_bounds,
@@ -31,7 +32,7 @@ from mobot_cli.assets.description.xacro import Expansion
 from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.common import cache
 from mobot_cli.errors import Location, Notice
-from mobot_cli.plan import DriveSpec
+from mobot_cli.plan import DriveSpec, JointHold
 
 MAX_FINGERPRINTS = 16  # search paths an entry remembers agreeing with (folders run from)
 
@@ -79,6 +80,7 @@ class RobotDescription:
     bottom_z: float = 0.0  # lowest collision point in the root frame, all joints at zero
     files: tuple[Path, ...] = field(default=())  # the description and every file it included
     sensors: tuple[DescribedSensor, ...] = ()  # from its <gazebo><sensor> blocks
+    holds: tuple[JointHold, ...] = ()  # springs and held joints (assets/description/joints.py)
 
     def tree(self) -> dict[str, Any]:
         """The link tree as nested dicts: {link, mass, children: [{joint, type, link...}]}."""
@@ -150,12 +152,13 @@ def _build(source: Path, expansion: Expansion, resolver: ResourceResolver,
     drive = detect_drive(robot, notices=notices, source=source)
     if drive is None:
         notices.append(Notice(NO_DRIVE, Location(file=source)))
+    holds = read_holds(robot, drive, notices, source)
     urdf = '<?xml version="1.0"?>\n' + ET.tostring(robot, encoding="unicode")
     description = RobotDescription(
         source=source, name=robot.get("name", ""), urdf=urdf, root_link=root_link,
         links=links, joints=joints, total_mass=sum(link.mass for link in links),
         footprint=bounds[:4], drive=drive, notices=tuple(notices), bottom_z=bounds[4],
-        sensors=sensors)
+        sensors=sensors, holds=holds)
     return description, found
 
 
@@ -238,6 +241,7 @@ def _from_document(document: dict[str, Any] | None) -> RobotDescription | None:
             sensors=tuple(DescribedSensor(**{k: tuple(v) if isinstance(v, list) else v
                                              for k, v in sensor.items()})
                           for sensor in document["sensors"]),
+            holds=tuple(JointHold(**hold) for hold in document.get("holds", ())),
             notices=tuple(Notice(n["message"], Location(**n["location"]))
                           for n in document["notices"]))
     except (KeyError, TypeError, ValueError):

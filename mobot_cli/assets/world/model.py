@@ -46,6 +46,7 @@ class Joint:
     limits: tuple[float, float, float, float]  # lower, upper, effort, velocity
     dynamics: tuple[float, float]  # damping, friction
     location: Location
+    spring: tuple[float, float] = (0.0, 0.0)  # <dynamics><spring_stiffness>, <spring_reference>
 
 
 @dataclass

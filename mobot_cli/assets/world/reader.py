@@ -241,7 +241,7 @@ class SdfReader:
         xyz = np.array([0.0, 0.0, 1.0])
         rotation = frame[:3, :3]
         limits = (-1e16, 1e16, -1.0, -1.0)
-        dynamics = (0.0, 0.0)
+        dynamics = spring = (0.0, 0.0)
         if axis_el is not None:
             xyz = np.array(self.vector(axis_el, "xyz", file, (0.0, 0.0, 1.0)))
             expressed = (axis_el.find("xyz").get("expressed_in", "") if axis_el.find("xyz") is not None
@@ -254,6 +254,8 @@ class SdfReader:
                            (("lower", -1e16), ("upper", 1e16), ("effort", -1.0), ("velocity", -1.0)))
             dynamics = (self.number(axis_el, "dynamics/damping", file, 0.0),
                         self.number(axis_el, "dynamics/friction", file, 0.0))
+            spring = (self.number(axis_el, "dynamics/spring_stiffness", file, 0.0),
+                      self.number(axis_el, "dynamics/spring_reference", file, 0.0))
         norm = float(np.linalg.norm(xyz))
         if norm < 1e-9:
             raise WorldError(f"joint '{joint.get('name')}' has a zero axis", location=where,
@@ -265,7 +267,7 @@ class SdfReader:
 
         return Joint(name=prefix + joint.get("name", ""), type=joint.get("type", ""),
                      parent=scoped(parent), child=scoped(child), pose=frame, axis=axis,
-                     limits=limits, dynamics=dynamics, location=where)  # type: ignore[arg-type]
+                     limits=limits, dynamics=dynamics, location=where, spring=spring)  # type: ignore[arg-type]
 
     # --- includes ----------------------------------------------------------------------
 

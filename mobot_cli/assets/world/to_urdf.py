@@ -217,6 +217,11 @@ def _joint(robot: ET.Element, joint, frames: dict, notices: list[Notice]) -> Non
     damping, friction = joint.dynamics
     if damping or friction:
         ET.SubElement(element, "dynamics", damping=f"{damping:.12g}", friction=f"{friction:.12g}")
+    stiffness, reference = joint.spring
+    if stiffness > 0.0:  # as a URDF writes a spring for Gazebo (assets/description/joints.py)
+        gazebo = ET.SubElement(robot, "gazebo", reference=joint.name)
+        ET.SubElement(gazebo, "springStiffness").text = f"{stiffness:.12g}"
+        ET.SubElement(gazebo, "springReference").text = f"{reference:.12g}"
 
 
 def _plugins(robot: ET.Element, model: Model) -> None:

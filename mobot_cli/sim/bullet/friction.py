@@ -31,6 +31,24 @@ CONE_FRICTION = 0
 # multiplier 1.0. Halving the friction along the wheel axis (as Gazebo skid-steer models do
 # with mu2 < mu1) made it steady across 0.3..1.5 rad/s; see drive.default_separation_multiplier.
 SKID_AXIAL_FRICTION = 0.5  # fraction of the rolling-direction friction
+# Turning in place, the wheels' sideways friction (arm: half the wheelbase) resists what their
+# rolling friction (arm: half the track) can push: a base turns only while
+# wheelbase * sideways < track * rolling. At 0.5 a base with a wheelbase twice its track could
+# not turn at all (0.3 deg of 90, 20 kg, 4 wheels), and one at 1.6 turned 0.60 of its wheel
+# kinematics; so bases longer than wide scrub with 0.5 * track / wheelbase, which keeps that
+# ratio (and their turns) as on a square base. Bases as long as wide or shorter keep 0.5.
+
+
+def skid_axial_fraction(cid: int, uid: int, wheels: set[int], track: float) -> float:
+    """Sideways friction fraction of skid-steer wheels: SKID_AXIAL_FRICTION, less on long bases."""
+    if not wheels or track <= 0.0:
+        return SKID_AXIAL_FRICTION
+    base_pos, base_orn = p.getBasePositionAndOrientation(uid, physicsClientId=cid)
+    to_base = p.invertTransform(base_pos, base_orn)
+    xs = [p.multiplyTransforms(*to_base, p.getLinkState(uid, link, physicsClientId=cid)[4],
+                               (0.0, 0.0, 0.0, 1.0))[0][0] for link in sorted(wheels)]
+    wheelbase = max(xs) - min(xs)
+    return SKID_AXIAL_FRICTION * min(1.0, abs(track) / wheelbase) if wheelbase > 0.0 else SKID_AXIAL_FRICTION
 
 
 def wheel_links(cid: int, uid: int, robot: RobotPlan) -> set[int]:

@@ -6,6 +6,7 @@ import math
 
 from mobot_cli.errors import SpawnError
 from mobot_cli.plan import DriveSpec, RobotPlan
+from mobot_cli.sim.bullet.joints import JointHolds
 from mobot_cli.sim.bullet.twist_trim import TwistTrim
 from mobot_cli.sim.drive import Odometry, body_twist, ramp, wheel_speeds, wrap_angle
 from mobot_cli.sim.pb import p
@@ -39,8 +40,11 @@ class SimRobot:
         self.joint_indices = list(self.joints.values())
         self._free_joints()
         self.drive: _Drive | None = None
+        wheels: set[str] = set()
         if plan.drive is not None:
             self.drive = _Drive(self, plan.drive)
+            wheels = {*plan.drive.left_joints, *plan.drive.right_joints, *plan.drive.steering_joints}
+        self.holds = JointHolds(cid, body, self.joints, plan.holds, wheels)
         x, y, _, _, _, yaw = self.link_pose_rpy()
         self.spawn_xy_yaw = (x, y, yaw)
 
@@ -146,7 +150,7 @@ class _Drive:
         self.max_step = (spec.max_wheel_acceleration or 0.0) * robot.dt
         self.forces = [spec.max_wheel_torque] * len(self.wheels)
         self.twist = (0.0, 0.0)  # the commanded body twist
-        self.trim = TwistTrim() if _twist_feedback(spec) else None
+        self.trim = TwistTrim(self.separation / 2.0) if _twist_feedback(spec) else None
         self.trim_from: tuple | None = None  # link pose at the start of the control period
         self._apply()
 

@@ -17,6 +17,7 @@ from mobot_cli.plan import Physics, RobotPlan, SpawnPose, WorldPlan
 from mobot_cli.sim import clearance, entity, parts, placement, static_shapes, surroundings
 from mobot_cli.sim.bullet import friction
 from mobot_cli.sim.bullet.clients import Stage, connect, release
+from mobot_cli.sim.bullet.joints import set_initial_positions
 from mobot_cli.sim.bullet.robot import SimRobot
 from mobot_cli.sim.bullet.urdf_file import links_with_friction, urdf_path
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, ContactCounter
@@ -61,6 +62,7 @@ class World:
         self._steps = 0
         self._robots: dict[str, SimRobot] = {}
         self._ramping: list[SimRobot] = []
+        self._sprung: list[SimRobot] = []  # robots with springs: torques before every step
         self._odom_every = max(1, round(physics.rate_hz / ODOMETRY_RATE_HZ))
         self._check_every = max(1, round(physics.rate_hz / HEALTH_RATE_HZ))
         self._contacts = ContactCounter()
@@ -89,6 +91,7 @@ class World:
         self._pristine = False  # not a client to keep its static world for another run
         self._steps = 0
         self._ramping = []
+        self._sprung = []
         self._contacts = ContactCounter()
         self._sensing = None  # rebuilt with the first robot with sensors: its noise restarts too
         self._clearance = {}
@@ -180,6 +183,7 @@ class World:
                              f"({robot.source or 'URDF text'})",
                              hint="Run `mobot check` on its description.")
         try:
+            set_initial_positions(cid, uid, robot.holds)
             self._settle_in(uid, robot)
             sim_robot = SimRobot(cid, uid, robot, self.physics.dt)
             if robot.sensors:
@@ -189,6 +193,8 @@ class World:
             self._pristine = False
             raise
         self._robots[robot.name] = sim_robot
+        if sim_robot.holds.spring_joints:
+            self._sprung.append(sim_robot)
 
     def _settle_in(self, uid: int, robot: RobotPlan) -> None:
         """Place the robot (z: auto), refuse overlaps, set contact and damping defaults."""
@@ -206,7 +212,8 @@ class World:
                    if h - bottom <= friction.CASTER_BAND and link not in wheels and friction.rigid(cid, uid, link)}
         if robot.drive is not None and max(len(robot.drive.left_joints),
                                            len(robot.drive.right_joints)) > 1:
-            friction.soften_axial_friction(cid, uid, wheels, friction.SKID_AXIAL_FRICTION)
+            fraction = friction.skid_axial_fraction(cid, uid, wheels, robot.drive.wheel_separation)
+            friction.soften_axial_friction(cid, uid, wheels, fraction)
         explicit = links_with_friction(robot.urdf)
         friction.set_friction(cid, uid, explicit, {link: friction.CASTER_FRICTION for link in casters},
                               friction.DEFAULT_FRICTION)
@@ -274,6 +281,8 @@ class World:
         self._clearance.pop(name, None)
         if robot in self._ramping:
             self._ramping.remove(robot)
+        if robot in self._sprung:
+            self._sprung.remove(robot)
 
     def set_command(self, name: str, linear: float, angular: float) -> None:
         """Command a body twist (m/s, rad/s); ValueError for a robot without a drive."""
@@ -288,6 +297,8 @@ class World:
             for robot in self._ramping:
                 robot.drive.ramp_step()
             self._ramping = [r for r in self._ramping if r.drive.ramping]
+        for robot in self._sprung:
+            robot.holds.apply_springs()
         p.stepSimulation(physicsClientId=self._cid)
         self._steps += 1
         if self._steps % self._odom_every == 0:
