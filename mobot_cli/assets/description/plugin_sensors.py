@@ -7,8 +7,9 @@ after the plugin, with the plugin's topic, frame, rate and gaussian noise (hecto
 ``rateGaussianNoise``/``accelGaussianNoise``, replaced by ``gaussianNoise`` when that is given
 and not 0; gazebo_ros_imu's ``gaussianNoise`` on both). Their drift, bias, scale error and
 offsets are not modelled. A plugin on the link of an imu <sensor>, or on its topic, is that
-same IMU (turtlebot3's descriptions carry both): the <sensor> is read, the plugin not again. GPS, magnetometer, altimeter and similar plugins mobot does not
-simulate are named with the left-out sensors.
+same IMU (turtlebot3's descriptions carry both): the <sensor> is read, the plugin not again.
+GPS, magnetometer, altimeter and similar plugins mobot does not simulate are named with the
+left-out sensors.
 """
 
 from __future__ import annotations
