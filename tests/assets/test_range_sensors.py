@@ -127,3 +127,25 @@ def test_a_scenario_changes_a_range_sensor_with_lidar_fields_but_not_imu_ones(tm
     bad = f"  - name: r\n    description: {RANGER}\n    sensors:\n      ir_front: {{accel_noise_stddev: 0.1}}\n"
     with pytest.raises(ScenarioError, match="'accel_noise_stddev' applies to imu sensors, and this one is a range"):
         prepare(room_scenario(tmp_path, bad))
+
+
+def test_an_sdf_model_carries_its_range_sensor_and_imu_plugin(tmp_path):
+    path = tmp_path / "model.sdf"
+    path.write_text("""<?xml version="1.0"?>
+<sdf version="1.7"><model name="m">
+  <link name="base">
+    <collision name="c"><geometry><box><size>0.2 0.2 0.1</size></box></geometry></collision>
+    <sensor name="tof" type="gpu_lidar"><pose>0.1 0 0 0 0 0</pose>
+      <lidar><scan><horizontal><samples>1</samples></horizontal></scan><range><min>0.05</min><max>2</max></range>
+      </lidar>
+      <plugin name="tof" filename="libgazebo_ros_ray_sensor.so"><ros><remapping>~/out:=tof</remapping></ros>
+        <output_type>sensor_msgs/Range</output_type><radiation_type>ultrasound</radiation_type></plugin>
+    </sensor>
+  </link>
+  <plugin name="imu" filename="libhector_gazebo_ros_imu.so"><gaussianNoise>0.02</gaussianNoise></plugin>
+</model></sdf>""")
+    tof, imu = load_robot(str(path)).sensors
+    assert (tof.kind, tof.type, tof.radiation, tof.topic, tof.range_max, tof.xyz) == \
+        ("range", "gpu_lidar", "ultrasound", "tof", 2.0, (0.1, 0.0, 0.0))
+    assert (imu.kind, imu.link, imu.topic, imu.noise_stddev, imu.accel_noise_stddev) == \
+        ("imu", "base", "imu", 0.02, 0.02)
