@@ -13,7 +13,7 @@ gives the same readings.
 * range: one distance, the nearest of its rays (each noised as a lidar's), then the plugin's
   own gaussian noise (from a generator of its own, so that batching never changes the
   numbers), clamped to [range_min, range_max]; range_max when no ray returns, as Gazebo's
-  range plugins publish. Cast when read (they have few rays), with the lidars due then;
+  range plugins publish. Cast at the step they are due (they have few rays), never batched;
 * imu: orientation of the sensor frame in the world (REP 145), angular velocity in the sensor
   frame, and linear acceleration as a real IMU measures it (specific force: +9.81 m/s^2 up at
   rest), averaged over the time since the previous reading;
