@@ -149,3 +149,13 @@ def test_an_sdf_model_carries_its_range_sensor_and_imu_plugin(tmp_path):
         ("range", "gpu_lidar", "ultrasound", "tof", 2.0, (0.1, 0.0, 0.0))
     assert (imu.kind, imu.link, imu.topic, imu.noise_stddev, imu.accel_noise_stddev) == \
         ("imu", "base", "imu", 0.02, 0.02)
+
+
+def test_a_sonar_takes_its_plugins_noise_and_field_of_view(tmp_path):
+    sonar = ('<gazebo reference="base_link"><sensor name="us" type="sonar"><pose>0 0 0 0 -1.5708 0</pose>'
+             "<sonar><min>0.01</min><max>3</max><radius>0.5</radius></sonar>"
+             '<plugin name="us" filename="libgazebo_plugins_sonar.so"><gaussianNoise>0.15</gaussianNoise>'
+             "<topicName>/achilles/sonarLeft</topicName><fov>0.5</fov></plugin></sensor></gazebo>")
+    (us,) = _robot(tmp_path, sonar).sensors
+    assert (us.kind, us.reading_noise_stddev, us.field_of_view, us.topic) == ("range", 0.15, 0.5, "achilles/sonarLeft")
+    assert us.max_angle == pytest.approx(math.atan2(0.5, 2.99))

@@ -159,9 +159,11 @@ class SensorXml:
                                    hint="Give 0 <= min < max and a radius of 0 or more.")
         half = math.atan2(radius, high - low)
         samples = SONAR_RAYS if half > 0 else 1
+        # a ROS plugin on it (gazebo_plugins_sonar and the like) may add noise and report its <fov>
         return dict(samples=samples, min_angle=-half, max_angle=half, vertical_samples=samples,
                     vertical_min_angle=-half, vertical_max_angle=half, range_min=low, range_max=high,
-                    radiation="ultrasound", field_of_view=2 * half)
+                    radiation="ultrasound", field_of_view=self.plugin_number("fov", 2 * half),
+                    reading_noise_stddev=abs(self.plugin_number("gaussianNoise", 0.0)))
 
     def plugin_number(self, tag: str, default: float) -> float:
         """A finite number in the plugin at ``tag``, or ``default`` when absent or empty."""
