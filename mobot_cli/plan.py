@@ -138,28 +138,32 @@ class SensorSpec:
     """One sensor of a robot, resolved from its ``<gazebo><sensor>`` block and the scenario.
 
     ``kind`` is "lidar" (Gazebo's ray, gpu_ray, lidar, gpu_lidar; 3D when ``vertical`` has
-    more than one sample), "imu" or "contact". Names are unprefixed: the robot's namespace
-    and frame prefix are added when the readings are recorded.
+    more than one sample), "range" (a ray sensor read by a range plugin, or a sonar: one
+    distance per reading, the nearest of its rays), "imu" or "contact". Names are unprefixed:
+    the robot's namespace and frame prefix are added when the readings are recorded.
     """
 
     name: str  # the <sensor name>, unique within the robot
-    kind: str  # "lidar" | "imu" | "contact"
+    kind: str  # "lidar" | "range" | "imu" | "contact"
     link: str  # the link it rides on
     every: int  # physics steps between two readings: update_rate rounded to whole steps
     xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)  # pose in the link frame
     quat: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
     topic: str = ""  # relative to the robot's namespace, e.g. "scan"
     frame_id: str = ""  # the frame readings are stamped with (default: the link)
-    horizontal: RayAxis | None = None  # lidar only
-    vertical: RayAxis | None = None  # lidar only; None or one sample: a 2D scan
-    range_min: float = 0.0  # m, lidar only
+    horizontal: RayAxis | None = None  # lidar and range only
+    vertical: RayAxis | None = None  # lidar and range only; None or one sample: a 2D scan
+    range_min: float = 0.0  # m, lidar and range only
     range_max: float = 0.0
     range_resolution: float = 0.0  # m; 0: ranges are not quantised
-    noise_mean: float = 0.0  # gaussian noise on ranges (lidar), on angular velocity (imu)
+    noise_mean: float = 0.0  # gaussian noise on each ray (lidar, range), on angular velocity (imu)
     noise_stddev: float = 0.0
     accel_noise_stddev: float = 0.0  # imu: gaussian noise on linear acceleration (m/s^2)
     collision: str = ""  # contact: the collision element whose contacts count ("" = the whole link)
     source: str = ""  # where it was declared, for messages
+    radiation: str = ""  # range: "ultrasound" | "infrared", as sensor_msgs/Range's radiation_type
+    field_of_view: float = 0.0  # rad, range: the arc the plugin reports (its rays are the axes')
+    reading_noise_stddev: float = 0.0  # m, range: the plugin's gaussian noise on the reading itself
 
 
 @dataclass(frozen=True)

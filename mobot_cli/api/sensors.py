@@ -1,8 +1,9 @@
-"""Sensor readings from Python: the latest reading of every sensor, and lidar scans as arrays.
+"""Sensor readings from Python: the latest reading of every sensor, lidar scans as arrays.
 
 A ``Simulation`` keeps the last ``Reading`` of each sensor as the timeline hands it out (the
-same records the run folder's sensor files are written from), and ``Scan`` is a lidar's
-reading as arrays: the beam angles and the ranges, +inf where a beam had no return.
+same records the run folder's sensor files are written from), ``Scan`` is a lidar's
+reading as arrays: the beam angles and the ranges, +inf where a beam had no return, and
+``Range`` a range sensor's one distance with what sensor_msgs/Range says of it.
 """
 
 from __future__ import annotations
@@ -49,6 +50,29 @@ class Scan:
         wrapped = np.angle(np.exp(1j * (self.angles - angle)))
         row = self.ranges if self.ranges.ndim == 1 else self.ranges[len(self.ranges) // 2]
         return float(row[int(np.argmin(np.abs(wrapped)))])
+
+
+@dataclass(frozen=True)
+class Range:
+    """One range sensor reading, as sensor_msgs/Range and ``sensors/<robot>/<sensor>.csv`` carry it."""
+
+    robot: str
+    sensor: str
+    step: int  # taken after this many physics steps
+    t: float  # s
+    range: float  # m, in [min_range, max_range]; max_range when nothing is in its field of view
+    min_range: float
+    max_range: float
+    field_of_view: float  # rad, as its plugin reports it
+    radiation: str  # "ultrasound" | "infrared"
+    frame: str  # the frame the reading is stamped with
+
+
+def range_of(reading: Reading, rate_hz: int) -> Range:
+    """A range sensor's reading as a ``Range``."""
+    spec = reading.sensor
+    return Range(reading.robot, spec.name, reading.step, reading.step / rate_hz, reading.data.range,
+                 spec.range_min, spec.range_max, spec.field_of_view, spec.radiation, spec.frame_id or spec.link)
 
 
 def scan_of(reading: Reading, rate_hz: int) -> Scan:

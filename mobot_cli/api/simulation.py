@@ -16,7 +16,7 @@ from typing import Iterable, Mapping
 from pydantic import ValidationError
 
 from mobot_cli.api.numbers import bounded
-from mobot_cli.api.sensors import Latest, Scan, pick, robot_plan
+from mobot_cli.api.sensors import Latest, Range, Scan, pick, range_of, robot_plan
 from mobot_cli.errors import MobotError, UsageError, did_you_mean
 from mobot_cli.plan import Plan
 from mobot_cli.record.recording import Recording
@@ -172,12 +172,12 @@ class Simulation:
     # -- sensors ----------------------------------------------------------------------------
 
     def sensors(self, name: str) -> dict[str, str]:
-        """A robot's sensors: name -> kind ('lidar', 'imu', 'contact')."""
+        """A robot's sensors: name -> kind ('lidar', 'range', 'imu', 'contact')."""
         self._known(name)
         return {spec.name: spec.kind for spec in self._timeline.robots[name].sensors}
 
     def reading(self, name: str, sensor: str | None = None) -> Reading | None:
-        """A sensor's latest reading (``step``, ``data``: ScanData, ImuData or ContactData), None
+        """A sensor's latest reading (``step``, ``data``: ScanData, RangeData, ImuData or ContactData), None
         before its first; ``sensor`` may be left out when the robot has one."""
         self._known(name)
         spec = pick(name, self._timeline.robots[name].sensors, sensor, None)
@@ -191,6 +191,15 @@ class Simulation:
         spec = pick(name, self._timeline.robots[name].sensors, sensor, "lidar")
         self._sense_now()
         return self._latest.scan(name, spec.name)
+
+    def range(self, name: str, sensor: str | None = None) -> Range | None:
+        """A range sensor's latest reading (``.range`` in metres, limits, field of view), None
+        before its first; ``sensor`` may be left out when the robot has one range sensor."""
+        self._known(name)
+        spec = pick(name, self._timeline.robots[name].sensors, sensor, "range")
+        self._sense_now()
+        reading = self._latest.get(name, spec.name)
+        return None if reading is None else range_of(reading, self._latest.rate_hz)
 
     def _sense_now(self) -> None:
         """Take the readings due at this step now rather than as the next step begins, so that a

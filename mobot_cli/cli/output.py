@@ -162,6 +162,11 @@ def sensor_lines(s: dict[str, Any]) -> list[str]:
         rays = f"{s['samples']}" + (f" x {s['vertical_samples']}" if s["vertical_samples"] > 1 else "")
         detail = (f"{rays} ray{'s' if rays != '1' else ''} {s['min_angle']:.3f}..{s['max_angle']:.3f} rad, range "
                   f"{s['range_min']:g}..{s['range_max']:g} m, noise {s['noise_stddev']:g} m")
+    elif s["kind"] == "range":
+        rays = s["samples"] * s["vertical_samples"]
+        detail = (f"{s['radiation']}, {rays} ray{'s' if rays != 1 else ''}, field of view "
+                  f"{s['field_of_view']:.3f} rad, range {s['range_min']:g}..{s['range_max']:g} m, "
+                  f"noise {s['noise_stddev']:g} + {s['reading_noise_stddev']:g} m")
     elif s["kind"] == "imu":
         detail = f"noise: gyro {s['noise_stddev']:g} rad/s, accel {s['accel_noise_stddev']:g} m/s^2"
     else:

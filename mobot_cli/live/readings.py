@@ -1,7 +1,8 @@
 """The live world's latest sensor readings, kept as the timeline makes them, for the ``scan`` op.
 
 A reply carries one reading as JSON: a lidar's angles, limits and ranges (``null`` where a
-beam had no return: JSON has no infinity; rows of ranges for a 3D lidar), an IMU's
+beam had no return: JSON has no infinity; rows of ranges for a 3D lidar), a range sensor's
+range, limits, field of view and radiation type (as sensor_msgs/Range), an IMU's
 orientation, angular velocity and linear acceleration, a contact sensor's contacts.
 """
 
@@ -63,6 +64,9 @@ def reading_fields(robot: RobotPlan, reading: Reading, rate_hz: int) -> dict[str
         if len(ranges) > 1:
             fields.update(vertical_angle_min=spec.vertical.min_angle, vertical_angle_max=spec.vertical.max_angle,
                           vertical_angle_increment=angle_step(spec.vertical))
+    elif spec.kind == "range":
+        fields.update(range=data.range, min_range=spec.range_min, max_range=spec.range_max,
+                      field_of_view=spec.field_of_view, radiation_type=spec.radiation)
     elif spec.kind == "imu":
         fields.update(orientation=list(data.orientation), angular_velocity=list(data.angular_velocity),
                       linear_acceleration=list(data.linear_acceleration))

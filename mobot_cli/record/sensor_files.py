@@ -5,6 +5,7 @@
   ``<sensor>.json`` with the beam angles, range limits, frame and topic;
   ``scan = np.load("sensors/mobot/scan.npy"); scan["t"], scan["ranges"]``
   (``mmap_mode="r"`` reads a long run without loading it);
+* range: ``<sensor>.csv``: t, range (m; range_max when nothing is in its field of view);
 * imu: ``<sensor>.csv``: t, qx, qy, qz, qw, wx, wy, wz, ax, ay, az;
 * contact: ``<sensor>.csv``: t, contacts, other, x, y, z, nx, ny, nz, depth, force, one row
   per contact point (a reading without contact is one row with contacts 0).
@@ -36,6 +37,7 @@ NPY_MAGIC = b"\x93NUMPY\x01\x00"
 NPY_HEADER = 1024  # bytes, magic included: room for any row count and beam grid
 FLUSH_EVERY = 50  # readings (5 s of a 10 Hz lidar), as the odometry CSV's rows: a killed run loses at most this many
 FLUSH_BYTES = 4 << 20
+RANGE_COLUMNS = ("t", "range")
 IMU_COLUMNS = ("t", "qx", "qy", "qz", "qw", "wx", "wy", "wz", "ax", "ay", "az")
 CONTACT_COLUMNS = ("t", "contacts", "other", "x", "y", "z", "nx", "ny", "nz", "depth", "force")
 _UNSAFE = re.compile(r"[^A-Za-z0-9_.-]")
@@ -171,6 +173,8 @@ class SensorFilesSink(Sink):
         data = reading.data
         if spec.kind == "lidar":
             target.append(t, data)
+        elif spec.kind == "range":
+            target.write([[number(t), number(data.range)]])
         elif spec.kind == "imu":
             target.write([[number(v) for v in (t, *data.orientation, *data.angular_velocity,
                                                 *data.linear_acceleration)]])
@@ -185,7 +189,8 @@ class SensorFilesSink(Sink):
             path.with_suffix(".json").write_text(
                 json.dumps(describe(key, self.robots[key], spec, self.rate), indent=2) + "\n", encoding="utf-8")
             return NpyRows(path, scan_dtype(spec))
-        return _CsvRows(path, IMU_COLUMNS if spec.kind == "imu" else CONTACT_COLUMNS)
+        columns = {"range": RANGE_COLUMNS, "imu": IMU_COLUMNS}.get(spec.kind, CONTACT_COLUMNS)
+        return _CsvRows(path, columns)
 
     def close(self) -> None:
         for target in self.files.values():

@@ -10,6 +10,7 @@ text and hash against rosbags and the .msg files of gazebo_msgs and rmw_dds_comm
 gazebo_msgs/ContactsState is what gazebo_ros_bumper publishes. rmw_dds_common's Gid is Jazzy's
 ``char[16]``, Humble's is ``char[24]`` (ros2/idl.py); its hash is the one rmw_dds_common ships,
 which reads ``char`` as ``uint8`` as ROS 2's IDL does (rosbags hashes it as a char).
+sensor_msgs/Range is Jazzy's (and Kilted's): Humble's lacks the last field, ``variance``.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from dataclasses import dataclass
 
 LASER_SCAN, POINT_CLOUD2 = "sensor_msgs/msg/LaserScan", "sensor_msgs/msg/PointCloud2"
 IMU, CONTACTS_STATE = "sensor_msgs/msg/Imu", "gazebo_msgs/msg/ContactsState"
+RANGE = "sensor_msgs/msg/Range"
 PARTICIPANT_ENTITIES_INFO = "rmw_dds_common/msg/ParticipantEntitiesInfo"
 SEPARATOR = "=" * 80 + "\n"
 
@@ -216,6 +218,25 @@ MESSAGES: dict[str, tuple[str, str]] = {
         "float64 y\n"
         "float64 z\n",
         "RIHS01_7d9a00ff131080897a5ec7e26e315954b8eae3353c3f995c55faf71574000b5b"),
+    "sensor_msgs/msg/Range": (
+        "uint8 ULTRASOUND=0\n"
+        "uint8 INFRARED=1\n"
+        "std_msgs/Header header\n"
+        "uint8 radiation_type\n"
+        "float32 field_of_view\n"
+        "float32 min_range\n"
+        "float32 max_range\n"
+        "float32 range\n"
+        "float32 variance\n"
+        "================================================================================\n"
+        "MSG: std_msgs/Header\n"
+        "builtin_interfaces/Time stamp\n"
+        "string frame_id\n"
+        "================================================================================\n"
+        "MSG: builtin_interfaces/Time\n"
+        "int32 sec\n"
+        "uint32 nanosec\n",
+        "RIHS01_b42b62562e93cbfe9d42b82fe5994dfa3d63d7d5c90a317981703f7388adff3a"),
     "gazebo_msgs/msg/ContactsState": (
         "std_msgs/Header header\n"
         "gazebo_msgs/ContactState[] states\n"

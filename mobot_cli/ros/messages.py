@@ -168,6 +168,8 @@ class RobotMessages:
             if sensor_topics.is_3d(spec):
                 return sensor_cdr.point_cloud2(stamp, frame, data.ranges, data.beams)
             return sensor_cdr.laser_scan(stamp, frame, spec, sensor_cdr.scan_row(data.ranges))
+        if spec.kind == "range":
+            return sensor_cdr.range_message(stamp, frame, spec, data.range)
         if spec.kind == "imu":
             return sensor_cdr.imu(stamp, frame, spec, data.orientation, data.angular_velocity,
                                   data.linear_acceleration)

@@ -1,4 +1,4 @@
-"""CDR bytes of the sensor messages: LaserScan, PointCloud2, Imu and gazebo_msgs/ContactsState.
+"""CDR bytes of the sensor messages: LaserScan, PointCloud2, Range, Imu and gazebo_msgs/ContactsState.
 
 Fields are filled as Gazebo's ROS plugins fill them for the same ``<sensor>`` (gazebo_ros's
 LaserScan and PointCloud2 conversions, ros_gz_bridge's): LaserScan carries ``angle_min``,
@@ -7,7 +7,9 @@ LaserScan and PointCloud2 conversions, ros_gz_bridge's): LaserScan carries ``ang
 as many intensities, all 0; a 3D lidar's LaserScan would be its middle vertical row.
 PointCloud2 is unordered (height 1) and dense: x, y, z, intensity float32 (16 bytes a point),
 vertical rows outer, beams inner, points without a return left out. Imu covariances are the
-noise variances on the diagonal (0 without noise). Every packer is independent of the bag, so
+noise variances on the diagonal (0 without noise). Range carries the radiation type
+(ULTRASOUND 0, INFRARED 1), field of view and limits its plugin reports, and as ``variance`` the
+noise variance of one reading (0, "unknown", without noise). Every packer is independent of the bag, so
 a live ROS 2 publisher can send the same bytes. tests/record/test_sensor_records.py checks each
 against rosbags' serializer.
 """
@@ -117,6 +119,16 @@ def point_cloud2(stamp: tuple[int, int], frame_id: str, ranges: np.ndarray, beam
     w.u32(POINT_STEP).u32(POINT_STEP * len(points))
     w.sequence(points.reshape(-1).view(np.uint8), 1)
     return w.pack("B", 1).bytes()  # is_dense
+
+
+RADIATION = {"ultrasound": 0, "infrared": 1}  # sensor_msgs/Range's constants
+
+
+def range_message(stamp: tuple[int, int], frame_id: str, spec: SensorSpec, value: float) -> bytes:
+    """sensor_msgs/Range (Jazzy's layout, with ``variance``) of one reading."""
+    variance = spec.noise_stddev ** 2 + spec.reading_noise_stddev ** 2
+    w = CdrWriter().header(stamp, frame_id).pack("B", RADIATION.get(spec.radiation, 1))
+    return w.pack("5f", spec.field_of_view, spec.range_min, spec.range_max, value, variance).bytes()
 
 
 def imu(stamp: tuple[int, int], frame_id: str, spec: SensorSpec, orientation, angular_velocity,

@@ -2,7 +2,8 @@
 
 Topics sit in the robot's namespace: ``<ns>/<topic>``, the topic defaulting to ``scan`` for a
 2D lidar (sensor_msgs/LaserScan), ``points`` for a 3D lidar (sensor_msgs/PointCloud2),
-``imu`` (sensor_msgs/Imu) and ``bumper`` (gazebo_msgs/ContactsState, as gazebo_ros_bumper).
+``range`` (sensor_msgs/Range), ``imu`` (sensor_msgs/Imu) and ``bumper``
+(gazebo_msgs/ContactsState, as gazebo_ros_bumper).
 
 Readings are stamped with the sensor's frame, prefixed as every frame of the robot. Its
 frame is ``frame_id`` (or the link); when that frame is not a link of the URDF, it is added to
@@ -20,7 +21,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 from mobot_cli.plan import RobotPlan, SensorSpec
-from mobot_cli.ros.definitions import CONTACTS_STATE, IMU, LASER_SCAN, POINT_CLOUD2
+from mobot_cli.ros.definitions import CONTACTS_STATE, IMU, LASER_SCAN, POINT_CLOUD2, RANGE
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9_]")
 IDENTITY = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
@@ -35,12 +36,12 @@ def message_type(spec: SensorSpec) -> str:
     """The ROS message type of a sensor's readings."""
     if spec.kind == "lidar":
         return POINT_CLOUD2 if is_3d(spec) else LASER_SCAN
-    return IMU if spec.kind == "imu" else CONTACTS_STATE
+    return {"range": RANGE, "imu": IMU}.get(spec.kind, CONTACTS_STATE)
 
 
 def topic(robot: RobotPlan, spec: SensorSpec) -> str:
     """``<ns>/<topic>`` of a sensor."""
-    default = "points" if is_3d(spec) else {"lidar": "scan", "imu": "imu"}.get(spec.kind, "bumper")
+    default = "points" if is_3d(spec) else {"lidar": "scan", "range": "range", "imu": "imu"}.get(spec.kind, "bumper")
     return f"{robot.namespace.rstrip('/')}/{spec.topic.strip('/') or default}"
 
 

@@ -6,7 +6,7 @@ leaves, as tf2's static broadcaster does), per robot ``<ns>/odom`` and ``<ns>/jo
 every sample and ``<ns>/robot_description`` once. Each robot's ``<ns>/cmd_vel`` reader is made
 here too, so that the node's endpoints in the graph are always the ones that exist.
 
-Every sensor's readings go out on its bag topic (``<ns>/scan``, ``<ns>/points``, ``<ns>/imu``,
+Every sensor's readings go out on its bag topic (``<ns>/scan``, ``<ns>/points``, ``<ns>/range``, ``<ns>/imu``,
 ``<ns>/bumper``: ros/sensor_topics.py), at the sensor's rate, the bag's bytes
 (``RobotMessages.reading``), reliable, volatile, keep last 10 as ros_gz_bridge publishes
 them (a reliable writer also serves the best-effort readers nav2 and slam_toolbox make);

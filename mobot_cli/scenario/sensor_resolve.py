@@ -95,12 +95,12 @@ def _changed(sensor: DescribedSensor, entry: SensorOverride, where: tuple,
              ctx: Context) -> DescribedSensor:
     changes = entry.changes()
     new_type = changes.get("type")
-    if new_type is not None and KINDS[new_type] != sensor.kind:
+    if new_type is not None and KINDS[new_type] != KINDS[sensor.type]:
         raise ScenarioError(f"sensor '{sensor.name}' is of type {sensor.type}; type {new_type} "
                             "would make it another kind of sensor", location=ctx.locate_key(
                                 where + ("type",)),
                             hint="Turn it off (false) and add the new one under another key.")
-    _fields_fit(KINDS[new_type or sensor.type], entry, where, ctx)
+    _fields_fit(sensor.kind, entry, where, ctx)  # a range sensor stays one: lidar fields fit it
     return replace(sensor, **changes)
 
 
@@ -141,7 +141,7 @@ def _added(key: str, entry: SensorOverride, where: tuple, ctx: Context) -> Descr
 
 def _fields_fit(kind: str, entry: SensorOverride, where: tuple, ctx: Context) -> None:
     for name in sorted(entry.model_fields_set):
-        if ONLY.get(name, kind) != kind:
+        if ONLY.get(name, kind) not in (kind, "lidar" if kind == "range" else kind):
             raise ScenarioError(f"'{name}' applies to {ONLY[name]} sensors, and this one is "
                                 f"{'an' if kind == 'imu' else 'a'} {kind}",
                                 location=ctx.locate_key(where + (name,)),

@@ -108,3 +108,19 @@ def test_scan_follow_prints_each_new_reading(endpoint):
         process.wait()
     steps = [line["step"] for line in lines]
     assert steps == sorted(set(steps)) and all((s - steps[0]) % 24 == 0 for s in steps)
+
+
+def test_scan_reads_a_range_sensor_of_a_spawned_robot(endpoint):
+    """Last in this file: the box it spawns is in the lidar's view."""
+    ranger = (REPO / "tests" / "assets" / "sensors" / "range.urdf").read_text()
+    with Client(endpoint, timeout=120) as client:
+        client.spawn("ranger", urdf=ranger, pose={"x": 1.0, "y": -1.5})
+        deadline = time.monotonic() + 60
+        while not (reply := client.call("scan", name="ranger", sensor="ir_front"))["ok"]:
+            assert time.monotonic() < deadline, reply
+            time.sleep(0.05)
+    assert (reply["kind"], reply["topic"], reply["radiation_type"]) == ("range", "/ranger/ir/front", "infrared")
+    assert (reply["min_range"], reply["max_range"], reply["field_of_view"]) == (0.02, 4.0, 0.0)
+    assert reply["range"] == pytest.approx(3.0 - 1.1, abs=0.01)  # the east wall, 1.9 m ahead of its ray
+    line = invoke(["scan", "ranger", "-s", "sonar_back", "--endpoint", endpoint, "--timeout", "120"]).stdout
+    assert line.endswith("ranger/sonar_back (range, /ranger/sonar/back) 1.000 m (ultrasound, 0.03..1 m)\n")

@@ -91,6 +91,20 @@ def test_packers_match_rosbags_serializer_byte_for_byte():
     assert (cloud.height, cloud.width, cloud.point_step, cloud.is_dense) == (1, 13, 16, True)
 
 
+def test_range_packer_matches_rosbags_serializer_byte_for_byte():
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_JAZZY)  # Range's variance is Jazzy's
+    spec = SensorSpec(name="ir", kind="range", link="l", every=1, range_min=0.02, range_max=4.0, noise_stddev=0.01,
+                      radiation="ultrasound", field_of_view=0.3, reading_noise_stddev=0.02)
+    data = sensor_cdr.range_message((3, 500), "m/ir", spec, 1.25)
+    msg = store.deserialize_cdr(data, "sensor_msgs/msg/Range")
+    assert store.serialize_cdr(msg, "sensor_msgs/msg/Range") == data
+    assert (msg.header.frame_id, msg.radiation_type, msg.range, msg.min_range, msg.max_range) == \
+        ("m/ir", 0, 1.25, np.float32(0.02), 4.0)
+    assert (msg.field_of_view, msg.variance) == (np.float32(0.3), np.float32(0.01 ** 2 + 0.02 ** 2))
+
+
 def test_a_scan_keeps_the_sign_of_a_zero_angle_after_a_sensor_equal_but_for_it():
     """-0.0 == 0.0, so two specs that differ only there are equal: the scan's cached bytes must not
     be shared between them (hypothesis found it: the second scan carried the first one's angle)."""

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mobot_cli.ros.definitions import CONTACTS_STATE, MESSAGES, PARTICIPANT_ENTITIES_INFO, Field, structs
+from mobot_cli.ros.definitions import CONTACTS_STATE, MESSAGES, PARTICIPANT_ENTITIES_INFO, RANGE, Field, structs
 from mobot_cli.ros.sensor_cdr import CdrWriter
 from tests.ros.test_wire import discovery_store
 
@@ -51,13 +51,16 @@ def _stores():
 
 def test_every_definition_and_hash_is_rosbags_own():
     stores = _stores()
-    assert len(MESSAGES) == 11
+    assert len(MESSAGES) == 12
+    jazzy_only = (PARTICIPANT_ENTITIES_INFO, RANGE)  # Humble's gid is 24 bytes; its Range has no variance
     for msgtype, (definition, rihs01) in MESSAGES.items():
         for name, store in stores.items():
-            if msgtype != PARTICIPANT_ENTITIES_INFO or name == "ROS2_JAZZY":  # Humble's gid is 24 bytes
+            if msgtype not in jazzy_only or name == "ROS2_JAZZY":
                 assert store.generate_msgdef(msgtype, ros_version=2)[0] == definition, (name, msgtype)
-        if msgtype != PARTICIPANT_ENTITIES_INFO:
+        if msgtype not in jazzy_only:
             assert stores["ROS2_HUMBLE"].hash_rihs01(msgtype) == rihs01 == stores["ROS2_JAZZY"].hash_rihs01(msgtype)
+    assert stores["ROS2_JAZZY"].hash_rihs01(RANGE) == MESSAGES[RANGE][1]
+    assert "float32 variance" not in stores["ROS2_HUMBLE"].generate_msgdef(RANGE, ros_version=2)[0]
     # rmw_dds_common's Gid is char[16]; its shipped hash reads char as uint8, as ROS 2's IDL does
     assert discovery_store(16).hash_rihs01(PARTICIPANT_ENTITIES_INFO) == MESSAGES[PARTICIPANT_ENTITIES_INFO][1]
 

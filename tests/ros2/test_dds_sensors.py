@@ -1,5 +1,5 @@
 """Every sensor topic the bag has reaches another DDS participant from `mobot serve --ros2`:
-<ns>/imu, <ns>/points and <ns>/bumper, with ROS 2's type names, QoS and hashes, at the
+<ns>/imu, <ns>/points, <ns>/bumper and a range sensor's, with ROS 2's type names, QoS and hashes, at the
 sensor's rate, decoding to what the sensor reads (tests/ros2/dds_peer.py, on loopback)."""
 
 from __future__ import annotations
@@ -8,6 +8,7 @@ import json
 import math
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,7 +20,8 @@ from tests.sim.sensor_world import HALF_X, ROOM_SDF
 pytest.importorskip("cyclonedds")
 
 # r1 stands in the middle of the room with its IMU and a 3D lidar that sees only the east
-# wall (x = 3 m); r2 drives west into the west wall with a bumper on its base.
+# wall (x = 3 m); r2 drives west into the west wall with a bumper on its base; r3, the range
+# sensors' box (tests/assets/sensors/range.urdf), faces the east wall 1.9 m from its infrared ray.
 SCENARIO = """version: 1
 name: ros2_sensors
 world: room.sdf
@@ -40,10 +42,15 @@ robots:
       bumper: {type: contact, link: base_link, rate_hz: 20}
     commands:
       - {at: 0.5, linear: 0.5}
+  - name: r3
+    description: RANGER
+    pose: {x: 1.0, y: -1.0}
 """
+RANGER = Path(__file__).resolve().parents[1] / "assets" / "sensors" / "range.urdf"
 TOPICS = {"rt/r1/imu": ("sensor_msgs::msg::dds_::Imu_", "RIHS01_7d9a00ff131080897a5ec7e26e315954b8eae3353c3f995c55"),
           "rt/r1/points": ("sensor_msgs::msg::dds_::PointCloud2_", "RIHS01_9198cabf7da3796ae6fe19c4cb3bdd352549"),
-          "rt/r2/bumper": ("gazebo_msgs::msg::dds_::ContactsState_", "RIHS01_1dc585e627c16551e50102b983ec51321")}
+          "rt/r2/bumper": ("gazebo_msgs::msg::dds_::ContactsState_", "RIHS01_1dc585e627c16551e50102b983ec51321"),
+          "rt/r3/ir/front": ("sensor_msgs::msg::dds_::Range_", "RIHS01_b42b62562e93cbfe9d42b82fe5994dfa3d63d7d5c90a3")}
 
 
 def peers(*calls: tuple[str, ...], timeout: float = 90) -> list:
@@ -66,12 +73,13 @@ def stamps(messages: list) -> list[float]:
 def received(tmp_path_factory):
     folder = tmp_path_factory.mktemp("ros2-sensors")
     (folder / "room.sdf").write_text(ROOM_SDF)
-    (folder / "world.yaml").write_text(SCENARIO)
+    (folder / "world.yaml").write_text(SCENARIO.replace("RANGER", str(RANGER)))
     live = LiveProcess(str(folder / "world.yaml"), "--ros2", cache_dir=tmp_path_factory.mktemp("cache"))
     try:
         return peers(("graph", "3"), ("take", "rt/r1/imu", "sensor_msgs/msg/Imu", "3"),
                      ("take", "rt/r1/points", "sensor_msgs/msg/PointCloud2", "3"),
-                     ("take", "rt/r2/bumper", "gazebo_msgs/msg/ContactsState", "8"))
+                     ("take", "rt/r2/bumper", "gazebo_msgs/msg/ContactsState", "8"),
+                     ("take", "rt/r3/ir/front", "sensor_msgs/msg/Range", "3"))
     finally:
         live.signal()
         live.kill()
@@ -125,3 +133,14 @@ def test_bumper_feels_the_wall_it_drives_into(received):
     assert state["collision1_name"] == "r2::base_link::base_link" and "walls" in state["collision2_name"]
     assert all(n["x"] > 0.9 for n in state["contact_normals"])  # the west wall pushes back (+x)
     assert touching[-1]["header"]["frame_id"] == "world"
+
+
+def test_range_reads_the_wall_at_20_hz_as_sensor_msgs_range(received):
+    ranges = received[4]
+    assert len(ranges) >= 20  # 3 s at 20 Hz in real time
+    times = stamps(ranges)
+    assert all(abs(b - a - 0.05) < 1e-6 for a, b in zip(times, times[1:]))
+    last = ranges[-1]
+    assert last["range"] == pytest.approx(HALF_X - 1.1, abs=0.01)
+    assert (last["radiation_type"], last["min_range"], last["max_range"]) == (1, pytest.approx(0.02), 4.0)
+    assert last["header"]["frame_id"] == "r3/base_link_ir_front"

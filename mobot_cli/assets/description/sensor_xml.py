@@ -6,6 +6,10 @@ plugin's ``<topicName>`` (``<bumperTopicName>``); gz-sim's ``<topic>`` in the se
 ``PLUGIN_NAME/out``. Topics are relative to the robot's namespace: a leading '/' is dropped and a
 plugin's ``<namespace>`` is replaced by the robot's, as ``spawn_entity.py -robot_namespace`` does.
 Frame: the plugin's ``<frame_name>`` (``<frameName>``), gz-sim's ``<gz_frame_id>``, else the link.
+
+Range plugins make a ray sensor a range sensor (``range_plugin``): gazebo_ros's ray sensor with
+``<output_type>sensor_msgs/Range</output_type>`` (ROS 2), gazebo_ros_range (ROS 1) and hector's
+sonar plugin, each with its own radiation type, field of view and noise.
 """
 
 from __future__ import annotations
@@ -18,6 +22,7 @@ from mobot_cli.common.transforms import quat_from_rpy
 from mobot_cli.errors import DescriptionError, Location
 
 _UNSET = ("", "__default__", "__default_topic__")
+SONAR_RAYS = 9  # rays along each axis of a sonar's cone
 
 
 class SensorXml:
@@ -27,7 +32,9 @@ class SensorXml:
         self.element, self.link, self.source = element, link, source
         self.name = element.get("name", "").strip()
         self.type = element.get("type", "").strip()
-        self.plugin = element.find("plugin")
+        plugins = element.findall("plugin")
+        # A range plugin decides what the sensor is (and names its topic and frame)
+        self.plugin = next((p for p in plugins if _range_plugin(p)), plugins[0] if plugins else None)
 
     def location(self, path: str = "") -> Location:
         """The description file and a key naming this sensor (and ``path`` inside it)."""
@@ -110,6 +117,66 @@ class SensorXml:
             values["noise_stddev"] = math.hypot(stddev, extra)
         return values
 
+    def range_plugin(self, axes: dict) -> dict | None:
+        """Radiation, field of view and reading noise of a ray sensor's range plugin, as each
+        plugin fills sensor_msgs/Range; None when no plugin makes it a range sensor. ``axes``
+        are its ``lidar()`` values (field of view from the scan's angles)."""
+        wide = axes["max_angle"] - axes["min_angle"]
+        high = axes["vertical_max_angle"] - axes["vertical_min_angle"]
+        plugin = self.plugin
+        if plugin is not None and _range_plugin(plugin):
+            filename = plugin.get("filename", "").lower()
+            if _range_output(plugin):
+                # gazebo_ros_ray_sensor (ROS 2): <radiation_type>, default infrared; the wider
+                # axis as field of view; no noise of its own (the <ray> block's is on each ray)
+                kind = (plugin.findtext("radiation_type") or "infrared").strip()
+                if kind not in ("ultrasound", "infrared"):
+                    raise DescriptionError(
+                        f"sensor '{self.name}' has <radiation_type> '{kind[:40]}'",
+                        location=self.location("plugin/radiation_type"),
+                        hint="gazebo_ros reads ultrasound or infrared (and loads no plugin otherwise).")
+                return dict(radiation=kind, field_of_view=max(wide, high), reading_noise_stddev=0.0)
+            if "gazebo_ros_range" in filename:  # ROS 1: <radiation> (anything else is infrared), <fov>
+                kind = (plugin.findtext("radiation") or "ultrasound").strip()
+                return dict(radiation="ultrasound" if kind == "ultrasound" else "infrared",
+                            field_of_view=self.plugin_number("fov", 0.05),
+                            reading_noise_stddev=abs(self.plugin_number("gaussianNoise", 0.0)))
+            if "sonar" in filename:  # hector_gazebo_ros_sonar: the narrower axis as field of view
+                return dict(radiation="ultrasound", field_of_view=min(abs(wide), abs(high)),
+                            reading_noise_stddev=abs(self.plugin_number("gaussianNoise", 0.0)))
+        return None
+
+    def sonar(self) -> dict:
+        """A Gazebo classic ``sonar`` sensor (<sonar><min>, <max>, <radius>) as a range sensor: a
+        cone along the sensor's -z axis from its apex at the sensor, ``radius`` wide at
+        ``max - min``, swept by SONAR_RAYS x SONAR_RAYS rays (the pose is turned so that x
+        points along the cone, as a Range message's frame does)."""
+        low, high = self.number("sonar/min", 0.0), self.number("sonar/max", 1.0)
+        radius = self.number("sonar/radius", 0.5)
+        if radius < 0 or low < 0 or high <= low:
+            raise DescriptionError(f"sensor '{self.name}' has <sonar> min {low:g}, max {high:g}, "
+                                   f"radius {radius:g}", location=self.location("sonar"),
+                                   hint="Give 0 <= min < max and a radius of 0 or more.")
+        half = math.atan2(radius, high - low)
+        samples = SONAR_RAYS if half > 0 else 1
+        # a ROS plugin on it (gazebo_plugins_sonar and the like) may add noise and report its <fov>
+        return dict(samples=samples, min_angle=-half, max_angle=half, vertical_samples=samples,
+                    vertical_min_angle=-half, vertical_max_angle=half, range_min=low, range_max=high,
+                    radiation="ultrasound", field_of_view=self.plugin_number("fov", 2 * half),
+                    reading_noise_stddev=abs(self.plugin_number("gaussianNoise", 0.0)))
+
+    def plugin_number(self, tag: str, default: float) -> float:
+        """A finite number in the plugin at ``tag``, or ``default`` when absent or empty."""
+        text = (self.plugin.findtext(tag) or "").strip() if self.plugin is not None else ""
+        if not text:
+            return default
+        value = _plugin_number(self.plugin, tag)
+        if value is None:
+            raise DescriptionError(f"sensor '{self.name}' has <{tag}> '{text[:40]}', which is not a "
+                                   "finite number", location=self.location(f"plugin/{tag}"),
+                                   hint="Write a plain number.")
+        return value
+
     def imu(self) -> dict:
         """Gyro noise (the noisiest axis) and accelerometer noise of an imu sensor."""
         gyro = [self.noise(f"imu/angular_velocity/{a}/noise", "none") for a in "xyz"]
@@ -158,7 +225,7 @@ class SensorXml:
     def frame(self) -> str:
         """The frame readings are stamped with, when the block names one."""
         if self.plugin is not None:
-            for tag in ("frame_name", "frameName"):
+            for tag in ("frame_name", "frameName", "frameId"):
                 text = (self.plugin.findtext(tag) or "").strip()
                 if text:
                     return text
@@ -172,6 +239,18 @@ def clean_topic(text: str) -> str:
     """A topic relative to the robot's namespace: no '~/', no leading or trailing '/'."""
     text = text.strip().removeprefix("~")
     return "/".join(part for part in text.split("/") if part)
+
+
+def _range_output(plugin: ET.Element) -> bool:
+    """gazebo_ros's ray sensor told to publish sensor_msgs/Range."""
+    return (plugin.findtext("output_type") or "").strip().split("/")[-1] == "Range"
+
+
+def _range_plugin(plugin: ET.Element) -> bool:
+    """A plugin that reads a ray sensor as one range: gazebo_ros's (ROS 2 output_type Range,
+    ROS 1 gazebo_ros_range) or hector's sonar."""
+    filename = plugin.get("filename", "").lower()
+    return _range_output(plugin) or "gazebo_ros_range" in filename or "sonar" in filename
 
 
 def _plugin_number(plugin: ET.Element, tag: str) -> float | None:

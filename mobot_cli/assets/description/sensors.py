@@ -1,9 +1,12 @@
 """A robot's sensors, read from its <gazebo reference="LINK"><sensor> blocks as Gazebo reads them.
 
-Types ray, gpu_ray, lidar and gpu_lidar are lidars (2D with one vertical sample), imu and
-contact (a bumper) are the others mobot simulates; cameras, GPS and the rest of SDFormat's
-types are left out with one notice. SDF models reach this module as URDF: model_to_urdf copies
-each link's sensors into such blocks, posed in the URDF link frame. Absent elements take
+Types ray, gpu_ray, lidar and gpu_lidar are lidars (2D with one vertical sample), unless a range
+plugin reads them (gazebo_ros's ray sensor with output_type sensor_msgs/Range, gazebo_ros_range,
+hector's sonar): then they are range sensors, as Gazebo classic's sonar is. imu and contact (a
+bumper) are the others mobot simulates, with IMUs that are model plugins (plugin_sensors.py);
+cameras, GPS and the rest of SDFormat's types are left out with one notice. SDF models reach
+this module as URDF: model_to_urdf copies each link's sensors into such blocks, posed in the
+URDF link frame. Absent elements take
 SDFormat's defaults (sdf/1.6 sensor.sdf, lidar.sdf, imu.sdf, noise.sdf): update_rate 0 (every
 physics step), 640 horizontal samples between angles 0 and 0, one vertical sample, range 0..0,
 no noise. The topic and frame come from the sensor's plugin or gz-sim elements (sensor_xml.py).
@@ -16,19 +19,23 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
 
+from mobot_cli.assets.description.plugin_sensors import plugin_sensors
 from mobot_cli.assets.description.sensor_xml import SensorXml
+from mobot_cli.common.transforms import quat_from_rpy, quat_mul
 from mobot_cli.errors import DescriptionError, Location, Notice, did_you_mean
 from mobot_cli.plan import RayAxis, SensorSpec
 
 LIDAR_TYPES = ("ray", "gpu_ray", "lidar", "gpu_lidar")
-KINDS = {**{t: "lidar" for t in LIDAR_TYPES}, "imu": "imu", "contact": "contact"}
+KINDS = {**{t: "lidar" for t in LIDAR_TYPES}, "sonar": "range", "imu": "imu", "contact": "contact"}
+RAY_KINDS = ("lidar", "range")  # sensors that cast rays: scan axes and a range
 # SDFormat's other sensor types (sdf/1.9 sensor.sdf): real, but not simulated by mobot.
 OTHER_TYPES = ("air_pressure", "air_speed", "altimeter", "boundingbox_camera", "boundingbox",
                "camera", "custom", "depth_camera", "depth", "dvl", "force_torque", "gps",
                "logical_camera", "magnetometer", "multicamera", "navsat", "rfid", "rfidtag",
-               "rgbd_camera", "rgbd", "segmentation_camera", "segmentation", "sonar",
+               "rgbd_camera", "rgbd", "segmentation_camera", "segmentation",
                "thermal_camera", "thermal", "wide_angle_camera", "wireless_receiver",
                "wireless_transmitter")
+SONAR_TURN = quat_from_rpy(0.0, math.pi / 2, 0.0)  # x onto -z: along a Gazebo sonar's cone
 MAX_SAMPLES = 100_000  # rays along one axis of a scan
 MAX_RAYS = 1_000_000  # rays in one reading (horizontal x vertical samples)
 
@@ -63,15 +70,18 @@ class DescribedSensor:
     collision: str = ""
     topic: str = ""
     frame_id: str = ""  # "" when the block names none: the link's name
+    radiation: str = ""  # a range sensor's "ultrasound" or "infrared"; "" for every other kind
+    field_of_view: float = 0.0  # rad, a range sensor's, as its plugin reports it
+    reading_noise_stddev: float = 0.0  # m, a range plugin's gaussian noise on the reading
 
     @property
     def kind(self) -> str:
-        """"lidar", "imu" or "contact"."""
-        return KINDS[self.type]
+        """"lidar", "range", "imu" or "contact"."""
+        return "range" if self.radiation else KINDS[self.type]
 
     def spec(self, every: int, source: str = "") -> SensorSpec:
         """The plan's form, reading every ``every`` physics steps."""
-        lidar = self.kind == "lidar"
+        lidar = self.kind in RAY_KINDS
         return SensorSpec(
             name=self.name, kind=self.kind, link=self.link, every=every, xyz=self.xyz,
             quat=self.quat, topic=self.topic, frame_id=self.frame_id or self.link,
@@ -82,7 +92,9 @@ class DescribedSensor:
             range_min=self.range_min if lidar else 0.0, range_max=self.range_max if lidar else 0.0,
             range_resolution=self.range_resolution if lidar else 0.0,
             noise_mean=self.noise_mean, noise_stddev=self.noise_stddev,
-            accel_noise_stddev=self.accel_noise_stddev, collision=self.collision, source=source)
+            accel_noise_stddev=self.accel_noise_stddev, collision=self.collision, source=source,
+            radiation=self.radiation, field_of_view=self.field_of_view,
+            reading_noise_stddev=self.reading_noise_stddev)
 
 
 SENSOR_FIELDS = tuple(f.name for f in fields(DescribedSensor))
@@ -93,7 +105,8 @@ def sensor_summary(sensor: DescribedSensor) -> dict:
     lidar = ("samples", "min_angle", "max_angle", "resolution", "vertical_samples",
              "vertical_min_angle", "vertical_max_angle", "vertical_resolution", "range_min",
              "range_max", "range_resolution", "noise_mean", "noise_stddev")
-    own = {"lidar": lidar, "imu": ("noise_mean", "noise_stddev", "accel_noise_stddev"),
+    ranged = (*lidar, "radiation", "field_of_view", "reading_noise_stddev")
+    own = {"lidar": lidar, "range": ranged, "imu": ("noise_mean", "noise_stddev", "accel_noise_stddev"),
            "contact": ("collision",)}[sensor.kind]
     out = {"name": sensor.name, "type": sensor.type, "kind": sensor.kind, "link": sensor.link,
            "topic": sensor.topic, "frame_id": sensor.frame_id or sensor.link,
@@ -115,6 +128,16 @@ def read_sensors(robot: ET.Element, source: Path,
                 continue
             _check_placement(xml, links, found)
             found.append(_read(xml))
+    for values in plugin_sensors(robot, source, skipped):
+        sensor = DescribedSensor(**values)
+        if any(s.kind == "imu" and (s.link == sensor.link or (s.topic or default_topic(s)) == sensor.topic)
+               for s in found):
+            continue  # the same IMU as a <sensor> (turtlebot3 has both): the <sensor> is read
+        if any(s.name == sensor.name for s in found) or sensor.link not in links:
+            why = "no link" if sensor.link not in links else "the name of another sensor"
+            skipped.append(f"IMU plugin '{sensor.name}' ({why} '{sensor.link if why == 'no link' else sensor.name}')")
+            continue
+        found.append(sensor)
     if skipped:
         notices.append(Notice("sensors of types mobot does not simulate are left out: "
                               + ", ".join(skipped), Location(file=source)))
@@ -142,7 +165,7 @@ def default_topic(sensor: DescribedSensor) -> str:
     """The topic of a sensor whose block names none: scan, points (3D), imu or bumper."""
     if sensor.kind == "lidar":
         return "scan" if sensor.vertical_samples <= 1 else "points"
-    return "bumper" if sensor.kind == "contact" else "imu"
+    return {"range": "range", "contact": "bumper"}.get(sensor.kind, "imu")
 
 
 def default_topics(sensors: list[DescribedSensor]) -> list[DescribedSensor]:
@@ -190,6 +213,10 @@ def _read(xml: SensorXml) -> DescribedSensor:
     kind = KINDS[xml.type]
     if kind == "lidar":
         values.update(xml.lidar())
+        values.update(xml.range_plugin(values) or {})
+    elif kind == "range":  # Gazebo classic's sonar: a cone, x turned along it
+        values.update(xml.sonar())
+        values["quat"] = quat_mul(values["quat"], SONAR_TURN)
     elif kind == "imu":
         values.update(xml.imu())
     else:
@@ -237,7 +264,7 @@ XML_KEYS = {
     "vertical_resolution": "ray.scan.vertical.resolution", "range_min": "ray.range.min",
     "range_max": "ray.range.max", "range_resolution": "ray.range.resolution",
     "noise_stddev": "noise.stddev", "accel_noise_stddev": "imu.linear_acceleration.noise.stddev",
-    "collision": "contact.collision"}
+    "collision": "contact.collision", "reading_noise_stddev": "plugin.gaussianNoise"}
 XML_NAMES = {"rate_hz": "<update_rate>", "samples": "<horizontal><samples>",
              "min_angle": "<horizontal><min_angle>", "max_angle": "<horizontal><max_angle>",
              "resolution": "<horizontal><resolution>", "vertical_samples": "<vertical><samples>",
@@ -246,7 +273,7 @@ XML_NAMES = {"rate_hz": "<update_rate>", "samples": "<horizontal><samples>",
              "vertical_resolution": "<vertical><resolution>", "range_min": "<range><min>",
              "range_max": "<range><max>", "range_resolution": "<range><resolution>",
              "noise_stddev": "<noise><stddev>", "accel_noise_stddev": "the accelerometer's <stddev>",
-             "collision": "<contact><collision>"}
+             "collision": "<contact><collision>", "reading_noise_stddev": "the plugin's <gaussianNoise>"}
 
 
 def check_values(sensor: DescribedSensor,
@@ -263,7 +290,10 @@ def check_values(sensor: DescribedSensor,
         field = "noise_stddev" if sensor.noise_stddev < 0 else "accel_noise_stddev"
         return field, f"has a negative noise standard deviation ({getattr(sensor, field):g})", \
             "Give {field} a value of 0 or more."
-    if sensor.kind == "lidar":
+    if sensor.reading_noise_stddev < 0:
+        return "reading_noise_stddev", "has a negative noise standard deviation " \
+            f"({sensor.reading_noise_stddev:g})", "Give {field} a value of 0 or more."
+    if sensor.kind in RAY_KINDS:
         return _check_lidar(sensor)
     if sensor.kind == "contact" and contact_collision(sensor.collision, collisions) is None:
         return "collision", f"counts contacts of collision '{sensor.collision}', which link " \

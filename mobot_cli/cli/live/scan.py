@@ -21,7 +21,7 @@ def scan(
     timeout: common.Timeout = 5.0,
     json_: common.JsonLines = False,
 ) -> int:
-    """Print a robot's latest lidar scan (or IMU or contact reading) from the live world."""
+    """Print a robot's latest lidar scan (or range, IMU or contact reading) from the live world."""
     env = ctx.obj
     fields = {"name": name, **({"sensor": sensor} if sensor else {})}
     with common.client(endpoint, timeout) as world:
@@ -29,10 +29,13 @@ def scan(
 
 
 def reading_line(reply: dict[str, Any]) -> str:
-    """One reading in a line: a lidar's returns and nearest one, an IMU's values, contacts."""
+    """One reading in a line: a lidar's returns and nearest one, a range, an IMU's values, contacts."""
     head = f"t={reply['t']:.3f} {reply['name']}/{reply['sensor']} ({reply['kind']}, {reply['topic']})"
     if reply["kind"] == "lidar":
         return f"{head} {_lidar(reply)}"
+    if reply["kind"] == "range":
+        return (f"{head} {reply['range']:.3f} m ({reply['radiation_type']}, "
+                f"{reply['min_range']:g}..{reply['max_range']:g} m)")
     if reply["kind"] == "imu":
         w, a = reply["angular_velocity"], reply["linear_acceleration"]
         return (f"{head} accel {' '.join(f'{v:.3f}' for v in a)} m/s^2, "

@@ -10,6 +10,10 @@ gives the same readings.
 
 * lidar: ranges (m, float32) on Gazebo's beam grid, +inf for no return, with gaussian noise
   and range quantisation as the ``<ray>`` block asks, clamped to [range_min, range_max];
+* range: one distance, the nearest of its rays (each noised as a lidar's), then the plugin's
+  own gaussian noise (from a generator of its own, so that batching never changes the
+  numbers), clamped to [range_min, range_max]; range_max when no ray returns, as Gazebo's
+  range plugins publish. Cast at the step they are due (they have few rays), never batched;
 * imu: orientation of the sensor frame in the world (REP 145), angular velocity in the sensor
   frame, and linear acceleration as a real IMU measures it (specific force: +9.81 m/s^2 up at
   rest), averaged over the time since the previous reading;
@@ -33,7 +37,7 @@ from mobot_cli.sim.contacts import CONTACT_SLOP, SUPPORT_NORMAL_Z
 from mobot_cli.sim.pb import p
 from mobot_cli.sim.sensing import lidar
 
-KINDS = ("lidar", "imu", "contact")
+KINDS = ("lidar", "range", "imu", "contact")
 # Scans waiting to be cast (ScanData): at most this many, and this many rays (a VLP-16 scan
 # has 30,000), so readers that never read still see memory stay flat.
 MAX_WAITING_SCANS = 50  # a chunk of the .npy (record/sensor_files.py) reads them all at once
@@ -78,6 +82,13 @@ class ScanData:
 
 
 @dataclass(frozen=True)
+class RangeData:
+    """One range reading, as sensor_msgs/Range's ``range`` carries it."""
+
+    range: float  # m, in [range_min, range_max]; range_max when nothing is in its field of view
+
+
+@dataclass(frozen=True)
 class ImuData:
     """One IMU reading (SI units), as sensor_msgs/Imu carries it."""
 
@@ -117,6 +128,7 @@ class _Rig:
     at_link: bool = True  # the sensor sits at its link's frame (no pose of its own)
     last: tuple[int, np.ndarray] | None = None  # imu: (step, world velocity) of the last reading
     to_link: tuple | None = None  # on the base: PyBullet's base (inertial) frame -> the URDF link frame
+    reading_rng: np.random.Generator | None = None  # range: the plugin's noise on the reading
 
 
 class _Waiting:
@@ -193,9 +205,11 @@ class Sensing:
             if rig.link < 0:
                 inertial = p.getDynamicsInfo(body, -1, physicsClientId=self.cid)
                 rig.to_link = p.invertTransform(inertial[3], inertial[4])
-            if spec.kind == "lidar":
+            if spec.kind in ("lidar", "range"):
                 rig.beams = lidar.Beams.of(spec)
                 rig.rays = len(rig.beams.directions)
+            if spec.kind == "range":
+                rig.reading_rng = noise_rng(self.seed, name, spec.name + "/reading")
             rigs[spec.name] = rig
         self.rigs[name] = rigs
 
@@ -217,11 +231,15 @@ class Sensing:
         """The readings of ``(robot, sensor)`` pairs due at ``step``, in order."""
         out: list[object] = []
         scans: list[tuple[_Rig, ScanData]] = []
+        ranges: list[tuple[int, _Rig, ScanData]] = []
         rigs = self.rigs
         for robot, sensor in due:
             rig = rigs[robot][sensor]
             position, quat = self._pose(rig)
-            if rig.beams is not None:  # a lidar
+            if rig.reading_rng is not None:  # a range sensor: cast below
+                data = ScanData(None, rig.beams, position, quat)
+                ranges.append((len(out), rig, data))
+            elif rig.beams is not None:  # a lidar
                 data = ScanData(None, rig.beams, position, quat)
                 scans.append((rig, data))
             elif rig.spec.kind == "imu":
@@ -231,6 +249,10 @@ class Sensing:
             out.append(data)
         if scans:
             self._scans(scans)
+        if ranges:
+            self._cast_now([(rig, data) for _, rig, data in ranges])
+            for index, rig, data in ranges:
+                out[index] = _range_reading(rig, data.ranges)
         return out
 
     def _scans(self, scans: list[tuple[_Rig, ScanData]]) -> None:
@@ -247,6 +269,11 @@ class Sensing:
             return
         if waiting:
             waiting.cast()  # scans taken before come first: noise is drawn in order
+        self._cast_now(scans, bodies)
+
+    def _cast_now(self, scans: list[tuple[_Rig, ScanData]], bodies: list[int] | None = None) -> None:
+        """Cast these scans now against the world and the other robots, noised."""
+        bodies = self.robot_bodies() if bodies is None else bodies
         jobs = []
         for rig, data in scans:
             rotation = np.array(p.getMatrixFromQuaternion(data.quat), dtype=np.float32).reshape(3, 3)
@@ -333,6 +360,18 @@ def _lidar_noise(rig: _Rig, ranges: np.ndarray) -> np.ndarray:
         np.round(ranges, out=ranges)
         ranges *= step
     return ranges.astype(np.float32, copy=False)
+
+
+def _range_reading(rig: _Rig, ranges: np.ndarray) -> RangeData:
+    """The nearest ray's range (rays noised and clamped already), with the plugin's noise on it,
+    clamped to the sensor's limits; range_max when no ray returned."""
+    spec = rig.spec
+    nearest = float(ranges.min()) if ranges.size else np.inf
+    if not np.isfinite(nearest) or nearest >= spec.range_max:
+        return RangeData(spec.range_max)
+    if spec.reading_noise_stddev > 0.0:
+        nearest += float(rig.reading_rng.normal(0.0, spec.reading_noise_stddev))
+    return RangeData(min(max(nearest, spec.range_min), spec.range_max))
 
 
 def _unit(q) -> tuple[float, float, float, float]:
