@@ -172,7 +172,7 @@ class RobotResolver:
         hint = ("Cars are found from a gazebo_ros ackermann_drive or gz-sim AckermannSteering plugin, or from "
                 "limited steering joints about the vertical that carry wheels (docs/ackermann.md)."
                 if wanted == "ackermann" else f"Leave drive.type out, or set it to {found}.")
-        raise ScenarioError(f"drive.type is {wanted}, but '{spec.description}' has a {drive.kind} drive "
+        raise ScenarioError(f"drive.type is {wanted}, but the drive detected in '{spec.description}' is {drive.kind} "
                             f"({', '.join(drive.steering_joints or drive.left_joints + drive.right_joints)}): "
                             "mobot drives a robot only as the type it is", hint=hint,
                             location=self.locate_key(path + ("drive", "type")))

@@ -58,11 +58,11 @@ def from_plugins(robot: ET.Element, tree: LinkTree, notices: list[Notice],
     """An Ackermann plugin's drive, or the refusal of a tracked or tricycle plugin; None without."""
     for gazebo in robot.findall("gazebo"):
         for plugin in gazebo.findall("plugin"):
-            label = _label(plugin)
-            if "ackermann" in label.lower():
+            label, words = _label(plugin), _words(plugin)
+            if "ackermann" in words:
                 return _from_ackermann_plugin(plugin, label, tree, notices, file)
             for key, what in UNSUPPORTED:
-                if key in label.lower():
+                if key in words:
                     return refusal(what, label, notices, file)
     return None
 
@@ -71,15 +71,22 @@ def unknown_drive(robot: ET.Element, notices: list[Notice], file: Path | None) -
     """Refuse a plugin named like a drive that mobot does not know (after the ones it does)."""
     for gazebo in robot.findall("gazebo"):
         for plugin in gazebo.findall("plugin"):
-            label = _label(plugin)
-            lowered = label.lower()
-            if any(w in lowered for w in DRIVE_WORDS) and not any(k in lowered for k in KNOWN):
-                return refusal("drive plugin of a kind mobot does not know", label, notices, file)
+            words = _words(plugin)
+            if any(w in words for w in DRIVE_WORDS) and not any(k in words for k in KNOWN):
+                return refusal("drive plugin of a kind mobot does not know", _label(plugin), notices, file)
     return None
 
 
 def _label(plugin: ET.Element) -> str:
-    return plugin.get("name") or plugin.get("filename") or ""
+    """How a plugin is named in messages: a classic plugin's library (its name is the user's),
+    a gz-sim system's class name."""
+    name, filename = plugin.get("name", ""), plugin.get("filename", "")
+    return filename if filename.startswith("lib") or not name else name
+
+
+def _words(plugin: ET.Element) -> str:
+    """What a plugin is matched on: its name and file name, lower case."""
+    return f"{plugin.get('name', '')} {plugin.get('filename', '')}".lower()
 
 
 def _text(plugin: ET.Element, tag: str) -> str | None:
@@ -114,7 +121,7 @@ def _from_ackermann_plugin(plugin: ET.Element, label: str, tree: LinkTree, notic
                            file: Path | None) -> Detected:
     """gazebo_ros_ackermann_drive (rear wheels driven, odometry = the model's world pose) or
     gz-sim AckermannSteering (its left/right joints driven, odometry from them and the steering)."""
-    classic = "gazebo_ros" in label.lower() or plugin.find("rear_left_joint") is not None
+    classic = "gazebo_ros" in _words(plugin) or plugin.find("rear_left_joint") is not None
     if classic:
         tags = {"left": ["rear_left_joint"], "right": ["rear_right_joint"]}
         defaults = {t: t for t in ("rear_left_joint", "rear_right_joint", "left_steering_joint",
