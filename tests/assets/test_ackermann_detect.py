@@ -131,3 +131,19 @@ def test_gz_ros2_control_ackermann_demo_is_a_car(corpus):
     assert (spec.left_joints, spec.right_joints) == (("rear_left_wheel_joint",), ("rear_right_wheel_joint",))
     assert (spec.wheelbase, spec.wheel_separation, spec.wheel_radius) == pytest.approx((1.7, 1.0, 0.3))
     assert any("have no limit" in str(n) for n in robot.notices)
+
+
+def test_an_arm_held_by_position_control_is_no_steering_joint():
+    """A vertical base joint that ros2_control commands by position, a continuous wrist far below it:
+    the robot stays a diff drive."""
+    from tests.assets.test_drive import robot, wheel
+
+    arm = ('<link name="link1"/><joint name="joint_1" type="continuous"><parent link="base"/>'
+           '<child link="link1"/><origin xyz="0 0 0.2"/><axis xyz="0 0 1"/></joint>'
+           '<link name="link2"/><joint name="joint_2" type="revolute"><parent link="link1"/>'
+           '<child link="link2"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="1" velocity="1"/></joint>'
+           + wheel("wrist", "0 0 0.3", parent="link2", radius=0.03)
+           + '<ros2_control name="arm" type="system"><joint name="joint_1"><command_interface name="position"/>'
+           '</joint><joint name="wrist"><command_interface name="position"/></joint></ros2_control>')
+    spec = detect(robot(wheel("l", "0 0.2 0"), wheel("r", "0 -0.2 0"), arm)).spec
+    assert spec.kind == "diff" and (spec.left_joints, spec.right_joints) == (("l",), ("r",))

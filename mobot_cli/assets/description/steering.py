@@ -216,14 +216,15 @@ def _steers(tree: LinkTree, joint: JointRow, positioned: set[str]) -> bool:
 
 
 def _below(tree: LinkTree, link: str) -> list[JointRow]:
-    """Every joint in the subtree under ``link``."""
+    """The joints hanging from ``link`` and from the links fixed to it (a knuckle and its parts)."""
     found, todo = [], [link]
     while todo:
         current = todo.pop()
         for joint in tree.joints:
             if joint.parent == current and joint not in found:
                 found.append(joint)
-                todo.append(joint.child)
+                if joint.type == "fixed":
+                    todo.append(joint.child)
     return found
 
 
@@ -241,7 +242,13 @@ def _spins_on_body(tree: LinkTree, joint: JointRow) -> bool:
 
 
 def _steered_wheel(tree: LinkTree, joint: JointRow) -> JointRow | None:
-    return next((j for j in _below(tree, joint.child) if _spins(tree, j)), None)
+    """The wheel a steering joint turns: a spinning joint right below it (only fixed joints
+    between), whose link collides. An arm's base joint carries no such thing."""
+    for below in _below(tree, joint.child):
+        link = tree.links.get(below.child)
+        if _spins(tree, below) and link is not None and link.find("collision") is not None:
+            return below
+    return None
 
 
 def _wheel(tree: LinkTree, joint: JointRow) -> Wheel:
