@@ -187,12 +187,19 @@ class RobotResolver:
         if detected is not None and (left, right) == (detected.left_joints, detected.right_joints):
             return detected
         try:
-            return drive_from_joints(desc.urdf, tuple(left), tuple(right), source=desc.source,
-                                     radius=fields.get("wheel_radius"),
-                                     separation=fields.get("wheel_separation"))
+            named = drive_from_joints(desc.urdf, tuple(left), tuple(right), source=desc.source,
+                                      radius=fields.get("wheel_radius"),
+                                      separation=fields.get("wheel_separation"))
         except MobotError as exc:
             raise ScenarioError(exc.message, location=self.locate_key(path + ("drive",)),
                                 hint=exc.hint) from None
+        if named is not None and detected is not None and detected.kind == "ackermann":
+            # other driven wheels of the same car: it keeps its steering
+            steering = tuple(s for s in detected.joint_signs if s[0] in detected.steering_joints)
+            return dataclasses.replace(detected, left_joints=named.left_joints, right_joints=named.right_joints,
+                                       wheel_radius=named.wheel_radius, wheel_separation=named.wheel_separation,
+                                       joint_signs=named.joint_signs + steering)
+        return named
 
     def commands(self, spec: RobotSpec, path: tuple, spawn_step: int = 0,
                  footprint: tuple[float, float, float, float] | None = None,

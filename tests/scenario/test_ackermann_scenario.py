@@ -89,3 +89,15 @@ def test_the_resolved_scenario_keeps_the_car(tmp_path):
     drive = prepare(tmp_path / "a" / "scenario.yaml").plan.robots[0].drive
     assert (drive.kind, drive.odometry, drive.max_steering_angle) == ("ackermann", "ground_truth", 0.3)
     assert (tmp_path / "a" / "odom" / "car.csv").read_bytes() == (tmp_path / "b" / "odom" / "car.csv").read_bytes()
+
+
+def test_naming_other_driven_wheels_keeps_the_steering(tmp_path):
+    """All four wheels driven (a 4WD car): still a car, its front wheels at their own speeds."""
+    path = scenario(tmp_path, CAR, "{left_joints: [front_left_wheel_joint, rear_left_wheel_joint], "
+                                   "right_joints: [front_right_wheel_joint, rear_right_wheel_joint]}",
+                    "      - {at: 0.5, linear: 0.5, angular: 0.25, for: 3}\n")
+    drive = prepare(path).plan.robots[0].drive
+    assert drive.kind == "ackermann" and drive.steering_joints == ("left_steering_joint", "right_steering_joint")
+    assert drive.left_joints == ("front_left_wheel_joint", "rear_left_wheel_joint")
+    done = invoke(["run", path, "--out", tmp_path / "run", "--quiet"])
+    assert done.exit_code == 0, done.stderr

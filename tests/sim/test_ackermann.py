@@ -12,6 +12,7 @@ when the command is tighter. Measured (PyBullet / kinematic), both plugins: 2 m 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -156,3 +157,20 @@ def test_corpus_ackermann_demo_drives_its_arc(corpus):
     _, samples, _, _ = drive(robot, "bullet", [(1.0, 0.25, 12.0)])
     steady = samples[len(samples) // 8:]
     assert circle_radius([(s.true_x, s.true_y) for s in steady]) == pytest.approx(4.0, rel=0.03)
+
+
+def test_a_four_wheel_drive_car_drives_its_arc():
+    """Front wheels driven too, each at its own speed about the turn's centre: R = 2 m as 2.0006 m."""
+    robot = plan(GZ)
+    front = detect_drive(car())  # the same car; its driven wheels renamed below
+    four = replace(robot.drive, left_joints=("front_left_wheel_joint", "rear_left_wheel_joint"),
+                   right_joints=("front_right_wheel_joint", "rear_right_wheel_joint"),
+                   joint_signs=front.joint_signs + (("front_left_wheel_joint", 1.0), ("front_right_wheel_joint", 1.0)))
+    _, samples, _, _ = drive(replace(robot, drive=four), "bullet", [(0.5, 0.25, 8.0)])
+    assert circle_radius([rear_axle(s) for s in samples[len(samples) // 8:]]) == pytest.approx(2.0, rel=0.01)
+    # each wheel rolls at its distance from the centre of the turn times 0.25 rad/s
+    spins = samples[-1].joint_velocities
+    for joint, y, x in (("front_left", TRACK / 2, WHEELBASE), ("front_right", -TRACK / 2, WHEELBASE),
+                        ("rear_left", TRACK / 2, 0.0), ("rear_right", -TRACK / 2, 0.0)):
+        expected = 0.25 * math.hypot(2.0 - y, x) / 0.1
+        assert spins[f"{joint}_wheel_joint"] == pytest.approx(expected, rel=0.01), joint

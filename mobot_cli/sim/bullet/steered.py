@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 
+from mobot_cli.errors import SpawnError
 from mobot_cli.plan import DriveSpec
 from mobot_cli.sim import steering
 from mobot_cli.sim.bullet.robot import SimRobot, _Drive
@@ -35,8 +36,6 @@ class SteeredDrive(_Drive):
         self.trim = None  # a car follows its geometry: no twist loop
         missing = [j for j in spec.steering_joints if j not in robot.joints]
         if missing:
-            from mobot_cli.errors import SpawnError
-
             raise SpawnError(f"robot '{robot.name}': steering joints {missing} are not movable joints "
                              "of its URDF", hint="Name its steering joints in the drive.")
         self.steering = [robot.joints[j] for j in spec.steering_joints]
