@@ -147,3 +147,13 @@ def test_an_arm_held_by_position_control_is_no_steering_joint():
            '</joint><joint name="wrist"><command_interface name="position"/></joint></ros2_control>')
     spec = detect(robot(wheel("l", "0 0.2 0"), wheel("r", "0 -0.2 0"), arm)).spec
     assert spec.kind == "diff" and (spec.left_joints, spec.right_joints) == (("l",), ("r",))
+
+
+def test_a_plugin_naming_a_missing_joint_is_a_located_error(tmp_path):
+    path = tmp_path / "typo.urdf"
+    path.write_text(car(GZ.replace("<left_steering_joint>left_steering_joint", "<left_steering_joint>left_steer")))
+    done = invoke(["inspect", path])
+    assert done.exit_code == 2 and "Traceback" not in done.stderr
+    assert (f"{path}, key 'gazebo.plugin.left_steering_joint': the gz::sim::systems::AckermannSteering "
+            "plugin names left_steering_joint 'left_steer', which is not in the URDF. "
+            "Did you mean 'left_steering_joint'?") in done.stderr
