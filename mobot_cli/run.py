@@ -27,6 +27,7 @@ class RunResult:
     out_dir: Path
     record: RunRecord
     expectations: list[Result] = field(default_factory=list)  # empty when the run did not finish
+    notices: list[str] = field(default_factory=list)  # said by the simulation during the run (a car's clamped turn)
 
 
 def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | None = None,
@@ -69,8 +70,9 @@ def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | 
         finally:
             for attachment in opened:
                 attachment.close()
-            record = recording.close(status, error, said=timeline.notices)
-    return RunResult(out_dir=out_dir, record=record, expectations=recording.results)
+            record = recording.close(status, error, said=[*world.notices, *timeline.notices])
+    return RunResult(out_dir=out_dir, record=record, expectations=recording.results,
+                     notices=list(world.notices))
 
 
 def _play(timeline: Timeline, progress: Progress | None) -> None:

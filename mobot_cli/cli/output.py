@@ -137,8 +137,16 @@ def inspect_tree(env: Environment, summary: dict[str, Any]) -> None:
     console.print(f"total mass {summary['total_mass']:.3f} kg; footprint {fp['length']:.3f} x {fp['width']:.3f} m "
                   f"(x {fp['xmin']:.3f}..{fp['xmax']:.3f}, y {fp['ymin']:.3f}..{fp['ymax']:.3f})")
     drive = summary["drive"]
-    if drive is None:
+    if drive is None and summary.get("refused_drive"):
+        console.print(f"drive: mobot cannot drive its {summary['refused_drive']}: a passive body")
+    elif drive is None:
         console.print("drive: none detected (set drive: in the scenario to command this robot)")
+    elif drive.get("kind") == "ackermann":
+        console.print(f"drive ({drive['source']}): ackermann; steering {', '.join(drive['steering_joints'])}; "
+                      f"driven {', '.join(drive['left_joints'] + drive['right_joints'])}; wheel radius "
+                      f"{drive['wheel_radius']:.4f} m, track {drive['wheel_separation']:.4f} m, wheelbase "
+                      f"{drive['wheelbase']:.4f} m; max steering {drive['max_steering_angle']:.4f} rad, "
+                      f"min turning radius {drive['min_turning_radius']:.3f} m; odometry {drive['odometry']}")
     else:
         console.print(f"drive ({drive['source']}): left {', '.join(drive['left_joints'])}; right "
                       f"{', '.join(drive['right_joints'])}; wheel radius {drive['wheel_radius']:.4f} m, "

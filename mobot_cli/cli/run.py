@@ -153,6 +153,7 @@ def run_scenario(env: Environment, scenario: Path, out: Optional[Path], options:
         output.emit_json(env, result.record.to_dict(), one_line=one_line_json)
     elif not options.quiet:
         output.run_table(env, result.record, result.out_dir)
+    output.notices(env, result.notices, quiet=quiet)
     output.expectations(env, result.expectations, verbose=not quiet)
     if watcher:
         watcher.replay(result.out_dir)

@@ -264,7 +264,8 @@ class Session:
         self.history_file.close()
         if status != Status.FAULT:
             self.timeline.log()
-        return self.recording.close(status, error, self.step, live, said=self.timeline.notices)
+        said = [*self.timeline.world.notices, *self.timeline.notices]  # the drives', then the bridge's
+        return self.recording.close(status, error, self.step, live, said=said)
 
 
 def _healthy(world: World, name: str) -> bool:

@@ -21,6 +21,7 @@ from mobot_cli.scenario.units import steps
 DRIVE_KEYS = ("odometry", "left_joints", "right_joints", "wheel_radius", "wheel_separation",
               "wheel_separation_multiplier", "wheel_radius_multiplier", "max_wheel_torque",
               "max_wheel_acceleration", "twist_feedback")
+CAR_KEYS = ("wheelbase", "max_steering_angle")  # an Ackermann drive's own
 
 
 def resolved_document(scenario: Scenario, plan: Plan, base_dir: Path) -> dict[str, Any]:
@@ -103,8 +104,9 @@ def _robot(spec: RobotSpec, robot: RobotPlan, base_dir: Path, rate: int) -> dict
 
 
 def _drive(drive: DriveSpec) -> dict[str, Any]:
-    out: dict[str, Any] = {"type": "diff_drive"}
-    for key in DRIVE_KEYS:
+    car = drive.kind == "ackermann"
+    out: dict[str, Any] = {"type": "ackermann" if car else "diff_drive"}
+    for key in DRIVE_KEYS + (CAR_KEYS if car else ()):
         value = getattr(drive, key)
         if value is not None:
             out[key] = list(value) if isinstance(value, tuple) else value

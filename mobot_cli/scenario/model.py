@@ -98,7 +98,8 @@ class PoseSpec(Strict):
 class DriveOverrides(Strict):
     """Anything detected from the URDF can be overridden here."""
 
-    type: Literal["diff_drive"] = "diff_drive"
+    # "diff" and "diff_drive" are one type (skid steer too); what is detected must match it
+    type: Literal["diff", "diff_drive", "holonomic", "ackermann"] = "diff_drive"
     odometry: Literal["encoder", "ground_truth"] = "encoder"
     left_joints: Optional[list[str]] = None
     right_joints: Optional[list[str]] = None
@@ -110,6 +111,9 @@ class DriveOverrides(Strict):
     max_wheel_torque: Optional[Annotated[PositiveFloat, at_most(MAX_WHEEL_TORQUE, "N m")]] = None
     max_wheel_acceleration: Optional[Annotated[PositiveFloat, at_most(MAX_WHEEL_ACCELERATION, "rad/s^2")]] = None
     twist_feedback: Optional[bool] = None
+    # ackermann: metres between the axles, and the bicycle model's largest steering angle (rad)
+    wheelbase: Optional[Annotated[PositiveFloat, at_most(MAX_WHEEL_SEPARATION, "m")]] = None
+    max_steering_angle: Optional[Annotated[PositiveFloat, Field(lt=math.pi / 2)]] = None
 
 
 class CommandSpec(GoalFields):
@@ -122,6 +126,8 @@ class CommandSpec(GoalFields):
     at: Optional[Seconds] = None
     linear: Speed = 0.0
     angular: AngularSpeed = 0.0
+    # a car's steering angle (rad, + left) instead of angular: angular = linear tan(it) / wheelbase
+    steering_angle: Optional[Annotated[Float, Field(gt=-math.pi / 2, lt=math.pi / 2)]] = None
     for_: Optional[Duration] = Field(default=None, alias="for")
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True, populate_by_name=True, defer_build=True)
@@ -129,7 +135,9 @@ class CommandSpec(GoalFields):
     @model_validator(mode="after")
     def _twist_or_goal(self) -> "CommandSpec":
         given = self.model_fields_set
-        self.check_goal([k.rstrip("_") for k in ("linear", "angular", "for_") if k in given])
+        self.check_goal([k.rstrip("_") for k in ("linear", "angular", "steering_angle", "for_") if k in given])
+        if "angular" in given and self.steering_angle is not None:
+            raise ValueError("gives both 'angular' and 'steering_angle': a car turns by one of them")
         return self
 
 

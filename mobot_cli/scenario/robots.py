@@ -24,6 +24,11 @@ from mobot_cli.scenario.sensor_resolve import resolve_sensors
 from mobot_cli.scenario.sensor_switches import arg_text
 from mobot_cli.scenario.source import Source
 from mobot_cli.scenario.units import spawn_pose, steps
+from mobot_cli.sim.steering import angular_from_steering
+
+# The scenario's drive.type of each detected kind (DESIGN.md).
+DRIVE_TYPES = {"diff": "diff", "skid": "diff", "mecanum": "holonomic", "omni": "holonomic",
+               "ackermann": "ackermann"}
 
 
 class RobotResolver:
@@ -55,9 +60,13 @@ class RobotResolver:
         desc = self.describe(spec, path)
         drive = self.drive(spec, desc, path)
         sensors = resolve_sensors(spec, desc, path, self)
-        commands = self.commands(spec, path, spawn_step, desc.footprint)
+        commands = self.commands(spec, path, spawn_step, desc.footprint, drive)
         if drive is None:  # said here, not by describe(): a drive: naming the wheels silences it
             self.notices.extend(str(n) for n in desc.notices if n.message == NO_DRIVE)
+        if commands and drive is None and desc.refused_drive:
+            raise ScenarioError(f"robot '{spec.name}' has commands but mobot cannot drive its "
+                                f"{desc.refused_drive}", location=self.locate_key(path + ("commands",)),
+                                hint="Leave its commands out: it is simulated as a passive body.")
         if commands and drive is None:
             raise ScenarioError(f"robot '{spec.name}' has commands but no drive wheels were detected in "
                                 f"'{spec.description}'", location=self.locate_key(path + ("commands",)),
@@ -131,11 +140,15 @@ class RobotResolver:
         over = spec.drive
         if over is None:
             return desc.drive
-        fields = {k: v for k, v in over.model_dump(exclude={"type"}).items() if v is not None}
+        # odometry only when written: its default would hide what a plugin publishes (a car's pose)
+        fields = {k: v for k, v in over.model_dump(exclude={"type"}).items()
+                  if v is not None and (k != "odometry" or k in over.model_fields_set)}
         for key in ("left_joints", "right_joints"):
             if key in fields:
                 fields[key] = tuple(fields[key])
         base = self.named_wheels(desc, fields, path)
+        if "type" in over.model_fields_set:
+            self.check_type(spec, desc, base, path)
         if base is not None:
             return dataclasses.replace(base, source=_source(base, fields), **fields)
         needed = ["left_joints", "right_joints", "wheel_radius", "wheel_separation"]
@@ -150,6 +163,21 @@ class RobotResolver:
                                 "come from their geometry.")
         return DriveSpec(source="scenario", **fields)
 
+    def check_type(self, spec: RobotSpec, desc: RobotDescription, drive: DriveSpec | None, path: tuple) -> None:
+        """A ScenarioError unless ``drive.type`` is the type of the drive detected: a robot is never
+        driven as another type (a car's rear wheels as a diff drive)."""
+        wanted = "diff" if spec.drive.type == "diff_drive" else spec.drive.type
+        found = DRIVE_TYPES.get(drive.kind, drive.kind) if drive is not None else None
+        if found is None or found == wanted:
+            return
+        hint = ("Cars are found from a gazebo_ros ackermann_drive or gz-sim AckermannSteering plugin, or from "
+                "limited steering joints about the vertical that carry wheels (docs/ackermann.md)."
+                if wanted == "ackermann" else f"Leave drive.type out, or set it to {found}.")
+        raise ScenarioError(f"drive.type is {wanted}, but the drive detected in '{spec.description}' is {drive.kind} "
+                            f"({', '.join(drive.steering_joints or drive.left_joints + drive.right_joints)}): "
+                            "mobot drives a robot only as the type it is", hint=hint,
+                            location=self.locate_key(path + ("drive", "type")))
+
     def named_wheels(self, desc: RobotDescription, fields: dict[str, Any], path: tuple) -> DriveSpec | None:
         """The detected drive, or the one on the joints drive: names, measured from their geometry."""
         detected = desc.drive
@@ -160,15 +188,23 @@ class RobotResolver:
         if detected is not None and (left, right) == (detected.left_joints, detected.right_joints):
             return detected
         try:
-            return drive_from_joints(desc.urdf, tuple(left), tuple(right), source=desc.source,
-                                     radius=fields.get("wheel_radius"),
-                                     separation=fields.get("wheel_separation"))
+            named = drive_from_joints(desc.urdf, tuple(left), tuple(right), source=desc.source,
+                                      radius=fields.get("wheel_radius"),
+                                      separation=fields.get("wheel_separation"))
         except MobotError as exc:
             raise ScenarioError(exc.message, location=self.locate_key(path + ("drive",)),
                                 hint=exc.hint) from None
+        if named is not None and detected is not None and detected.kind == "ackermann":
+            # other driven wheels of the same car: it keeps its steering
+            steering = tuple(s for s in detected.joint_signs if s[0] in detected.steering_joints)
+            return dataclasses.replace(detected, left_joints=named.left_joints, right_joints=named.right_joints,
+                                       wheel_radius=named.wheel_radius, wheel_separation=named.wheel_separation,
+                                       joint_signs=named.joint_signs + steering)
+        return named
 
     def commands(self, spec: RobotSpec, path: tuple, spawn_step: int = 0,
-                 footprint: tuple[float, float, float, float] | None = None) -> tuple:
+                 footprint: tuple[float, float, float, float] | None = None,
+                 drive: DriveSpec | None = None) -> tuple:
         """The command script in whole steps; each robot holds still for ``settle`` after its spawn.
 
         Twists before the first goal are CommandSteps at fixed steps (a ``for`` adds a stop);
@@ -210,14 +246,27 @@ class RobotResolver:
                 goal_seen = True
             elif goal_seen:
                 hold = None if cmd.for_ is None else max(1, steps(cmd.for_, rate))
-                out.append(TwistStep(step=at, index=i, linear=cmd.linear, angular=cmd.angular, hold=hold))
+                angular = self.angular(cmd, spec, drive, key)
+                out.append(TwistStep(step=at, index=i, linear=cmd.linear, angular=angular, hold=hold))
             else:
-                out.append(CommandStep(step=at, linear=cmd.linear, angular=cmd.angular))
+                out.append(CommandStep(step=at, linear=cmd.linear, angular=self.angular(cmd, spec, drive, key)))
                 if cmd.for_ is not None:
                     free_from = at + max(1, steps(cmd.for_, rate))
                     if free_from < self.total:
                         out.append(CommandStep(step=free_from, linear=0.0, angular=0.0))
         return tuple(out)
+
+
+    def angular(self, cmd, spec: RobotSpec, drive: DriveSpec | None, key: tuple) -> float:
+        """A twist command's yaw rate: ``angular``, or a car's ``steering_angle`` through its wheelbase."""
+        if cmd.steering_angle is None:
+            return cmd.angular
+        if drive is None or drive.kind != "ackermann":
+            raise ScenarioError(f"robot '{spec.name}' has no steering (its drive is "
+                                f"{drive.kind if drive is not None else 'none'}): steering_angle is for cars",
+                                location=self.locate_key(key + ("steering_angle",)),
+                                hint="Give 'angular' (rad/s) instead.")
+        return angular_from_steering(cmd.linear, cmd.steering_angle, drive.wheelbase)
 
 
 def _shown(desc: RobotDescription) -> list[str]:

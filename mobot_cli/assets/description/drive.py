@@ -13,7 +13,9 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+from mobot_cli.assets.description import steering
 from mobot_cli.assets.description.frames import LinkTree
+from mobot_cli.assets.description.steering import Detected
 from mobot_cli.assets.description.wheels import Wheel, wheel
 from mobot_cli.errors import DescriptionError, Location, Notice, did_you_mean
 from mobot_cli.plan import DriveSpec
@@ -26,19 +28,40 @@ DISAGREEMENT = 0.02
 
 def detect_drive(urdf: ET.Element | str, *, notices: list[Notice] | None = None,
                  source: Path | None = None) -> DriveSpec | None:
-    """The robot's differential / skid-steer drive, or None when it has no drive wheels."""
+    """The robot's drive, or None when it has none mobot can drive (``detect``)."""
+    return detect(urdf, notices=notices, source=source).spec
+
+
+def detect(urdf: ET.Element | str, *, notices: list[Notice] | None = None,
+           source: Path | None = None) -> Detected:
+    """The robot's drive (diff, skid or Ackermann), or the name of one mobot refuses.
+
+    Plugins first, as Gazebo drives by them: Ackermann, then the ones mobot refuses (tracks,
+    tricycles), then diff-drive and skid-steer, then other drive plugins (refused); without one,
+    steering joints make a car (steering.py), and wheels fixed to the body a diff or skid drive.
+    """
     robot = ET.fromstring(urdf) if isinstance(urdf, str) else urdf
     notices = notices if notices is not None else []
     tree = LinkTree(robot)
     if tree.root is None:
-        return None
+        return Detected(None)
+    found = steering.from_plugins(robot, tree, notices, source)
+    if found is not None:
+        return found
     plugin = _drive_plugin(robot)
     if plugin is not None:
         spec = _from_plugin(plugin, tree, notices, source)
         if spec is not None:
-            return spec
+            return Detected(spec)
+    else:
+        found = steering.unknown_drive(robot, notices, source)
+        if found is not None:
+            return found
+    found = steering.from_geometry(tree, robot, notices, source)
+    if found is not None:
+        return found
     wheels = [w for j in tree.joints if (w := wheel(tree, j.name, strict=True)) is not None]
-    return _spec(wheels, source="urdf", notices=notices, file=source)
+    return Detected(_spec(wheels, source="urdf", notices=notices, file=source))
 
 
 def drive_from_joints(urdf: ET.Element | str, left: tuple[str, ...], right: tuple[str, ...], *,

@@ -15,7 +15,7 @@ from typing import Any
 
 from mobot_cli.assets import sandbox
 from mobot_cli.assets.description.check import check_geometry, check_tree, check_with_yourdfpy, parse_urdf
-from mobot_cli.assets.description.drive import detect_drive
+from mobot_cli.assets.description.drive import detect
 from mobot_cli.assets.description.frames import LinkTree, floats
 from mobot_cli.assets.description.joints import read_holds
 from mobot_cli.assets.description.process import (
@@ -81,6 +81,7 @@ class RobotDescription:
     files: tuple[Path, ...] = field(default=())  # the description and every file it included
     sensors: tuple[DescribedSensor, ...] = ()  # from its <gazebo><sensor> blocks
     holds: tuple[JointHold, ...] = ()  # springs and held joints (assets/description/joints.py)
+    refused_drive: str = ""  # a drive mobot cannot simulate (tracks, ...), named; "" otherwise
 
     def tree(self) -> dict[str, Any]:
         """The link tree as nested dicts: {link, mass, children: [{joint, type, link...}]}."""
@@ -149,8 +150,9 @@ def _build(source: Path, expansion: Expansion, resolver: ResourceResolver,
     sensors = read_sensors(robot, source, notices)
     apply_friction(robot)
     bounds = collision_bounds(LinkTree(robot), source, notices)
-    drive = detect_drive(robot, notices=notices, source=source)
-    if drive is None:
+    detected = detect(robot, notices=notices, source=source)
+    drive = detected.spec
+    if drive is None and not detected.refused:  # a refused drive was named in its own notice
         notices.append(Notice(NO_DRIVE, Location(file=source)))
     holds = read_holds(robot, drive, notices, source)
     urdf = '<?xml version="1.0"?>\n' + ET.tostring(robot, encoding="unicode")
@@ -158,7 +160,7 @@ def _build(source: Path, expansion: Expansion, resolver: ResourceResolver,
         source=source, name=robot.get("name", ""), urdf=urdf, root_link=root_link,
         links=links, joints=joints, total_mass=sum(link.mass for link in links),
         footprint=bounds[:4], drive=drive, notices=tuple(notices), bottom_z=bounds[4],
-        sensors=sensors, holds=holds)
+        sensors=sensors, holds=holds, refused_drive=detected.refused)
     return description, found
 
 
@@ -227,7 +229,8 @@ def _from_document(document: dict[str, Any] | None) -> RobotDescription | None:
         if drive is not None:
             drive = DriveSpec(**{**drive, "left_joints": tuple(drive["left_joints"]),
                                  "right_joints": tuple(drive["right_joints"]),
-                                 "joint_signs": tuple(tuple(s) for s in drive["joint_signs"])})
+                                 "joint_signs": tuple(tuple(s) for s in drive["joint_signs"]),
+                                 "steering_joints": tuple(drive.get("steering_joints", ()))})
         return RobotDescription(
             source=Path(document["source"]), name=document["name"], urdf=document["urdf"],
             root_link=document["root_link"],
@@ -237,7 +240,7 @@ def _from_document(document: dict[str, Any] | None) -> RobotDescription | None:
                                       for k, v in joint.items()})
                          for joint in document["joints"]),
             total_mass=document["total_mass"], footprint=tuple(document["footprint"]),
-            drive=drive, bottom_z=document["bottom_z"],
+            drive=drive, bottom_z=document["bottom_z"], refused_drive=document.get("refused_drive", ""),
             sensors=tuple(DescribedSensor(**{k: tuple(v) if isinstance(v, list) else v
                                              for k, v in sensor.items()})
                           for sensor in document["sensors"]),
@@ -262,7 +265,20 @@ def inspect_summary(desc: RobotDescription) -> dict[str, Any]:
                       "length": round(xmax - xmin, 9), "width": round(ymax - ymin, 9)},
         "bottom_z": desc.bottom_z,
         "tree": desc.tree(),
-        "drive": asdict(desc.drive) if desc.drive is not None else None,
+        "drive": drive_summary(desc.drive),
+        "refused_drive": desc.refused_drive or None,
         "sensors": [sensor_summary(s) for s in desc.sensors],
         "notices": [str(n) for n in desc.notices],
     }
+
+
+def drive_summary(drive: DriveSpec | None) -> dict[str, Any] | None:
+    """A drive as `inspect` shows it: its fields, and a car's minimum turning radius (m)."""
+    if drive is None:
+        return None
+    summary = asdict(drive)
+    if drive.kind == "ackermann" and drive.max_steering_angle:
+        from mobot_cli.sim.steering import min_turning_radius
+
+        summary["min_turning_radius"] = round(min_turning_radius(drive.wheelbase, drive.max_steering_angle), 6)
+    return summary

@@ -16,8 +16,11 @@ from mobot_cli.sim.state import RobotState
 class SimRobot:
     """A robot body in one PyBullet client, driven like ros2_control's diff_drive_controller."""
 
-    def __init__(self, cid: int, body: int, plan: RobotPlan, dt: float):
+    def __init__(self, cid: int, body: int, plan: RobotPlan, dt: float, notices: list[str] | None = None,
+                 drive_class: type | None = None):
         self.cid = cid
+        # What its drive says once during the run (a clamped car turn): the World's notices.
+        self.notices: list[str] = notices if notices is not None else []
         self.body = body
         self.plan = plan
         self.name = plan.name
@@ -41,8 +44,8 @@ class SimRobot:
         self._free_joints()
         self.drive: _Drive | None = None
         wheels: set[str] = set()
-        if plan.drive is not None:
-            self.drive = _Drive(self, plan.drive)
+        if plan.drive is not None:  # drive_class: another kind's (steered.drive_class)
+            self.drive = (drive_class or _Drive)(self, plan.drive)
             wheels = {*plan.drive.left_joints, *plan.drive.right_joints, *plan.drive.steering_joints}
         self.holds = JointHolds(cid, body, self.joints, plan.holds, wheels)
         x, y, _, _, _, yaw = self.link_pose_rpy()

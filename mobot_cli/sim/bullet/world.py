@@ -19,6 +19,7 @@ from mobot_cli.sim.bullet import friction
 from mobot_cli.sim.bullet.clients import Stage, connect, release
 from mobot_cli.sim.bullet.joints import set_initial_positions
 from mobot_cli.sim.bullet.robot import SimRobot
+from mobot_cli.sim.bullet.steered import drive_class
 from mobot_cli.sim.bullet.urdf_file import links_with_friction, urdf_path
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, ContactCounter
 from mobot_cli.sim.pb import p
@@ -69,6 +70,7 @@ class World:
         self._contact_every = max(1, round(physics.rate_hz / CONTACT_RATE_HZ))
         self._sensing: Sensing | None = None  # made when the first robot with sensors arrives
         self._clearance: dict[str, float] = {}  # robot -> how far its clearance is measured (m)
+        self.notices: list[str] = []  # said once during the run by robots' drives (a clamped car turn)
         if stage is not None:
             self._probes, self._statics, self._solids, self._ground = \
                 stage.probes, stage.statics, stage.solids, stage.ground
@@ -185,7 +187,7 @@ class World:
         try:
             set_initial_positions(cid, uid, robot.holds)
             self._settle_in(uid, robot)
-            sim_robot = SimRobot(cid, uid, robot, self.physics.dt)
+            sim_robot = SimRobot(cid, uid, robot, self.physics.dt, self.notices, drive_class(robot.drive))
             if robot.sensors:
                 self._sensors().add(robot.name, uid, sim_robot.links, robot.sensors)
         except BaseException:
@@ -210,8 +212,8 @@ class World:
         wheels = friction.wheel_links(cid, uid, robot)
         casters = {link for link, h in lowest.items()
                    if h - bottom <= friction.CASTER_BAND and link not in wheels and friction.rigid(cid, uid, link)}
-        if robot.drive is not None and max(len(robot.drive.left_joints),
-                                           len(robot.drive.right_joints)) > 1:
+        if robot.drive is not None and robot.drive.kind != "ackermann" and max(
+                len(robot.drive.left_joints), len(robot.drive.right_joints)) > 1:
             fraction = friction.skid_axial_fraction(cid, uid, wheels, robot.drive.wheel_separation)
             friction.soften_axial_friction(cid, uid, wheels, fraction)
         explicit = links_with_friction(robot.urdf)

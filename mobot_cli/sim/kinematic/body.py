@@ -6,12 +6,15 @@ something looks at it: a collision query, a sensor, a clearance, a later spawn's
 
 from __future__ import annotations
 
+import functools
 import math
 
 from mobot_cli.sim.bullet.robot import SimRobot
+from mobot_cli.sim.bullet.steered import SteeredDrive
 from mobot_cli.sim.drive import Odometry, arc, body_twist, ramp, wheel_speeds, wrap_angle
 from mobot_cli.sim.pb import p
 from mobot_cli.sim.state import RobotState
+from mobot_cli.sim.steering import lever_arc, steering_angle
 
 
 class Mover:
@@ -58,10 +61,15 @@ class Mover:
         self._wheels_of: tuple | None = None
         self._wheel_steps: list[tuple[str, float]] = []
         self.encoder = False
+        self.arc = arc  # how the root moves when the body drives along an arc
         drive = robot.drive
         self.drive = drive
+        self.car: SteeredDrive | None = None
         if drive is None:
             return
+        if isinstance(drive, SteeredDrive):  # the rear axle's middle follows the arc, not the root
+            self.car = drive
+            self.arc = functools.partial(lever_arc, drive.rear)
         spec = drive.spec
         self.radius, self.separation = drive.radius, drive.separation
         self.max_step = (spec.max_wheel_acceleration or 0.0) * dt
@@ -76,7 +84,10 @@ class Mover:
         self.encoder = spec.odometry == "encoder"
 
     def command(self, linear: float, angular: float) -> None:
-        """Wheel rates for a body twist; slowed together (same curvature) to the wheels' limit."""
+        """Wheel rates for a body twist; slowed together (same curvature) to the wheels' limit.
+        A car's twist is clamped to what it can follow first, its steering joints set at once."""
+        if self.car is not None:
+            linear, angular = self._steer(linear, angular)
         left, right = wheel_speeds(linear, angular, self.separation, self.radius, self.radius)
         top = max(abs(left), abs(right))
         if top > self.max_rate:
@@ -84,6 +95,14 @@ class Mover:
         self.goal = (left, right)
         if self.max_step <= 0.0:
             self.rates = self.goal
+
+    def _steer(self, linear: float, angular: float) -> tuple[float, float]:
+        car = self.car
+        linear, angular, kappa = car.clamped(linear, angular)
+        for name, sign, (x, y) in zip(car.spec.steering_joints, car.steer_signs, car.steered):
+            self.positions[name] = steering_angle(1.0, kappa, x, y) * sign
+        self.synced = False
+        return linear, angular
 
     def motion(self) -> tuple[float, float] | None:
         """This step's (distance, turn) from the wheel rates, ramped first; None: standing still."""
@@ -111,7 +130,7 @@ class Mover:
 
     def target(self, distance: float, turn: float, fraction: float) -> tuple[float, float, float]:
         """Where ``fraction`` of this step's arc takes the robot: x, y, yaw."""
-        return arc(self.x, self.y, self.yaw, distance * fraction, turn * fraction)
+        return self.arc(self.x, self.y, self.yaw, distance * fraction, turn * fraction)
 
     def move(self, distance: float, turn: float, fraction: float) -> None:
         """Make ``fraction`` of this step's motion (``motion()``'s): pose, wheel angles, encoder
@@ -119,7 +138,7 @@ class Mover:
         # Runs every step for every moving robot: a whole step is plain arithmetic on numbers
         # worked out when the rates last changed.
         if fraction == 1.0:
-            self.x, self.y, self.yaw = arc(self.x, self.y, self.yaw, distance, turn)
+            self.x, self.y, self.yaw = self.arc(self.x, self.y, self.yaw, distance, turn)
             self.synced = False
             self.stuck = self._stayed = None
             dt = self.dt
@@ -131,7 +150,7 @@ class Mover:
                 positions[name] += angle
             if self.encoder:  # the wheels' arc is the body's: motion() worked it out from them
                 odo = self.odometry
-                odo.x, odo.y, odo.yaw = arc(odo.x, odo.y, odo.yaw, distance, turn)
+                odo.x, odo.y, odo.yaw = self.arc(odo.x, odo.y, odo.yaw, distance, turn)
             return
         if fraction == 0.0:
             if self._stayed is self.rates:  # blocked again at the same rates: see _stayed
@@ -141,7 +160,7 @@ class Mover:
             self._stayed = None
         distance, turn = distance * fraction, turn * fraction
         if fraction > 0.0:
-            self.x, self.y, self.yaw = arc(self.x, self.y, self.yaw, distance, turn)
+            self.x, self.y, self.yaw = self.arc(self.x, self.y, self.yaw, distance, turn)
             self.synced = False
             self.stuck = None
         dt = self.dt
@@ -156,7 +175,9 @@ class Mover:
         self.velocities, self._wheels_of = {**self.velocities, **velocities}, None
         if self.encoder:
             travel = self.radius * dt
-            self.odometry.integrate(*body_twist(left * travel, right * travel, self.separation))
+            odo = self.odometry
+            odo.x, odo.y, odo.yaw = self.arc(odo.x, odo.y, odo.yaw,
+                                             *body_twist(left * travel, right * travel, self.separation))
 
     def _whole_wheel_steps(self) -> None:
         """Each wheel's angle step and rate at the current rates; ``velocities`` is a new dict
