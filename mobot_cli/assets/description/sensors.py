@@ -109,7 +109,7 @@ def read_sensors(robot: ET.Element, source: Path,
     skipped: list[str] = []
     for gazebo in robot.findall("gazebo"):
         for element in gazebo.findall("sensor"):
-            xml = SensorXml(element, gazebo.get("reference", "").strip(), source)
+            xml = SensorXml(element, gazebo.get("reference", "").strip(), source, notices)
             if xml.type in OTHER_TYPES:
                 skipped.append(f"{xml.type} '{xml.name}'")
                 continue
