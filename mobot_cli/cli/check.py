@@ -83,7 +83,7 @@ def _check_robot(path: Path, args: dict[str, str], skip_missing: bool) -> dict:
     from mobot_cli.sim.preflight import check_robot
 
     desc = load_robot(str(path), args, Path.cwd(), skip_missing)
-    check_robot("robot", desc.urdf, desc.root_link, str(desc.source))  # PyBullet loads what a run loads
+    check_robot(desc.name or "robot", desc.urdf, desc.root_link, str(desc.source))  # PyBullet loads what a run loads
     return {"ok": True, "kind": "robot", "path": str(path), **inspect_summary(desc),
             "notices": [str(n) for n in desc.notices]}
 

@@ -164,3 +164,15 @@ def test_an_sdf_model_written_as_xacro_is_a_robot_description(tmp_path):
     result = checked(path)
     assert result["name"] == "cart"
     assert result["footprint"]["length"] == pytest.approx(0.4) and result["footprint"]["width"] == pytest.approx(0.2)
+
+
+def test_a_corpus_robot_with_gazebo_classics_wideanglecamera_is_read(corpus, monkeypatch):
+    """turtlebot3_burger_cam's camera is type 'wideanglecamera', which sdformat reads; it was refused."""
+    monkeypatch.setenv("GAZEBO_MODEL_PATH", str(corpus / "turtlebot3_simulations" / "turtlebot3_gazebo" / "models"))
+    model = corpus / "turtlebot3_simulations/turtlebot3_gazebo/models/turtlebot3_burger_cam/model.sdf"
+    done = invoke(["check", str(model), "--json"])
+    assert done.exit_code == 0, done.stderr
+    result = json.loads(done.stdout)
+    assert any("sensors of types mobot does not simulate are left out: wideanglecamera 'camera'" in notice
+               for notice in result["notices"])
+    assert sorted(s["name"] for s in result["sensors"]) == ["hls_lfcd_lds", "tb3_imu"]

@@ -236,7 +236,8 @@ def _from_document(document: dict[str, Any] | None) -> RobotDescription | None:
         if drive is not None:
             drive = DriveSpec(**{**drive, "left_joints": tuple(drive["left_joints"]),
                                  "right_joints": tuple(drive["right_joints"]),
-                                 "joint_signs": tuple(tuple(s) for s in drive["joint_signs"])})
+                                 "joint_signs": tuple(tuple(s) for s in drive["joint_signs"]),
+                                 "steering_joints": tuple(drive.get("steering_joints", ()))})
         return RobotDescription(
             source=Path(document["source"]), name=document["name"], urdf=document["urdf"],
             root_link=document["root_link"],

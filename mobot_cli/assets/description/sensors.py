@@ -29,6 +29,7 @@ OTHER_TYPES = ("air_pressure", "air_speed", "altimeter", "boundingbox_camera", "
                "rgbd_camera", "rgbd", "segmentation_camera", "segmentation", "sonar",
                "thermal_camera", "thermal", "wide_angle_camera", "wireless_receiver",
                "wireless_transmitter")
+OTHER_TYPES += ("wideanglecamera",)  # Gazebo classic's spelling, which sdformat reads (turtlebot3_burger_cam)
 MAX_SAMPLES = 100_000  # rays along one axis of a scan
 MAX_RAYS = 1_000_000  # rays in one reading (horizontal x vertical samples)
 

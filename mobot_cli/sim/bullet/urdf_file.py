@@ -45,6 +45,11 @@ def urdf_path(text: str, folder: str = "urdf") -> Path:
         cache.store_file(folder, f"{digest}.urdf", data, bounded=True)
 
 
+def pybullet_file(urdf: str) -> Path:
+    """The file PyBullet loads for URDF text: ``pybullet_text`` of it, written by ``urdf_path``."""
+    return urdf_path(pybullet_text(urdf))
+
+
 def fits(text: str) -> bool:
     """True when PyBullet reads ``text`` as written: no line of LINE_LIMIT bytes or more, no CR."""
     return "\r" not in text and max(map(len, text.encode("utf-8").split(b"\n"))) < LINE_LIMIT

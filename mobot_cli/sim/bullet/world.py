@@ -18,7 +18,7 @@ from mobot_cli.sim import clearance, entity, parts, placement, static_shapes, su
 from mobot_cli.sim.bullet import friction
 from mobot_cli.sim.bullet.clients import Stage, connect, release
 from mobot_cli.sim.bullet.robot import SimRobot
-from mobot_cli.sim.bullet.urdf_file import links_with_friction, pybullet_text, urdf_path
+from mobot_cli.sim.bullet.urdf_file import links_with_friction, pybullet_file
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, ContactCounter
 from mobot_cli.sim.pb import p
 from mobot_cli.sim.state import RobotState
@@ -127,7 +127,7 @@ class World:
     def _load(self, urdf: str, xyz, quat, fixed: bool = False) -> int:
         """Load URDF text (in lines PyBullet reads whole: urdf_file.pybullet_text); -1 when PyBullet
         refuses it."""
-        path = str(urdf_path(pybullet_text(urdf)))
+        path = str(pybullet_file(urdf))
         try:
             with silenced(1):  # the importer prints its warnings to stdout
                 return p.loadURDF(path, xyz, quat, useFixedBase=fixed,
