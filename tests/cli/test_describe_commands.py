@@ -69,7 +69,8 @@ def test_check_fails_exactly_where_run_fails(tmp_path):
     assert checked.exit_code == 2 and checked.stdout == ""
     assert checked.stderr.startswith(f"mobot: error: {sdf}: attribute name= of <link> (5004 bytes) in <link "
                                      'name="dddd')
-    assert "is longer than a line PyBullet can read (4096 bytes). Shorten the value" in checked.stderr
+    assert ("is longer than mobot can write in a line PyBullet reads whole (3840 bytes). Shorten the value"
+            in checked.stderr)
     ran = invoke(["run", str(drive_scenario(tmp_path, "long.sdf")), "--out", str(tmp_path / "run"), "--quiet"])
     assert ran.exit_code == 2 and checked.stderr.split(": ", 2)[2] in ran.stderr
 

@@ -96,8 +96,9 @@ def test_spaces_padding_numbers_are_tidied_and_a_long_name_pybullet_reads_is_ref
     written = pybullet_text(text)
     assert fits(written) and ET.fromstring(written).find("link/collision/geometry/box").get("size") == "0.1 0.2 0.3"
     name = "n" * (LINE_LIMIT * 3)
-    with pytest.raises(UnwritableURDF, match=r"attribute name= of <link> \(12288 bytes\) in <link name=\"n{60}\"> "
-                                             r"is longer than a line PyBullet can read \(4096 bytes\)"):
+    message = (r"attribute name= of <link> \(12288 bytes\) in <link name=\"n{60}\"> is longer than mobot can "
+               r"write in a line PyBullet reads whole \(3840 bytes\)")
+    with pytest.raises(UnwritableURDF, match=message):
         pybullet_text(one_line_robot(1).replace('"part_000"', f'"{name}"'))
 
 
@@ -107,3 +108,11 @@ def test_a_start_tag_too_long_for_a_line_is_broken_between_its_attributes():
     written = pybullet_text(text)
     assert fits(written) and same_elements(text, written)
     assert load(written) == 1
+
+
+def test_a_long_word_after_short_ones_gets_a_line_of_its_own():
+    text = one_line_robot(1).replace("</robot>", "<gazebo><plugin><blob>" + "a " * 400 + "b" * 3500 + " c"
+                                                  "</blob></plugin></gazebo></robot>")
+    written = pybullet_text(text)
+    assert fits(written)
+    assert ET.fromstring(written).findtext("gazebo/plugin/blob").split() == ["a"] * 400 + ["b" * 3500, "c"]

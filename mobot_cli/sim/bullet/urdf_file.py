@@ -18,6 +18,9 @@ from mobot_cli.errors import DescriptionError
 
 # Every line of what PyBullet reads stays below this many bytes: half its buffer.
 LINE_LIMIT = 4096
+# A value or word longer than this cannot be written with its tag and indentation in a line.
+VALUE_LIMIT = LINE_LIMIT - 256
+WRAP = LINE_LIMIT // 4  # long text is wrapped at its spaces into lines about this long
 # Top-level elements PyBullet's URDF parser reads (UrdfParser::loadUrdf); it never looks at the
 # others (<gazebo>, <transmission>, <ros2_control>, ...), which mobot reads from its own copy.
 PYBULLET_READS = frozenset({"link", "joint", "material", "deformable", "reduced_deformable"})
@@ -71,7 +74,7 @@ def pybullet_text(text: str) -> str:
             continue
         if child is root or child.tag in PYBULLET_READS:
             raise UnwritableURDF(f"{problem} in <{child.tag} name=\"{child.get('name', '')[:60]}\"> is "
-                                 f"longer than a line PyBullet can read ({LINE_LIMIT} bytes)",
+                                 f"longer than mobot can write in a line PyBullet reads whole ({VALUE_LIMIT} bytes)",
                                  hint="Shorten the value: PyBullet cuts URDF lines at 8,191 bytes.")
         root.remove(child)  # PyBullet never reads it; mobot reads the description's own text
     for element in root.iter():
@@ -89,7 +92,7 @@ def pybullet_text(text: str) -> str:
 
 def _long_value(element: ET.Element, below: bool = True) -> str | None:
     """What in ``element`` (or below) cannot be written in one line, after numbers are tidied."""
-    budget = LINE_LIMIT // 2
+    budget = VALUE_LIMIT
     for item in element.iter() if below else [element]:
         for key, value in item.attrib.items():
             if len(_escaped(value)) < budget:
@@ -122,16 +125,17 @@ def _wrapped(text: str | None) -> str | None:
     if text is None:
         return None
     text = text.replace("\r", "\n")
-    if len(text) < LINE_LIMIT // 4:
+    if len(text) < WRAP:
         return text
-    out, width = [], 0
-    for part in re.split(r"(\s+)", text):
-        if part and part.isspace() and width + 1 >= LINE_LIMIT // 4:
+    parts = re.split(r"(\s+)", text)  # word, space, word, ...: spaces at the odd places
+    out, width = ["" if text.startswith("\n") else "\n"], 0  # long text starts on a line of its own
+    for i, part in enumerate(parts):
+        if i % 2 and "\n" not in part and width + len(part) + len(parts[i + 1]) >= WRAP:
             out.append("\n")
             width = 0
             continue
         out.append(part)
-        width = len(part) if "\n" in part else width + len(part)
+        width = len(part) - part.rfind("\n") - 1 if "\n" in part else width + len(part)
     return "".join(out)
 
 
