@@ -237,10 +237,13 @@ def model_sdf(model_dir: Path) -> Path:
     """The SDF file of a Gazebo model folder, as its model.config names it (newest version)."""
     import xml.etree.ElementTree as ET
 
+    from mobot_cli.assets.lenient import gazebo_xml
+
     config = Path(model_dir) / "model.config"
     candidates: list[tuple[tuple[int, ...], str]] = []
     try:
-        for sdf in ET.parse(config).getroot().findall("sdf"):
+        text = gazebo_xml(config.read_text(encoding="utf-8", errors="replace"))
+        for sdf in ET.fromstring(text).findall("sdf"):
             version = tuple(int(p) for p in (sdf.get("version") or "0").split(".") if p.isdigit())
             if (sdf.text or "").strip():
                 candidates.append((version, sdf.text.strip()))

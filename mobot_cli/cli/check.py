@@ -21,7 +21,8 @@ SKIP_HELP = ("Leave out world models and robot visuals/collisions whose files ar
 def check(
     ctx: typer.Context,
     path: Path = typer.Argument(..., help="A scenario (.yaml), robot (.urdf, .xacro, .sdf model or model folder), "
-                                         "world (.world, .sdf, bundled name), or run folder."),
+                                         "world (.world, .sdf, .world.xacro, .sdf.xacro, bundled name), "
+                                         "or run folder."),
     mappings: list[str] = typer.Argument(None, metavar="[NAME:=VALUE]...", help="xacro arguments for a robot."),
     json_: bool = typer.Option(False, "--json", help="Print the result as JSON."),
     skip_missing: bool = typer.Option(False, "--skip-missing", help=SKIP_HELP),
@@ -44,8 +45,11 @@ def check(
     if set_ and path.suffix not in SCENARIO_SUFFIXES:
         raise UsageError("--set overrides keys of a scenario; it does not apply to a robot or world",
                          hint="Give xacro arguments to a robot as NAME:=VALUE.")
+    sdf_xacro = path.name.endswith(".sdf.xacro")
     if path.suffix in SCENARIO_SUFFIXES:
         result = _check_scenario(path, skip_missing, set_)
+    elif path.name.endswith(".world.xacro") or (sdf_xacro and _is_world(path)):
+        result = _check_world(path, skip_missing)
     elif path.suffix in ROBOT_SUFFIXES or model_folder or (path.suffix == ".sdf" and not _is_world(path)):
         result = _check_robot(path, parse_mappings(mappings or []), skip_missing)
     elif path.suffix in WORLD_SUFFIXES or _bundled_world(path):
@@ -76,8 +80,10 @@ def _check_scenario(path: Path, skip_missing: bool, overrides: list[str]) -> dic
 def _check_robot(path: Path, args: dict[str, str], skip_missing: bool) -> dict:
     from mobot_cli.assets.description.describe import load_robot
     from mobot_cli.assets.description.robot import inspect_summary
+    from mobot_cli.sim.preflight import check_robot
 
     desc = load_robot(str(path), args, Path.cwd(), skip_missing)
+    check_robot(desc.name or "robot", desc.urdf, desc.root_link, str(desc.source))  # PyBullet loads what a run loads
     return {"ok": True, "kind": "robot", "path": str(path), **inspect_summary(desc),
             "notices": [str(n) for n in desc.notices]}
 

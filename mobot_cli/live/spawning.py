@@ -25,7 +25,7 @@ from mobot_cli.live.schema import Spawn, normalize_namespace
 from mobot_cli.plan import RobotPlan, SpawnPose
 from mobot_cli.scenario.model import RobotSpec
 from mobot_cli.scenario.robots import RobotResolver
-from mobot_cli.sim.bullet.urdf_file import urdf_path
+from mobot_cli.sim.bullet.urdf_file import pybullet_file, urdf_path
 from mobot_cli.sim.state import RobotState
 from mobot_cli.timeline.loop import NameTaken, NotInWorld
 
@@ -69,7 +69,7 @@ def load_plan(request: Spawn, rate_hz: int, bounds: tuple[int, int] | None = Non
     if bounds is not None:
         check_bounds(plan, *bounds)
     plan = dataclasses.replace(plan, urdf=hulled(plan.urdf))  # built here, not on the world's thread
-    urdf_path(plan.urdf)  # written here too: the world's thread finds the file PyBullet loads
+    pybullet_file(plan.urdf)  # written here too: the world's thread finds the file PyBullet loads
     notices = resolver.notices if label is None else [n.replace(description, label) for n in resolver.notices]
     return plan, [_short(notice, MAX_NOTICE_CHARS) for notice in notices[:MAX_NOTICES]]
 

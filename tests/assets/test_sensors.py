@@ -256,9 +256,6 @@ BAD = {
     "samples text": (lidar(samples="many"), "ray.scan.horizontal.samples",
                      "sensor 'scanner' has <samples> 'many', which is not a finite number. Write a "
                      "plain number."),
-    "samples fraction": (lidar(samples="2.5"), "ray.scan.horizontal.samples",
-                         "sensor 'scanner' has <samples> 2.5, not a whole number. Give a whole number "
-                         "of samples."),
     "unknown type": ('<gazebo reference="base_link"><sensor name="s" type="lazer"/></gazebo>', "",
                      "sensor 's' has unknown type 'lazer'. Did you mean 'lidar'?"),
     "no name": ('<gazebo reference="base_link"><sensor type="imu"/></gazebo>', "",

@@ -193,7 +193,6 @@ def test_absurd_pose_is_left_out_with_a_warning(tmp_path):
      "mismatch", 3),
     ("<world name='w'>" + box_model("m", "0 0 nan 0 0 0") + "</world>", "pose '0 0 nan 0 0 0' has a non-finite", 3),
     ("<world name='w'>" + box_model("m", "0 0 0") + "</world>", "pose '0 0 0' needs 6 numbers, got 3", 3),
-    ("<world name='w'>" + box_model("m") + box_model("m") + "</world>", "two models are named 'm'", 3),
     ("<world name='w'><include><uri></uri></include></world>", "<include> has no <uri>", 3),
     ("<world name='w'><model name='m'><link name='l'><pose relative_to='x'>0 0 0 0 0 0</pose></link></model>"
      "</world>", "link 'l' is placed relative to 'x', which this model does not have", 3),

@@ -16,7 +16,7 @@ from mobot_cli.assets.description.robot import RobotDescription, describe_expans
 from mobot_cli.assets.description.sdf import expand_sdf
 from mobot_cli.assets.description.xacro import expand_file
 from mobot_cli.assets.resources import ResourceResolver, bundled_dir, model_sdf
-from mobot_cli.errors import Location, ResourceError, did_you_mean
+from mobot_cli.errors import Location, MobotError, Notice, ResourceError, did_you_mean
 
 _SUFFIXES = (".urdf", ".xacro", ".sdf")
 # A comment is matched first and left as it is: a mesh named in a comment is not loaded.
@@ -73,8 +73,8 @@ def load_robot(description: str, args: Mapping[str, str] | None = None,
     """
     resolver = ResourceResolver(base_dir)
     source = resolve_description(description, base_dir, resolver)
-    if source.suffix == ".sdf":  # a Gazebo model: converted to URDF, then the same path
-        expansion = expand_sdf(source, resolver, skip_missing)
+    if source.name.endswith((".sdf", ".sdf.xacro")):  # a Gazebo model: converted to URDF, then the same path
+        expansion = expand_sdf(source, resolver, skip_missing, args)
     else:
         expansion = expand_file(source, args or {}, resolver)
     return describe_expansion(source, expansion, resolver, skip_missing)
@@ -88,16 +88,37 @@ def _model_file(path: Path) -> Path:
 
 
 def expand_to_text(description: str, args: Mapping[str, str] | None = None,
-                   base_dir: Path | None = None) -> str:
-    """The expanded URDF as `mobot xacro` prints it: xacro output, mesh paths made absolute."""
+                   base_dir: Path | None = None, skip_missing: bool = False,
+                   notices: list[Notice] | None = None) -> str:
+    """The expanded URDF as `mobot xacro` prints it: xacro output, mesh paths made absolute.
+
+    With ``skip_missing`` a mesh that cannot be found stays as written, named in one notice
+    (added to ``notices``) instead of being an error; xacro's own warnings are added there too.
+    """
     resolver = ResourceResolver(base_dir)
     source = resolve_description(description, base_dir, resolver)
-    text = expand_file(source, args or {}, resolver).text
+    expansion = expand_file(source, args or {}, resolver)
+    missing: list[str] = []
 
     def absolute(match: re.Match) -> str:
         if match.group(1) is None:  # a comment
             return match.group(0)
-        path = resolver.resolve_uri(match.group(3), source)
+        try:
+            path = resolver.resolve_uri(match.group(3), source)
+        except MobotError:
+            if not skip_missing:
+                raise
+            missing.append(match.group(3))
+            return match.group(0)
         return f"{match.group(1)}{match.group(2)}{path}{match.group(2)}"
 
-    return _MESH_ATTR.sub(absolute, text)
+    text = _MESH_ATTR.sub(absolute, expansion.text)
+    if notices is not None:
+        notices.extend(expansion.notices)
+        if missing:
+            notices.append(Notice(
+                f"{len(missing)} mesh{'es' if len(missing) > 1 else ''} cannot be found and "
+                f"{'are' if len(missing) > 1 else 'is'} left as written (skip_missing; a run leaves "
+                f"their visuals and collisions out): {', '.join(dict.fromkeys(missing))}",
+                Location(file=source)))
+    return text

@@ -28,11 +28,14 @@ from mobot_cli.assets.description.process import (
 )
 from mobot_cli.assets.description.sanity import check_mesh_file, check_sanity
 from mobot_cli.assets.description.sensors import DescribedSensor, collision_names, read_sensors, sensor_summary
+from mobot_cli.assets.description.wheels import wheel_layout
 from mobot_cli.assets.description.xacro import Expansion
+from mobot_cli.assets.lenient import gazebo_xml
 from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.common import cache
-from mobot_cli.errors import Location, Notice
+from mobot_cli.errors import DescriptionError, Location, Notice
 from mobot_cli.plan import DriveSpec, JointHold
+from mobot_cli.sim.bullet.urdf_file import UnwritableURDF, pybullet_text
 
 MAX_FINGERPRINTS = 16  # search paths an entry remembers agreeing with (folders run from)
 
@@ -134,13 +137,19 @@ def _same_meshes(uris: list, resolver: ResourceResolver, source: Path) -> bool:
 
 def _build(source: Path, expansion: Expansion, resolver: ResourceResolver,
            skip_missing: bool = False) -> tuple[RobotDescription, dict[str, str | None]]:
-    robot = parse_urdf(expansion.text, source)
+    text = gazebo_xml(expansion.text)  # what Gazebo's parsers accept (assets/lenient.py)
+    robot = parse_urdf(text, source)
     root_link = check_tree(robot, source)
     check_geometry(robot, source)
-    check_with_yourdfpy(expansion.text, source)
+    check_with_yourdfpy(text, source)
     check_sanity(robot, source)
     notices: list[Notice] = []
     found = resolve_meshes(robot, resolver, source, skip_missing, notices)
+    if not any(link.find("collision") is not None for link in robot.findall("link")):
+        raise DescriptionError(
+            "the robot has no collision geometry left: its collision meshes cannot be found and "
+            "were left out (skip_missing), so nothing would hold it up", location=Location(file=source),
+            hint="Make the collision meshes findable (MOBOT_RESOURCE_PATH), or add <collision> shapes.")
     for link in robot.findall("link"):
         for mesh in link.findall("collision/geometry/mesh"):
             check_mesh_file(Path(mesh.get("filename", "")), link.get("name", ""), source)
@@ -155,7 +164,10 @@ def _build(source: Path, expansion: Expansion, resolver: ResourceResolver,
     if drive is None and not detected.refused:  # a refused drive was named in its own notice
         notices.append(Notice(NO_DRIVE, Location(file=source)))
     holds = read_holds(robot, drive, notices, source)
-    urdf = '<?xml version="1.0"?>\n' + ET.tostring(robot, encoding="unicode")
+    try:  # written once as PyBullet reads it whole, so `check` fails where `run` would
+        urdf = pybullet_text('<?xml version="1.0"?>\n' + ET.tostring(robot, encoding="unicode"))
+    except UnwritableURDF as exc:
+        raise UnwritableURDF(exc.message, location=Location(file=source), hint=exc.hint) from None
     description = RobotDescription(
         source=source, name=robot.get("name", ""), urdf=urdf, root_link=root_link,
         links=links, joints=joints, total_mass=sum(link.mass for link in links),
@@ -251,6 +263,14 @@ def _from_document(document: dict[str, Any] | None) -> RobotDescription | None:
         return None
 
 
+def _wheels(desc: RobotDescription) -> list[dict[str, Any]]:
+    drive = desc.drive
+    if drive is None:
+        return []
+    tree = LinkTree(ET.fromstring(desc.urdf))
+    return wheel_layout(tree, drive.left_joints, drive.right_joints, drive.wheel_radius)
+
+
 def inspect_summary(desc: RobotDescription) -> dict[str, Any]:
     """What `mobot inspect` shows, as plain data: tree, mass, footprint, drive, sensors, notices."""
     xmin, xmax, ymin, ymax = desc.footprint
@@ -266,7 +286,9 @@ def inspect_summary(desc: RobotDescription) -> dict[str, Any]:
         "bottom_z": desc.bottom_z,
         "tree": desc.tree(),
         "drive": drive_summary(desc.drive),
+        "drive_type": desc.drive.kind if desc.drive is not None else None,
         "refused_drive": desc.refused_drive or None,
+        "wheels": _wheels(desc),
         "sensors": [sensor_summary(s) for s in desc.sensors],
         "notices": [str(n) for n in desc.notices],
     }

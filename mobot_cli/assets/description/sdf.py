@@ -7,6 +7,7 @@ robot: checks, inertial fixes, friction, drive detection, the robot cache.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Mapping
 
 from mobot_cli.assets.description.robot import RobotDescription, describe_expansion
 from mobot_cli.assets.description.xacro import Expansion
@@ -14,13 +15,15 @@ from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.errors import DescriptionError, Location, Notice, WorldError
 
 
-def expand_sdf(source: Path, resolver: ResourceResolver, skip_missing: bool = False) -> Expansion:
-    """The URDF text of the first <model> in an SDF file, with what changed as notices."""
+def expand_sdf(source: Path, resolver: ResourceResolver, skip_missing: bool = False,
+               args: Mapping[str, str] | None = None) -> Expansion:
+    """The URDF text of the first <model> in an SDF file (an .sdf.xacro expanded with ``args``
+    first), with what changed as notices."""
     from mobot_cli.assets.world.paths import SdfPaths
     from mobot_cli.assets.world.reader import SdfReader
     from mobot_cli.assets.world.to_urdf import model_to_urdf
 
-    paths = SdfPaths(source, resolver)
+    paths = SdfPaths(source, resolver, dict(args or {}))
     reader = SdfReader(source, paths, skip_missing)
     try:
         model = reader.model_file()

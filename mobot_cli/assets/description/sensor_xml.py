@@ -18,8 +18,9 @@ import math
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+from mobot_cli.assets.lenient import sdf_integer
 from mobot_cli.common.transforms import quat_from_rpy
-from mobot_cli.errors import DescriptionError, Location
+from mobot_cli.errors import DescriptionError, Location, Notice
 
 _UNSET = ("", "__default__", "__default_topic__")
 SONAR_RAYS = 9  # rays along each axis of a sonar's cone
@@ -28,8 +29,9 @@ SONAR_RAYS = 9  # rays along each axis of a sonar's cone
 class SensorXml:
     """One <sensor> element on ``link``, read with located errors."""
 
-    def __init__(self, element: ET.Element, link: str, source: Path):
+    def __init__(self, element: ET.Element, link: str, source: Path, notices: list[Notice] | None = None):
         self.element, self.link, self.source = element, link, source
+        self.notices = notices if notices is not None else []  # values read as sdformat reads them
         self.name = element.get("name", "").strip()
         self.type = element.get("type", "").strip()
         plugins = element.findall("plugin")
@@ -61,13 +63,23 @@ class SensorXml:
         return value
 
     def integer(self, path: str, default: int) -> int:
-        """A whole number at ``path`` (SDF's unsigned int), or ``default``."""
-        value = self.number(path, float(default))
-        if value != int(value):
-            raise DescriptionError(f"sensor '{self.name}' has <{path.split('/')[-1]}> {value:g}, "
-                                   "not a whole number", location=self.location(path),
+        """A whole number at ``path`` (SDF's unsigned int), or ``default``; read as sdformat reads
+        it (666.519 is 666, with a notice), as an xacro expression often gives a fraction."""
+        text = self.text(path)
+        if not text:
+            return default
+        self.number(path, float(default))  # text that is no number at all is an error
+        read = sdf_integer(text)
+        if read is None:
+            raise DescriptionError(f"sensor '{self.name}' has <{path.split('/')[-1]}> '{text[:40]}', "
+                                   "which is not a whole number", location=self.location(path),
                                    hint="Give a whole number of samples.")
-        return int(value)
+        value, rest = read
+        if rest:
+            self.notices.append(Notice(f"sensor '{self.name}' has <{path.split('/')[-1]}> '{text[:40]}': "
+                                       f"read as {value}, as Gazebo (sdformat) reads a whole number",
+                                       self.location(path)))
+        return value
 
     def pose(self) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
         """The sensor's <pose> in its link's frame: 'x y z roll pitch yaw' (or a quaternion)."""

@@ -36,6 +36,7 @@ OTHER_TYPES = ("air_pressure", "air_speed", "altimeter", "boundingbox_camera", "
                "thermal_camera", "thermal", "wide_angle_camera", "wireless_receiver",
                "wireless_transmitter")
 SONAR_TURN = quat_from_rpy(0.0, math.pi / 2, 0.0)  # x onto -z: along a Gazebo sonar's cone
+OTHER_TYPES += ("wideanglecamera",)  # Gazebo classic's spelling, which sdformat reads (turtlebot3_burger_cam)
 MAX_SAMPLES = 100_000  # rays along one axis of a scan
 MAX_RAYS = 1_000_000  # rays in one reading (horizontal x vertical samples)
 
@@ -122,7 +123,7 @@ def read_sensors(robot: ET.Element, source: Path,
     skipped: list[str] = []
     for gazebo in robot.findall("gazebo"):
         for element in gazebo.findall("sensor"):
-            xml = SensorXml(element, gazebo.get("reference", "").strip(), source)
+            xml = SensorXml(element, gazebo.get("reference", "").strip(), source, notices)
             if xml.type in OTHER_TYPES:
                 skipped.append(f"{xml.type} '{xml.name}'")
                 continue

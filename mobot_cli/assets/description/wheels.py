@@ -51,6 +51,23 @@ def wheel(tree: LinkTree, joint_name: str, strict: bool) -> Wheel | None:
                  sign=1.0 if axis >= 0 else -1.0)
 
 
+def wheel_layout(tree: LinkTree, left: tuple[str, ...], right: tuple[str, ...],
+                 default_radius: float) -> list[dict]:
+    """Each drive wheel as `mobot inspect --json` shows it: joint, side, centre (x, y, z in the
+    root frame, all joints at zero) and radius (its own, else the drive's)."""
+    out = []
+    for side, joints in (("left", left), ("right", right)):
+        for name in joints:
+            joint = next((j for j in tree.joints if j.name == name), None)
+            if joint is None:
+                continue
+            x, y, z = (round(v, 9) + 0.0 for v in tree.frame(joint.child).pos)
+            found = wheel(tree, name, strict=False)
+            radius = found.radius if found is not None and found.radius else default_radius
+            out.append({"joint": name, "side": side, "x": x, "y": y, "z": z, "radius": radius})
+    return out
+
+
 def carried_by_body(tree: LinkTree, link: str) -> bool:
     """True when every joint between the root and ``link`` keeps it moving with the body.
 
@@ -74,33 +91,43 @@ def carried_by_body(tree: LinkTree, link: str) -> bool:
 
 def wheel_radius(tree: LinkTree, link: str, centre: Vec, axis_root: Vec,
                  meshes: bool = False) -> float | None:
-    """Radius of the first sphere, or cylinder along the spin axis, in the link's collisions.
+    """The radius the wheel rolls on: the farthest any of the link's spheres, or cylinders along
+    the spin axis, reaches from the spin axis through ``centre`` (a hub cylinder written before
+    the tyre does not make the wheel smaller).
 
-    With ``meshes``, a collision mesh counts too: its radius is the farthest vertex from the
-    spin axis through ``centre`` (exact for a meshed cylinder or tyre).
+    With ``meshes``, a collision mesh counts too: its farthest vertex from the spin axis
+    (exact for a meshed cylinder or tyre).
     """
     element = tree.links.get(link)
     if element is None:
         return None
     link_frame = tree.frame(link)
+    reaches = []
     for collision in element.findall("collision"):
         geometry = collision.find("geometry")
         if geometry is None:
             continue
-        sphere, cylinder = geometry.find("sphere"), geometry.find("cylinder")
-        if sphere is not None:
-            return floats(sphere.get("radius"), 1, (0.0,))[0] or None
         frame = link_frame.compose(origin_frame(collision))
-        if cylinder is not None:
+        sphere, cylinder, mesh = geometry.find("sphere"), geometry.find("cylinder"), geometry.find("mesh")
+        if sphere is not None:
+            reaches.append(_off_axis(frame.pos, centre, axis_root) + floats(sphere.get("radius"), 1, (0.0,))[0])
+        elif cylinder is not None:
             along = mat_vec(frame.rot, (0.0, 0.0, 1.0))  # a URDF cylinder's axis is its local z
             if abs(sum(a * b for a, b in zip(along, axis_root))) >= PARALLEL:
-                return floats(cylinder.get("radius"), 1, (0.0,))[0] or None
-        mesh = geometry.find("mesh")
-        if meshes and mesh is not None:
-            radius = _mesh_radius(mesh, frame, centre, axis_root)
-            if radius:
-                return radius
-    return None
+                reaches.append(_off_axis(frame.pos, centre, axis_root)
+                               + floats(cylinder.get("radius"), 1, (0.0,))[0])
+        elif meshes and mesh is not None:
+            reaches.append(_mesh_radius(mesh, frame, centre, axis_root) or 0.0)
+    radius = round(max(reaches, default=0.0), 9)
+    return radius or None
+
+
+def _off_axis(point: Vec, centre: Vec, axis: Vec) -> float:
+    """How far ``point`` is from the axis through ``centre`` along ``axis``."""
+    d = [p - c for p, c in zip(point, centre)]
+    norm = math.sqrt(sum(a * a for a in axis)) or 1.0
+    along = sum(x * a for x, a in zip(d, axis)) / norm
+    return math.sqrt(max(0.0, sum(x * x for x in d) - along * along))
 
 
 def _mesh_radius(mesh: ET.Element, frame, centre: Vec, axis: Vec) -> float | None:

@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Iterator, Mapping
 
 from mobot_cli.assets import sandbox
+from mobot_cli.assets.lenient import gazebo_xml
 from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.common import cache
 from mobot_cli.errors import DescriptionError, Location, MobotError, Notice, ResourceError, did_you_mean
@@ -101,8 +102,8 @@ def _run_xacro(path: Path, args: dict[str, str],
 
     env: dict[str, str | None] = {}
     stderr = io.StringIO()
-    with _lock, _patched_substitutions(resolver, env), sandbox.xacro_limits(xacro), \
-            contextlib.redirect_stderr(stderr):
+    with _lock, _patched_substitutions(resolver, env), _lenient_parse(xacro), \
+            sandbox.xacro_limits(xacro), contextlib.redirect_stderr(stderr):
         _reset_xacro_state(xacro)
         try:
             doc = xacro.process_file(str(path), mappings=dict(args), verbosity=0)
@@ -117,6 +118,28 @@ def _run_xacro(path: Path, args: dict[str, str],
                for line in stderr.getvalue().splitlines() if line.strip()]
     notices.extend(_unknown_args(args, files, path))
     return Expansion(text=text, files=files, notices=tuple(notices)), env
+
+
+@contextlib.contextmanager
+def _lenient_parse(xacro) -> Iterator[None]:
+    """Let xacro read every file as Gazebo's parsers would (assets/lenient.py); the sandbox's own
+    parse, entered after this, checks a path before this reads it."""
+    original = xacro.parse
+
+    def parse(inp, filename=None):
+        if inp is None:
+            try:
+                with open(os.path.join(xacro.root_dir, filename), encoding="utf-8", errors="replace") as file:
+                    inp = file.read()
+            except OSError:
+                return original(None, filename)  # xacro reports it as it always does
+        return original(gazebo_xml(inp) if isinstance(inp, str) else inp, filename)
+
+    xacro.parse = parse
+    try:
+        yield
+    finally:
+        xacro.parse = original
 
 
 def _reset_xacro_state(xacro) -> None:

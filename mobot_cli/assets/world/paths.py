@@ -19,6 +19,7 @@ from urllib.parse import unquote, urlparse
 
 from lxml import etree
 
+from mobot_cli.assets.lenient import gazebo_xml_bytes
 from mobot_cli.assets.resources import ResourceResolver, model_sdf
 from mobot_cli.errors import Location, MobotError, Notice, WorldError
 
@@ -72,8 +73,10 @@ def left_out_notices(items: list[LeftOut], roots: list[Path], file: Path) -> lis
 class SdfPaths:
     """Resolves and parses the files of one world (or model) and remembers every file read."""
 
-    def __init__(self, top: Path, resolver: ResourceResolver):
+    def __init__(self, top: Path, resolver: ResourceResolver, xacro_args: dict[str, str] | None = None):
         self.resolver = resolver
+        self.xacro_args = xacro_args or {}  # for a top file written as xacro (.sdf.xacro, .world.xacro)
+        self.notices: list[Notice] = []  # xacro's, for the reader to pass on
         self.files: dict[Path, None] = {}  # every file read, in order (cache dependencies)
         self._trees: dict[Path, object] = {}
         self.local: list[Path] = []
@@ -98,14 +101,17 @@ class SdfPaths:
             return self._trees[path]
         parser = etree.XMLParser(remove_comments=True, remove_pis=True, resolve_entities=False)
         try:
-            data = declaration_first(path.read_bytes())
-            root = etree.fromstring(data, parser, base_url=str(path))
+            data = self._expanded(path) if path.name.endswith(".xacro") else path.read_bytes()
+            root = etree.fromstring(gazebo_xml_bytes(declaration_first(data)), parser, base_url=str(path))
         except OSError as exc:
             raise WorldError(f"cannot read {path}: {exc}", location=Location(file=path),
                              hint="Check the path and the file's permissions.") from None
         except etree.XMLSyntaxError as exc:
             raise WorldError(f"malformed XML: {exc.msg}", location=Location(file=path, line=exc.lineno),
                              hint="Fix the XML (an unclosed tag or a stray '<' is typical).") from None
+        if path.name.endswith(".xacro"):  # lines of the expansion are not the file's: name none
+            for element in root.iter():
+                element.sourceline = 0
         if root.tag != "sdf":
             raise WorldError(f"the root element is <{root.tag}>, not <sdf>",
                              location=Location(file=path, line=root.sourceline),
@@ -114,6 +120,16 @@ class SdfPaths:
         self.files[path] = None
         self._trees[path] = root
         return root
+
+    def _expanded(self, path: Path) -> bytes:
+        """An SDF file written as xacro (nav2's sandbox world is), expanded as a robot description is."""
+        from mobot_cli.assets.description.xacro import expand_file
+
+        expansion = expand_file(path, self.xacro_args if not self.files else {}, self.resolver)
+        for file in expansion.files[1:]:
+            self.files[Path(file).resolve()] = None
+        self.notices.extend(expansion.notices)
+        return expansion.text.encode("utf-8")
 
     def find_model(self, name: str, where: Location) -> Path:
         """The folder of model NAME: ROOT/NAME or ROOT/models/NAME for the first root that has it."""

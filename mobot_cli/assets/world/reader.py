@@ -69,15 +69,19 @@ class SdfReader:
                 self.ignored[child.tag] += 1
             if model is None:
                 continue
-            if model.name in names:
-                raise WorldError(f"two models are named '{model.name}'", location=model.location,
-                                 hint="Model names in a world must be unique, as Gazebo requires.")
+            if model.name in names:  # Gazebo classic loads both; mobot's entities need unique names
+                renamed = next(f"{model.name}_{n}" for n in range(1, len(names) + 2)
+                               if f"{model.name}_{n}" not in names)
+                self.warn(f"two models are named '{model.name}': this one is renamed '{renamed}' "
+                          "(Gazebo classic loads both under one name)", model.location)
+                model.name = renamed
             names.add(model.name)
             models.append(model)
         step = world.findtext("physics/max_step_size")
         result = World(name=world.get("name", self.top.stem), models=models, ignored=self.ignored,
                        max_step_size=float(step) if is_number(step) else None)
         result.state_poses = self._apply_state(world, models)
+        self.notices[:0] = self.paths.notices  # xacro's, for a world written as xacro
         self.notices.extend(sdf_paths.left_out_notices(self.left_out, self.paths.roots, self.top))
         return result
 
@@ -121,6 +125,7 @@ class SdfReader:
         self._stack = [self.top]
         model = self.model(element, self.top, world_level=True)
         model.pose = IDENTITY.copy()  # a spawned model goes where the scenario puts it
+        self.notices[:0] = self.paths.notices
         self.notices.extend(sdf_paths.left_out_notices(self.left_out, self.paths.roots, self.top))
         return model
 

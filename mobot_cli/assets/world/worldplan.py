@@ -21,6 +21,7 @@ from mobot_cli.errors import Location, WorldError, did_you_mean
 from mobot_cli.plan import StaticBody, StaticShape, WorldPlan
 
 WORLD_SUFFIXES = (".world", ".sdf")
+XACRO_WORLD_SUFFIXES = (".world.xacro", ".sdf.xacro")  # expanded as a robot description is
 
 
 def bundled_world_names() -> tuple[str, ...]:
@@ -38,7 +39,7 @@ def world_path(world: str, base_dir: Path | None) -> Path:
     if text in names:
         root = bundled_dir("worlds")
         return next(root / f"{text}{s}" for s in WORLD_SUFFIXES if (root / f"{text}{s}").is_file())
-    if text.endswith(WORLD_SUFFIXES) or "/" in text or os.sep in text:
+    if text.endswith((*WORLD_SUFFIXES, *XACRO_WORLD_SUFFIXES)) or "/" in text or os.sep in text:
         path = Path(text).expanduser()
         path = path if path.is_absolute() else Path(base_dir or Path.cwd()) / path
         if not path.is_file():

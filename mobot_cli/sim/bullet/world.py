@@ -20,7 +20,7 @@ from mobot_cli.sim.bullet.clients import Stage, connect, release
 from mobot_cli.sim.bullet.joints import set_initial_positions
 from mobot_cli.sim.bullet.robot import SimRobot
 from mobot_cli.sim.bullet.steered import drive_class
-from mobot_cli.sim.bullet.urdf_file import links_with_friction, urdf_path
+from mobot_cli.sim.bullet.urdf_file import links_with_friction, pybullet_file
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, ContactCounter
 from mobot_cli.sim.pb import p
 from mobot_cli.sim.state import RobotState
@@ -130,10 +130,12 @@ class World:
                     self._solids.add(uid)
 
     def _load(self, urdf: str, xyz, quat, fixed: bool = False) -> int:
-        """Load URDF text; -1 when PyBullet refuses it."""
+        """Load URDF text (in lines PyBullet reads whole: urdf_file.pybullet_text); -1 when PyBullet
+        refuses it."""
+        path = str(pybullet_file(urdf))
         try:
             with silenced(1):  # the importer prints its warnings to stdout
-                return p.loadURDF(str(urdf_path(urdf)), xyz, quat, useFixedBase=fixed,
+                return p.loadURDF(path, xyz, quat, useFixedBase=fixed,
                                   flags=URDF_FLAGS, physicsClientId=self._cid)
         except p.error:
             return -1
@@ -327,10 +329,16 @@ class World:
                 f"robot '{robot.name}' has a non-finite state at step {self._steps}",
                 hint="Raise physics.rate_hz, or check the robot's masses and inertias.")
         if pos[2] < FLOOR_OF_THE_WORLD:
-            raise SimulationFault(
-                f"robot '{robot.name}' fell out of the world (z = {pos[2]:.1f} m) "
-                f"at step {self._steps}",
-                hint="Is there a floor under its spawn pose?")
+            fell = f"robot '{robot.name}' fell out of the world (z = {pos[2]:.1f} m) at step {self._steps}"
+            if not self._collides(robot.body):
+                raise SimulationFault(f"{fell}: it has no collision geometry, so nothing holds it up",
+                                      hint="Add <collision> to its links (a box the size of its body will do).")
+            raise SimulationFault(fell, hint="Is there a floor under its spawn pose?")
+
+    def _collides(self, body: int) -> bool:
+        """True when any link of ``body`` has a collision shape PyBullet can touch."""
+        links = range(-1, p.getNumJoints(body, physicsClientId=self._cid))
+        return any(p.getCollisionShapeData(body, link, physicsClientId=self._cid) for link in links)
 
     def sense(self, due: list[tuple[str, str]]) -> list[object]:
         """Readings of the (robot, sensor name) pairs due now, computed together (sim/sensing/rig.py)."""
