@@ -39,6 +39,7 @@ class RobotState:
     # robot whose clearance is watched; +inf otherwise or when nothing is that near. Not columns.
     clearance: float = math.inf
     nearest: str = ""
+    cmd_linear_y: float = 0.0  # m/s, the sideways part of the command (holonomic drives); not a column
 
     # Column order of the odom CSV (DESIGN.md), without the leading time column.
     CSV_FIELDS = (

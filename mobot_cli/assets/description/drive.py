@@ -6,6 +6,11 @@ continuous joints whose axes lie along the root's y axis, whose child link has a
 (along that axis) or sphere collision, and which move with the body (wheels.py: under fixed,
 prismatic or suspension joints, anywhere in the tree). A plugin whose radius or separation
 disagrees with that geometry is followed, as Gazebo follows it, with a warning.
+
+Holonomic bases (holonomic.py) are found first: a gz-sim MecanumDrive plugin (kind "mecanum"),
+a gazebo_ros planar_move or omni-drive plugin (kind "omni", ground-truth odometry, as the plugin
+publishes the model's pose), or, without any drive plugin, two or more wheels a side whose
+Gazebo friction is that of mecanum rollers (process.roller_links).
 """
 
 from __future__ import annotations
@@ -32,12 +37,23 @@ def detect_drive(urdf: ET.Element | str, *, notices: list[Notice] | None = None,
     tree = LinkTree(robot)
     if tree.root is None:
         return None
+    from mobot_cli.assets.description import holonomic  # it builds on this module's helpers
+
+    holonomic_plugin = holonomic.plugin(robot)
+    if holonomic_plugin is not None:
+        spec = holonomic.from_plugin(holonomic_plugin, robot, tree, notices, source)
+        if spec is not None:
+            return spec
     plugin = _drive_plugin(robot)
     if plugin is not None:
         spec = _from_plugin(plugin, tree, notices, source)
         if spec is not None:
+            holonomic.note_rollers(spec, robot, tree, plugin, notices, source)
             return spec
     wheels = [w for j in tree.joints if (w := wheel(tree, j.name, strict=True)) is not None]
+    rolling = holonomic.from_rollers(wheels, robot, tree, notices, source)
+    if rolling is not None:
+        return rolling
     return _spec(wheels, source="urdf", notices=notices, file=source)
 
 

@@ -6,10 +6,15 @@ import math
 
 from mobot_cli.errors import SpawnError
 from mobot_cli.plan import DriveSpec, RobotPlan
+from mobot_cli.sim.bullet.holonomic import HolonomicDrive
 from mobot_cli.sim.bullet.twist_trim import TwistTrim
 from mobot_cli.sim.drive import Odometry, body_twist, ramp, wheel_speeds, wrap_angle
 from mobot_cli.sim.pb import p
 from mobot_cli.sim.state import RobotState
+
+
+# Drive kinds that take a sideways linear_y (DriveSpec.kind).
+HOLONOMIC = ("mecanum", "omni")
 
 
 class SimRobot:
@@ -22,6 +27,7 @@ class SimRobot:
         self.name = plan.name
         self.dt = dt
         self.cmd = (0.0, 0.0)
+        self.cmd_y = 0.0  # the sideways part of the command (holonomic drives)
         self.collisions = 0  # collision events so far, counted by the World's ContactCounter
         self.joints: dict[str, int] = {}  # every non-fixed joint
         self.links: dict[str, int] = {p.getBodyInfo(body, physicsClientId=cid)[0].decode(): -1}
@@ -38,9 +44,10 @@ class SimRobot:
         self.com_offset = offset  # most root links (base_footprint) have none: skip the maths
         self.joint_indices = list(self.joints.values())
         self._free_joints()
-        self.drive: _Drive | None = None
+        self.drive: _Drive | HolonomicDrive | None = None
         if plan.drive is not None:
-            self.drive = _Drive(self, plan.drive)
+            holonomic = plan.drive.kind in HOLONOMIC
+            self.drive = (HolonomicDrive if holonomic else _Drive)(self, plan.drive)
         x, y, _, _, _, yaw = self.link_pose_rpy()
         self.spawn_xy_yaw = (x, y, yaw)
 
@@ -65,12 +72,16 @@ class SimRobot:
         roll, pitch, yaw = p.getEulerFromQuaternion(orn)
         return pos[0], pos[1], pos[2], roll, pitch, yaw
 
-    def set_command(self, linear: float, angular: float) -> None:
-        """Take a cmd_vel body twist; robots without a drive refuse it."""
-        if self.drive is None:
-            raise ValueError(f"robot '{self.name}' has no drive: it cannot take velocity commands")
+    def set_command(self, linear: float, angular: float, linear_y: float = 0.0) -> None:
+        """Take a cmd_vel body twist; robots without a drive refuse it, and a sideways
+        ``linear_y`` is refused unless the drive is holonomic."""
+        check_command(self.name, self.drive.spec if self.drive is not None else None, linear_y)
         self.cmd = (float(linear), float(angular))
-        self.drive.command(linear, angular)
+        self.cmd_y = float(linear_y)
+        if linear_y:
+            self.drive.command(linear, angular, linear_y)
+        else:
+            self.drive.command(linear, angular)
 
     def kinematics(self) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...], tuple[float, ...]]:
         """World position, quaternion, linear and angular velocity of the root link's URDF frame."""
@@ -97,7 +108,7 @@ class SimRobot:
         true_wz = ang[0] * rot[2] + ang[1] * rot[5] + ang[2] * rot[8]  # about the body z axis
         joints = p.getJointStates(body, self.joint_indices, physicsClientId=cid) \
             if self.joint_indices else ()
-        if self.drive is not None and self.drive.spec.odometry == "encoder":
+        if self.drive is not None and self.drive.encoder:
             odom = self.drive.odometry_now(joints, step)
         else:
             x0, y0, yaw0 = self.spawn_xy_yaw
@@ -108,7 +119,7 @@ class SimRobot:
             self.cmd[0], self.cmd[1], *odom, pos[0], pos[1], pos[2], roll, pitch, yaw,
             true_vx, true_wz, joint_positions={n: j[0] for n, j in zip(self.joints, joints)},
             collisions=self.collisions,
-            joint_velocities={n: j[1] for n, j in zip(self.joints, joints)})
+            joint_velocities={n: j[1] for n, j in zip(self.joints, joints)}, cmd_linear_y=self.cmd_y)
 
     def joint_positions(self) -> dict[str, float]:
         """Position of every non-fixed joint, by name."""
@@ -138,6 +149,7 @@ class _Drive:
         self.radius = spec.wheel_radius * spec.wheel_radius_multiplier
         self.separation = spec.wheel_separation * spec.wheel_separation_multiplier
         self.odometry = Odometry(self.separation)
+        self.encoder = spec.odometry == "encoder"
         self.scale = [sign * self.radius for sign in self.signs]  # joint angle -> rim travel
         self.last = self._positions()
         self.integrated_at = -1  # the world step of the last integration
@@ -230,6 +242,15 @@ class _Drive:
                             self.separation)
         odo = self.odometry
         return odo.x, odo.y, wrap_angle(odo.yaw), vx, wz
+
+
+def check_command(name: str, spec: DriveSpec | None, linear_y: float) -> None:
+    """ValueError for a command this drive cannot follow: none at all, or a sideways one."""
+    if spec is None:
+        raise ValueError(f"robot '{name}' has no drive: it cannot take velocity commands")
+    if linear_y and spec.kind not in HOLONOMIC:
+        raise ValueError(f"robot '{name}' has a {spec.kind} drive: it cannot move sideways "
+                         f"(linear_y {linear_y:g} m/s); only holonomic (mecanum, omni) drives can")
 
 
 def _twist_feedback(spec: DriveSpec) -> bool:
