@@ -98,8 +98,10 @@ class PoseSpec(Strict):
 class DriveOverrides(Strict):
     """Anything detected from the URDF can be overridden here."""
 
-    type: Literal["diff_drive"] = "diff_drive"
-    odometry: Literal["encoder", "ground_truth"] = "encoder"
+    # None: as detected. "diff_drive" is the older spelling of "diff"; "holonomic" is mecanum or
+    # omni (scenario/robots.py, drive_kind); "ackermann" is not simulated yet.
+    type: Optional[Literal["diff", "diff_drive", "holonomic", "ackermann"]] = None
+    odometry: Optional[Literal["encoder", "ground_truth"]] = None  # None: as detected (encoder for most)
     left_joints: Optional[list[str]] = None
     right_joints: Optional[list[str]] = None
     wheel_radius: Optional[Annotated[PositiveFloat, at_most(MAX_WHEEL_RADIUS, "m")]] = None
@@ -110,6 +112,7 @@ class DriveOverrides(Strict):
     max_wheel_torque: Optional[Annotated[PositiveFloat, at_most(MAX_WHEEL_TORQUE, "N m")]] = None
     max_wheel_acceleration: Optional[Annotated[PositiveFloat, at_most(MAX_WHEEL_ACCELERATION, "rad/s^2")]] = None
     twist_feedback: Optional[bool] = None
+    wheelbase: Optional[Annotated[PositiveFloat, at_most(MAX_WHEEL_SEPARATION, "m")]] = None  # holonomic
 
 
 class CommandSpec(GoalFields):
@@ -122,6 +125,7 @@ class CommandSpec(GoalFields):
     at: Optional[Seconds] = None
     linear: Speed = 0.0
     angular: AngularSpeed = 0.0
+    linear_y: Speed = 0.0  # sideways, m/s (+ left): holonomic drives only
     for_: Optional[Duration] = Field(default=None, alias="for")
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True, populate_by_name=True, defer_build=True)
@@ -129,7 +133,7 @@ class CommandSpec(GoalFields):
     @model_validator(mode="after")
     def _twist_or_goal(self) -> "CommandSpec":
         given = self.model_fields_set
-        self.check_goal([k.rstrip("_") for k in ("linear", "angular", "for_") if k in given])
+        self.check_goal([k.rstrip("_") for k in ("linear", "angular", "linear_y", "for_") if k in given])
         return self
 
 

@@ -11,6 +11,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+# DriveSpec kinds that take a sideways linear_y: a scenario's drive type "holonomic".
+KINDS = ("mecanum", "omni")
+
 
 def mecanum_wheel_speeds(linear: float, lateral: float, angular: float, separation: float,
                          wheelbase: float, radius: float) -> tuple[float, float, float, float]:

@@ -152,3 +152,11 @@ def _wheelbase(left: list[Wheel], right: list[Wheel]) -> float:
 
 def _mean(values: list[float]) -> float:
     return sum(values) / len(values) if values else 0.0
+
+
+def wheelbase_of(urdf: str, left: tuple[str, ...], right: tuple[str, ...]) -> float:
+    """The wheelbase of these wheel joints (front first on each side) as holonomic_spec measures it."""
+    tree = LinkTree(ET.fromstring(urdf))
+    found = {name: wheel(tree, name, strict=False) for name in left + right}
+    return abs(_wheelbase([found[n] for n in left if found[n] is not None],
+                          [found[n] for n in right if found[n] is not None]))
