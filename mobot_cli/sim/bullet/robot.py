@@ -8,8 +8,8 @@ from mobot_cli.errors import SpawnError
 from mobot_cli.plan import DriveSpec, RobotPlan
 from mobot_cli.sim.bullet.holonomic import HolonomicDrive
 from mobot_cli.sim.bullet.twist_trim import TwistTrim
-from mobot_cli.sim.holonomic import KINDS
 from mobot_cli.sim.drive import Odometry, body_twist, ramp, wheel_speeds, wrap_angle
+from mobot_cli.sim.holonomic import KINDS
 from mobot_cli.sim.pb import p
 from mobot_cli.sim.state import RobotState
 

@@ -24,11 +24,10 @@ import numpy as np
 from mobot_cli.errors import SimulationFault, SpawnError
 from mobot_cli.plan import Physics, RobotPlan, SpawnPose, WorldPlan
 from mobot_cli.sim import clearance as clearance_mod
+from mobot_cli.sim.bullet.robot import HOLONOMIC, check_command
 from mobot_cli.sim.bullet.world import World
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, CONTACT_SLOP, RELEASE_SAMPLES, ContactCounter
-from mobot_cli.sim.bullet.robot import HOLONOMIC, check_command
 from mobot_cli.sim.kinematic.body import Mover
-from mobot_cli.sim.kinematic.holonomic import HolonomicMover
 from mobot_cli.sim.kinematic.collide import (
     NEAR_MARGIN,
     QUERY_REACH,
@@ -41,6 +40,7 @@ from mobot_cli.sim.kinematic.collide import (
     nearest,
     static_boxes,
 )
+from mobot_cli.sim.kinematic.holonomic import HolonomicMover
 from mobot_cli.sim.placement import body_bounds
 from mobot_cli.sim.state import RobotState
 
