@@ -118,9 +118,13 @@ class Session:
             raise Refusal(Result.OPERATION_FAILED, f"robot '{request.name}' has no drive wheels: it does "
                           "not take velocity commands")
         span = None if request.for_ is None else steps(request.for_, self.rate_hz)
-        until = self.timeline.command(request.name, request.linear, request.angular, span)
+        try:
+            until = self.timeline.command(request.name, request.linear, request.angular, span, request.linear_y)
+        except ValueError as exc:  # a sideways command to a robot that is not holonomic
+            raise Refusal(Result.OPERATION_FAILED, str(exc)) from None
+        sideways = {"linear_y": request.linear_y} if request.linear_y else {}
         self.history(op="cmd", name=request.name, result="OK", linear=request.linear, angular=request.angular,
-                     **{"for": request.for_})
+                     **sideways, **{"for": request.for_})
         return until
 
     def goto(self, request: schema.Goto, done: Callable[[dict[str, Any]], None] | None = None) -> dict[str, Any]:

@@ -18,15 +18,17 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+from mobot_cli.assets.description import holonomic
 from mobot_cli.assets.description.frames import LinkTree
+from mobot_cli.assets.description.plugin_values import disagreement as _disagreement
+from mobot_cli.assets.description.plugin_values import number as _number
+from mobot_cli.assets.description.plugin_values import texts as _texts
 from mobot_cli.assets.description.wheels import Wheel, wheel
 from mobot_cli.errors import DescriptionError, Location, Notice, did_you_mean
 from mobot_cli.plan import DriveSpec
 
 _LEFT_TAGS = ("leftJoint", "left_joint", "leftFrontJoint", "leftRearJoint")
 _RIGHT_TAGS = ("rightJoint", "right_joint", "rightFrontJoint", "rightRearJoint")
-# Plugin values farther than this from the wheel geometry get a warning.
-DISAGREEMENT = 0.02
 
 
 def detect_drive(urdf: ET.Element | str, *, notices: list[Notice] | None = None,
@@ -37,8 +39,6 @@ def detect_drive(urdf: ET.Element | str, *, notices: list[Notice] | None = None,
     tree = LinkTree(robot)
     if tree.root is None:
         return None
-    from mobot_cli.assets.description import holonomic  # it builds on this module's helpers
-
     holonomic_plugin = holonomic.plugin(robot)
     if holonomic_plugin is not None:
         spec = holonomic.from_plugin(holonomic_plugin, robot, tree, notices, source)
@@ -98,26 +98,6 @@ def _drive_plugin(robot: ET.Element) -> ET.Element | None:
     return None
 
 
-def _texts(plugin: ET.Element, *tags: str) -> list[str]:
-    """Values of the children named ``tags``, as <t>v</t> or <t value="v"/>, in tag order."""
-    values = []
-    for tag in tags:
-        for child in plugin.findall(tag):
-            value = (child.text or "").strip() or child.get("value", "").strip()
-            if value:
-                values.append(value)
-    return values
-
-
-def _number(plugin: ET.Element, *tags: str) -> float | None:
-    for text in _texts(plugin, *tags):
-        try:
-            return float(text)
-        except ValueError:
-            continue
-    return None
-
-
 def _from_plugin(plugin: ET.Element, tree: LinkTree, notices: list[Notice],
                  file: Path | None) -> DriveSpec | None:
     label = plugin.get("filename") or plugin.get("name") or "diff-drive"
@@ -154,37 +134,6 @@ def _from_plugin(plugin: ET.Element, tree: LinkTree, notices: list[Notice],
     return _spec([w for _, w in wheels], source="plugin", notices=notices, file=file,
                  sides={w.joint: s for s, w in wheels}, radius=radius,
                  separation=separation, torque=torque, rim_accel=accel)
-
-
-def _disagreement(label: str, wheels: list[tuple[str, Wheel]], radius: float | None,
-                  separation: float | None, notices: list[Notice], file: Path | None) -> None:
-    """One warning when the plugin's radius or separation is > 2 % off the wheel geometry."""
-    parts, effects = [], []
-    left = [w.y for side, w in wheels if side == "left"]
-    right = [w.y for side, w in wheels if side == "right"]
-    if separation and left and right:
-        apart = abs(sum(left) / len(left) - sum(right) / len(right))
-        if apart > 0 and abs(separation - apart) > DISAGREEMENT * apart:
-            parts.append(f"wheel_separation {separation:.3f} m, but its wheel joints are "
-                         f"{apart:.3f} m apart")
-            effects.append(f"turns {_percent(separation / apart)} than commanded")
-    radii = [w.radius for _, w in wheels if w.radius]
-    if radius and radii:
-        measured = sum(radii) / len(radii)
-        if abs(radius - measured) > DISAGREEMENT * measured:
-            parts.append(f"wheel_radius {radius:.3f} m, but its wheels' collisions have radius "
-                         f"{measured:.3f} m")
-            effects.append(f"drives {_percent(measured / radius)} than commanded")
-    if parts:
-        notices.append(Notice(
-            f"the {label} plugin says {'; and '.join(parts)}: mobot uses the plugin's values, "
-            f"as Gazebo does, so the robot {' and '.join(effects)} (set drive: wheel_radius / "
-            "wheel_separation to use the geometry)", Location(file=file)))
-
-
-def _percent(ratio: float) -> str:
-    """'11 % more' or '9 % less' for a ratio of achieved to commanded motion."""
-    return f"{abs(ratio - 1) * 100:.0f} % {'more' if ratio > 1 else 'less'}"
 
 
 def _spec(wheels: list[Wheel], *, source: str, notices: list[Notice], file: Path | None,

@@ -18,8 +18,8 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from mobot_cli.assets.description.drive import _disagreement, _number, _texts
 from mobot_cli.assets.description.frames import LinkTree
+from mobot_cli.assets.description.plugin_values import disagreement, number, texts
 from mobot_cli.assets.description.process import roller_links
 from mobot_cli.assets.description.wheels import Wheel, wheel
 from mobot_cli.errors import DescriptionError, Location, Notice, did_you_mean
@@ -64,7 +64,7 @@ def from_plugin(element: ET.Element, robot: ET.Element, tree: LinkTree, notices:
     joint_types = {j.name: j.type for j in tree.joints}
     found, sides = [], {}
     for side, tag in CORNERS:
-        names = _texts(element, tag)
+        names = texts(element, tag)
         if not names:
             notices.append(Notice(f"the {label} plugin gives no <{tag}>; detecting the wheels from the "
                                   "URDF instead", Location(file=file)))
@@ -79,10 +79,10 @@ def from_plugin(element: ET.Element, robot: ET.Element, tree: LinkTree, notices:
                     or "Name a continuous wheel joint.")
             found.append(wheel(tree, name, strict=False))
             sides[name] = side
-    radius = _number(element, "wheel_radius")
-    separation = _number(element, "wheel_separation")
-    wheelbase = _number(element, "wheelbase", "wheel_base")
-    _disagreement(label, [(sides[w.joint], w) for w in found], radius, separation, notices, file)
+    radius = number(element, "wheel_radius")
+    separation = number(element, "wheel_separation")
+    wheelbase = number(element, "wheelbase", "wheel_base")
+    disagreement(label, [(sides[w.joint], w) for w in found], radius, separation, notices, file)
     return holonomic_spec("mecanum", found, sides, odometry="encoder", source="plugin", notices=notices,
                           file=file, radius=radius, separation=separation, wheelbase=wheelbase)
 
