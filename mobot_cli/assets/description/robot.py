@@ -222,9 +222,7 @@ def _from_document(document: dict[str, Any] | None) -> RobotDescription | None:
             return None  # an entry from before URIs were kept
         drive = document["drive"]
         if drive is not None:
-            drive = DriveSpec(**{**drive, "left_joints": tuple(drive["left_joints"]),
-                                 "right_joints": tuple(drive["right_joints"]),
-                                 "joint_signs": tuple(tuple(s) for s in drive["joint_signs"])})
+            drive = DriveSpec(**{key: _tuples(value) for key, value in drive.items()})
         return RobotDescription(
             source=Path(document["source"]), name=document["name"], urdf=document["urdf"],
             root_link=document["root_link"],
@@ -242,6 +240,11 @@ def _from_document(document: dict[str, Any] | None) -> RobotDescription | None:
                           for n in document["notices"]))
     except (KeyError, TypeError, ValueError):
         return None
+
+
+def _tuples(value: Any) -> Any:
+    """JSON lists back to the tuples they were (a DriveSpec holds tuples, some of pairs)."""
+    return tuple(_tuples(v) for v in value) if isinstance(value, list) else value
 
 
 def inspect_summary(desc: RobotDescription) -> dict[str, Any]:
