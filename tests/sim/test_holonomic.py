@@ -166,3 +166,32 @@ def test_a_diff_robot_refuses_a_sideways_command(engine, tmp_path, monkeypatch):
         assert world.read("skid").cmd_linear == 0.0  # refused: nothing changed
         world.set_command("skid", 0.1, 0.0)  # a plain twist still goes
         assert world.read("skid").cmd_linear == 0.1
+
+
+@pytest.fixture(scope="module")
+def linorobot2_mecanum(corpus, tmp_path_factory):
+    """linorobot2's mecanum base: gazebo_ros planar_move, which mobot once drove as skid steer."""
+    from mobot_cli.assets.description.describe import load_robot
+
+    mp = pytest.MonkeyPatch()
+    mp.setenv("MOBOT_RESOURCE_PATH", str(corpus / "linorobot2"))
+    mp.setenv("MOBOT_CACHE_DIR", str(tmp_path_factory.mktemp("linorobot2-cache")))
+    try:
+        desc = load_robot(str(corpus / "linorobot2/linorobot2_description/urdf/robots/mecanum.urdf.xacro"), {})
+    finally:
+        mp.undo()
+    return RobotPlan(name="lino", namespace="/lino", frame_prefix="lino/", urdf=desc.urdf,
+                     root_link=desc.root_link, pose=SpawnPose(z_auto=True), drive=desc.drive)
+
+
+def test_corpus_linorobot2_mecanum_is_omni_and_moves_sideways(linorobot2_mecanum):
+    drive_spec = linorobot2_mecanum.drive
+    assert drive_spec.kind == "omni" and drive_spec.odometry == "ground_truth"
+    assert len(drive_spec.left_joints) == len(drive_spec.right_joints) == 2
+    before, after, tilt = drive(linorobot2_mecanum, (0.0, 0.25, 0.0), 4.0)
+    forward, left, turn = moved(before, after)
+    assert left == pytest.approx(1.0, rel=0.02) and abs(forward) < 0.01 and tilt < 1.0
+    before, after, _ = drive(linorobot2_mecanum, (0.2, -0.2, 0.0), 5.0)
+    assert moved(before, after)[:2] == pytest.approx((1.0, -1.0), rel=0.02)
+    before, after, _ = drive(linorobot2_mecanum, (0.0, 0.0, 0.5), math.pi)
+    assert math.degrees(moved(before, after)[2]) == pytest.approx(90.0, abs=1.0)

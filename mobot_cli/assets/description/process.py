@@ -204,7 +204,8 @@ def _mu_values(block: ET.Element) -> tuple[dict[str, float], bool]:
     return found, fdir
 
 
-def _is_roller(values: dict[str, float], fdir: bool) -> bool:
+def is_roller(values: dict[str, float], fdir: bool) -> bool:
+    """Whether mu values (two of them) and an <fdir1> (given or not) are a roller's."""
     if not fdir or len(values) < 2:
         return False
     low, high = sorted(values.values())
@@ -227,14 +228,14 @@ def _surfaces(robot: ET.Element) -> dict[str, tuple[dict[str, float], bool]]:
 def gazebo_friction(robot: ET.Element) -> dict[str, float]:
     """Link name -> friction from <gazebo reference> mu1/mu2 (text or value= forms): the smaller,
     or for rollers (see roller_links) the larger."""
-    return {link: max(values.values()) if _is_roller(values, fdir) else min(values.values())
+    return {link: max(values.values()) if is_roller(values, fdir) else min(values.values())
             for link, (values, fdir) in _surfaces(robot).items() if values}
 
 
 def roller_links(robot: ET.Element) -> frozenset[str]:
     """Links whose Gazebo friction is anisotropic as mecanum rollers are: an <fdir1>, and one mu
     at most ROLLER_RATIO of the other (gz-sim's mecanum example: mu 1, mu2 0, fdir1 at 45 deg)."""
-    return frozenset(link for link, (values, fdir) in _surfaces(robot).items() if _is_roller(values, fdir))
+    return frozenset(link for link, (values, fdir) in _surfaces(robot).items() if is_roller(values, fdir))
 
 
 def apply_friction(robot: ET.Element) -> dict[str, float]:
