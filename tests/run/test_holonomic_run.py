@@ -71,3 +71,14 @@ def test_naming_other_wheels_keeps_a_detected_holonomic_kind(tmp_path):
     prepared = prepare(scenario(tmp_path, "mecanum4.urdf.xacro", args="{drive: rollers}", drive=drive))
     spec = prepared.plan.robots[0].drive
     assert spec.kind == "mecanum" and spec.odometry == "ground_truth" and spec.wheelbase == pytest.approx(0.4)
+
+
+def test_the_bag_records_cmd_vel_linear_y(tmp_path):
+    from tests.record.test_bag import by_topic, messages
+
+    path = scenario(tmp_path, "mecanum4.urdf.xacro", args="{drive: plugin}", commands=SIDEWAYS)
+    path.write_text(path.read_text().replace("duration: 6\n", "duration: 2\nlog: {formats: [csv, mcap]}\n"))
+    done = invoke(["run", path, "--out", tmp_path / "bag", "--quiet"])
+    assert done.exit_code == 0, done.stderr
+    cmds = [(m[3].linear.x, m[3].linear.y, m[3].angular.z) for m in by_topic(messages(tmp_path / "bag" / "bag"), "/m/cmd_vel")]
+    assert cmds[0] == (0.0, 0.0, 0.0) and cmds[-1] == (0.0, 0.25, 0.0)
