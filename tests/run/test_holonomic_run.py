@@ -80,5 +80,6 @@ def test_the_bag_records_cmd_vel_linear_y(tmp_path):
     path.write_text(path.read_text().replace("duration: 6\n", "duration: 2\nlog: {formats: [csv, mcap]}\n"))
     done = invoke(["run", path, "--out", tmp_path / "bag", "--quiet"])
     assert done.exit_code == 0, done.stderr
-    cmds = [(m[3].linear.x, m[3].linear.y, m[3].angular.z) for m in by_topic(messages(tmp_path / "bag" / "bag"), "/m/cmd_vel")]
+    recorded = by_topic(messages(tmp_path / "bag" / "bag"), "/m/cmd_vel")
+    cmds = [(m[3].linear.x, m[3].linear.y, m[3].angular.z) for m in recorded]
     assert cmds[0] == (0.0, 0.0, 0.0) and cmds[-1] == (0.0, 0.25, 0.0)
