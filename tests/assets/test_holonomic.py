@@ -139,3 +139,14 @@ def test_sdf_rollers_are_read_not_reduced_to_zero(tmp_path, monkeypatch):
     assert rollers.drive.wheelbase == pytest.approx(0.5) and rollers.drive.wheel_separation == pytest.approx(0.6)
     wheel = ET.fromstring(rollers.urdf).find("link[@name='front_left_wheel']")
     assert wheel.find("contact/lateral_friction").get("value") == "1"
+
+
+def test_inspect_names_the_holonomic_kind(tmp_path, monkeypatch):
+    from mobot_cli.cli import invoke
+
+    monkeypatch.setenv("MOBOT_CACHE_DIR", str(tmp_path))
+    done = invoke(["inspect", MECANUM, "drive:=planar"])
+    assert done.exit_code == 0
+    assert ("omni drive (plugin, holonomic: takes linear_y): left front_left_wheel_joint, rear_left_wheel_joint; "
+            "right front_right_wheel_joint, rear_right_wheel_joint; wheel radius 0.0500 m, separation 0.5000 m, "
+            "wheelbase 0.4000 m; odometry ground_truth") in " ".join(done.stdout.split())
