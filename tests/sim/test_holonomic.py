@@ -195,3 +195,25 @@ def test_corpus_linorobot2_mecanum_is_omni_and_moves_sideways(linorobot2_mecanum
     assert moved(before, after)[:2] == pytest.approx((1.0, -1.0), rel=0.02)
     before, after, _ = drive(linorobot2_mecanum, (0.0, 0.0, 0.5), math.pi)
     assert math.degrees(moved(before, after)[2]) == pytest.approx(90.0, abs=1.0)
+
+
+def test_acceleration_limit_ramps_the_twist(plans):
+    """max_wheel_acceleration 10 rad/s^2 at r = 0.05 m: 0.5 m/s^2 at the rim, so 0.25 m/s takes 0.5 s."""
+    from dataclasses import replace
+
+    plan = replace(plans["plugin"], drive=replace(plans["plugin"].drive, max_wheel_acceleration=10.0))
+    with open_world(Physics(rate_hz=RATE), WorldPlan()) as world:
+        world.spawn(plan)
+        for _ in range(RATE // 2):
+            world.step()
+        start = world.read(plan.name).true_y
+        world.set_command(plan.name, 0.0, 0.0, linear_y=0.25)
+        for _ in range(RATE // 4):
+            world.step()
+        quarter = world.read(plan.name)
+        for _ in range(RATE):
+            world.step()
+        late = world.read(plan.name)
+    # after 0.25 s: half the speed, 0.5 * 0.5 * 0.25^2 = 1.6 cm; a second later at full speed
+    assert quarter.true_y - start == pytest.approx(0.0156, abs=0.002)
+    assert (late.true_y - quarter.true_y) == pytest.approx(0.0625 - 0.0156 + 0.25 * 0.75, abs=0.005)

@@ -36,10 +36,10 @@ ROLLER_FRICTION = 0.0
 class HolonomicDrive:
     """Base force and torque toward the commanded (vx, vy, wz), wheel joints at mecanum speeds."""
 
-    twist_feedback = False
     trim = None  # the skid-steer twist loop (twist_trim.py) never runs here
 
-    def __init__(self, robot, spec: DriveSpec):
+    def __init__(self, robot, spec: DriveSpec, forward_sign=None):
+        """``forward_sign(robot, joint index)`` gives a wheel's sign when the spec does not."""
         self.robot = robot
         self.spec = spec
         missing = [j for j in spec.left_joints + spec.right_joints if j not in robot.joints]
@@ -56,7 +56,8 @@ class HolonomicDrive:
         self.wheels = self.left + self.right
         self.slots = [robot.joint_indices.index(j) for j in self.wheels]
         given = dict(spec.joint_signs)
-        self.signs = [float(given.get(j, 0.0)) or 1.0 for j in names]
+        self.signs = [float(given.get(j, 0.0)) or (forward_sign(robot, robot.joints[j]) if forward_sign else 1.0)
+                      for j in names]
         self.scale = [sign * self.radius for sign in self.signs]
         # No wheels to read (planar_move on a wheel-less body): odometry is the model's pose.
         self.encoder = spec.odometry == "encoder" and bool(self.wheels)
@@ -98,7 +99,7 @@ class HolonomicDrive:
     def command(self, linear: float, angular: float, lateral: float = 0.0) -> None:
         """Take a body twist; ramped later when acceleration is limited."""
         self.goal = (float(linear), float(lateral), float(angular))
-        if not self.ramping or self.max_step[0] <= 0.0:
+        if self.max_step[0] <= 0.0:  # else ramp_step() moves the twist there
             self.twist = self.goal
             self._apply()
 

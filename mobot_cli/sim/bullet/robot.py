@@ -45,8 +45,8 @@ class SimRobot:
         self._free_joints()
         self.drive: _Drive | HolonomicDrive | None = None
         if plan.drive is not None:
-            holonomic = plan.drive.kind in HOLONOMIC
-            self.drive = (HolonomicDrive if holonomic else _Drive)(self, plan.drive)
+            self.drive = HolonomicDrive(self, plan.drive, _forward_sign) if plan.drive.kind in HOLONOMIC \
+                else _Drive(self, plan.drive)
         x, y, _, _, _, yaw = self.link_pose_rpy()
         self.spawn_xy_yaw = (x, y, yaw)
 
