@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import struct
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,7 +12,7 @@ from mobot_cli.errors import UsageError
 from mobot_cli.gym.env import MobotEnv
 from mobot_cli.ros2 import inputs
 
-MECANUM = str(Path(__file__).resolve().parents[1] / "sim" / "robots" / "mecanum4.urdf.xacro")
+MECANUM = "mecanum"  # bundled: robots/mecanum
 
 
 def test_api_command_takes_linear_y_and_a_diff_robot_refuses_it():

@@ -13,7 +13,7 @@ from mobot_cli.assets.description.process import gazebo_friction, roller_links
 from mobot_cli.errors import DescriptionError
 
 ROBOTS = Path(__file__).resolve().parents[1] / "sim" / "robots"
-MECANUM = ROBOTS / "mecanum4.urdf.xacro"
+MECANUM = "mecanum"  # bundled: robots/mecanum
 SDF = ROBOTS / "mecanum_gz.sdf"
 CORNERS = {"front_left": (0.2, 0.25), "rear_left": (-0.2, 0.25), "front_right": (0.2, -0.25),
            "rear_right": (-0.2, -0.25)}
@@ -119,8 +119,8 @@ def test_planar_move_on_a_body_without_wheels():
 @pytest.mark.parametrize("args", [{"drive": "plugin"}, {"drive": "rollers"}, {"drive": "planar"}])
 def test_descriptions_survive_the_cache(tmp_path, monkeypatch, args):
     monkeypatch.setenv("MOBOT_CACHE_DIR", str(tmp_path))
-    cold = load_robot(str(MECANUM), args).drive
-    warm = load_robot(str(MECANUM), args).drive
+    cold = load_robot(MECANUM, args).drive
+    warm = load_robot(MECANUM, args).drive
     assert warm == cold and warm.kind in ("mecanum", "omni") and isinstance(warm.joint_signs[0], tuple)
 
 

@@ -250,8 +250,7 @@ def test_odom_follow_prints_readings_until_interrupted(live, blocker):
 
 
 def test_cmd_linear_y_moves_a_mecanum_base_and_a_diff_robot_refuses_it(mobot):
-    mecanum = REPO / "tests" / "sim" / "robots" / "mecanum4.urdf.xacro"
-    spawn_json(mobot, "mecanum", "--file", str(mecanum), "drive:=plugin", "-x", "-8", "-y", "-8")
+    spawn_json(mobot, "mecanum", "--file", "mecanum", "-x", "-8", "-y", "-8")
     code, out, err = mobot("cmd", "mecanum", "--linear-y", "0.25", "--for", "2.0", "--wait", "--json")
     assert code == 0, err
     reply = json.loads(out)

@@ -17,8 +17,9 @@ ROBOTS = Path(__file__).resolve().parents[1] / "sim" / "robots"
 def scenario(tmp_path: Path, description: str, *, args: str = "{}", drive: str = "", commands: str = "",
              engine: str = "bullet") -> Path:
     path = tmp_path / "s.yaml"
+    where = ROBOTS / description if "." in description else description  # a file, or a bundled name
     path.write_text(f"version: 1\nduration: 6\nsettle: 0.5\nphysics: {{engine: {engine}}}\nrobots:\n"
-                    f"  - name: m\n    description: {ROBOTS / description}\n    args: {args}\n"
+                    f"  - name: m\n    description: {where}\n    args: {args}\n"
                     + (f"    drive: {drive}\n" if drive else "")
                     + (f"    commands:\n{commands}" if commands else ""))
     return path
@@ -29,7 +30,7 @@ SIDEWAYS = ("      - {at: 1.0, linear_y: 0.25, for: 4.0}\n")
 
 @pytest.mark.parametrize("engine", ["bullet", "kinematic"])
 def test_a_scenario_moves_a_mecanum_base_sideways_and_reruns_identically(tmp_path, engine):
-    path = scenario(tmp_path, "mecanum4.urdf.xacro", args="{drive: plugin}", commands=SIDEWAYS, engine=engine)
+    path = scenario(tmp_path, "mecanum", args="{drive: plugin}", commands=SIDEWAYS, engine=engine)
     first = invoke(["run", path, "--out", tmp_path / "one", "--quiet"])
     assert first.exit_code == 0, first.stderr
     rows = list(csv.DictReader((tmp_path / "one" / "odom" / "m.csv").open()))
@@ -57,7 +58,7 @@ def test_drive_type_holonomic_makes_a_four_wheel_base_mecanum(tmp_path):
 
 
 def test_drive_type_diff_drives_a_mecanum_base_as_skid_steer(tmp_path):
-    prepared = prepare(scenario(tmp_path, "mecanum4.urdf.xacro", args="{drive: plugin}", drive="{type: diff}"))
+    prepared = prepare(scenario(tmp_path, "mecanum", args="{drive: plugin}", drive="{type: diff}"))
     drive = prepared.plan.robots[0].drive
     assert drive.kind == "diff" and drive.wheel_separation_multiplier > 1.0
     again = tmp_path / "again.yaml"
@@ -68,7 +69,7 @@ def test_drive_type_diff_drives_a_mecanum_base_as_skid_steer(tmp_path):
 def test_naming_other_wheels_keeps_a_detected_holonomic_kind(tmp_path):
     drive = ("{left_joints: [front_left_wheel_joint, rear_left_wheel_joint], "
              "right_joints: [front_right_wheel_joint, rear_right_wheel_joint], odometry: ground_truth}")
-    prepared = prepare(scenario(tmp_path, "mecanum4.urdf.xacro", args="{drive: rollers}", drive=drive))
+    prepared = prepare(scenario(tmp_path, "mecanum", args="{drive: rollers}", drive=drive))
     spec = prepared.plan.robots[0].drive
     assert spec.kind == "mecanum" and spec.odometry == "ground_truth" and spec.wheelbase == pytest.approx(0.4)
 
@@ -76,7 +77,7 @@ def test_naming_other_wheels_keeps_a_detected_holonomic_kind(tmp_path):
 def test_the_bag_records_cmd_vel_linear_y(tmp_path):
     from tests.record.test_bag import by_topic, messages
 
-    path = scenario(tmp_path, "mecanum4.urdf.xacro", args="{drive: plugin}", commands=SIDEWAYS)
+    path = scenario(tmp_path, "mecanum", args="{drive: plugin}", commands=SIDEWAYS)
     path.write_text(path.read_text().replace("duration: 6\n", "duration: 2\nlog: {formats: [csv, mcap]}\n"))
     done = invoke(["run", path, "--out", tmp_path / "bag", "--quiet"])
     assert done.exit_code == 0, done.stderr

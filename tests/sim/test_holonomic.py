@@ -1,6 +1,6 @@
 """Holonomic bases against closed-form motion, on both engines.
 
-Robots of our own: tests/sim/robots/mecanum4.urdf.xacro (gz-sim's MecanumDrive plugin; rollers
+Robots of our own: the bundled `mecanum` (robots/mecanum: gz-sim's MecanumDrive plugin; rollers
 as anisotropic friction without a plugin; gazebo_ros planar_move) and mecanum_gz.sdf (an SDF
 model as gz-sim's mecanum example lays it out). A twist (vx, vy, wz) held for t seconds moves
 the body by gz-math's exact integration; the ground truth must match it (sideways 1 m and the
@@ -33,7 +33,7 @@ ENGINES = ("bullet", "kinematic")
 def _plan(name: str, description: str, args: dict | None = None) -> RobotPlan:
     from mobot_cli.assets.description.describe import load_robot
 
-    desc = load_robot(str(ROBOTS / description), args or {})
+    desc = load_robot(str(ROBOTS / description) if "." in description else description, args or {})
     return RobotPlan(name=name, namespace=f"/{name}", frame_prefix=f"{name}/", urdf=desc.urdf,
                      root_link=desc.root_link, pose=SpawnPose(z_auto=True), drive=desc.drive)
 
@@ -43,9 +43,9 @@ def plans(tmp_path_factory):
     mp = pytest.MonkeyPatch()
     mp.setenv("MOBOT_CACHE_DIR", str(tmp_path_factory.mktemp("holonomic-cache")))
     try:
-        return {"plugin": _plan("plugin", "mecanum4.urdf.xacro", {"drive": "plugin"}),
-                "rollers": _plan("rollers", "mecanum4.urdf.xacro", {"drive": "rollers"}),
-                "planar": _plan("planar", "mecanum4.urdf.xacro", {"drive": "planar"}),
+        return {"plugin": _plan("plugin", "mecanum", {"drive": "plugin"}),
+                "rollers": _plan("rollers", "mecanum", {"drive": "rollers"}),
+                "planar": _plan("planar", "mecanum", {"drive": "planar"}),
                 "sdf": _plan("sdf", "mecanum_gz.sdf")}
     finally:
         mp.undo()

@@ -10,7 +10,7 @@ the weight, the base force moves it) and their joints turn at MecanumDrive's whe
 encoders and joint states are what Gazebo shows. Encoder odometry integrates those wheels as
 gz-math's MecanumDriveOdometry does; planar_move robots report the model's pose instead.
 
-Tracking was measured on tests/sim/robots/mecanum4.urdf (tests/sim/test_holonomic.py): see
+Tracking was measured on the bundled robots/mecanum (tests/sim/test_holonomic.py): see
 ``GAIN``.
 """
 
