@@ -264,7 +264,8 @@ def drive_kind(drive: DriveSpec, over: DriveOverrides, desc: RobotDescription, w
         multiplier = drive.wheel_separation_multiplier
         if n > 1 and not given and drive.wheel_separation > 0 and drive.wheelbase > 0:
             multiplier = default_separation_multiplier(drive.wheel_separation, drive.wheelbase)
-        return dataclasses.replace(drive, kind="diff", twist_feedback=None, wheel_separation_multiplier=multiplier)
+        return dataclasses.replace(drive, kind="diff", twist_feedback=over.twist_feedback,
+                                   wheel_separation_multiplier=multiplier)
     if drive.kind in HOLONOMIC:
         return drive
     kind = "mecanum" if min(len(drive.left_joints), len(drive.right_joints)) > 1 else "omni"

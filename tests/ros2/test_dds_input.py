@@ -128,7 +128,7 @@ def test_a_twist_is_taken_only_when_finite_bounded_and_of_a_twists_length(linear
     elif abs(linear) > 100 or abs(angular) > 100:
         assert checked == inputs.TOO_FAST
     else:
-        assert checked == (linear, angular)
+        assert checked == (linear, angular, 0.0)  # (linear.x, angular.z, linear.y)
 
 
 def test_linear_y_to_a_robot_that_cannot_move_sideways_is_dropped_with_one_warning(tmp_path):
