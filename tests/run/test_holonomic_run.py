@@ -74,7 +74,7 @@ def test_naming_other_wheels_keeps_a_detected_holonomic_kind(tmp_path):
     assert spec.kind == "mecanum" and spec.odometry == "ground_truth" and spec.wheelbase == pytest.approx(0.4)
 
 
-def test_the_bag_records_cmd_vel_linear_y(tmp_path):
+def test_the_bag_records_linear_y_in_cmd_vel_and_odom(tmp_path):
     from tests.record.test_bag import by_topic, messages
 
     path = scenario(tmp_path, "mecanum", args="{drive: plugin}", commands=SIDEWAYS)
@@ -84,3 +84,5 @@ def test_the_bag_records_cmd_vel_linear_y(tmp_path):
     recorded = by_topic(messages(tmp_path / "bag" / "bag"), "/m/cmd_vel")
     cmds = [(m[3].linear.x, m[3].linear.y, m[3].angular.z) for m in recorded]
     assert cmds[0] == (0.0, 0.0, 0.0) and cmds[-1] == (0.0, 0.25, 0.0)
+    odom = by_topic(messages(tmp_path / "bag" / "bag"), "/m/odom")[-1][3].twist.twist
+    assert odom.linear.y == pytest.approx(0.25, abs=0.005) and odom.linear.x == pytest.approx(0.0, abs=0.005)

@@ -65,6 +65,7 @@ class HolonomicDrive:
         self.last = [s[0] for s in p.getJointStates(robot.body, self.wheels, physicsClientId=robot.cid)] \
             if self.wheels else []
         self.integrated_at = -1
+        self.odom_vy = 0.0  # the sideways speed the encoders give, as of the last odometry_now
         self.twist = self.goal = (0.0, 0.0, 0.0)  # (vx, vy, wz) followed now, and commanded
         reach = 0.5 * (self.separation + spec.wheelbase) or 0.1
         rim = (spec.max_wheel_acceleration or 0.0) * robot.dt * (self.radius or 1.0)
@@ -172,6 +173,7 @@ class HolonomicDrive:
             self.integrate(wheels)
             self.integrated_at = step
         rims = [state[1] * scale for state, scale in zip(wheels, self.scale)]
-        vx, _, wz = mecanum_body_twist(*corners(rims, self.n_left), self.separation, self.spec.wheelbase)
+        vx, self.odom_vy, wz = mecanum_body_twist(*corners(rims, self.n_left), self.separation,
+                                                  self.spec.wheelbase)
         odo = self.odometry
         return odo.x, odo.y, wrap_angle(odo.yaw), vx, wz

@@ -114,11 +114,15 @@ class SimRobot:
             dx, dy = pos[0] - x0, pos[1] - y0
             c, s = math.cos(yaw0), math.sin(yaw0)
             odom = (c * dx + s * dy, -s * dx + c * dy, wrap_angle(yaw - yaw0), true_vx, true_wz)
-        return RobotState(
+        state = RobotState(
             self.cmd[0], self.cmd[1], *odom, pos[0], pos[1], pos[2], roll, pitch, yaw,
             true_vx, true_wz, joint_positions={n: j[0] for n, j in zip(self.joints, joints)},
             collisions=self.collisions,
             joint_velocities={n: j[1] for n, j in zip(self.joints, joints)}, cmd_linear_y=self.cmd_y)
+        if isinstance(self.drive, HolonomicDrive):
+            state.true_vy = lin[0] * rot[1] + lin[1] * rot[4] + lin[2] * rot[7]  # along the body y axis
+            state.odom_vy = self.drive.odom_vy if self.drive.encoder else state.true_vy
+        return state
 
     def joint_positions(self) -> dict[str, float]:
         """Position of every non-fixed joint, by name."""

@@ -99,7 +99,8 @@ class HolonomicMover(Mover):
             self.odometry.integrate(forward, lateral, turn)
 
     def state(self) -> RobotState:
-        """Command, odometry and truth now (Mover.state), with the sideways command."""
+        """Command, odometry and truth now (Mover.state), with the sideways command and speed."""
         state = super().state()
         state.cmd_linear_y = self.robot.cmd_y
+        state.odom_vy = state.true_vy = self.vy
         return state
