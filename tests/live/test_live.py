@@ -256,8 +256,14 @@ def test_cmd_linear_y_moves_a_mecanum_base_and_a_diff_robot_refuses_it(mobot):
     reply = json.loads(out)
     assert reply["odom"]["y"] == pytest.approx(0.5, abs=0.02) and abs(reply["odom"]["x"]) < 0.01
     assert reply["truth"]["y"] == pytest.approx(-8.0 + 0.5, abs=0.02)
+    assert reply["cmd"] == {"linear": 0.0, "angular": 0.0, "linear_y": 0.0}  # ended with a stop
     code, out, _ = mobot("cmd", "mecanum", "-y", "-0.1")
     assert code == 0 and "linear_y -0.1 m/s" in out
+    code, out, _ = mobot("odom", "mecanum", "--json")
+    moving = json.loads(out)
+    assert moving["cmd"]["linear_y"] == -0.1 and robots(mobot)["mecanum"]["cmd"]["linear_y"] == -0.1
+    assert moving["odom"]["vy"] == pytest.approx(-0.1, abs=0.01)
+    assert moving["truth"]["vy"] == pytest.approx(-0.1, abs=0.01)
     spawn_json(mobot, "sideless", "--file", "mobot", "-x", "-8", "-y", "8")
     code, out, err = mobot("cmd", "sideless", "--linear", "0.1", "--linear-y", "0.1")
     assert code == 2 and out == ""
