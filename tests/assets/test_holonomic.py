@@ -150,3 +150,11 @@ def test_inspect_names_the_holonomic_kind(tmp_path, monkeypatch):
     assert ("omni drive (plugin, holonomic: takes linear_y): left front_left_wheel_joint, rear_left_wheel_joint; "
             "right front_right_wheel_joint, rear_right_wheel_joint; wheel radius 0.0500 m, separation 0.5000 m, "
             "wheelbase 0.4000 m; odometry ground_truth") in " ".join(done.stdout.split())
+
+
+def test_roller_friction_split_over_two_gazebo_blocks():
+    split = ('<gazebo reference="{link}"><mu1>0.9</mu1></gazebo>'
+             '<gazebo reference="{link}"><mu2>0</mu2><fdir1>1 1 0</fdir1><mu1>1.2</mu1></gazebo>')
+    robot = ET.fromstring(four_wheels(split))
+    assert roller_links(robot) == frozenset(CORNERS)
+    assert gazebo_friction(robot) == dict.fromkeys(CORNERS, 1.2)  # the later block's mu1 wins

@@ -221,7 +221,7 @@ def _surfaces(robot: ET.Element) -> dict[str, tuple[dict[str, float], bool]]:
             continue
         values, fdir = _mu_values(gazebo)
         before, had = out.get(reference, ({}, False))
-        out[reference] = ({**values, **before}, had or fdir)
+        out[reference] = ({**before, **values}, had or fdir)  # a later block wins, as the last one did
     return out
 
 
