@@ -114,18 +114,23 @@ class Simulation:
         return self._world.read(name)
 
     def command(self, name: str, linear: float = 0.0, angular: float = 0.0, *,
-                duration: float | None = None) -> None:
-        """Hold a body twist (m/s, rad/s) from this step on; with ``duration``, stop after it."""
+                duration: float | None = None, linear_y: float = 0.0) -> None:
+        """Hold a body twist (m/s, rad/s; ``linear_y`` sideways, holonomic robots only) from this
+        step on; with ``duration``, stop after it."""
         self._known(name)
         if not self._world.has_drive(name):
             raise UsageError(f"robot '{name}' has no drive wheels: it does not take velocity commands")
         # Checked before the world sees them: a NaN or 1e308 twist would poison the robot's state.
         linear = bounded(f"command '{name}': linear", linear, "m/s", MAX_SPEED)
         angular = bounded(f"command '{name}': angular", angular, "rad/s", MAX_ANGULAR_SPEED)
+        linear_y = bounded(f"command '{name}': linear_y", linear_y, "m/s", MAX_SPEED)
         if duration is not None:
             duration = bounded(f"command '{name}': duration", duration, "s", MAX_SECONDS, low=0.0, strict=True)
         span = None if duration is None else steps(duration, self.rate_hz)
-        self._timeline.command(name, linear, angular, span)
+        try:
+            self._timeline.command(name, linear, angular, span, linear_y)
+        except ValueError as exc:  # sideways, and the robot is not holonomic
+            raise UsageError(str(exc), hint="Only mecanum and omni bases take linear_y.") from None
 
     def goto(self, name: str, x: float, y: float, yaw: float | None = None, **settings) -> None:
         """Drive to (x, y) (then turn to ``yaw``) with the goal controller of a scenario's

@@ -147,6 +147,12 @@ def inspect_tree(env: Environment, summary: dict[str, Any]) -> None:
                       f"{drive['wheel_radius']:.4f} m, track {drive['wheel_separation']:.4f} m, wheelbase "
                       f"{drive['wheelbase']:.4f} m; max steering {drive['max_steering_angle']:.4f} rad, "
                       f"min turning radius {drive['min_turning_radius']:.3f} m; odometry {drive['odometry']}")
+    elif drive.get("kind") in ("mecanum", "omni"):
+        left, right = ", ".join(drive["left_joints"]) or "none", ", ".join(drive["right_joints"]) or "none"
+        console.print(f"{drive['kind']} drive ({drive['source']}, holonomic: takes linear_y): "
+                      f"left {left}; right {right}; "
+                      f"wheel radius {drive['wheel_radius']:.4f} m, separation {drive['wheel_separation']:.4f} m, "
+                      f"wheelbase {drive['wheelbase']:.4f} m; odometry {drive['odometry']}")
     else:
         console.print(f"drive ({drive['source']}): left {', '.join(drive['left_joints'])}; right "
                       f"{', '.join(drive['right_joints'])}; wheel radius {drive['wheel_radius']:.4f} m, "

@@ -4,7 +4,9 @@ Observation: the robot's odometry ``[x, y, yaw, vx, wz]`` in its odom frame (its
 and the goal in that frame ``[gx, gy]``, one flat Box of 7; for a robot with a lidar, a Dict
 ``{"odom": Box(5), "goal": Box(2), "scan": Box(beams, 0, range_max)}`` whose scan is the
 lidar's latest reading with no return (+inf) as ``range_max``. Action: ``[linear, angular]``
-(m/s, rad/s), held for one control period (``physics rate / control_hz`` whole steps).
+(m/s, rad/s), held for one control period (``physics rate / control_hz`` whole steps);
+``holonomic=True`` makes it ``[linear, angular, linear_y]`` for a mecanum or omni robot (the
+sideways speed scaled, and bounded, as ``linear``; other robots are refused).
 
 ``normalize=True`` (the default) puts both in the ranges learning libraries assume (Stable-
 Baselines3 warns otherwise, and PPO with its defaults learns nothing from raw m/s): the action
@@ -39,6 +41,7 @@ from mobot_cli.scenario.limits import (
     MAX_SECONDS,
     MAX_SPEED,
 )
+from mobot_cli.sim.holonomic import KINDS as HOLONOMIC
 
 
 @dataclass(frozen=True)
@@ -47,7 +50,7 @@ class StepOutcome:
 
     state: RobotState  # odometry and ground truth (see RobotState)
     goal: tuple[float, float]  # in the robot's odom frame
-    action: tuple[float, float]
+    action: tuple[float, ...]  # (linear, angular), and linear_y for a holonomic env
     steps: int  # control periods since reset
     scan: Optional[np.ndarray] = None  # the observation's scan (finite), None without a lidar
 
@@ -72,8 +75,9 @@ class MobotEnv(gym.Env):
                  max_angular: float = 2.0, settle: float = 0.5, reward: Optional[Reward] = None,
                  terminated: Optional[Termination] = None, args: Optional[dict[str, str]] = None,
                  scan: bool = True, scan_sensor: Optional[str] = None, out: str | Path | None = None,
-                 normalize: bool = True):
+                 normalize: bool = True, holonomic: bool = False):
         self.world, self.description, self.robot = str(world), description, robot
+        self.holonomic = holonomic
         # Every number checked here, before a world exists (docs/errors.md "Limits").
         pose = tuple(bounded(f"pose[{i}]", v, "m" if i < 2 else "rad", MAX_COORDINATE) for i, v in enumerate(pose))
         goal = tuple(bounded(f"goal[{i}]", v, "m", MAX_COORDINATE) for i, v in enumerate(goal))
@@ -88,15 +92,20 @@ class MobotEnv(gym.Env):
         self.terminated_fn = terminated or (lambda o: o.distance < self.goal_tolerance)
         self.args = dict(args or {})
         self.out = None if out is None else Path(out)  # episode k's run folder: out/episode_000k
-        self._lidar = self._find_lidar(scan_sensor) if scan else None
-        high = np.array([max_linear, max_angular], dtype=np.float32)
+        plan = robot_plan(self.robot, self.description, args=self.args) if scan or holonomic else None
+        if holonomic and (plan.drive is None or plan.drive.kind not in HOLONOMIC):
+            kind = f"a {plan.drive.kind} drive" if plan.drive is not None else "no drive"
+            raise UsageError(f"holonomic=True: robot '{self.robot}' ({self.description}) has {kind}",
+                             hint="Only mecanum and omni bases take linear_y; leave holonomic off.")
+        self._lidar = self._find_lidar(plan.sensors, scan_sensor) if scan else None
+        high = np.array([max_linear, max_angular] + ([max_linear] if holonomic else []), dtype=np.float32)
         self.normalize = normalize
         self._goal = self._goal_in_odom()
         # Observations are divided by these (all ones in SI units): x, y, yaw, vx, wz, gx, gy.
         length = max(math.hypot(*self._goal), 1.0)
         self._scale = (np.array([length, length, np.pi, max_linear, max_angular, length, length], np.float32)
                        if normalize else np.ones(7, np.float32))
-        unit = np.ones(2, np.float32)
+        unit = np.ones(len(high), np.float32)
         self.action_space = spaces.Box(-unit if normalize else -high, unit if normalize else high, dtype=np.float32)
         # Odometry is bounded by the farthest spawn a scenario allows and by what a robot can do.
         far, turn = 2e6, np.float32(np.pi)
@@ -149,14 +158,15 @@ class MobotEnv(gym.Env):
         action = self._action(action)
         if self.normalize:  # [-1, 1] to the robot's limits
             action = [min(max(float(v), -1.0), 1.0) * hi for v, hi in zip(action, self._high)]
-        linear, angular = (min(max(float(v), lo), hi) for v, lo, hi in zip(action, self._low, self._high))
-        self._sim.command(self.robot, linear, angular)
+        clipped = tuple(min(max(float(v), lo), hi) for v, lo, hi in zip(action, self._low, self._high))
+        linear, angular = clipped[:2]
+        self._sim.command(self.robot, linear, angular, linear_y=clipped[2] if self.holonomic else 0.0)
         self._sim.step(self._steps_per_action)
         self._count += 1
         state, scan = self._sim.state(self.robot), self._scan()
         obs = self._observation(state, scan)
         scan_m = self._finite(scan) if self._lidar else None
-        outcome = StepOutcome(state, self._goal, (linear, angular), self._count, scan_m)
+        outcome = StepOutcome(state, self._goal, clipped, self._count, scan_m)
         reward = float(self.reward_fn(outcome))
         return obs, reward, bool(self.terminated_fn(outcome)), False, self._info(scan)
 
@@ -164,13 +174,15 @@ class MobotEnv(gym.Env):
         self._close_sim()
 
     def _action(self, action) -> list[float]:
-        """Two finite numbers, or a UsageError before the world is touched (NaN would not clip)."""
+        """Two (three when holonomic) finite numbers, or a UsageError before the world is touched
+        (NaN would not clip)."""
+        shape = "[linear, angular, linear_y]" if self.holonomic else "[linear, angular]"
         try:
             values = np.asarray(action, dtype=np.float64).reshape(-1).tolist()
         except (TypeError, ValueError):
-            raise UsageError(f"step: the action must be [linear, angular] numbers, got {action!r:.60}") from None
-        if len(values) != 2:
-            raise UsageError(f"step: the action must be [linear, angular], got {len(values)} numbers")
+            raise UsageError(f"step: the action must be {shape} numbers, got {action!r:.60}") from None
+        if len(values) != len(self._high):
+            raise UsageError(f"step: the action must be {shape}, got {len(values)} numbers")
         if not all(math.isfinite(v) for v in values):
             raise UsageError(f"step: the action {values} holds a number that is not finite")
         return values
@@ -182,9 +194,8 @@ class MobotEnv(gym.Env):
         c, s = math.cos(yaw0), math.sin(yaw0)
         return c * dx + s * dy, -s * dx + c * dy
 
-    def _find_lidar(self, sensor: Optional[str]):
-        """The lidar whose scan is observed (None: the robot has none), from the robot's description."""
-        sensors = robot_plan(self.robot, self.description, args=self.args).sensors
+    def _find_lidar(self, sensors, sensor: Optional[str]):
+        """The lidar whose scan is observed (None: the robot has none), among the robot's sensors."""
         if sensor is None and not any(spec.kind == "lidar" for spec in sensors):
             return None
         return pick(self.robot, sensors, sensor, "lidar")

@@ -109,9 +109,12 @@ class Client:
         return self.request("list")["robots"]
 
     def cmd(self, name: str, linear: float = 0.0, angular: float = 0.0, for_: float | None = None,
-            wait: bool = False, timeout: float | None = None) -> dict[str, Any]:
-        """Command a body twist; with ``for_`` it ends with a stop, with ``wait`` the reply waits for it."""
+            wait: bool = False, timeout: float | None = None, linear_y: float = 0.0) -> dict[str, Any]:
+        """Command a body twist (``linear_y``: sideways, holonomic robots only); with ``for_`` it
+        ends with a stop, with ``wait`` the reply waits for it."""
         fields: dict[str, Any] = {"name": name, "linear": linear, "angular": angular}
+        if linear_y:
+            fields["linear_y"] = linear_y
         if for_ is not None:
             fields["for"] = for_
             fields["wait"] = wait

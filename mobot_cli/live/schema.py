@@ -75,6 +75,7 @@ class Cmd(Request):
     angular: AngularSpeed = 0.0
     for_: Optional[Annotated[float, Field(gt=0, le=1e6)]] = Field(default=None, alias="for")
     wait: bool = False  # with 'for': reply when the command has ended
+    linear_y: LinearSpeed = 0.0  # sideways (+ left): holonomic drives only
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True, populate_by_name=True)
 

@@ -24,6 +24,7 @@ from mobot_cli.scenario.goal_model import GoalFields, GotoSpec
 from mobot_cli.scenario.goals import goal_step
 from mobot_cli.scenario.units import spawn_pose, steps
 from mobot_cli.sim.bullet.world import FLOOR_OF_THE_WORLD, World
+from mobot_cli.sim.holonomic import KINDS as HOLONOMIC
 from mobot_cli.timeline.goals import GoalEnded, GoalStarted
 from mobot_cli.timeline.loop import Timeline
 from mobot_cli.timeline.records import Deleted, Record, Spawned
@@ -118,9 +119,13 @@ class Session:
             raise Refusal(Result.OPERATION_FAILED, f"robot '{request.name}' has no drive wheels: it does "
                           "not take velocity commands")
         span = None if request.for_ is None else steps(request.for_, self.rate_hz)
-        until = self.timeline.command(request.name, request.linear, request.angular, span)
+        try:
+            until = self.timeline.command(request.name, request.linear, request.angular, span, request.linear_y)
+        except ValueError as exc:  # a sideways command to a robot that is not holonomic
+            raise Refusal(Result.OPERATION_FAILED, str(exc)) from None
+        sideways = {"linear_y": request.linear_y} if request.linear_y else {}
         self.history(op="cmd", name=request.name, result="OK", linear=request.linear, angular=request.angular,
-                     **{"for": request.for_})
+                     **sideways, **{"for": request.for_})
         return until
 
     def goto(self, request: schema.Goto, done: Callable[[dict[str, Any]], None] | None = None) -> dict[str, Any]:
@@ -215,20 +220,33 @@ class Session:
             state = self.world.read(name)
             robots.append({"name": name, "namespace": self.robots[name].namespace,
                            "pose": spawning.pose_fields(state), "has_drive": self.world.has_drive(name),
-                           "cmd": {"linear": state.cmd_linear, "angular": state.cmd_angular}})
+                           "cmd": self._cmd_fields(name, state)})
         return protocol.reply(request_id, step=self.step, t=self.step / self.rate_hz, robots=robots)
 
     def odometry(self, request_id: Any, name: str) -> dict[str, Any]:
         """One robot's odometry (odom frame = spawn pose), ground truth and command now."""
         self.known(name)
         robot, s = self.robots[name], self.world.read(name)
+        odom = {"x": s.odom_x, "y": s.odom_y, "yaw": s.odom_yaw, "vx": s.odom_vx, "wz": s.odom_wz}
+        truth = {"x": s.true_x, "y": s.true_y, "z": s.true_z, "roll": s.true_roll, "pitch": s.true_pitch,
+                 "yaw": s.true_yaw, "vx": s.true_vx, "wz": s.true_wz}
+        if self._holonomic(name):
+            odom["vy"], truth["vy"] = s.odom_vy, s.true_vy
         return protocol.reply(
             request_id, name=name, namespace=robot.namespace, step=self.step, t=self.step / self.rate_hz,
             frame_id=robot.frame_prefix + "odom", child_frame_id=robot.frame_prefix + robot.root_link,
-            odom={"x": s.odom_x, "y": s.odom_y, "yaw": s.odom_yaw, "vx": s.odom_vx, "wz": s.odom_wz},
-            truth={"x": s.true_x, "y": s.true_y, "z": s.true_z, "roll": s.true_roll, "pitch": s.true_pitch,
-                   "yaw": s.true_yaw, "vx": s.true_vx, "wz": s.true_wz},
-            cmd={"linear": s.cmd_linear, "angular": s.cmd_angular})
+            odom=odom, truth=truth, cmd=self._cmd_fields(name, s))
+
+    def _holonomic(self, name: str) -> bool:
+        drive = self.robots[name].drive
+        return drive is not None and drive.kind in HOLONOMIC
+
+    def _cmd_fields(self, name: str, state) -> dict[str, float]:
+        """The command a reply shows: linear and angular, and linear_y for a holonomic robot."""
+        fields = {"linear": state.cmd_linear, "angular": state.cmd_angular}
+        if self._holonomic(name):
+            fields["linear_y"] = state.cmd_linear_y
+        return fields
 
     def scan(self, request_id: Any, name: str, sensor: str | None) -> dict[str, Any]:
         """A robot's latest reading of one sensor (default: its first lidar)."""

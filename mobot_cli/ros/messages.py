@@ -33,7 +33,8 @@ _MESH_PATH = re.compile(r'(<mesh\b[^>]*?\bfilename\s*=\s*")(/)')
 CLOCK_LAYOUT = Layout().var("i").var("I")
 CLOCK_PACKER = CLOCK_LAYOUT.build()
 STAMP_SOURCES = (1, 2)  # a row's values start with its log time (ns), then the stamp: sec, nanosec
-_BLOCK = 8  # a robot's block: x, y, sin and cos of half the yaw, vx, wz, command linear and angular
+_BLOCK = 10  # a robot's block: x, y, sin and cos of half the yaw, vx, wz, command linear, angular,
+# linear_y, and odometry vy
 
 Stamp = tuple[int, int]  # (sec, nanosec)
 
@@ -94,11 +95,11 @@ class RobotMessages:
         """nav_msgs/Odometry in the robot's odom frame."""
         half = state.odom_yaw / 2.0
         return self.odom_packer.pack((*stamp, state.odom_x, state.odom_y, 0.0, 0.0, 0.0, math.sin(half),
-                                      math.cos(half), state.odom_vx, 0.0, 0.0, 0.0, 0.0, state.odom_wz))
+                                      math.cos(half), state.odom_vx, state.odom_vy, 0.0, 0.0, 0.0, state.odom_wz))
 
     def cmd_vel(self, state: RobotState) -> bytes:
         """geometry_msgs/Twist: the command the robot holds."""
-        return self.twist_packer.pack((state.cmd_linear, 0.0, 0.0, 0.0, 0.0, state.cmd_angular))
+        return self.twist_packer.pack((state.cmd_linear, state.cmd_linear_y, 0.0, 0.0, 0.0, state.cmd_angular))
 
     def joint_states(self, stamp: Stamp, state: RobotState) -> bytes:
         """sensor_msgs/JointState: positions and velocities of every joint the robot had at spawn."""
@@ -125,7 +126,7 @@ class RobotMessages:
         cmd_vel, joint_states and /tf transforms, each once."""
         half = state.odom_yaw / 2.0
         out += (state.odom_x, state.odom_y, math.sin(half), math.cos(half), state.odom_vx, state.odom_wz,
-                state.cmd_linear, state.cmd_angular)
+                state.cmd_linear, state.cmd_angular, state.cmd_linear_y, state.odom_vy)
         positions, velocities = self._joint_numbers(state)
         out += positions
         out += velocities
@@ -134,10 +135,10 @@ class RobotMessages:
 
     def row_messages(self, at: int) -> list[tuple[Layout, tuple]]:
         """(layout, sources) of odom, cmd_vel and joint_states with this robot's block at value ``at``."""
-        x, y, sin, cos, vx, wz, linear, angular = range(at, at + _BLOCK)
+        x, y, sin, cos, vx, wz, linear, angular, linear_y, vy = range(at, at + _BLOCK)
         joints = tuple(range(at + _BLOCK, at + _BLOCK + 2 * len(self.joints)))
-        return [(self.odom_layout, (*STAMP_SOURCES, x, y, 0.0, 0.0, 0.0, sin, cos, vx, 0.0, 0.0, 0.0, 0.0, wz)),
-                (self.twist_layout, (linear, 0.0, 0.0, 0.0, 0.0, angular)),
+        return [(self.odom_layout, (*STAMP_SOURCES, x, y, 0.0, 0.0, 0.0, sin, cos, vx, vy, 0.0, 0.0, 0.0, wz)),
+                (self.twist_layout, (linear, linear_y, 0.0, 0.0, 0.0, angular)),
                 (self.joint_layout, (*STAMP_SOURCES, *joints))]
 
     def tf_sources(self, at: int) -> tuple:

@@ -30,6 +30,7 @@ from typing import Mapping
 from mobot_cli.errors import Location, UsageError
 from mobot_cli.plan import Plan, Ros2Settings
 from mobot_cli.ros2 import inputs, names
+from mobot_cli.sim.holonomic import KINDS as HOLONOMIC
 from mobot_cli.timeline.loop import Timeline
 from mobot_cli.timeline.records import Record, Sample
 
@@ -83,7 +84,8 @@ class Bridge:
                              hint="Check CYCLONEDDS_URI and the ROS discovery variables "
                                   "(ROS_AUTOMATIC_DISCOVERY_RANGE, ROS_STATIC_PEERS).") from None
         self._records: queue.SimpleQueue = queue.SimpleQueue()
-        self._twists: deque[tuple[str, float, float]] = deque()
+        self._twists: deque[tuple[str, float, float, float]] = deque()
+        self._sideways_said: set[str] = set()  # robots told once that their linear.y is ignored
         self._timeline: Timeline | None = None
         self._thread: threading.Thread | None = None
         self._threaded = threaded
@@ -145,9 +147,15 @@ class Bridge:
         twists, timeline = self._twists, self._timeline
         self._drops.say(timeline.notices)
         while twists:
-            name, linear, angular = twists.popleft()
+            name, linear, angular, linear_y = twists.popleft()
             if name in timeline.robots:  # it may have left since
-                timeline.command(name, linear, angular, self.settings.cmd_vel_timeout_steps)
+                drive = timeline.robots[name].drive
+                if linear_y and (drive is None or drive.kind not in HOLONOMIC):
+                    linear_y = 0.0
+                    if name not in self._sideways_said:
+                        self._sideways_said.add(name)
+                        timeline.notices.append(inputs.sideways_ignored(name, drive.kind if drive else "no"))
+                timeline.command(name, linear, angular, self.settings.cmd_vel_timeout_steps, linear_y)
                 self._commands += 1
 
     def close(self) -> BridgeStats:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import threading
 
-from mobot_cli.ros2.publisher import twist
+from mobot_cli.ros2.publisher import planar_twist
 from mobot_cli.scenario.limits import MAX_ANGULAR_SPEED, MAX_SPEED
 
 MALFORMED = "not a little-endian CDR Twist"
@@ -19,17 +19,24 @@ NOT_FINITE = "not finite"
 TOO_FAST = f"beyond {MAX_SPEED:g} m/s or {MAX_ANGULAR_SPEED:g} rad/s"
 
 
-def cmd_vel(data: bytes) -> tuple[float, float] | str:
-    """(linear.x, angular.z) of a sample the world may take, or why it is dropped."""
+def cmd_vel(data: bytes) -> tuple[float, float, float] | str:
+    """(linear.x, angular.z, linear.y) of a sample the world may take, or why it is dropped."""
     try:
-        linear, angular = twist(data)
+        linear, linear_y, angular = planar_twist(data)
     except ValueError:
         return MALFORMED
-    if not (math.isfinite(linear) and math.isfinite(angular)):
+    if not (math.isfinite(linear) and math.isfinite(angular) and math.isfinite(linear_y)):
         return NOT_FINITE
-    if abs(linear) > MAX_SPEED or abs(angular) > MAX_ANGULAR_SPEED:
+    if abs(linear) > MAX_SPEED or abs(angular) > MAX_ANGULAR_SPEED or abs(linear_y) > MAX_SPEED:
         return TOO_FAST
-    return linear, angular
+    return linear, angular, linear_y
+
+
+def sideways_ignored(name: str, kind: str) -> str:
+    """The one warning for linear.y sent to a robot that cannot move sideways (it is dropped, as
+    nav2 sends 0 there for such robots anyway)."""
+    return (f"ROS 2: cmd_vel linear.y for robot '{name}' is ignored: it has a {kind} drive, and only "
+            "holonomic (mecanum, omni) drives move sideways")
 
 
 class Drops:

@@ -69,6 +69,12 @@ def twist(data: bytes) -> tuple[float, float]:
     return lx, az
 
 
+def planar_twist(data: bytes) -> tuple[float, float, float]:
+    """(linear.x, linear.y, angular.z) of a geometry_msgs/Twist in CDR; ValueError if it is not one."""
+    linear, angular = twist(data)
+    return linear, TWIST_FIELDS.unpack_from(data)[1], angular
+
+
 class Topics:
     """The node's writers and readers by ROS topic name; every change re-announces the node."""
 

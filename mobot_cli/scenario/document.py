@@ -17,6 +17,7 @@ from mobot_cli.scenario.expect_resolve import expect_document
 from mobot_cli.scenario.goals import area_form
 from mobot_cli.scenario.model import RobotSpec, Scenario
 from mobot_cli.scenario.units import steps
+from mobot_cli.sim.holonomic import KINDS as HOLONOMIC
 
 DRIVE_KEYS = ("odometry", "left_joints", "right_joints", "wheel_radius", "wheel_separation",
               "wheel_separation_multiplier", "wheel_radius_multiplier", "max_wheel_torque",
@@ -105,8 +106,9 @@ def _robot(spec: RobotSpec, robot: RobotPlan, base_dir: Path, rate: int) -> dict
 
 def _drive(drive: DriveSpec) -> dict[str, Any]:
     car = drive.kind == "ackermann"
-    out: dict[str, Any] = {"type": "ackermann" if car else "diff_drive"}
-    for key in DRIVE_KEYS + (CAR_KEYS if car else ()):
+    holonomic = drive.kind in HOLONOMIC
+    out: dict[str, Any] = {"type": "ackermann" if car else "holonomic" if holonomic else "diff_drive"}
+    for key in DRIVE_KEYS + (CAR_KEYS if car else ("wheelbase",) if holonomic else ()):
         value = getattr(drive, key)
         if value is not None:
             out[key] = list(value) if isinstance(value, tuple) else value
@@ -144,8 +146,11 @@ def _commands(robot: RobotPlan, rate: int) -> list[dict[str, Any]]:
     while i < len(cmds):
         cmd = cmds[i]
         entry: dict[str, Any] = {"at": cmd.step / rate, "linear": cmd.linear, "angular": cmd.angular}
+        if cmd.linear_y:
+            entry["linear_y"] = cmd.linear_y
         nxt = cmds[i + 1] if i + 1 < len(cmds) else None
-        if nxt is not None and nxt.linear == 0.0 and nxt.angular == 0.0 and (cmd.linear or cmd.angular):
+        if nxt is not None and not (nxt.linear or nxt.angular or nxt.linear_y) and (
+                cmd.linear or cmd.angular or cmd.linear_y):
             entry["for"] = (nxt.step - cmd.step) / rate
             i += 1
         out.append(entry)
@@ -179,6 +184,8 @@ def _goal(goal: GoalStep, rate: int) -> dict[str, Any]:
 
 def _twist(cmd: TwistStep, rate: int) -> dict[str, Any]:
     entry: dict[str, Any] = {"at": cmd.step / rate, "linear": cmd.linear, "angular": cmd.angular}
+    if cmd.linear_y:
+        entry["linear_y"] = cmd.linear_y
     if cmd.hold is not None:
         entry["for"] = cmd.hold / rate
     return entry

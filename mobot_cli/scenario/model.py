@@ -98,9 +98,10 @@ class PoseSpec(Strict):
 class DriveOverrides(Strict):
     """Anything detected from the URDF can be overridden here."""
 
-    # "diff" and "diff_drive" are one type (skid steer too); what is detected must match it
-    type: Literal["diff", "diff_drive", "holonomic", "ackermann"] = "diff_drive"
-    odometry: Literal["encoder", "ground_truth"] = "encoder"
+    # None: as detected. "diff_drive" is the older spelling of "diff"; "holonomic" is mecanum or
+    # omni (scenario/robots.py, drive_kind); "ackermann" must be what is detected.
+    type: Optional[Literal["diff", "diff_drive", "holonomic", "ackermann"]] = None
+    odometry: Optional[Literal["encoder", "ground_truth"]] = None  # None: as detected (encoder for most)
     left_joints: Optional[list[str]] = None
     right_joints: Optional[list[str]] = None
     wheel_radius: Optional[Annotated[PositiveFloat, at_most(MAX_WHEEL_RADIUS, "m")]] = None
@@ -111,7 +112,8 @@ class DriveOverrides(Strict):
     max_wheel_torque: Optional[Annotated[PositiveFloat, at_most(MAX_WHEEL_TORQUE, "N m")]] = None
     max_wheel_acceleration: Optional[Annotated[PositiveFloat, at_most(MAX_WHEEL_ACCELERATION, "rad/s^2")]] = None
     twist_feedback: Optional[bool] = None
-    # ackermann: metres between the axles, and the bicycle model's largest steering angle (rad)
+    # holonomic and ackermann: metres between the axles; ackermann: the bicycle model's largest
+    # steering angle (rad)
     wheelbase: Optional[Annotated[PositiveFloat, at_most(MAX_WHEEL_SEPARATION, "m")]] = None
     max_steering_angle: Optional[Annotated[PositiveFloat, Field(lt=math.pi / 2)]] = None
 
@@ -128,6 +130,7 @@ class CommandSpec(GoalFields):
     angular: AngularSpeed = 0.0
     # a car's steering angle (rad, + left) instead of angular: angular = linear tan(it) / wheelbase
     steering_angle: Optional[Annotated[Float, Field(gt=-math.pi / 2, lt=math.pi / 2)]] = None
+    linear_y: Speed = 0.0  # sideways, m/s (+ left): holonomic drives only
     for_: Optional[Duration] = Field(default=None, alias="for")
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True, populate_by_name=True, defer_build=True)
@@ -135,7 +138,8 @@ class CommandSpec(GoalFields):
     @model_validator(mode="after")
     def _twist_or_goal(self) -> "CommandSpec":
         given = self.model_fields_set
-        self.check_goal([k.rstrip("_") for k in ("linear", "angular", "steering_angle", "for_") if k in given])
+        self.check_goal([k.rstrip("_") for k in ("linear", "angular", "steering_angle", "linear_y", "for_")
+                         if k in given])
         if "angular" in given and self.steering_angle is not None:
             raise ValueError("gives both 'angular' and 'steering_angle': a car turns by one of them")
         return self

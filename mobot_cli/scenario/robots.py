@@ -13,17 +13,20 @@ from typing import Any
 
 from mobot_cli.assets.description.describe import load_robot
 from mobot_cli.assets.description.drive import drive_from_joints
+from mobot_cli.assets.description.holonomic import wheelbase_of
 from mobot_cli.assets.description.robot import NO_DRIVE, RobotDescription
 from mobot_cli.assets.world.loaded import LoadedWorld, WorldRobot
 from mobot_cli.common.transforms import quat_from_rpy
 from mobot_cli.errors import Location, MobotError, ScenarioError
 from mobot_cli.plan import CommandStep, DriveSpec, RobotPlan, SpawnPose, TwistStep
 from mobot_cli.scenario.goals import goal_step
-from mobot_cli.scenario.model import RobotSpec
+from mobot_cli.scenario.model import DriveOverrides, RobotSpec
 from mobot_cli.scenario.sensor_resolve import resolve_sensors
 from mobot_cli.scenario.sensor_switches import arg_text
 from mobot_cli.scenario.source import Source
 from mobot_cli.scenario.units import spawn_pose, steps
+from mobot_cli.sim.drive import default_separation_multiplier
+from mobot_cli.sim.holonomic import KINDS as HOLONOMIC
 from mobot_cli.sim.steering import angular_from_steering
 
 # The scenario's drive.type of each detected kind (DESIGN.md).
@@ -71,6 +74,7 @@ class RobotResolver:
             raise ScenarioError(f"robot '{spec.name}' has commands but no drive wheels were detected in "
                                 f"'{spec.description}'", location=self.locate_key(path + ("commands",)),
                                 hint="Add drive: {left_joints, right_joints, wheel_radius, wheel_separation}.")
+        self.check_sideways(spec, drive, path)
         in_world = self.world_robot(spec)
         if in_world is not None and "pose" not in spec.model_fields_set:
             members = [(spec.name, spec.namespace, SpawnPose(xyz=in_world.xyz, quat=in_world.quat))]
@@ -135,14 +139,31 @@ class RobotResolver:
             return None
         return self.world.robot(spec.name)
 
+    def check_sideways(self, spec: RobotSpec, drive: DriveSpec | None, path: tuple) -> None:
+        """A located error for a sideways command (linear_y) to a robot whose drive is not holonomic."""
+        if drive is not None and drive.kind in HOLONOMIC:
+            return
+        for i, cmd in enumerate(spec.commands):
+            if cmd.linear_y:
+                kind = f"a {drive.kind} drive" if drive is not None else "no drive"
+                raise ScenarioError(f"robot '{spec.name}' has {kind}: it cannot move sideways "
+                                    f"(linear_y {cmd.linear_y:g} m/s)",
+                                    location=self.locate_key(path + ("commands", i, "linear_y")),
+                                    hint="Only holonomic (mecanum, omni) bases take linear_y; set drive: "
+                                         "{type: holonomic} if this one is, or drop linear_y.")
+
     def drive(self, spec: RobotSpec, desc: RobotDescription, path: tuple) -> DriveSpec | None:
-        """The detected drive with the spec's overrides merged in."""
+        """The detected drive with the spec's overrides merged in, of the kind ``drive.type`` asks."""
         over = spec.drive
         if over is None:
             return desc.drive
-        # odometry only when written: its default would hide what a plugin publishes (a car's pose)
-        fields = {k: v for k, v in over.model_dump(exclude={"type"}).items()
-                  if v is not None and (k != "odometry" or k in over.model_fields_set)}
+        merged = self.merged_drive(spec, desc, path)
+        return drive_kind(merged, over, desc)
+
+    def merged_drive(self, spec: RobotSpec, desc: RobotDescription, path: tuple) -> DriveSpec:
+        """The detected drive (or the one on the joints ``drive:`` names) with its values merged in."""
+        over = spec.drive
+        fields = {k: v for k, v in over.model_dump(exclude={"type"}).items() if v is not None}
         for key in ("left_joints", "right_joints"):
             if key in fields:
                 fields[key] = tuple(fields[key])
@@ -164,12 +185,13 @@ class RobotResolver:
         return DriveSpec(source="scenario", **fields)
 
     def check_type(self, spec: RobotSpec, desc: RobotDescription, drive: DriveSpec | None, path: tuple) -> None:
-        """A ScenarioError unless ``drive.type`` is the type of the drive detected: a robot is never
-        driven as another type (a car's rear wheels as a diff drive)."""
+        """A ScenarioError when ``drive.type`` or the detected drive is a car and the other is not: a
+        robot is never driven as another type (a car's rear wheels as a diff drive). A base's wheels
+        may be driven as diff or holonomic on request (drive_kind)."""
         wanted = "diff" if spec.drive.type == "diff_drive" else spec.drive.type
         found = DRIVE_TYPES.get(drive.kind, drive.kind) if drive is not None else None
-        if found is None or found == wanted:
-            return
+        if found is None or found == wanted or "ackermann" not in (found, wanted):
+            return  # diff <-> holonomic: the user's choice for the same wheels (drive_kind)
         hint = ("Cars are found from a gazebo_ros ackermann_drive or gz-sim AckermannSteering plugin, or from "
                 "limited steering joints about the vertical that carry wheels (docs/ackermann.md)."
                 if wanted == "ackermann" else f"Leave drive.type out, or set it to {found}.")
@@ -247,9 +269,11 @@ class RobotResolver:
             elif goal_seen:
                 hold = None if cmd.for_ is None else max(1, steps(cmd.for_, rate))
                 angular = self.angular(cmd, spec, drive, key)
-                out.append(TwistStep(step=at, index=i, linear=cmd.linear, angular=angular, hold=hold))
+                out.append(TwistStep(step=at, index=i, linear=cmd.linear, angular=angular, hold=hold,
+                                     linear_y=cmd.linear_y))
             else:
-                out.append(CommandStep(step=at, linear=cmd.linear, angular=self.angular(cmd, spec, drive, key)))
+                out.append(CommandStep(step=at, linear=cmd.linear, angular=self.angular(cmd, spec, drive, key),
+                                       linear_y=cmd.linear_y))
                 if cmd.for_ is not None:
                     free_from = at + max(1, steps(cmd.for_, rate))
                     if free_from < self.total:
@@ -267,6 +291,42 @@ class RobotResolver:
                                 location=self.locate_key(key + ("steering_angle",)),
                                 hint="Give 'angular' (rad/s) instead.")
         return angular_from_steering(cmd.linear, cmd.steering_angle, drive.wheelbase)
+
+
+def drive_kind(drive: DriveSpec, over: DriveOverrides, desc: RobotDescription) -> DriveSpec:
+    """The drive as the scenario's ``drive.type`` asks: None keeps the detected kind (also when
+    ``drive:`` names other wheels), "diff" drives a holonomic base as diff or skid steer,
+    "holonomic" a diff-detected base as mecanum (two or more wheels a side) or omni; a car stays
+    a car (check_type refused any other type for it)."""
+    detected, wanted = desc.drive, over.type
+    given = over.wheel_separation_multiplier is not None
+    if wanted is None:
+        if detected is not None and detected.kind in HOLONOMIC and drive.kind not in HOLONOMIC:
+            return holonomic_drive(drive, desc, detected.kind, given)
+        return drive
+    if wanted == "ackermann" or drive.kind == "ackermann":  # a detected car (check_type)
+        return drive
+    if wanted in ("diff", "diff_drive"):
+        if drive.kind not in HOLONOMIC:
+            return drive
+        n = max(len(drive.left_joints), len(drive.right_joints))
+        multiplier = drive.wheel_separation_multiplier
+        if n > 1 and not given and drive.wheel_separation > 0 and drive.wheelbase > 0:
+            multiplier = default_separation_multiplier(drive.wheel_separation, drive.wheelbase)
+        return dataclasses.replace(drive, kind="diff", twist_feedback=over.twist_feedback,
+                                   wheel_separation_multiplier=multiplier)
+    if drive.kind in HOLONOMIC:
+        return drive
+    kind = "mecanum" if min(len(drive.left_joints), len(drive.right_joints)) > 1 else "omni"
+    return holonomic_drive(drive, desc, kind, given)
+
+
+def holonomic_drive(drive: DriveSpec, desc: RobotDescription, kind: str, given: bool) -> DriveSpec:
+    """A diff drive's wheels driven as a holonomic base: no skid multiplier, a measured wheelbase."""
+    wheelbase = drive.wheelbase or wheelbase_of(desc.urdf, drive.left_joints, drive.right_joints)
+    multiplier = drive.wheel_separation_multiplier if given else 1.0
+    return dataclasses.replace(drive, kind=kind, wheelbase=wheelbase, twist_feedback=False,
+                              wheel_separation_multiplier=multiplier)
 
 
 def _shown(desc: RobotDescription) -> list[str]:

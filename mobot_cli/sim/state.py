@@ -39,6 +39,11 @@ class RobotState:
     # robot whose clearance is watched; +inf otherwise or when nothing is that near. Not columns.
     clearance: float = math.inf
     nearest: str = ""
+    cmd_linear_y: float = 0.0  # m/s, the sideways part of the command (holonomic drives); not a column
+    # Sideways velocities in the robot's frame, reported for holonomic drives (0 for the others,
+    # whose wheels cannot give one); the odom message carries odom_vy. Not columns.
+    odom_vy: float = 0.0
+    true_vy: float = 0.0
 
     # Column order of the odom CSV (DESIGN.md), without the leading time column.
     CSV_FIELDS = (

@@ -103,7 +103,7 @@ class Driver:
         item = self.items.pop(0)
         self.current, self.started = item, step
         if isinstance(item, TwistStep):
-            self.world.set_command(self.name, item.linear, item.angular)
+            self.world.set_command(self.name, item.linear, item.angular, item.linear_y)
             if item.hold is not None:
                 self.wake = step + item.hold
             else:

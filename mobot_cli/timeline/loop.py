@@ -66,7 +66,7 @@ class Timeline:
         """What the plan has due, from t = 0 on: its events, command scripts and log cadence."""
         plan = self.plan
         self._events: dict[int, list[Event]] = defaultdict(list)
-        self._commands: dict[int, list[tuple[str, float, float]]] = defaultdict(list)
+        self._commands: dict[int, list[tuple[str, float, float, float]]] = defaultdict(list)
         self._stops: dict[str, int] = {}  # robot -> step at which its timed command ends
         self._drivers: dict[str, Driver] = {}  # robot -> the driver of its goals (and what follows them)
         self._logged = -1  # the step of the last complete sample
@@ -88,7 +88,7 @@ class Timeline:
         for robot in (*plan.robots, *spawned):
             for cmd in robot.commands:
                 if isinstance(cmd, CommandStep):  # goals and what follows them: a Driver's
-                    self._commands[cmd.step].append((robot.name, cmd.linear, cmd.angular))
+                    self._commands[cmd.step].append((robot.name, cmd.linear, cmd.angular, cmd.linear_y))
 
     @property
     def step(self) -> int:
@@ -147,9 +147,9 @@ class Timeline:
             for event in self._events[step]:
                 self._scripted(event)
         if step in self._commands:
-            for name, linear, angular in self._commands[step]:
+            for name, linear, angular, linear_y in self._commands[step]:
                 if name in self.robots:  # a live world may have deleted it meanwhile
-                    self.world.set_command(name, linear, angular)
+                    self.world.set_command(name, linear, angular, linear_y)
         if self._stops:
             for name, until in list(self._stops.items()):
                 if step >= until:
@@ -258,11 +258,15 @@ class Timeline:
         self._stops.pop(name, None)
         self._consume(Deleted(self.step, name, by, message))
 
-    def command(self, name: str, linear: float, angular: float, steps: int | None = None) -> int | None:
-        """Hold a twist; with ``steps``, stop after that many steps. Returns the stop step.
-        A goal the robot is driving to ends ``cancelled``."""
+    def command(self, name: str, linear: float, angular: float, steps: int | None = None,
+                linear_y: float = 0.0) -> int | None:
+        """Hold a twist (``linear_y``: sideways, holonomic drives only); with ``steps``, stop after
+        that many steps. Returns the stop step. A goal the robot is driving to ends ``cancelled``;
+        a twist the drive cannot follow is a ValueError and changes nothing."""
+        if linear_y:
+            self.world.set_command(name, linear, angular, linear_y)  # refused before any goal ends
         self._cancel(name)
-        self.world.set_command(name, linear, angular)
+        self.world.set_command(name, linear, angular, linear_y)
         self._stops.pop(name, None)
         if steps is None:
             return None

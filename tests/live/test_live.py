@@ -247,3 +247,27 @@ def test_odom_follow_prints_readings_until_interrupted(live, blocker):
     times = [float(line.split()[0].removeprefix("t=")) for line in lines]
     assert times == sorted(set(times)), lines  # one line per new reading
     assert all(f" {blocker}  odom x=" in line for line in lines)
+
+
+def test_cmd_linear_y_moves_a_mecanum_base_and_a_diff_robot_refuses_it(mobot):
+    spawn_json(mobot, "mecanum", "--file", "mecanum", "-x", "-8", "-y", "-8")
+    code, out, err = mobot("cmd", "mecanum", "--linear-y", "0.25", "--for", "2.0", "--wait", "--json")
+    assert code == 0, err
+    reply = json.loads(out)
+    assert reply["odom"]["y"] == pytest.approx(0.5, abs=0.02) and abs(reply["odom"]["x"]) < 0.01
+    assert reply["truth"]["y"] == pytest.approx(-8.0 + 0.5, abs=0.02)
+    assert reply["cmd"] == {"linear": 0.0, "angular": 0.0, "linear_y": 0.0}  # ended with a stop
+    code, out, _ = mobot("cmd", "mecanum", "-y", "-0.1")
+    assert code == 0 and "linear_y -0.1 m/s" in out
+    code, out, _ = mobot("odom", "mecanum", "--json")
+    moving = json.loads(out)
+    assert moving["cmd"]["linear_y"] == -0.1 and robots(mobot)["mecanum"]["cmd"]["linear_y"] == -0.1
+    assert moving["odom"]["vy"] == pytest.approx(-0.1, abs=0.01)
+    assert moving["truth"]["vy"] == pytest.approx(-0.1, abs=0.01)
+    spawn_json(mobot, "sideless", "--file", "mobot", "-x", "-8", "-y", "8")
+    code, out, err = mobot("cmd", "sideless", "--linear", "0.1", "--linear-y", "0.1")
+    assert code == 2 and out == ""
+    assert err.startswith("mobot: error: OPERATION_FAILED: robot 'sideless' has a diff drive: it cannot move "
+                          "sideways (linear_y 0.1 m/s)")
+    code, out, _ = mobot("odom", "sideless", "--json")
+    assert json.loads(out)["cmd"] == {"linear": 0.0, "angular": 0.0}  # refused: nothing changed

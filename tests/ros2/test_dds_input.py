@@ -128,4 +128,26 @@ def test_a_twist_is_taken_only_when_finite_bounded_and_of_a_twists_length(linear
     elif abs(linear) > 100 or abs(angular) > 100:
         assert checked == inputs.TOO_FAST
     else:
-        assert checked == (linear, angular)
+        assert checked == (linear, angular, 0.0)  # (linear.x, angular.z, linear.y)
+
+
+def test_linear_y_to_a_robot_that_cannot_move_sideways_is_dropped_with_one_warning(tmp_path):
+    scenario = tmp_path / "world.yaml"
+    scenario.write_text(WORLD.format(ros2=""))
+    out = tmp_path / "out"
+    sideways = (HEADER + struct.pack("<6d", 0.2, 0.3, 0.0, 0.0, 0.0, 0.1)).hex()
+    live = LiveProcess(str(scenario), "--ros2", cache_dir=tmp_path / "cache", out=out)
+    try:
+        sent = peer("send", "rt/r1/cmd_vel", sideways, sideways)
+        with live.client() as client:
+            odom = client.odom("r1")
+        code = live.signal()
+    finally:
+        live.kill()
+    assert sent["matched"] == 1 and all(sent["written"])
+    assert odom["cmd"] == {"linear": 0.2, "angular": 0.1}  # linear.x and angular.z still drive
+    assert code == 0
+    notices = json.loads((out / "summary.json").read_text())["notices"]
+    assert [n for n in notices if "linear.y" in n] == [
+        "ROS 2: cmd_vel linear.y for robot 'r1' is ignored: it has a diff drive, and only holonomic "
+        "(mecanum, omni) drives move sideways"]

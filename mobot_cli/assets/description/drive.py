@@ -6,6 +6,11 @@ continuous joints whose axes lie along the root's y axis, whose child link has a
 (along that axis) or sphere collision, and which move with the body (wheels.py: under fixed,
 prismatic or suspension joints, anywhere in the tree). A plugin whose radius or separation
 disagrees with that geometry is followed, as Gazebo follows it, with a warning.
+
+Holonomic bases (holonomic.py) are found first: a gz-sim MecanumDrive plugin (kind "mecanum"),
+a gazebo_ros planar_move or omni-drive plugin (kind "omni", ground-truth odometry, as the plugin
+publishes the model's pose), or, without any drive plugin, two or more wheels a side whose
+Gazebo friction is that of mecanum rollers (process.roller_links).
 """
 
 from __future__ import annotations
@@ -13,8 +18,11 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from mobot_cli.assets.description import steering
+from mobot_cli.assets.description import holonomic, steering
 from mobot_cli.assets.description.frames import LinkTree
+from mobot_cli.assets.description.plugin_values import disagreement as _disagreement
+from mobot_cli.assets.description.plugin_values import number as _number
+from mobot_cli.assets.description.plugin_values import texts as _texts
 from mobot_cli.assets.description.steering import Detected
 from mobot_cli.assets.description.wheels import Wheel, wheel
 from mobot_cli.errors import DescriptionError, Location, Notice, did_you_mean
@@ -22,8 +30,6 @@ from mobot_cli.plan import DriveSpec
 
 _LEFT_TAGS = ("leftJoint", "left_joint", "leftFrontJoint", "leftRearJoint")
 _RIGHT_TAGS = ("rightJoint", "right_joint", "rightFrontJoint", "rightRearJoint")
-# Plugin values farther than this from the wheel geometry get a warning.
-DISAGREEMENT = 0.02
 
 
 def detect_drive(urdf: ET.Element | str, *, notices: list[Notice] | None = None,
@@ -48,10 +54,16 @@ def detect(urdf: ET.Element | str, *, notices: list[Notice] | None = None,
     found = steering.from_plugins(robot, tree, notices, source)
     if found is not None:
         return found
+    holonomic_plugin = holonomic.plugin(robot)
+    if holonomic_plugin is not None:
+        spec = holonomic.from_plugin(holonomic_plugin, robot, tree, notices, source)
+        if spec is not None:
+            return Detected(spec)
     plugin = _drive_plugin(robot)
     if plugin is not None:
         spec = _from_plugin(plugin, tree, notices, source)
         if spec is not None:
+            holonomic.note_rollers(spec, robot, tree, plugin, notices, source)
             return Detected(spec)
     else:
         found = steering.unknown_drive(robot, notices, source)
@@ -61,6 +73,9 @@ def detect(urdf: ET.Element | str, *, notices: list[Notice] | None = None,
     if found is not None:
         return found
     wheels = [w for j in tree.joints if (w := wheel(tree, j.name, strict=True)) is not None]
+    rolling = holonomic.from_rollers(wheels, robot, tree, notices, source)
+    if rolling is not None:
+        return Detected(rolling)
     return Detected(_spec(wheels, source="urdf", notices=notices, file=source))
 
 
@@ -105,26 +120,6 @@ def _drive_plugin(robot: ET.Element) -> ET.Element | None:
     return None
 
 
-def _texts(plugin: ET.Element, *tags: str) -> list[str]:
-    """Values of the children named ``tags``, as <t>v</t> or <t value="v"/>, in tag order."""
-    values = []
-    for tag in tags:
-        for child in plugin.findall(tag):
-            value = (child.text or "").strip() or child.get("value", "").strip()
-            if value:
-                values.append(value)
-    return values
-
-
-def _number(plugin: ET.Element, *tags: str) -> float | None:
-    for text in _texts(plugin, *tags):
-        try:
-            return float(text)
-        except ValueError:
-            continue
-    return None
-
-
 def _from_plugin(plugin: ET.Element, tree: LinkTree, notices: list[Notice],
                  file: Path | None) -> DriveSpec | None:
     label = plugin.get("filename") or plugin.get("name") or "diff-drive"
@@ -161,37 +156,6 @@ def _from_plugin(plugin: ET.Element, tree: LinkTree, notices: list[Notice],
     return _spec([w for _, w in wheels], source="plugin", notices=notices, file=file,
                  sides={w.joint: s for s, w in wheels}, radius=radius,
                  separation=separation, torque=torque, rim_accel=accel)
-
-
-def _disagreement(label: str, wheels: list[tuple[str, Wheel]], radius: float | None,
-                  separation: float | None, notices: list[Notice], file: Path | None) -> None:
-    """One warning when the plugin's radius or separation is > 2 % off the wheel geometry."""
-    parts, effects = [], []
-    left = [w.y for side, w in wheels if side == "left"]
-    right = [w.y for side, w in wheels if side == "right"]
-    if separation and left and right:
-        apart = abs(sum(left) / len(left) - sum(right) / len(right))
-        if apart > 0 and abs(separation - apart) > DISAGREEMENT * apart:
-            parts.append(f"wheel_separation {separation:.3f} m, but its wheel joints are "
-                         f"{apart:.3f} m apart")
-            effects.append(f"turns {_percent(separation / apart)} than commanded")
-    radii = [w.radius for _, w in wheels if w.radius]
-    if radius and radii:
-        measured = sum(radii) / len(radii)
-        if abs(radius - measured) > DISAGREEMENT * measured:
-            parts.append(f"wheel_radius {radius:.3f} m, but its wheels' collisions have radius "
-                         f"{measured:.3f} m")
-            effects.append(f"drives {_percent(measured / radius)} than commanded")
-    if parts:
-        notices.append(Notice(
-            f"the {label} plugin says {'; and '.join(parts)}: mobot uses the plugin's values, "
-            f"as Gazebo does, so the robot {' and '.join(effects)} (set drive: wheel_radius / "
-            "wheel_separation to use the geometry)", Location(file=file)))
-
-
-def _percent(ratio: float) -> str:
-    """'11 % more' or '9 % less' for a ratio of achieved to commanded motion."""
-    return f"{abs(ratio - 1) * 100:.0f} % {'more' if ratio > 1 else 'less'}"
 
 
 def _spec(wheels: list[Wheel], *, source: str, notices: list[Notice], file: Path | None,

@@ -8,11 +8,16 @@
 * Links without <inertial>, or with (near) zero mass or inertia, get 1 g and 1e-6 kg*m^2:
   PyBullet would silently give them 1 kg, which doubles a turtlebot's mass. Each one is
   reported as a notice.
-* Gazebo friction (<gazebo reference="LINK"><mu1>/<mu2>) becomes PyBullet's
-  <contact><lateral_friction>: the smaller of mu1 and mu2, because PyBullet's friction is
-  isotropic and a robot should never get more grip than Gazebo gives it. Links without mu
-  are left alone: the simulation layer (sim/bullet/world.py) gives them Gazebo's default, or caster
-  friction, and treats a <lateral_friction> in the text as the author's choice.
+* Gazebo friction (<gazebo reference="LINK"><mu1>/<mu2>, or the SDF form
+  <gazebo reference="LINK"><collision><surface><friction><ode><mu>/<mu2>/<fdir1>) becomes
+  PyBullet's <contact><lateral_friction>: the smaller of mu1 and mu2, because PyBullet's friction
+  is isotropic and a robot should never get more grip than Gazebo gives it. Rollers are the
+  exception: an <fdir1> with one mu at most ROLLER_RATIO of the other is a mecanum wheel's
+  rollers (grip along fdir1 only), which min() would turn into a wheel without grip that never
+  moves; it gets the larger mu, and drive detection reads it as a holonomic wheel
+  (roller_links). Links without mu are left alone: the simulation layer (sim/bullet/world.py)
+  gives them Gazebo's default, or caster friction, and treats a <lateral_friction> in the
+  text as the author's choice.
 """
 
 from __future__ import annotations
@@ -176,24 +181,61 @@ def _tiny_inertial(old: ET.Element | None) -> ET.Element:
     return inertial
 
 
-def gazebo_friction(robot: ET.Element) -> dict[str, float]:
-    """Link name -> friction from <gazebo reference><mu1>/<mu2> (text or value= forms)."""
-    friction: dict[str, float] = {}
+# One mu at most this fraction of the other, with an <fdir1>: rollers (gz's mecanum wheels use 1 and 0).
+ROLLER_RATIO = 0.1
+
+
+def _mu_values(block: ET.Element) -> tuple[dict[str, float], bool]:
+    """mu1/mu2 (URDF's <mu1>/<mu2>, SDF's <mu>/<mu2> under collision/surface/friction/ode) of one
+    <gazebo reference> block, and whether it gives an <fdir1>."""
+    found: dict[str, float] = {}
+    fdir = False
+    for parent in (block, block.find("collision/surface/friction/ode")):
+        if parent is None:
+            continue
+        for tag, key in (("mu1", "mu1"), ("mu", "mu1"), ("mu2", "mu2")):
+            element = parent.find(tag)
+            if element is not None and key not in found:
+                text = (element.text or "").strip() or element.get("value", "")
+                value = floats(text, 1, (math.nan,))[0]
+                if not math.isnan(value):
+                    found[key] = value
+        fdir = fdir or parent.find("fdir1") is not None
+    return found, fdir
+
+
+def is_roller(values: dict[str, float], fdir: bool) -> bool:
+    """Whether mu values (two of them) and an <fdir1> (given or not) are a roller's."""
+    if not fdir or len(values) < 2:
+        return False
+    low, high = sorted(values.values())
+    return high > 0.0 and low <= ROLLER_RATIO * high
+
+
+def _surfaces(robot: ET.Element) -> dict[str, tuple[dict[str, float], bool]]:
+    """Link name -> its mu values and whether an <fdir1> is given, over all its <gazebo> blocks."""
+    out: dict[str, tuple[dict[str, float], bool]] = {}
     for gazebo in robot.findall("gazebo"):
         reference = gazebo.get("reference")
         if not reference:
             continue
-        values = []
-        for tag in ("mu1", "mu2", "mu"):
-            element = gazebo.find(tag)
-            if element is not None:
-                text = (element.text or "").strip() or element.get("value", "")
-                value = floats(text, 1, (math.nan,))[0]
-                if not math.isnan(value):
-                    values.append(value)
-        if values:
-            friction[reference] = min(values)
-    return friction
+        values, fdir = _mu_values(gazebo)
+        before, had = out.get(reference, ({}, False))
+        out[reference] = ({**before, **values}, had or fdir)  # a later block wins, as the last one did
+    return out
+
+
+def gazebo_friction(robot: ET.Element) -> dict[str, float]:
+    """Link name -> friction from <gazebo reference> mu1/mu2 (text or value= forms): the smaller,
+    or for rollers (see roller_links) the larger."""
+    return {link: max(values.values()) if is_roller(values, fdir) else min(values.values())
+            for link, (values, fdir) in _surfaces(robot).items() if values}
+
+
+def roller_links(robot: ET.Element) -> frozenset[str]:
+    """Links whose Gazebo friction is anisotropic as mecanum rollers are: an <fdir1>, and one mu
+    at most ROLLER_RATIO of the other (gz-sim's mecanum example: mu 1, mu2 0, fdir1 at 45 deg)."""
+    return frozenset(link for link, (values, fdir) in _surfaces(robot).items() if is_roller(values, fdir))
 
 
 def apply_friction(robot: ET.Element) -> dict[str, float]:

@@ -239,10 +239,7 @@ def _from_document(document: dict[str, Any] | None) -> RobotDescription | None:
             return None  # an entry from before URIs were kept
         drive = document["drive"]
         if drive is not None:
-            drive = DriveSpec(**{**drive, "left_joints": tuple(drive["left_joints"]),
-                                 "right_joints": tuple(drive["right_joints"]),
-                                 "joint_signs": tuple(tuple(s) for s in drive["joint_signs"]),
-                                 "steering_joints": tuple(drive.get("steering_joints", ()))})
+            drive = DriveSpec(**{key: _tuples(value) for key, value in drive.items()})
         return RobotDescription(
             source=Path(document["source"]), name=document["name"], urdf=document["urdf"],
             root_link=document["root_link"],
@@ -269,6 +266,11 @@ def _wheels(desc: RobotDescription) -> list[dict[str, Any]]:
         return []
     tree = LinkTree(ET.fromstring(desc.urdf))
     return wheel_layout(tree, drive.left_joints, drive.right_joints, drive.wheel_radius)
+
+
+def _tuples(value: Any) -> Any:
+    """JSON lists back to the tuples they were (a DriveSpec holds tuples, some of pairs)."""
+    return tuple(_tuples(v) for v in value) if isinstance(value, list) else value
 
 
 def inspect_summary(desc: RobotDescription) -> dict[str, Any]:

@@ -27,6 +27,9 @@ class Shape:
     uri: str = ""
     pose: Matrix = field(default_factory=lambda: IDENTITY.copy())
     friction: float | None = None  # min(mu, mu2) when the surface gives them
+    # (mu, mu2, fdir1 text) when the surface gives both mu and an <fdir1>: anisotropic friction,
+    # which the robot path keeps as written (description/process.py reads rollers from it)
+    anisotropic: tuple[float, float, str] | None = None
     extent: tuple[float, float] | None = None  # a plane's <size>: it is finite (build.py)
 
 
@@ -69,6 +72,7 @@ def parse_shape(reader, element, file: Path, collision: bool) -> Shape | None:
         raise WorldError(f"{what} has a plane with a zero normal", location=key_of(kind_el, file),
                          hint="Give <normal> a direction, e.g. 0 0 1.")
     shape.friction = _friction(reader, element, file)
+    shape.anisotropic = _anisotropic(reader, element, file)
     return shape
 
 
@@ -117,3 +121,12 @@ def _friction(reader, element, file: Path) -> float | None:
     values = [reader.number(ode, tag, file, -1.0) for tag in ("mu", "mu2")]
     values = [v for v in values if v >= 0.0]
     return min(values) if values else None
+
+
+def _anisotropic(reader, element, file: Path) -> tuple[float, float, str] | None:
+    ode = element.find("surface/friction/ode")
+    fdir = ode.find("fdir1") if ode is not None else None
+    if fdir is None or not (fdir.text or "").strip():
+        return None
+    mu, mu2 = (reader.number(ode, tag, file, 1.0) for tag in ("mu", "mu2"))  # SDF's defaults
+    return mu, mu2, " ".join(fdir.text.split())

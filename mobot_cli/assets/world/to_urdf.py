@@ -14,6 +14,7 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+from mobot_cli.assets.description.process import is_roller
 from mobot_cli.assets.world.model import Link, Model
 from mobot_cli.assets.world.pose import IDENTITY, inverse, rpy
 from mobot_cli.errors import DescriptionError, Location, Notice
@@ -112,7 +113,15 @@ def _link(robot: ET.Element, link: Link, frame, notices: list[Notice]) -> None:
     for sensor, pose in link.sensors:  # description.sensors reads them as from URDF
         _sensor(robot, link.name, sensor, to_urdf @ pose)
     frictions = [s.friction for s in link.collisions if s.friction is not None]
-    if frictions:  # description.process.apply_friction turns this into PyBullet's lateral_friction
+    rollers = [s.anisotropic for s in link.collisions if s.anisotropic is not None
+               and is_roller({"mu1": s.anisotropic[0], "mu2": s.anisotropic[1]}, True)]
+    if rollers:  # kept as written: description.process reads mecanum rollers from mu, mu2, fdir1
+        gazebo = ET.SubElement(robot, "gazebo", reference=link.name)
+        mu, mu2, fdir = rollers[0]
+        ET.SubElement(gazebo, "mu1").text = f"{mu:.12g}"
+        ET.SubElement(gazebo, "mu2").text = f"{mu2:.12g}"
+        ET.SubElement(gazebo, "fdir1").text = fdir
+    elif frictions:  # description.process.apply_friction turns this into PyBullet's lateral_friction
         gazebo = ET.SubElement(robot, "gazebo", reference=link.name)
         ET.SubElement(gazebo, "mu1").text = f"{min(frictions):.12g}"
         ET.SubElement(gazebo, "mu2").text = f"{min(frictions):.12g}"

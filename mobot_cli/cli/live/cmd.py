@@ -1,4 +1,4 @@
-"""`mobot cmd NAME --linear V --angular W [--for S]`: drive a robot like a cmd_vel message."""
+"""`mobot cmd NAME --linear V --angular W [--linear-y V] [--for S]`: drive a robot like a cmd_vel message."""
 
 from __future__ import annotations
 
@@ -15,6 +15,8 @@ def cmd(
     name: str = typer.Argument(..., help="The robot to drive."),
     linear: float = typer.Option(0.0, "--linear", "-l", help="Forward speed, m/s (negative: backwards)."),
     angular: float = typer.Option(0.0, "--angular", "-a", help="Turn rate, rad/s (positive: left)."),
+    linear_y: float = typer.Option(0.0, "--linear-y", "-y",
+                                   help="Sideways speed, m/s (positive: left); holonomic robots only."),
     for_: Optional[float] = typer.Option(None, "--for", metavar="S",
                                          help="Stop after S simulated seconds [default: hold until the next cmd]."),
     wait: bool = typer.Option(False, "--wait", help="With --for: return when the command has ended."),
@@ -32,6 +34,8 @@ def cmd(
     with common.client(endpoint, timeout) as world:
         budget = timeout + (_wall_bound(world, for_) if wait else 0.0)
         fields = {"name": name, "linear": linear, "angular": angular}
+        if linear_y:
+            fields["linear_y"] = linear_y
         if for_ is not None:
             fields.update({"for": for_, "wait": wait})
         reply = world.call("cmd", timeout=budget, **fields)
@@ -43,7 +47,8 @@ def cmd(
             common.say(env, common.odom_line(reply))
         else:
             ends = f" until step {reply['until_step']}" if reply.get("until_step") is not None else ""
-            common.say(env, f"'{name}': linear {linear:g} m/s, angular {angular:g} rad/s from step "
+            sideways = f", linear_y {linear_y:g} m/s" if linear_y else ""
+            common.say(env, f"'{name}': linear {linear:g} m/s{sideways}, angular {angular:g} rad/s from step "
                             f"{reply['step']}{ends}")
     return ExitCode.OK
 

@@ -6,11 +6,15 @@ import math
 
 from mobot_cli.errors import SpawnError
 from mobot_cli.plan import DriveSpec, RobotPlan
+from mobot_cli.sim.bullet.holonomic import HolonomicDrive
 from mobot_cli.sim.bullet.joints import JointHolds
 from mobot_cli.sim.bullet.twist_trim import TwistTrim
 from mobot_cli.sim.drive import Odometry, body_twist, ramp, wheel_speeds, wrap_angle
+from mobot_cli.sim.holonomic import KINDS
 from mobot_cli.sim.pb import p
 from mobot_cli.sim.state import RobotState
+
+HOLONOMIC = KINDS  # drive kinds that take a sideways linear_y
 
 
 class SimRobot:
@@ -26,6 +30,7 @@ class SimRobot:
         self.name = plan.name
         self.dt = dt
         self.cmd = (0.0, 0.0)
+        self.cmd_y = 0.0  # the sideways part of the command (holonomic drives)
         self.collisions = 0  # collision events so far, counted by the World's ContactCounter
         self.joints: dict[str, int] = {}  # every non-fixed joint
         self.links: dict[str, int] = {p.getBodyInfo(body, physicsClientId=cid)[0].decode(): -1}
@@ -42,10 +47,11 @@ class SimRobot:
         self.com_offset = offset  # most root links (base_footprint) have none: skip the maths
         self.joint_indices = list(self.joints.values())
         self._free_joints()
-        self.drive: _Drive | None = None
+        self.drive: _Drive | HolonomicDrive | None = None
         wheels: set[str] = set()
         if plan.drive is not None:  # drive_class: another kind's (steered.drive_class)
-            self.drive = (drive_class or _Drive)(self, plan.drive)
+            self.drive = HolonomicDrive(self, plan.drive, _forward_sign) if plan.drive.kind in HOLONOMIC \
+                else (drive_class or _Drive)(self, plan.drive)
             wheels = {*plan.drive.left_joints, *plan.drive.right_joints, *plan.drive.steering_joints}
         self.holds = JointHolds(cid, body, self.joints, plan.holds, wheels)
         x, y, _, _, _, yaw = self.link_pose_rpy()
@@ -72,12 +78,16 @@ class SimRobot:
         roll, pitch, yaw = p.getEulerFromQuaternion(orn)
         return pos[0], pos[1], pos[2], roll, pitch, yaw
 
-    def set_command(self, linear: float, angular: float) -> None:
-        """Take a cmd_vel body twist; robots without a drive refuse it."""
-        if self.drive is None:
-            raise ValueError(f"robot '{self.name}' has no drive: it cannot take velocity commands")
+    def set_command(self, linear: float, angular: float, linear_y: float = 0.0) -> None:
+        """Take a cmd_vel body twist; robots without a drive refuse it, and a sideways
+        ``linear_y`` is refused unless the drive is holonomic."""
+        check_command(self.name, self.drive.spec if self.drive is not None else None, linear_y)
         self.cmd = (float(linear), float(angular))
-        self.drive.command(linear, angular)
+        self.cmd_y = float(linear_y)
+        if linear_y:
+            self.drive.command(linear, angular, linear_y)
+        else:
+            self.drive.command(linear, angular)
 
     def kinematics(self) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...], tuple[float, ...]]:
         """World position, quaternion, linear and angular velocity of the root link's URDF frame."""
@@ -104,18 +114,22 @@ class SimRobot:
         true_wz = ang[0] * rot[2] + ang[1] * rot[5] + ang[2] * rot[8]  # about the body z axis
         joints = p.getJointStates(body, self.joint_indices, physicsClientId=cid) \
             if self.joint_indices else ()
-        if self.drive is not None and self.drive.spec.odometry == "encoder":
+        if self.drive is not None and self.drive.encoder:
             odom = self.drive.odometry_now(joints, step)
         else:
             x0, y0, yaw0 = self.spawn_xy_yaw
             dx, dy = pos[0] - x0, pos[1] - y0
             c, s = math.cos(yaw0), math.sin(yaw0)
             odom = (c * dx + s * dy, -s * dx + c * dy, wrap_angle(yaw - yaw0), true_vx, true_wz)
-        return RobotState(
+        state = RobotState(
             self.cmd[0], self.cmd[1], *odom, pos[0], pos[1], pos[2], roll, pitch, yaw,
             true_vx, true_wz, joint_positions={n: j[0] for n, j in zip(self.joints, joints)},
             collisions=self.collisions,
-            joint_velocities={n: j[1] for n, j in zip(self.joints, joints)})
+            joint_velocities={n: j[1] for n, j in zip(self.joints, joints)}, cmd_linear_y=self.cmd_y)
+        if isinstance(self.drive, HolonomicDrive):
+            state.true_vy = lin[0] * rot[1] + lin[1] * rot[4] + lin[2] * rot[7]  # along the body y axis
+            state.odom_vy = self.drive.odom_vy if self.drive.encoder else state.true_vy
+        return state
 
     def joint_positions(self) -> dict[str, float]:
         """Position of every non-fixed joint, by name."""
@@ -145,6 +159,7 @@ class _Drive:
         self.radius = spec.wheel_radius * spec.wheel_radius_multiplier
         self.separation = spec.wheel_separation * spec.wheel_separation_multiplier
         self.odometry = Odometry(self.separation)
+        self.encoder = spec.odometry == "encoder"
         self.scale = [sign * self.radius for sign in self.signs]  # joint angle -> rim travel
         self.last = self._positions()
         self.integrated_at = -1  # the world step of the last integration
@@ -237,6 +252,15 @@ class _Drive:
                             self.separation)
         odo = self.odometry
         return odo.x, odo.y, wrap_angle(odo.yaw), vx, wz
+
+
+def check_command(name: str, spec: DriveSpec | None, linear_y: float) -> None:
+    """ValueError for a command this drive cannot follow: none at all, or a sideways one."""
+    if spec is None:
+        raise ValueError(f"robot '{name}' has no drive: it cannot take velocity commands")
+    if linear_y and spec.kind not in HOLONOMIC:
+        raise ValueError(f"robot '{name}' has a {spec.kind} drive: it cannot move sideways "
+                         f"(linear_y {linear_y:g} m/s); only holonomic (mecanum, omni) drives can")
 
 
 def _twist_feedback(spec: DriveSpec) -> bool:

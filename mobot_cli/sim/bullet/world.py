@@ -17,6 +17,7 @@ from mobot_cli.plan import Physics, RobotPlan, SpawnPose, WorldPlan
 from mobot_cli.sim import clearance, entity, parts, placement, static_shapes, surroundings
 from mobot_cli.sim.bullet import friction
 from mobot_cli.sim.bullet.clients import Stage, connect, release
+from mobot_cli.sim.bullet.holonomic import ROLLER_FRICTION, HolonomicDrive
 from mobot_cli.sim.bullet.joints import set_initial_positions
 from mobot_cli.sim.bullet.robot import SimRobot
 from mobot_cli.sim.bullet.steered import drive_class
@@ -64,6 +65,7 @@ class World:
         self._robots: dict[str, SimRobot] = {}
         self._ramping: list[SimRobot] = []
         self._sprung: list[SimRobot] = []  # robots with springs: torques before every step
+        self._pushed: list[HolonomicDrive] = []  # holonomic drives: a base force every step
         self._odom_every = max(1, round(physics.rate_hz / ODOMETRY_RATE_HZ))
         self._check_every = max(1, round(physics.rate_hz / HEALTH_RATE_HZ))
         self._contacts = ContactCounter()
@@ -94,6 +96,7 @@ class World:
         self._steps = 0
         self._ramping = []
         self._sprung = []
+        self._pushed = []
         self._contacts = ContactCounter()
         self._sensing = None  # rebuilt with the first robot with sensors: its noise restarts too
         self._clearance = {}
@@ -199,6 +202,8 @@ class World:
         self._robots[robot.name] = sim_robot
         if sim_robot.holds.spring_joints:
             self._sprung.append(sim_robot)
+        if isinstance(sim_robot.drive, HolonomicDrive):
+            self._pushed.append(sim_robot.drive)
 
     def _settle_in(self, uid: int, robot: RobotPlan) -> None:
         """Place the robot (z: auto), refuse overlaps, set contact and damping defaults."""
@@ -214,13 +219,16 @@ class World:
         wheels = friction.wheel_links(cid, uid, robot)
         casters = {link for link, h in lowest.items()
                    if h - bottom <= friction.CASTER_BAND and link not in wheels and friction.rigid(cid, uid, link)}
-        if robot.drive is not None and robot.drive.kind != "ackermann" and max(
+        holonomic = robot.drive is not None and robot.drive.kind in ("mecanum", "omni")
+        if robot.drive is not None and not holonomic and robot.drive.kind != "ackermann" and max(
                 len(robot.drive.left_joints), len(robot.drive.right_joints)) > 1:
             fraction = friction.skid_axial_fraction(cid, uid, wheels, robot.drive.wheel_separation)
             friction.soften_axial_friction(cid, uid, wheels, fraction)
         explicit = links_with_friction(robot.urdf)
         friction.set_friction(cid, uid, explicit, {link: friction.CASTER_FRICTION for link in casters},
                               friction.DEFAULT_FRICTION)
+        for link in wheels if holonomic else ():  # rollers: the base force moves the robot
+            p.changeDynamics(uid, link, lateralFriction=ROLLER_FRICTION, physicsClientId=cid)
         for link in range(-1, p.getNumJoints(uid, physicsClientId=cid)):
             # PyBullet damps every body (0.04) by default; Gazebo does not, and it slows robots.
             p.changeDynamics(uid, link, linearDamping=0.0, angularDamping=0.0,
@@ -287,11 +295,14 @@ class World:
             self._ramping.remove(robot)
         if robot in self._sprung:
             self._sprung.remove(robot)
+        if robot.drive in self._pushed:
+            self._pushed.remove(robot.drive)
 
-    def set_command(self, name: str, linear: float, angular: float) -> None:
-        """Command a body twist (m/s, rad/s); ValueError for a robot without a drive."""
+    def set_command(self, name: str, linear: float, angular: float, linear_y: float = 0.0) -> None:
+        """Command a body twist (m/s, rad/s; ``linear_y`` sideways, holonomic drives only);
+        ValueError for a robot without a drive, or a sideways command to one that is not holonomic."""
         robot = self._robot(name)
-        robot.set_command(linear, angular)
+        robot.set_command(linear, angular, linear_y)
         if robot.drive.ramping and robot not in self._ramping:
             self._ramping.append(robot)
 
@@ -303,6 +314,9 @@ class World:
             self._ramping = [r for r in self._ramping if r.drive.ramping]
         for robot in self._sprung:
             robot.holds.apply_springs()
+        if self._pushed:
+            for drive in self._pushed:
+                drive.push(self.physics.dt)
         p.stepSimulation(physicsClientId=self._cid)
         self._steps += 1
         if self._steps % self._odom_every == 0:

@@ -38,6 +38,7 @@ class Mover:
         self.above = math.inf  # m: its highest collision point above the link origin
         self.feet = feet  # where it stands (root frame): the floor is looked for under them
         self.v = self.w = 0.0  # the body twist of the last step, as it moved
+        self.vy = 0.0  # and its sideways part (holonomic drives: sim/kinematic/holonomic.py)
         self.positions = robot.joint_positions()
         self.velocities = dict.fromkeys(self.positions, 0.0)
         self.clear = 0.0  # m to the nearest static body (not floor) when last measured
@@ -228,7 +229,7 @@ class Mover:
             return
         robot = self.robot
         c, s = math.cos(self.yaw), math.sin(self.yaw)
-        lin, ang = [self.v * c, self.v * s, 0.0], [0.0, 0.0, self.w]
+        lin, ang = [self.v * c - self.vy * s, self.v * s + self.vy * c, 0.0], [0.0, 0.0, self.w]
         if robot.com_offset:  # the centre of mass moves as v + w x (com - link)
             com = p.getBasePositionAndOrientation(robot.body, physicsClientId=robot.cid)[0]
             lin[0] -= self.w * (com[1] - self.y)

@@ -24,6 +24,7 @@ import numpy as np
 from mobot_cli.errors import SimulationFault, SpawnError
 from mobot_cli.plan import Physics, RobotPlan, SpawnPose, WorldPlan
 from mobot_cli.sim import clearance as clearance_mod
+from mobot_cli.sim.bullet.robot import HOLONOMIC, check_command
 from mobot_cli.sim.bullet.world import World
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, CONTACT_SLOP, RELEASE_SAMPLES, ContactCounter
 from mobot_cli.sim.kinematic.body import Mover
@@ -39,6 +40,7 @@ from mobot_cli.sim.kinematic.collide import (
     nearest,
     static_boxes,
 )
+from mobot_cli.sim.kinematic.holonomic import HolonomicMover
 from mobot_cli.sim.placement import body_bounds
 from mobot_cli.sim.state import RobotState
 
@@ -108,8 +110,9 @@ class KinematicWorld(World):
             (lo, hi) = body_bounds(self._probes, sim.body)
             x, y, z = sim.link_pose()[0]
             reach = float(np.hypot(max(x - lo[0], hi[0] - x), max(y - lo[1], hi[1] - y)))
-            mover = Mover(sim, self.physics.dt, lo[2], reach,
-                          feet(self._probes, sim.body, lo, (x, y, sim.spawn_xy_yaw[2])))
+            kind = HolonomicMover if robot.drive is not None and robot.drive.kind in HOLONOMIC else Mover
+            mover = kind(sim, self.physics.dt, lo[2], reach,
+                         feet(self._probes, sim.body, lo, (x, y, sim.spawn_xy_yaw[2])))
             mover.above = hi[2] - z  # its highest point above its link origin
             floor = self._floor_under([mover], mover.floor + SUPPORT_BAND)[0]
             if not np.isfinite(floor):
@@ -147,13 +150,17 @@ class KinematicWorld(World):
             measured[:n - 1, :n - 1] = self._measured
             self._measured = measured
 
-    def set_command(self, name: str, linear: float, angular: float) -> None:
-        """Command a body twist (m/s, rad/s); ValueError for a robot without a drive."""
+    def set_command(self, name: str, linear: float, angular: float, linear_y: float = 0.0) -> None:
+        """Command a body twist (m/s, rad/s; ``linear_y`` sideways, holonomic drives only);
+        ValueError for a robot without a drive, or a sideways command to one that is not holonomic."""
         robot = self._robot(name)
-        if robot.drive is None:
-            raise ValueError(f"robot '{robot.name}' has no drive: it cannot take velocity commands")
-        robot.cmd = (float(linear), float(angular))
-        self._movers[name].command(float(linear), float(angular))
+        check_command(robot.name, robot.drive.spec if robot.drive is not None else None, linear_y)
+        robot.cmd, robot.cmd_y = (float(linear), float(angular)), float(linear_y)
+        mover = self._movers[name]
+        if isinstance(mover, HolonomicMover):
+            mover.command(float(linear), float(angular), float(linear_y))
+        else:
+            mover.command(float(linear), float(angular))
 
     def step(self) -> None:
         """Move every robot one step along its twist, as far as nothing is in the way."""
@@ -221,7 +228,7 @@ class KinematicWorld(World):
     def _move(self, mover: Mover, motion, others: list[Mover]) -> bool:
         """One robot's step, asking PyBullet what is in its way (step() makes a step in open
         space itself); True when it moved."""
-        distance, turn = motion if motion is not None else (0.0, 0.0)
+        distance, turn = (motion[0], motion[1]) if motion is not None else (0.0, 0.0)
         bound = mover.bound
         stuck = mover.stuck
         if stuck is not None and motion == stuck[0] and _still(others, stuck[1]):
@@ -264,7 +271,7 @@ class KinematicWorld(World):
             return distances(self._cid, body, near.within(x, y, reach), robots, QUERY_REACH, mover.floor)
 
         full = at(1.0)
-        if nearest(full) >= -PENETRATION or (distance == 0.0 and turn == 0.0):
+        if nearest(full) >= -PENETRATION or mover.bound == 0.0:
             return 1.0, full
         here = at(0.0)
         floor = min(-PENETRATION, nearest(here))  # already deeper: it may not go deeper still
@@ -275,7 +282,7 @@ class KinematicWorld(World):
         # Conservative advancement first: no point of the robot moves more than ``bound`` over
         # the whole step, so the part of it within the clearance here (and the tolerance) is
         # safe. Approaching a wall or a robot head-on, that is all the way: one query.
-        bound = abs(distance) + abs(turn) * mover.reach
+        bound = mover.bound  # no point of the robot moves farther in the whole step
         safe = (nearest(here) - floor) / bound if bound > 0.0 else 0.0
         if safe * bound < MIN_MOVE:  # pressed against it already: stay put (and be stuck)
             mover.place(mover.x, mover.y, z, mover.yaw)

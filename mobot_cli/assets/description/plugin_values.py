@@ -1,0 +1,64 @@
+"""Values of a Gazebo <plugin> block, and the one warning when its wheel layout disagrees with
+the wheels' geometry: shared by every drive's detection (drive.py, holonomic.py)."""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+from mobot_cli.assets.description.wheels import Wheel
+from mobot_cli.errors import Location, Notice
+
+# Plugin values farther than this from the wheel geometry get a warning.
+DISAGREEMENT = 0.02
+
+
+def texts(plugin: ET.Element, *tags: str) -> list[str]:
+    """Values of the children named ``tags``, as <t>v</t> or <t value="v"/>, in tag order."""
+    values = []
+    for tag in tags:
+        for child in plugin.findall(tag):
+            value = (child.text or "").strip() or child.get("value", "").strip()
+            if value:
+                values.append(value)
+    return values
+
+
+def number(plugin: ET.Element, *tags: str) -> float | None:
+    for text in texts(plugin, *tags):
+        try:
+            return float(text)
+        except ValueError:
+            continue
+    return None
+
+
+def disagreement(label: str, wheels: list[tuple[str, Wheel]], radius: float | None,
+                  separation: float | None, notices: list[Notice], file: Path | None) -> None:
+    """One warning when the plugin's radius or separation is > 2 % off the wheel geometry."""
+    parts, effects = [], []
+    left = [w.y for side, w in wheels if side == "left"]
+    right = [w.y for side, w in wheels if side == "right"]
+    if separation and left and right:
+        apart = abs(sum(left) / len(left) - sum(right) / len(right))
+        if apart > 0 and abs(separation - apart) > DISAGREEMENT * apart:
+            parts.append(f"wheel_separation {separation:.3f} m, but its wheel joints are "
+                         f"{apart:.3f} m apart")
+            effects.append(f"turns {_percent(separation / apart)} than commanded")
+    radii = [w.radius for _, w in wheels if w.radius]
+    if radius and radii:
+        measured = sum(radii) / len(radii)
+        if abs(radius - measured) > DISAGREEMENT * measured:
+            parts.append(f"wheel_radius {radius:.3f} m, but its wheels' collisions have radius "
+                         f"{measured:.3f} m")
+            effects.append(f"drives {_percent(measured / radius)} than commanded")
+    if parts:
+        notices.append(Notice(
+            f"the {label} plugin says {'; and '.join(parts)}: mobot uses the plugin's values, "
+            f"as Gazebo does, so the robot {' and '.join(effects)} (set drive: wheel_radius / "
+            "wheel_separation to use the geometry)", Location(file=file)))
+
+
+def _percent(ratio: float) -> str:
+    """'11 % more' or '9 % less' for a ratio of achieved to commanded motion."""
+    return f"{abs(ratio - 1) * 100:.0f} % {'more' if ratio > 1 else 'less'}"
