@@ -147,8 +147,8 @@ class Simulation:
         self._timeline.goto(name, goal)
 
     def goal_status(self, name: str) -> str | None:
-        """How the robot's last goal stands: 'running', 'reached', 'timed_out', 'blocked',
-        'cancelled'; None when it was never given one."""
+        """How the robot's last goal stands: 'running', 'reached', 'reached_by_odometry_only',
+        'timed_out', 'blocked', 'cancelled'; None when it was never given one."""
         record = self._goals.get(name)
         return None if record is None else "running" if isinstance(record, GoalStarted) else record.status
 

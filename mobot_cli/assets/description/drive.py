@@ -14,6 +14,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from mobot_cli.assets.description.frames import LinkTree
+from mobot_cli.assets.description.torque import with_torque
 from mobot_cli.assets.description.wheels import Wheel, wheel
 from mobot_cli.errors import DescriptionError, Location, Notice, did_you_mean
 from mobot_cli.plan import DriveSpec
@@ -36,9 +37,9 @@ def detect_drive(urdf: ET.Element | str, *, notices: list[Notice] | None = None,
     if plugin is not None:
         spec = _from_plugin(plugin, tree, notices, source)
         if spec is not None:
-            return spec
+            return with_torque(robot, spec)
     wheels = [w for j in tree.joints if (w := wheel(tree, j.name, strict=True)) is not None]
-    return _spec(wheels, source="urdf", notices=notices, file=source)
+    return with_torque(robot, _spec(wheels, source="urdf", notices=notices, file=source))
 
 
 def drive_from_joints(urdf: ET.Element | str, left: tuple[str, ...], right: tuple[str, ...], *,
@@ -68,8 +69,8 @@ def drive_from_joints(urdf: ET.Element | str, left: tuple[str, ...], right: tupl
                     or "Name continuous wheel joints.")
             wheels.append(wheel(tree, name, strict=False))
     sides = {**{n: "left" for n in left}, **{n: "right" for n in right}}
-    return _spec(wheels, source="scenario", notices=notices, file=source,  # type: ignore[arg-type]
-                 sides=sides, radius=radius, separation=separation)
+    return with_torque(robot, _spec(wheels, source="scenario", notices=notices, file=source,  # type: ignore[arg-type]
+                                    sides=sides, radius=radius, separation=separation))
 
 
 def _drive_plugin(robot: ET.Element) -> ET.Element | None:
@@ -200,9 +201,9 @@ def _spec(wheels: list[Wheel], *, source: str, notices: list[Notice], file: Path
     if len(left) > 1 or len(right) > 1:
         wheelbase = max(w.x for w in wheels) - min(w.x for w in wheels)
         multiplier = _separation_multiplier(abs(separation), wheelbase)
-    extra = {}
+    extra: dict = {}
     if torque is not None and torque > 0:
-        extra["max_wheel_torque"] = torque
+        extra.update(max_wheel_torque=torque, torque_source="plugin")
     if rim_accel is not None and rim_accel > 0:
         # gazebo_ros limits the change of rim speed (m/s^2); DriveSpec wants rad/s^2.
         extra["max_wheel_acceleration"] = rim_accel / radius
