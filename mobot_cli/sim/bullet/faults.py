@@ -57,12 +57,15 @@ class Health:
         self.watches: dict[str, Watch] = {}
 
     def watch(self, robot, step: int) -> None:
-        """Start watching a robot as it stands now (at its spawn, or a teleport)."""
+        """Start watching a robot as it stands at its spawn: its up axis is the reference."""
         pos, orn = robot.link_pose()
         m = p.getMatrixFromQuaternion(orn)
-        fastest = self.watches[robot.name].fastest if robot.name in self.watches else 0.0
-        self.watches[robot.name] = Watch(up=(m[6], m[7], m[8]), touched_at=step, touched_z=pos[2],
-                                         fastest=fastest)
+        self.watches[robot.name] = Watch(up=(m[6], m[7], m[8]), touched_at=step, touched_z=pos[2])
+
+    def moved(self, robot, step: int) -> None:
+        """A robot was put somewhere (a teleport): its flight starts over, its up axis stays."""
+        w = self.watches[robot.name]
+        w.touched_at, w.touched_z = step, robot.link_pose()[0][2]
 
     def forget(self, name: str) -> None:
         self.watches.pop(name, None)

@@ -265,7 +265,7 @@ class World:
             entity.restore(robot, saved)
             raise
         entity.set_twist(robot, linear, angular)
-        self._health.watch(robot, self._steps)
+        self._health.moved(robot, self._steps)
 
     def remove(self, name: str) -> None:
         """Delete a robot from the world."""
