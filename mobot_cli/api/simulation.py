@@ -17,7 +17,7 @@ from pydantic import ValidationError
 
 from mobot_cli.api.numbers import bounded
 from mobot_cli.api.sensors import Latest, Scan, pick, robot_plan
-from mobot_cli.errors import MobotError, UsageError, did_you_mean
+from mobot_cli.errors import MobotError, SimulationFault, UsageError, did_you_mean
 from mobot_cli.plan import Plan
 from mobot_cli.record.recording import Recording
 from mobot_cli.record.summary import RunRecord, Status
@@ -57,6 +57,7 @@ class Simulation:
             raise
         self._base_dir = Path.cwd()
         self._closed = False
+        self._fault: SimulationFault | None = None  # what ended it, for summary.json's fault record
         self.record: RunRecord | None = None
 
     @classmethod
@@ -220,7 +221,8 @@ class Simulation:
                 self._timeline.log()
         except Exception as exc:  # noqa: BLE001 - a world gone bad still gets its summary, saying why
             status, error = Status.ERROR, error or f"{type(exc).__name__}: {exc}"
-        return self._recording.close(status, error, self.step_count)  # type: ignore[union-attr]
+        return self._recording.close(status, error, self.step_count,  # type: ignore[union-attr]
+                                     said=self._timeline.notices, fault=self._fault)
 
     def __enter__(self) -> "Simulation":
         return self
@@ -231,6 +233,7 @@ class Simulation:
         elif issubclass(kind, KeyboardInterrupt):
             self.close(Status.INTERRUPTED)
         else:
+            self._fault = exc if isinstance(exc, SimulationFault) else None
             self.close(Status.FAULT if isinstance(exc, MobotError) else Status.ERROR, str(exc) or repr(exc))
 
     def _open(self) -> None:

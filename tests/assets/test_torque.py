@@ -39,8 +39,8 @@ def test_a_urdf_effort_limit_wins_over_the_mass_default():
     wheels = [with_effort(w, "12") if i else with_effort(w, "7.5") for i, w in enumerate(four_wheels())]
     spec = detect_drive(robot(*wheels, mass=296.0))
     assert (spec.torque_source, spec.max_wheel_torque) == ("urdf", 7.5)  # the smallest of the wheels'
-    unset = [with_effort(w, "0") for w in four_wheels()]  # 0 means "not given", as in many URDFs
-    assert detect_drive(robot(*unset)).torque_source == "mass"
+    for unset in ("0", "1e6", "nan"):  # 0: "not given", as in many URDFs; 1e6: an SDF's unlimited -1
+        assert detect_drive(robot(*[with_effort(w, unset) for w in four_wheels()])).torque_source == "mass"
     named = drive_from_joints(robot(*wheels), ("fl", "rl"), ("fr", "rr"))
     assert (named.torque_source, named.max_wheel_torque) == ("urdf", 7.5)
 

@@ -167,3 +167,12 @@ def test_a_goal_with_true_odometry_is_reached(tmp_path):
     assert (code, goal["status"], goal["failure"]) == (0, "reached", None)
     assert goal["error"] < 0.1 and summary["robots"]["mobot"]["odom_error"]["max_position"] < 0.1
     assert not [n for n in summary["notices"] if "odometry" in n]
+
+
+def test_without_quiet_the_run_prints_what_it_said_during_the_run(tmp_path):
+    scenario = tmp_path / "weak.yaml"
+    scenario.write_text("version: 1\nduration: 3\nrobots:\n" + robot(
+        "weak", "{mass: 20, effort: 0.05}", commands="      - {at: 0.5, linear: 1.0, for: 2.0}\n"))
+    done = invoke(["run", scenario, "--out", tmp_path / "r"])
+    assert done.exit_code == 0
+    assert "mobot: warning: robot 'weak': its wheels have been at their torque limit (0.05 N*m" in done.stderr

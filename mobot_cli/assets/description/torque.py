@@ -5,8 +5,8 @@ In order, the first given wins (docs/faults.md, "Wheel torque"):
 1. the scenario's ``drive: {max_wheel_torque}`` (merged in scenario/robots.py);
 2. the drive plugin's torque (``wheelTorque``, ``max_wheel_torque``, ``torque``): gazebo_ros's
    diff drive sets it as the wheel joints' motor limit, over any URDF limit;
-3. the wheel joints' URDF ``<limit effort>`` (the smallest positive one), which Gazebo applies
-   to velocity commands when no plugin says otherwise;
+3. the wheel joints' URDF ``<limit effort>`` (the smallest positive one; SDF's unlimited -1
+   is none), which Gazebo applies to velocity commands when no plugin says otherwise;
 4. a default that grows with the robot: the torque that accelerates the whole robot at
    ``DESIGN_ACCELERATION`` up a ``DESIGN_SLOPE`` slope with every driven wheel pushing,
    ``m * (a + g sin(slope)) * r / n`` (0.81 m g r / n), but never less than ``FLOOR_TORQUE``.
@@ -31,6 +31,9 @@ FLOOR_TORQUE = 20.0  # N*m per wheel: never less by default
 DESIGN_ACCELERATION = 1.0  # m/s^2
 DESIGN_SLOPE = math.radians(45.0)
 GRAVITY = 9.81  # m/s^2: standard gravity (the description knows no scenario)
+# An effort this large is no limit: SDF's -1 ("unlimited", also its default) becomes this in the
+# URDF mobot writes for an SDF robot (assets/world/to_urdf.py); such wheels get the default.
+UNLIMITED_EFFORT = 1e6  # N*m
 
 
 def mass_torque(mass: float, radius: float, wheels: int) -> float:
@@ -53,7 +56,7 @@ def robot_mass(robot: ET.Element) -> float:
 
 
 def joint_effort(robot: ET.Element, joints: tuple[str, ...]) -> float | None:
-    """The smallest positive, finite ``<limit effort>`` among these joints, or None."""
+    """The smallest positive ``<limit effort>`` below UNLIMITED_EFFORT among these joints, or None."""
     wanted, efforts = set(joints), []
     for joint in robot.findall("joint"):
         limit = joint.find("limit")
@@ -63,7 +66,7 @@ def joint_effort(robot: ET.Element, joints: tuple[str, ...]) -> float | None:
             effort = float(limit.get("effort", ""))
         except ValueError:
             continue
-        if math.isfinite(effort) and effort > 0:
+        if 0 < effort < UNLIMITED_EFFORT:
             efforts.append(effort)
     return min(efforts) if efforts else None
 
