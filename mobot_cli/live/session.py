@@ -206,6 +206,7 @@ class Session:
         bad = [exc.robot] if exc.robot in names else [name for name in names if not _healthy(self.world, name)]
         for name in bad:
             self.timeline.delete(name, "fault", message=str(exc), last_row=False)
+            self.timeline.notices.append(f"robot '{name}' was taken out of the live world: {exc}")
         return bool(bad)
 
     # -- replies ----------------------------------------------------------------------------
