@@ -202,8 +202,11 @@ class Simulation:
 
     # -- the end ----------------------------------------------------------------------------
 
-    def close(self, status: Status = Status.OK, error: str | None = None) -> RunRecord | None:
-        """Record the state now, write summary.json (when recording) and free the world."""
+    def close(self, status: Status = Status.OK, error: str | None = None, *,
+                fault: SimulationFault | None = None) -> RunRecord | None:
+        """Record the state now, write summary.json (when recording) and free the world;
+        ``fault``: the SimulationFault that ended it (summary.json's ``fault`` record)."""
+        self._fault = fault or self._fault
         if self._closed:
             return self.record
         self._closed = True
@@ -233,8 +236,8 @@ class Simulation:
         elif issubclass(kind, KeyboardInterrupt):
             self.close(Status.INTERRUPTED)
         else:
-            self._fault = exc if isinstance(exc, SimulationFault) else None
-            self.close(Status.FAULT if isinstance(exc, MobotError) else Status.ERROR, str(exc) or repr(exc))
+            self.close(Status.FAULT if isinstance(exc, MobotError) else Status.ERROR, str(exc) or repr(exc),
+                       fault=exc if isinstance(exc, SimulationFault) else None)
 
     def _open(self) -> None:
         if self._closed:
