@@ -51,6 +51,18 @@ def test_a_tall_robot_that_flips_under_hard_acceleration_ends_the_run_as_a_fault
     assert step - 24 < summary["steps"] <= step  # the last log row before it
 
 
+def test_a_narrow_tall_robot_on_a_fast_arc_rolls_over(tmp_path):
+    # a long wheelbase and gentle wheel acceleration keep it from pitching: the arc rolls it
+    code, err, summary = run(tmp_path, "duration: 6\nrobots:\n" + robot(
+        "narrow", "{wheelbase: 1.0, track: 0.3, com_z: 1.0}",
+        "    drive: {max_wheel_torque: 200, max_wheel_acceleration: 20, twist_feedback: false}\n",
+        "      - {at: 0.5, linear: 3.0, angular: 3.0}\n"))
+    assert code == 3 and summary["fault"]["kind"] == "tipped_over"
+    assert err.startswith(f"mobot: error: robot 'narrow' tipped over at step {summary['fault']['step']}: ")
+    roll = float(err.split("(roll ")[1].split(" deg")[0])
+    assert abs(roll) > 55
+
+
 def test_the_same_command_on_a_low_robot_is_no_fault(tmp_path):
     code, err, summary = run(tmp_path, "duration: 3\nrobots:\n" + robot(
         "low", "{wheelbase: 0.3, com_z: 0.0, mass: 20}", "    drive: {max_wheel_torque: 200}\n",
