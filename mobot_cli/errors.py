@@ -121,9 +121,16 @@ def cannot_write(path: str | Path, exc: OSError) -> OutputError:
 
 
 class SimulationFault(MobotError):
-    """The physics went wrong during a run (NaN state, a robot left the world)."""
+    """The physics went wrong during a run: a NaN state, a robot that left the world, tipped over,
+    flew or ran away (docs/faults.md). ``robot``, ``step`` and ``kind`` say which, when and what,
+    where known (``kind``: non_finite, out_of_world, tipped_over, flying, runaway, off_floor)."""
 
     exit_code = ExitCode.SIMULATION_FAULT
+
+    def __init__(self, message: str, *, location: Location | None = None, hint: str | None = None,
+                 robot: str | None = None, step: int | None = None, kind: str | None = None):
+        super().__init__(message, location=location, hint=hint)
+        self.robot, self.step, self.kind = robot, step, kind
 
 
 class LiveWorldError(MobotError):

@@ -6,7 +6,19 @@ simulation core consumes them and never reads YAML or searches for files.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
+
+
+@dataclass(frozen=True)
+class FaultLimits:
+    """When a robot's motion is a fault that ends the run (docs/faults.md), and how far its
+    odometry may stray from the truth before a notice says so; a scenario's ``faults:``."""
+
+    max_tilt: float = math.radians(60.0)  # rad: roll or pitch beyond this is tipped over
+    flying_time: float = 1.0  # s touching nothing while above where it last touched something
+    max_speed: float = 20.0  # m/s of the root link, or twice the fastest command if more
+    odom_tolerance: float = 0.25  # m between odometry and ground truth
 
 
 @dataclass(frozen=True)
@@ -19,6 +31,7 @@ class Physics:
     # "bullet": wheels driven by torques through PyBullet's solver (sim/bullet/world.py);
     # "kinematic": robots follow their commanded twist (sim/kinematic/world.py)
     engine: str = "bullet"
+    faults: FaultLimits = FaultLimits()  # checked by the World, so every door gets them
 
     @property
     def dt(self) -> float:
@@ -68,6 +81,10 @@ class DriveSpec:
     wheelbase: float = 0.0  # metres between the front and rear axles (mecanum, omni, ackermann)
     steering_joints: tuple[str, ...] = ()  # ackermann: (left, right) steering joints
     max_steering_angle: float | None = None  # rad, ackermann: the steering joints' limit
+    # Where max_wheel_torque came from: "scenario" (drive.max_wheel_torque), "plugin" (its torque),
+    # "urdf" (the wheel joints' <limit effort>), "mass" (mobot's default for the robot's mass,
+    # assets/description/torque.py) or "default" (20 N*m: a drive made without a description).
+    torque_source: str = field(default="default", compare=False)
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable, Sequence
 
-from mobot_cli.errors import MobotError, OutputError
+from mobot_cli.errors import MobotError, OutputError, SimulationFault
 from mobot_cli.plan import Plan
 from mobot_cli.record.outcome import Status
 from mobot_cli.record.recording import Recording
@@ -45,7 +45,7 @@ def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | 
         timeline = Timeline(plan, world)
         timeline.start()
         recording = Recording(plan, out_dir, resolved_yaml, durable)
-        status, error = Status.OK, None
+        status, error, fault = Status.OK, None, None
         opened: list[Attachment] = []
         try:
             timeline.attach(recording)  # the spawns' records: a robot's CSV opens here
@@ -60,6 +60,7 @@ def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | 
             raise
         except MobotError as exc:
             status, error = Status.FAULT, str(exc)
+            fault = exc if isinstance(exc, SimulationFault) else None
             raise
         except KeyboardInterrupt:
             status = Status.INTERRUPTED
@@ -70,7 +71,7 @@ def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | 
         finally:
             for attachment in opened:
                 attachment.close()
-            record = recording.close(status, error, said=[*world.notices, *timeline.notices])
+            record = recording.close(status, error, said=[*world.notices, *timeline.notices], fault=fault)
     return RunResult(out_dir=out_dir, record=record, expectations=recording.results,
                      notices=list(world.notices))
 

@@ -17,7 +17,7 @@ from pydantic import ValidationError
 
 from mobot_cli.api.numbers import bounded
 from mobot_cli.api.sensors import Latest, Range, Scan, pick, range_of, robot_plan
-from mobot_cli.errors import MobotError, UsageError, did_you_mean
+from mobot_cli.errors import MobotError, SimulationFault, UsageError, did_you_mean
 from mobot_cli.plan import Plan
 from mobot_cli.record.recording import Recording
 from mobot_cli.record.summary import RunRecord, Status
@@ -57,6 +57,7 @@ class Simulation:
             raise
         self._base_dir = Path.cwd()
         self._closed = False
+        self._fault: SimulationFault | None = None  # what ended it, for summary.json's fault record
         self.record: RunRecord | None = None
 
     @classmethod
@@ -152,8 +153,8 @@ class Simulation:
         self._timeline.goto(name, goal)
 
     def goal_status(self, name: str) -> str | None:
-        """How the robot's last goal stands: 'running', 'reached', 'timed_out', 'blocked',
-        'cancelled'; None when it was never given one."""
+        """How the robot's last goal stands: 'running', 'reached', 'reached_by_odometry_only',
+        'timed_out', 'blocked', 'cancelled'; None when it was never given one."""
         record = self._goals.get(name)
         return None if record is None else "running" if isinstance(record, GoalStarted) else record.status
 
@@ -215,8 +216,11 @@ class Simulation:
 
     # -- the end ----------------------------------------------------------------------------
 
-    def close(self, status: Status = Status.OK, error: str | None = None) -> RunRecord | None:
-        """Record the state now, write summary.json (when recording) and free the world."""
+    def close(self, status: Status = Status.OK, error: str | None = None, *,
+                fault: SimulationFault | None = None) -> RunRecord | None:
+        """Record the state now, write summary.json (when recording) and free the world;
+        ``fault``: the SimulationFault that ended it (summary.json's ``fault`` record)."""
+        self._fault = fault or self._fault
         if self._closed:
             return self.record
         self._closed = True
@@ -234,7 +238,8 @@ class Simulation:
                 self._timeline.log()
         except Exception as exc:  # noqa: BLE001 - a world gone bad still gets its summary, saying why
             status, error = Status.ERROR, error or f"{type(exc).__name__}: {exc}"
-        return self._recording.close(status, error, self.step_count)  # type: ignore[union-attr]
+        return self._recording.close(status, error, self.step_count,  # type: ignore[union-attr]
+                                     said=self._timeline.notices, fault=self._fault)
 
     def __enter__(self) -> "Simulation":
         return self
@@ -245,7 +250,8 @@ class Simulation:
         elif issubclass(kind, KeyboardInterrupt):
             self.close(Status.INTERRUPTED)
         else:
-            self.close(Status.FAULT if isinstance(exc, MobotError) else Status.ERROR, str(exc) or repr(exc))
+            self.close(Status.FAULT if isinstance(exc, MobotError) else Status.ERROR, str(exc) or repr(exc),
+                       fault=exc if isinstance(exc, SimulationFault) else None)
 
     def _open(self) -> None:
         if self._closed:

@@ -149,6 +149,8 @@ def run_scenario(env: Environment, scenario: Path, out: Optional[Path], options:
         if bar:
             bar.stop()
         ros2.report(env, bridges, quiet=quiet)
+    # Said during the run (stalled wheels, odometry far from the truth): summary.json has them too.
+    output.notices(env, result.record.notices[len(plan.notices):], quiet=quiet)
     if options.json_:
         output.emit_json(env, result.record.to_dict(), one_line=one_line_json)
     elif not options.quiet:

@@ -30,10 +30,10 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from mobot_cli.api import RobotState, Scan, Simulation
+from mobot_cli.api import RobotState, Scan, Simulation, Status
 from mobot_cli.api.numbers import bounded
 from mobot_cli.api.sensors import pick, robot_plan
-from mobot_cli.errors import UsageError
+from mobot_cli.errors import SimulationFault, UsageError
 from mobot_cli.scenario.limits import (
     MAX_ANGULAR_SPEED,
     MAX_COORDINATE,
@@ -161,14 +161,24 @@ class MobotEnv(gym.Env):
         clipped = tuple(min(max(float(v), lo), hi) for v, lo, hi in zip(action, self._low, self._high))
         linear, angular = clipped[:2]
         self._sim.command(self.robot, linear, angular, linear_y=clipped[2] if self.holonomic else 0.0)
-        self._sim.step(self._steps_per_action)
+        fault = None
+        try:
+            self._sim.step(self._steps_per_action)
+        except SimulationFault as exc:  # it tipped over, flew, ran away: the episode ends here
+            fault = exc
         self._count += 1
         state, scan = self._sim.state(self.robot), self._scan()
         obs = self._observation(state, scan)
         scan_m = self._finite(scan) if self._lidar else None
         outcome = StepOutcome(state, self._goal, clipped, self._count, scan_m)
         reward = float(self.reward_fn(outcome))
-        return obs, reward, bool(self.terminated_fn(outcome)), False, self._info(scan)
+        info = self._info(scan)
+        if fault is None:
+            return obs, reward, bool(self.terminated_fn(outcome)), False, info
+        info["fault"] = {"robot": fault.robot, "step": fault.step, "kind": fault.kind, "message": str(fault)}
+        self._sim.close(Status.FAULT, str(fault), fault=fault)
+        self._sim = None  # reset() next
+        return obs, reward, True, False, info
 
     def close(self) -> None:
         self._close_sim()

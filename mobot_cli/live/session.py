@@ -23,7 +23,8 @@ from mobot_cli.record.summary import LiveInfo, RunRecord, Status
 from mobot_cli.scenario.goal_model import GoalFields, GotoSpec
 from mobot_cli.scenario.goals import goal_step
 from mobot_cli.scenario.units import spawn_pose, steps
-from mobot_cli.sim.bullet.world import FLOOR_OF_THE_WORLD, World
+from mobot_cli.sim.bullet.faults import FLOOR_OF_THE_WORLD
+from mobot_cli.sim.bullet.world import World
 from mobot_cli.sim.holonomic import KINDS as HOLONOMIC
 from mobot_cli.timeline.goals import GoalEnded, GoalStarted
 from mobot_cli.timeline.loop import Timeline
@@ -205,10 +206,12 @@ class Session:
         return [{"name": name, **entity_state.fields(self.world.kinematics(name))} for name in self.robots]
 
     def fault(self, exc: SimulationFault) -> bool:
-        """Remove robots whose state went bad; False when none can be blamed."""
-        bad = [name for name in self.world.names() if not _healthy(self.world, name)]
+        """Remove the robot the fault names (or those whose state went bad); False when none can be blamed."""
+        names = self.world.names()
+        bad = [exc.robot] if exc.robot in names else [name for name in names if not _healthy(self.world, name)]
         for name in bad:
             self.timeline.delete(name, "fault", message=str(exc), last_row=False)
+            self.timeline.notices.append(f"robot '{name}' was taken out of the live world: {exc}")
         return bool(bad)
 
     # -- replies ----------------------------------------------------------------------------

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Optional, Sequence
 from mobot_cli import __version__
 from mobot_cli.common.files import write_text_atomic
 from mobot_cli.common.installed import version
-from mobot_cli.errors import OutputError, cannot_write
+from mobot_cli.errors import OutputError, SimulationFault, cannot_write
 from mobot_cli.plan import Plan, RobotPlan
 from mobot_cli.record.outcome import SUMMARY, Status
 from mobot_cli.record.sinks import CsvSink
@@ -47,13 +47,24 @@ class _Life:
     distance: float = 0.0
     readings: dict[str, int] = field(default_factory=dict)  # sensor name -> readings recorded
     goals: list[dict] = field(default_factory=list)  # GoalRecord fields, and the distance at the start
+    worst: tuple[float, int] = (0.0, 0)  # the largest odometry position error so far (m), its step
 
-    def add(self, state: RobotState) -> None:
+    def add(self, state: RobotState, step: int) -> None:
         if self.first is None:
             self.first = state
-        elif self.last is not None:
-            self.distance += math.hypot(state.true_x - self.last.true_x, state.true_y - self.last.true_y)
+        else:
+            if self.last is not None:
+                self.distance += math.hypot(state.true_x - self.last.true_x, state.true_y - self.last.true_y)
+            position = odom_error(self.first, state)[0]
+            if position > self.worst[0]:  # NaN never is: a broken state is not the worst
+                self.worst = (position, step)
         self.last = state
+
+    def failed(self, kind: str) -> None:
+        """Its robot faulted: the goal it was driving to failed (tipped over: ``flipped``)."""
+        for goal in self.goals:
+            if goal["status"] == "unfinished":
+                goal.update(status="failed", failure="flipped" if kind == "tipped_over" else kind)
 
     def started(self, record: GoalStarted, rate: int) -> None:
         self.goals.append({"command": _command(record.index), "kind": record.kind, "status": "unfinished",
@@ -81,7 +92,8 @@ class _Life:
                             pitch=_r(s.true_pitch), yaw=_r(s.true_yaw)),
             final_odom=OdomPose(x=_r(s.odom_x), y=_r(s.odom_y), yaw=_r(s.odom_yaw)),
             distance=_r(self.distance), collisions=s.collisions,
-            odom_error=OdomError(position=_r(position), yaw=_r(yaw)), goals=goals,
+            odom_error=OdomError(position=_r(position), yaw=_r(yaw), max_position=_r(self.worst[0]),
+                                 max_position_at=_r(self.worst[1] / rate_hz)), goals=goals,
             sensors=[self._sensor(spec, rate_hz) for spec in self.plan.sensors])
 
     def _sensor(self, spec, rate_hz: int) -> SensorRecord:
@@ -196,12 +208,14 @@ class Recording:
             sink.write(sample)
         lives = self._lives
         for key, state in sample.states.items():
-            lives[key].add(state)
+            lives[key].add(state, sample.step)
         self.last_step = sample.step
 
     def close(self, status: Status, error: str | None = None, steps: int | None = None,
-              live: LiveInfo | None = None, said: Sequence[str] = ()) -> RunRecord:
-        """Close every writer and write summary.json last (``said``: notices from during the run); returns the record.
+              live: LiveInfo | None = None, said: Sequence[str] = (),
+              fault: SimulationFault | None = None) -> RunRecord:
+        """Close every writer and write summary.json last (``said``: notices from during the run;
+        ``fault``: what ended the run, when it names a robot); returns the record.
 
         Raises OutputError when a file could not be written here (an earlier failure was
         raised when it happened); every writer is closed all the same."""
@@ -217,7 +231,7 @@ class Recording:
                 status, error = Status.ERROR, str(self.failure)
             elif self.plan.expectations and status == Status.OK:
                 self.results = self.checker.results()
-            record = self._record(status, error, self.last_step if steps is None else steps, live, said)
+            record = self._record(status, error, self.last_step if steps is None else steps, live, said, fault)
             self._save(record)
         if self.failure is not raised:
             raise self.failure
@@ -231,7 +245,7 @@ class Recording:
             self._failed(exc)
 
     def _record(self, status: Status, error: str | None, steps: int, live: LiveInfo | None,
-                said: Sequence[str] = ()) -> RunRecord:
+                said: Sequence[str] = (), fault: SimulationFault | None = None) -> RunRecord:
         from mobot_cli.record.summary import ExpectationResult, Expectations, RunRecord, Versions
 
         wall = time.perf_counter() - self._started
@@ -241,17 +255,37 @@ class Recording:
             failed = sum(not r.passed for r in self.results)
             expectations = Expectations(passed=len(self.results) - failed, failed=failed,
                                         results=[ExpectationResult(**r.as_dict()) for r in self.results])
+        fault_record = self._fault(fault)  # before the robots' records: it marks a goal failed
         return RunRecord(
             status=status, error=error, scenario=plan.name, world=plan.world.name, seed=plan.seed,
             versions=Versions(mobot=__version__, pybullet=version("pybullet"), python=platform.python_version()),
             steps=steps, sim_time=_r(sim_time), wall_time=round(wall, 3),
             real_time_factor=round(sim_time / wall, 2) if wall > 0 else None,
             physics_rate_hz=plan.physics.rate_hz, log_rate_hz=_r(plan.physics.rate_hz / plan.log_every),
-            notices=[*plan.notices, *said],
+            notices=[*plan.notices, *said, *self._disagreements()],
             robots={key: life.record(life.deleted_at if life.deleted_at is not None else sim_time,
                                      plan.physics.rate_hz)
                     for key, life in self._lives.items() if life.last is not None},
-            expectations=expectations, live=live)
+            expectations=expectations, live=live, fault=fault_record)
+
+    def _fault(self, fault: SimulationFault | None):
+        """The fault's record, its robot's running goal marked failed; None unless a robot is named."""
+        from mobot_cli.record.summary import FaultRecord
+
+        if fault is None or fault.robot is None or fault.step is None:
+            return None
+        key = self._keys.get(fault.robot)
+        if key is not None:
+            self._lives[key].failed(fault.kind or "fault")
+        return FaultRecord(robot=fault.robot, step=fault.step, time=_r(fault.step / self.plan.physics.rate_hz),
+                           kind=fault.kind or "fault")
+
+    def _disagreements(self) -> list[str]:
+        """A notice for each robot whose odometry strayed from the truth beyond the tolerance."""
+        tolerance, rate = self.plan.physics.faults.odom_tolerance, self.plan.physics.rate_hz
+        return [f"robot '{key}': odometry and ground truth disagree by {life.worst[0]:.2f} m at "
+                f"{life.worst[1] / rate:g} s (step {life.worst[1]}), beyond faults.odom_tolerance {tolerance:g} m"
+                for key, life in self._lives.items() if life.worst[0] > tolerance]
 
 
 def make_sinks(plan: Plan, out_dir: Path, sweeps: dict | None = None) -> list[Sink]:

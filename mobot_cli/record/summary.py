@@ -88,6 +88,8 @@ class OdomError(_Record):
 
     position: float
     yaw: float
+    max_position: Optional[float] = None  # m, the largest position error over the log rows
+    max_position_at: Optional[float] = None  # s, when it was largest
 
 
 @_record
@@ -109,13 +111,17 @@ class GoalRecord(_Record):
 
     command: Optional[int]  # its index in the robot's commands list; None: a live goto request
     kind: str  # goto | path | patrol | coverage
-    status: str  # reached | timed_out | blocked | cancelled | unfinished (the run ended first)
+    # reached | reached_by_odometry_only (odometry says so, the truth is farther than its tolerance
+    # plus faults.odom_tolerance) | timed_out | blocked | cancelled | unfinished (the run ended
+    # first) | failed (its robot faulted: ``failure`` says how)
+    status: str
     started_at: float
     ended_at: Optional[float] = None
     time: float  # s from start to end (or to the end of the record)
     path_length: float  # m the robot truly drove meanwhile (from the log rows)
     error: Optional[float] = None  # m from the goal's last point (a patrol's first) when it ended
     laps: Optional[int] = None  # patrol: rounds completed
+    failure: Optional[str] = None  # failed: flipped | flying | runaway | non_finite | out_of_world | off_floor
 
 
 @_record
@@ -157,6 +163,16 @@ class Expectations(_Record):
 
 
 @_record
+class FaultRecord(_Record):
+    """The fault that ended a run (status ``fault``): which robot, when, what happened."""
+
+    robot: str
+    step: int
+    time: float
+    kind: str  # non_finite | out_of_world | tipped_over | flying | runaway | off_floor
+
+
+@_record
 class Versions(_Record):
     mobot: str
     pybullet: Optional[str] = None
@@ -192,6 +208,7 @@ class RunRecord(_Record):
     robots: dict[str, RobotRecord] = dataclasses.field(default_factory=dict)
     expectations: Optional[Expectations] = None
     live: Optional[LiveInfo] = None
+    fault: Optional[FaultRecord] = None
 
     @property
     def failed_expectations(self) -> int:

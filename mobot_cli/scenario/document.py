@@ -51,6 +51,8 @@ def resolved_document(scenario: Scenario, plan: Plan, base_dir: Path) -> dict[st
         "settle": plan.settle_steps / rate,
         "log": {"rate_hz": scenario.log.rate_hz or rate / plan.log_every, "formats": list(scenario.log.formats)},
         "robots": robots,
+        **({"faults": scenario.faults.model_dump(exclude_defaults=True)}
+           if scenario.faults.model_dump(exclude_defaults=True) else {}),
         **_events(scenario, plan, base_dir),
         **expect_document(plan.expectations, rate),
         **_ros2(scenario, plan),

@@ -17,9 +17,11 @@ from mobot_cli.scenario.expect_model import ExpectSpec
 from mobot_cli.scenario.goal_model import GoalFields
 from mobot_cli.scenario.limits import (
     FLEET_NAME_RE,
+    MAX_COORDINATE,
     MAX_MULTIPLIER,
     MAX_NAMESPACE_LENGTH,
     MAX_RATE_HZ,
+    MAX_SPEED,
     MAX_WHEEL_ACCELERATION,
     MAX_WHEEL_RADIUS,
     MAX_WHEEL_SEPARATION,
@@ -59,6 +61,16 @@ class PhysicsSpec(Strict):
     gravity: Annotated[Vector3, AfterValidator(gravity_length)] = (0.0, 0.0, -9.81)
     solver_iterations: Annotated[Int, Field(gt=0, le=1000)] = 50
     engine: Annotated[str, AfterValidator(check_engine)] = "bullet"
+
+
+class FaultsSpec(Strict):
+    """``faults:``: when a robot's motion ends the run as a fault, and the odometry tolerance
+    (docs/faults.md); the defaults suit ground robots."""
+
+    max_tilt: Annotated[Float, Field(gt=0, le=180)] = 60.0  # degrees of roll or pitch: tipped over
+    flying_time: Duration = 1.0  # s touching nothing while above its last support: flying
+    max_speed: Annotated[Float, Field(gt=0, le=MAX_SPEED * 10)] = 20.0  # m/s: runaway speed
+    odom_tolerance: Annotated[Float, Field(gt=0, le=MAX_COORDINATE)] = 0.25  # m, odometry vs truth
 
 
 class LogSpec(Strict):
@@ -263,6 +275,7 @@ class Scenario(Strict):
     seed: Annotated[Int, Field(ge=0, lt=2**32)] = 0
     settle: Seconds = 0.5
     log: LogSpec = LogSpec.model_construct()  # all defaults (see physics)
+    faults: FaultsSpec = FaultsSpec.model_construct()  # all defaults (see physics)
     robots: list[RobotSpec] = []
     events: list[EventSpec] = []
     expect: list[ExpectSpec] = []

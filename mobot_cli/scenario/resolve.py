@@ -9,7 +9,7 @@ from mobot_cli.assets.world.loaded import LoadedWorld
 from mobot_cli.assets.world.worldplan import load_world
 from mobot_cli.common import cache
 from mobot_cli.errors import MobotError, ScenarioError
-from mobot_cli.plan import Physics, Plan, Ros2Settings
+from mobot_cli.plan import FaultLimits, Physics, Plan, Ros2Settings
 from mobot_cli.scenario.events import resolve_events
 from mobot_cli.scenario.expect_resolve import resolve_expectations
 from mobot_cli.scenario.model import Scenario
@@ -36,8 +36,12 @@ def resolve(scenario: Scenario, source: Source) -> Plan:
     if log_rate is not None and abs(rate / log_every - log_rate) > 1e-9:
         notices.append(f"log.rate_hz {scenario.log.rate_hz:g} is not a whole number of physics steps at "
                        f"{rate} Hz: logging every {log_every} steps ({rate / log_every:.4g} Hz)")
+    given = scenario.faults
+    faults = FaultLimits(max_tilt=math.radians(given.max_tilt), flying_time=given.flying_time,
+                         max_speed=given.max_speed, odom_tolerance=given.odom_tolerance)
     physics = Physics(rate_hz=rate, gravity=tuple(scenario.physics.gravity),
-                      solver_iterations=scenario.physics.solver_iterations, engine=scenario.physics.engine)
+                      solver_iterations=scenario.physics.solver_iterations, engine=scenario.physics.engine,
+                      faults=faults)
     base_dir = source.file.parent.resolve() if source.file else Path.cwd()
     world = _world(scenario, source, base_dir)
     notices.extend(world.notices)

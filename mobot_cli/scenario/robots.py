@@ -15,6 +15,7 @@ from mobot_cli.assets.description.describe import load_robot
 from mobot_cli.assets.description.drive import drive_from_joints
 from mobot_cli.assets.description.holonomic import wheelbase_of
 from mobot_cli.assets.description.robot import NO_DRIVE, RobotDescription
+from mobot_cli.assets.description.torque import mass_torque
 from mobot_cli.assets.world.loaded import LoadedWorld, WorldRobot
 from mobot_cli.common.transforms import quat_from_rpy
 from mobot_cli.errors import Location, MobotError, ScenarioError
@@ -153,7 +154,20 @@ class RobotResolver:
                                          "{type: holonomic} if this one is, or drop linear_y.")
 
     def drive(self, spec: RobotSpec, desc: RobotDescription, path: tuple) -> DriveSpec | None:
-        """The detected drive with the spec's overrides merged in, of the kind ``drive.type`` asks."""
+        """The detected drive with the spec's overrides merged in, of the kind ``drive.type`` asks,
+        its torque limit chosen last."""
+        merged = self._drive_of_kind(spec, desc, path)
+        if merged is None:
+            return None
+        if spec.drive is not None and spec.drive.max_wheel_torque is not None:
+            return dataclasses.replace(merged, torque_source="scenario")
+        if merged.torque_source in ("mass", "default"):  # the radius may be the scenario's
+            torque = mass_torque(desc.total_mass, merged.wheel_radius,
+                                 len(merged.left_joints) + len(merged.right_joints))
+            merged = dataclasses.replace(merged, max_wheel_torque=torque, torque_source="mass")
+        return merged
+
+    def _drive_of_kind(self, spec: RobotSpec, desc: RobotDescription, path: tuple) -> DriveSpec | None:
         over = spec.drive
         if over is None:
             return desc.drive

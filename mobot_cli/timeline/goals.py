@@ -8,6 +8,9 @@ moved less than ``BLOCKED_DISTANCE`` and turned less than ``BLOCKED_TURN`` in
 ``BLOCKED_SECONDS``: it pushes against something) or ``cancelled`` (a live command or goal
 took over); the robot is stopped and ``GoalEnded`` recorded. Progress is judged on the true
 pose, so wheels spinning against a wall count as blocked even if the encoders say they move.
+A goal driven on odometry that odometry says is reached is checked on the true pose as well:
+farther than its tolerance plus ``faults.odom_tolerance`` from the goal, it ends
+``reached_by_odometry_only`` (the record's ``error`` says how far it truly is).
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ CONTROL_RATE_HZ = 20  # nav2's controller_frequency default
 BLOCKED_SECONDS = 1.0
 BLOCKED_DISTANCE = 0.02  # m
 BLOCKED_TURN = 0.05  # rad
-STATUSES = ("reached", "timed_out", "blocked", "cancelled")
+STATUSES = ("reached", "reached_by_odometry_only", "timed_out", "blocked", "cancelled")
 
 
 @dataclass(frozen=True)
@@ -70,6 +73,7 @@ class Driver:
         self.lap_ends: list[int] = []  # patrol: route vertices that close a lap
         x, y, yaw = world.odom_origin(name)
         self.odom = Planar(x, y, yaw)
+        self.odom_tolerance = world.physics.faults.odom_tolerance
 
     @property
     def finished(self) -> bool:
@@ -166,6 +170,9 @@ class Driver:
             self.world.set_command(self.name, 0.0, 0.0)
         target = goal.points[0] if goal.kind == "patrol" else goal.points[-1]
         error = math.hypot(state.true_x - target[0], state.true_y - target[1])
+        if status == "reached" and goal.control.localization == "odometry" and \
+                error > goal.control.tolerance + self.odom_tolerance:
+            status = "reached_by_odometry_only"
         laps = sum(self.pursuit.passed >= end for end in self.lap_ends) if goal.kind == "patrol" else None
         self.emit(GoalEnded(step, self.name, goal.index, goal.kind, status, self.started, error, laps))
         self.current, self.pursuit, self.lap_ends = None, None, []

@@ -55,7 +55,9 @@ class Timeline:
         self._consume: Consumer = self._held.append
         self._inputs: list[Callable[[], None]] = []
         self._on_refused = on_refused  # None: a refused scripted event ends the run
-        self.notices: list[str] = []  # said during the run (the ROS 2 bridge's drops): summary.json's, after the plan's
+        # Said during the run (the ROS 2 bridge's drops, the world's stalled wheels): summary.json's,
+        # after the plan's. The world's own list, so what the world says is in it too.
+        self.notices: list[str] = world.notices
         self.resets = 0
         # ``advance()``: one physics step. The world's own step, bound once: no call in between on
         # every step (the world of a timeline is never replaced).

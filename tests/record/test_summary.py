@@ -64,7 +64,7 @@ def test_the_file_keeps_the_declared_key_order_and_two_space_indents():
     data = json.loads(_run().to_json())
     assert list(data) == ["status", "error", "scenario", "world", "seed", "versions", "steps", "sim_time",
                           "wall_time", "real_time_factor", "physics_rate_hz", "log_rate_hz", "notices", "robots",
-                          "expectations", "live"]
+                          "expectations", "live", "fault"]
     assert list(data["robots"]["r1"]) == ["name", "namespace", "source", "spawned_at", "deleted_at", "final_pose",
                                           "final_odom", "distance", "collisions", "odom_error", "sensors", "goals"]
     assert _run().to_json().splitlines()[1] == '  "status": "ok",'

@@ -15,6 +15,7 @@ Gazebo friction is that of mecanum rollers (process.roller_links).
 
 from __future__ import annotations
 
+import dataclasses
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -24,6 +25,7 @@ from mobot_cli.assets.description.plugin_values import disagreement as _disagree
 from mobot_cli.assets.description.plugin_values import number as _number
 from mobot_cli.assets.description.plugin_values import texts as _texts
 from mobot_cli.assets.description.steering import Detected
+from mobot_cli.assets.description.torque import with_torque
 from mobot_cli.assets.description.wheels import Wheel, wheel
 from mobot_cli.errors import DescriptionError, Location, Notice, did_you_mean
 from mobot_cli.plan import DriveSpec
@@ -40,14 +42,22 @@ def detect_drive(urdf: ET.Element | str, *, notices: list[Notice] | None = None,
 
 def detect(urdf: ET.Element | str, *, notices: list[Notice] | None = None,
            source: Path | None = None) -> Detected:
-    """The robot's drive (diff, skid or Ackermann), or the name of one mobot refuses.
+    """The robot's drive (diff, skid, mecanum, omni or Ackermann) with its wheel torque limit
+    (torque.py), or the name of one mobot refuses.
 
     Plugins first, as Gazebo drives by them: Ackermann, then the ones mobot refuses (tracks,
-    tricycles), then diff-drive and skid-steer, then other drive plugins (refused); without one,
-    steering joints make a car (steering.py), and wheels fixed to the body a diff or skid drive.
+    tricycles), then mecanum and planar-move, then diff-drive and skid-steer, then other drive
+    plugins (refused); without one, steering joints make a car (steering.py), wheels with roller
+    friction a mecanum base (holonomic.py), and wheels fixed to the body a diff or skid drive.
     """
     robot = ET.fromstring(urdf) if isinstance(urdf, str) else urdf
-    notices = notices if notices is not None else []
+    found = _detect(robot, notices if notices is not None else [], source)
+    if found.spec is None:
+        return found
+    return dataclasses.replace(found, spec=with_torque(robot, found.spec))
+
+
+def _detect(robot: ET.Element, notices: list[Notice], source: Path | None) -> Detected:
     tree = LinkTree(robot)
     if tree.root is None:
         return Detected(None)
@@ -106,8 +116,8 @@ def drive_from_joints(urdf: ET.Element | str, left: tuple[str, ...], right: tupl
                     or "Name continuous wheel joints.")
             wheels.append(wheel(tree, name, strict=False))
     sides = {**{n: "left" for n in left}, **{n: "right" for n in right}}
-    return _spec(wheels, source="scenario", notices=notices, file=source,  # type: ignore[arg-type]
-                 sides=sides, radius=radius, separation=separation)
+    return with_torque(robot, _spec(wheels, source="scenario", notices=notices, file=source,  # type: ignore[arg-type]
+                                    sides=sides, radius=radius, separation=separation))
 
 
 def _drive_plugin(robot: ET.Element) -> ET.Element | None:
@@ -187,9 +197,9 @@ def _spec(wheels: list[Wheel], *, source: str, notices: list[Notice], file: Path
     if len(left) > 1 or len(right) > 1:
         wheelbase = max(w.x for w in wheels) - min(w.x for w in wheels)
         multiplier = _separation_multiplier(abs(separation), wheelbase)
-    extra = {}
+    extra: dict = {}
     if torque is not None and torque > 0:
-        extra["max_wheel_torque"] = torque
+        extra.update(max_wheel_torque=torque, torque_source="plugin")
     if rim_accel is not None and rim_accel > 0:
         # gazebo_ros limits the change of rim speed (m/s^2); DriveSpec wants rad/s^2.
         extra["max_wheel_acceleration"] = rim_accel / radius

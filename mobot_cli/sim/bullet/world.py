@@ -17,6 +17,7 @@ from mobot_cli.plan import Physics, RobotPlan, SpawnPose, WorldPlan
 from mobot_cli.sim import clearance, entity, parts, placement, static_shapes, surroundings
 from mobot_cli.sim.bullet import friction
 from mobot_cli.sim.bullet.clients import Stage, connect, release
+from mobot_cli.sim.bullet.faults import Health
 from mobot_cli.sim.bullet.holonomic import ROLLER_FRICTION, HolonomicDrive
 from mobot_cli.sim.bullet.joints import set_initial_positions
 from mobot_cli.sim.bullet.robot import SimRobot
@@ -34,10 +35,8 @@ __all__ = ["World", "RobotState"]
 # Encoder odometry is folded in at this rate (diff_drive_controller's default update rate);
 # reads bring it up to date as well, so no reader sees stale odometry.
 ODOMETRY_RATE_HZ = 50
-# A robot below this height has fallen out of the world.
-FLOOR_OF_THE_WORLD = -10.0  # m
-# Robots are checked for NaN and falling at this rate: a fault is caught within 0.1 s of
-# simulated time, and the check costs nothing measurable per step.
+# Robots are checked for faults (sim/bullet/faults.py) and stalls at this rate: a fault is
+# caught within 0.1 s of simulated time, and the check costs little per step.
 HEALTH_RATE_HZ = 10
 # Inertia as written (not recomputed from collision shapes), and cylinders as true cylinders:
 # PyBullet's default 40-sided hulls rolled 1 mm (3 %) too large on turtlebot3's 33 mm wheels.
@@ -72,7 +71,9 @@ class World:
         self._contact_every = max(1, round(physics.rate_hz / CONTACT_RATE_HZ))
         self._sensing: Sensing | None = None  # made when the first robot with sensors arrives
         self._clearance: dict[str, float] = {}  # robot -> how far its clearance is measured (m)
-        self.notices: list[str] = []  # said once during the run by robots' drives (a clamped car turn)
+        self._health = Health(self._cid, physics.faults, physics.rate_hz)
+        # Said once during the run (a stalled robot, a clamped car turn); a Timeline hands them on to summary.json.
+        self.notices: list[str] = []
         if stage is not None:
             self._probes, self._statics, self._solids, self._ground = \
                 stage.probes, stage.statics, stage.solids, stage.ground
@@ -100,6 +101,7 @@ class World:
         self._contacts = ContactCounter()
         self._sensing = None  # rebuilt with the first robot with sensors: its noise restarts too
         self._clearance = {}
+        self._health = Health(self._cid, self.physics.faults, self.physics.rate_hz)
         self._build(self.plan)
 
     def _build(self, world: WorldPlan) -> None:
@@ -204,6 +206,7 @@ class World:
             self._sprung.append(sim_robot)
         if isinstance(sim_robot.drive, HolonomicDrive):
             self._pushed.append(sim_robot.drive)
+        self._health.watch(sim_robot, self._steps)
 
     def _settle_in(self, uid: int, robot: RobotPlan) -> None:
         """Place the robot (z: auto), refuse overlaps, set contact and damping defaults."""
@@ -280,6 +283,7 @@ class World:
             entity.restore(robot, saved)
             raise
         entity.set_twist(robot, linear, angular)
+        self._health.moved(robot, self._steps)
 
     def remove(self, name: str) -> None:
         """Delete a robot from the world."""
@@ -291,6 +295,7 @@ class World:
         if self._sensing is not None:
             self._sensing.forget(name)
         self._clearance.pop(name, None)
+        self._health.forget(name)
         if robot in self._ramping:
             self._ramping.remove(robot)
         if robot in self._sprung:
@@ -303,6 +308,7 @@ class World:
         ValueError for a robot without a drive, or a sideways command to one that is not holonomic."""
         robot = self._robot(name)
         robot.set_command(linear, angular, linear_y)
+        self._health.commanded(name, math.hypot(linear, linear_y))
         if robot.drive.ramping and robot not in self._ramping:
             self._ramping.append(robot)
 
@@ -327,32 +333,23 @@ class World:
                     if robot.drive.trim is not None:
                         robot.drive.trim_step(self._odom_every * self.physics.dt)
         if self._steps % self._check_every == 0:
-            for robot in self._robots.values():
-                self._check(robot)
+            self._check()
         if self._steps % self._contact_every == 0:
             self._contacts.sample(self._cid, self._robots.values())
 
-    def _check(self, robot: SimRobot) -> None:
-        pos = p.getBasePositionAndOrientation(robot.body, physicsClientId=self._cid)[0]
-        # One comparison chain on the hot path; NaN and inf fail it, then we look closer.
-        if FLOOR_OF_THE_WORLD < pos[2] < math.inf and abs(pos[0]) + abs(pos[1]) < math.inf:
-            return
-        self._pristine = False  # a faulted world is not kept for the next run
-        if not all(math.isfinite(v) for v in pos):
-            raise SimulationFault(
-                f"robot '{robot.name}' has a non-finite state at step {self._steps}",
-                hint="Raise physics.rate_hz, or check the robot's masses and inertias.")
-        if pos[2] < FLOOR_OF_THE_WORLD:
-            fell = f"robot '{robot.name}' fell out of the world (z = {pos[2]:.1f} m) at step {self._steps}"
-            if not self._collides(robot.body):
-                raise SimulationFault(f"{fell}: it has no collision geometry, so nothing holds it up",
-                                      hint="Add <collision> to its links (a box the size of its body will do).")
-            raise SimulationFault(fell, hint="Is there a floor under its spawn pose?")
-
-    def _collides(self, body: int) -> bool:
-        """True when any link of ``body`` has a collision shape PyBullet can touch."""
-        links = range(-1, p.getNumJoints(body, physicsClientId=self._cid))
-        return any(p.getCollisionShapeData(body, link, physicsClientId=self._cid) for link in links)
+    def _check(self) -> None:
+        """Faults end the run (SimulationFault); a stall is said once (``notices``)."""
+        health, step = self._health, self._steps
+        try:
+            for robot in self._robots.values():
+                health.check(robot, step)
+                if robot.drive is not None:
+                    notice = health.stall(robot, step)
+                    if notice:
+                        self.notices.append(notice)
+        except SimulationFault:
+            self._pristine = False  # a faulted world is not kept for the next run
+            raise
 
     def sense(self, due: list[tuple[str, str]]) -> list[object]:
         """Readings of the (robot, sensor name) pairs due now, computed together (sim/sensing/rig.py)."""

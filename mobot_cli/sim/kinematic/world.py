@@ -311,7 +311,8 @@ class KinematicWorld(World):
             if not np.isfinite(floor):
                 raise SimulationFault(
                     f"robot '{mover.robot.name}' drove off the floor (nothing under it) at step {self._steps}",
-                    hint="Keep it on the world's floor, or give the world a ground plane.")
+                    hint="Keep it on the world's floor, or give the world a ground plane.",
+                    robot=mover.robot.name, step=self._steps, kind="off_floor")
             if abs(floor - mover.floor) > FLOOR_TOLERANCE:  # not the rays' rounding
                 mover.moved, mover.travel = self._steps, mover.travel + abs(floor - mover.floor)
                 mover.used += abs(floor - mover.floor)
