@@ -71,7 +71,7 @@ def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | 
         finally:
             for attachment in opened:
                 attachment.close()
-            record = recording.close(status, error, said=[*world.notices, *timeline.notices], fault=fault)
+            record = recording.close(status, error, said=timeline.notices, fault=fault)  # the world's too
     return RunResult(out_dir=out_dir, record=record, expectations=recording.results,
                      notices=list(world.notices))
 

@@ -149,13 +149,12 @@ def run_scenario(env: Environment, scenario: Path, out: Optional[Path], options:
         if bar:
             bar.stop()
         ros2.report(env, bridges, quiet=quiet)
-    # Said during the run (stalled wheels, odometry far from the truth): summary.json has them too.
+    # Said during the run (stalled wheels, a car's clamped turn, odometry far from the truth): in summary.json too.
     output.notices(env, result.record.notices[len(plan.notices):], quiet=quiet)
     if options.json_:
         output.emit_json(env, result.record.to_dict(), one_line=one_line_json)
     elif not options.quiet:
         output.run_table(env, result.record, result.out_dir)
-    output.notices(env, result.notices, quiet=quiet)
     output.expectations(env, result.expectations, verbose=not quiet)
     if watcher:
         watcher.replay(result.out_dir)
