@@ -285,7 +285,7 @@ class Session:
         self.history_file.close()
         if status != Status.FAULT:
             self.timeline.log()
-        said = [*self.timeline.world.notices, *self.timeline.notices]  # the drives', then the bridge's
+        said = self.timeline.notices  # the world's list: the drives' and the bridge's
         return self.recording.close(status, error, self.step, live, said=said)
 
 
