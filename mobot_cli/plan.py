@@ -92,6 +92,8 @@ class GoalControl:
     yaw_tolerance: float = 0.05  # rad, for a goal's final heading
     localization: str = "odometry"  # "odometry" (the robot's own odom_*) | "ground_truth"
     timeout: int | None = None  # physics steps from the start; None: no limit
+    planner: str | None = None  # "astar": plan around the world's obstacles (timeline/planner.py); None: straight
+    inflation: float = 0.0  # m: the planner keeps the robot's centre this far from obstacles
 
 
 @dataclass(frozen=True)

@@ -109,13 +109,14 @@ class GoalRecord(_Record):
 
     command: Optional[int]  # its index in the robot's commands list; None: a live goto request
     kind: str  # goto | path | patrol | coverage
-    status: str  # reached | timed_out | blocked | cancelled | unfinished (the run ended first)
+    status: str  # reached | timed_out | blocked | cancelled | unreachable | unfinished (the run ended first)
     started_at: float
     ended_at: Optional[float] = None
     time: float  # s from start to end (or to the end of the record)
     path_length: float  # m the robot truly drove meanwhile (from the log rows)
     error: Optional[float] = None  # m from the goal's last point (a patrol's first) when it ended
     laps: Optional[int] = None  # patrol: rounds completed
+    reason: Optional[str] = None  # unreachable: why (planner: astar found no way there)
 
 
 @_record
