@@ -36,7 +36,8 @@ class Occupancy:
 
     def inflated(self, radius: float) -> np.ndarray:
         """The occupied cells grown by ``radius`` (m)."""
-        return inflate(self.occupied, radius / self.grid.cell) if radius > 0 else self.occupied.copy()
+        # 1e-9: 0.3 / 0.1 is 2.9999999999999996 in floats, and a radius of 3 cells must reach 3 cells
+        return inflate(self.occupied, radius / self.grid.cell + 1e-9) if radius > 0 else self.occupied.copy()
 
 
 def floor_under(world: WorldPlan, starts: list[tuple[float, float, float]]) -> float:
