@@ -114,7 +114,8 @@ BOXES = """<?xml version='1.0'?>
   <model name='shelf'><static>true</static><pose>-1 -1 2.5 0 0 0</pose><link name='l'>
     <collision name='c'><geometry><box><size>0.4 0.4 0.2</size></box></geometry></collision></link></model>
   <model name='post'><static>true</static><pose>-1 0.4 0.5 0 0 0</pose><link name='l'>
-    <collision name='c'><geometry><cylinder><radius>0.2</radius><length>1</length></cylinder></geometry></collision></link></model>
+    <collision name='c'><geometry><cylinder><radius>0.2</radius><length>1</length></cylinder></geometry>
+    </collision></link></model>
 </world></sdf>
 """
 
