@@ -280,6 +280,7 @@ class Ros2Settings:
     cmd_vel_timeout_steps: int | None = None  # stop a robot whose /cmd_vel went quiet this long
     ignore_fastdds_type_information: bool = True  # Fast DDS 3 (Kilted) sends some Cyclone cannot parse
     world_frame: bool = True  # world -> <prefix>odom on /tf_static; off when a localizer owns map -> odom
+    map: bool = False  # the world's occupancy grid on /map (ros2/map_topic.py)
 
 
 @dataclass(frozen=True)

@@ -64,3 +64,16 @@ def _number(value: float) -> str:
     if not math.isfinite(value):
         raise ValueError(f"map metadata must be finite, not {value}")
     return repr(round(value, 9))
+
+
+def occupancy_grid_cdr(cells: np.ndarray, resolution: float, origin: tuple[float, float, float],
+                       stamp: tuple[int, int], frame_id: str = "map") -> bytes:
+    """nav_msgs/OccupancyGrid in CDR, as map_server publishes a map: rows from the origin up,
+    ``map_load_time`` the stamp, the origin's yaw as a quaternion about z."""
+    from mobot_cli.ros.sensor_cdr import CdrWriter
+
+    height, width = cells.shape
+    x, y, yaw = origin
+    out = CdrWriter().header(stamp, frame_id).pack("iI", *stamp).pack("f", resolution).pack("II", width, height)
+    out.pack("7d", x, y, 0.0, 0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
+    return out.sequence(np.ascontiguousarray(cells, dtype=np.int8).reshape(-1), 1).bytes()

@@ -56,3 +56,20 @@ def test_a_negated_map_reads_the_other_way_round(tmp_path):
 def test_non_finite_metadata_is_refused():
     with pytest.raises(ValueError, match="finite"):
         yaml_text("map.pgm", 0.05, (float("nan"), 0.0, 0.0))
+
+
+def test_occupancy_grid_bytes_are_rosbags_own():
+    from rosbags.typesys import Stores, get_typestore
+
+    from mobot_cli.ros.map_files import occupancy_grid_cdr
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    cells = cells_with_corners()
+    data = occupancy_grid_cdr(cells, 0.05, (-1.25, 2.5, 0.5), (3, 250), "world")
+    msg = store.deserialize_cdr(data, "nav_msgs/msg/OccupancyGrid")
+    assert (msg.header.frame_id, msg.header.stamp.sec, msg.header.stamp.nanosec) == ("world", 3, 250)
+    assert (msg.info.width, msg.info.height, msg.info.resolution) == (5, 3, pytest.approx(0.05))
+    assert (msg.info.origin.position.x, msg.info.origin.position.y) == (-1.25, 2.5)
+    assert msg.info.origin.orientation.z == pytest.approx(np.sin(0.25))
+    assert msg.data.tolist() == cells.reshape(-1).tolist()  # rows from the origin up, as map_server sends
+    assert store.serialize_cdr(msg, "nav_msgs/msg/OccupancyGrid") == data
