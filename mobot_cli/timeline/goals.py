@@ -62,6 +62,7 @@ class Driver:
                  plan_world: WorldPlan | None = None):
         self.name, self.world, self.emit = name, world, emit
         self.plan_world = plan_world  # the static world a planned goal's map is drawn from
+        self.floor: float | None = None  # the floor under the robot, found by its first planned goal
         self.items: list[GoalStep | TwistStep] = list(items)
         self.every = max(1, round(rate_hz / CONTROL_RATE_HZ))
         self.dt = self.every / rate_hz
@@ -125,7 +126,8 @@ class Driver:
         if goal.control.planner is not None:
             from mobot_cli.timeline.routes import plan_route  # the world's map: only for planned goals
 
-            planned = plan_route(self.plan_world, (pose.x, pose.y, state.true_z), goal)
+            planned = plan_route(self.plan_world, (pose.x, pose.y, state.true_z), goal, self.floor)
+            self.floor = planned.floor if not planned.reason else self.floor
             if planned.reason:
                 self.current = goal
                 self.emit(GoalStarted(step, self.name, goal.index, goal.kind))

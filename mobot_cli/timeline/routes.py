@@ -30,14 +30,18 @@ class Route:
     lap: tuple[tuple[float, float], ...] = ()  # patrol: first point round to the first point; else to the last
     reason: str = ""
     length: float = 0.0  # m: the planned path's length, lead and one lap
+    floor: float = 0.0  # the floor's height the band was measured from
 
 
-def plan_route(world: WorldPlan | None, start: tuple[float, float, float], goal: GoalStep) -> Route:
-    """Plan ``goal``'s legs from ``start`` (the robot's x, y and root-link z)."""
+def plan_route(world: WorldPlan | None, start: tuple[float, float, float], goal: GoalStep,
+               floor: float | None = None) -> Route:
+    """Plan ``goal``'s legs from ``start`` (the robot's x, y and root-link z); ``floor``: the
+    floor's height when known already (a robot's next goal), else found under the start."""
     from mobot_cli.assets.world import occupancy
 
     points = list(goal.points)
-    floor = occupancy.floor_under(world, [start]) if world is not None else 0.0
+    if floor is None:
+        floor = occupancy.floor_under(world, [start]) if world is not None else 0.0
     band = (floor + occupancy.BAND[0], floor + occupancy.BAND[1])
     plan_world = world or WorldPlan()
     grid = occupancy.grid_for(plan_world, CELL, band, also=[start[:2], *points])
@@ -72,7 +76,7 @@ def plan_route(world: WorldPlan | None, start: tuple[float, float, float], goal:
         lap += leg[1:]
         length += more
         before = i
-    return Route(lead=tuple(lead), lap=tuple(lap), length=length)
+    return Route(lead=tuple(lead), lap=tuple(lap), length=length, floor=floor)
 
 
 def _leg(blocked: np.ndarray, grid, a: tuple[int, int], b: tuple[int, int],

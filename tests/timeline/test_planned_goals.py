@@ -139,3 +139,17 @@ def test_python_goto_takes_the_planner(tmp_path):
         assert sim.goal_status("r") == "reached"
         sim.goto("r", -3.0, -4.85, planner="astar")
         assert sim.goal_status("r") == "unreachable"
+
+
+def test_planned_patrol_laps_repeat_the_planned_loop(tmp_path):
+    doc = house_goto([{"at": 0.5, "patrol": [[-2.5, -2.0], [-2.5, 3.0]], "planner": "astar", "laps": 3,
+                       "localization": "ground_truth", "max_linear": 0.5}], 120.0)
+    doc["physics"] = {"engine": "kinematic"}
+    doc["expect"] = [{"robot": "r", "visits": [[-2.5, 3.0], [-2.5, -2.0], [-2.5, 3.0], [-2.5, -2.0],
+                                               [-2.5, 3.0], [-2.5, -2.0]], "radius": 0.3}]
+    code, summary = run(tmp_path, doc)
+    goal = only_goal(summary)
+    assert (code, goal["status"], goal["laps"]) == (0, "reached", 3)
+    assert robot_of(summary)["collisions"] == 0
+    # Three rounds of the living room and bedroom through their doorway: 2 x 5.2 m each, and the way in.
+    assert 30.0 < goal["path_length"] < 36.0
