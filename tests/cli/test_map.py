@@ -182,3 +182,31 @@ def test_unknown_world_and_unwritable_out(tmp_path, boxes):
     blocker.write_text("")
     done = invoke(["map", str(boxes), "--out", blocker])
     assert done.exit_code == 2 and done.stderr.startswith(f"mobot: error: cannot write {blocker}")
+
+
+XACRO_WORLD = """<?xml version="1.0"?>
+<sdf version="1.6" xmlns:xacro="http://www.ros.org/wiki/xacro">
+  <xacro:property name="side" value="1.5"/>
+  <world name="walls">
+    <xacro:macro name="wall" params="name x">
+      <model name="${name}"><static>true</static><pose>${x} 0 0.5 0 0 0</pose><link name="l">
+        <collision name="c"><geometry><box><size>0.2 4 1</size></box></geometry></collision></link></model>
+    </xacro:macro>
+    <xacro:wall name="east" x="${side}"/>
+    <xacro:wall name="west" x="${-side}"/>
+  </world>
+</sdf>
+"""
+
+
+def test_a_xacro_world_is_expanded_and_mapped(tmp_path):
+    path = tmp_path / "walls.world.xacro"
+    path.write_text(XACRO_WORLD)
+    data, res, origin = mapped(str(path), tmp_path / "m", "--resolution", "0.1")
+    iy, ix = np.nonzero(data == 100)
+    xs = origin[0] + (ix + 0.5) * res
+    columns = {x: int((np.round(xs, 2) == x).sum()) for x in set(np.round(xs, 2).tolist())}
+    # Two walls 0.2 m thick and 4 m long at x = +-1.5: two whole columns of 40 cells each; their
+    # corners lie on cell edges, and the cells holding a corner count as occupied too.
+    assert sorted(x for x, n in columns.items() if 40 <= n <= 42) == [-1.55, -1.45, 1.45, 1.55]
+    assert all(n <= 2 for x, n in columns.items() if n < 40)
