@@ -153,3 +153,15 @@ def test_planned_patrol_laps_repeat_the_planned_loop(tmp_path):
     assert robot_of(summary)["collisions"] == 0
     # Three rounds of the living room and bedroom through their doorway: 2 x 5.2 m each, and the way in.
     assert 30.0 < goal["path_length"] < 36.0
+
+
+def test_the_terminal_says_why_under_the_goals_table(tmp_path):
+    path = tmp_path / "unreachable.yaml"
+    path.write_text(yaml.safe_dump(house_goto([{"at": 0.5, "goto": {"x": -3.0, "y": -4.85}, "planner": "astar"}],
+                                              1.0)))
+    done = invoke(["run", path, "--out", tmp_path / "out"])
+    assert done.exit_code == 0, done.stderr
+    printed = " ".join(done.stdout.split())  # the line may wrap at 80 columns
+    assert "│ r │ 0 goto │ unreachable │ 0.00 │ 0.00 │" in printed
+    assert ("r goal 0 unreachable: the goal (-3, -4.85) is inside an obstacle at this inflation (0.26 m from "
+            "obstacles)") in printed
