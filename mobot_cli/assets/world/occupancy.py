@@ -17,7 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from mobot_cli.assets.world.floorplan import BAND, body_shadows, body_shapes
-from mobot_cli.common.raster import Grid, dilate, fill_shape
+from mobot_cli.assets.world.freespace import obstacle_mask
+from mobot_cli.common.raster import Grid, dilate
 from mobot_cli.plan import WorldPlan
 
 MARGIN = 0.5  # m of free cells around the world's geometry when no extent is given
@@ -95,13 +96,7 @@ def occupancy(world: WorldPlan, grid: Grid, floor: float = 0.0, band: tuple[floa
 
 @functools.lru_cache(maxsize=8)  # a run's goals plan on the same world, band and grid again and again
 def _mask(world: WorldPlan, grid: Grid, band: tuple[float, float]) -> np.ndarray:
-    mask = grid.empty()
-    xmax, ymax = grid.x0 + grid.nx * grid.cell, grid.y0 + grid.ny * grid.cell
-    for _, polygons in body_shadows(world, band):
-        for shape in polygons:
-            xs, ys = [p[0] for p in shape], [p[1] for p in shape]
-            if max(xs) >= grid.x0 and min(xs) <= xmax and max(ys) >= grid.y0 and min(ys) <= ymax:
-                fill_shape(mask, grid, shape)
+    mask = obstacle_mask(world, grid, band)
     mask.flags.writeable = False
     return mask
 
