@@ -109,6 +109,8 @@ class GoalControl:
     yaw_tolerance: float = 0.05  # rad, for a goal's final heading
     localization: str = "odometry"  # "odometry" (the robot's own odom_*) | "ground_truth"
     timeout: int | None = None  # physics steps from the start; None: no limit
+    planner: str | None = None  # "astar": plan around the world's obstacles (timeline/planner.py); None: straight
+    inflation: float = 0.0  # m: the planner keeps the robot's centre this far from obstacles
 
 
 @dataclass(frozen=True)
@@ -295,6 +297,7 @@ class Ros2Settings:
     cmd_vel_timeout_steps: int | None = None  # stop a robot whose /cmd_vel went quiet this long
     ignore_fastdds_type_information: bool = True  # Fast DDS 3 (Kilted) sends some Cyclone cannot parse
     world_frame: bool = True  # world -> <prefix>odom on /tf_static; off when a localizer owns map -> odom
+    map: bool = False  # the world's occupancy grid on /map (ros2/map_topic.py)
 
 
 @dataclass(frozen=True)

@@ -136,7 +136,8 @@ class Simulation:
     def goto(self, name: str, x: float, y: float, yaw: float | None = None, **settings) -> None:
         """Drive to (x, y) (then turn to ``yaw``) with the goal controller of a scenario's
         ``goto`` command, from this step on; ``settings``: tolerance, timeout (s), localization,
-        max_linear, max_angular, acceleration, angular_acceleration. A running goal is cancelled."""
+        max_linear, max_angular, acceleration, angular_acceleration, planner ("astar": plan around
+        the world's obstacles), inflation (m). A running goal is cancelled."""
         self._known(name)
         if not self._world.has_drive(name):
             raise UsageError(f"robot '{name}' has no drive wheels: it cannot drive to a goal")
@@ -154,7 +155,7 @@ class Simulation:
 
     def goal_status(self, name: str) -> str | None:
         """How the robot's last goal stands: 'running', 'reached', 'reached_by_odometry_only',
-        'timed_out', 'blocked', 'cancelled'; None when it was never given one."""
+        'timed_out', 'blocked', 'cancelled', 'unreachable'; None when it was never given one."""
         record = self._goals.get(name)
         return None if record is None else "running" if isinstance(record, GoalStarted) else record.status
 

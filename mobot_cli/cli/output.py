@@ -80,6 +80,10 @@ def run_table(env: Environment, record, out_dir) -> None:
     goals = [(name, goal) for name, robot in record.robots.items() for goal in robot.goals]
     if goals:
         console.print(_goal_table(goals))
+        for name, goal in goals:  # why a planned goal could not start, under the table
+            if goal.reason:
+                which = f"goal {goal.command}" if goal.command is not None else "live goal"
+                console.print(f"{name} {which} {goal.status}: {goal.reason}")
     written = [name for name in ("trajectory.png", "bag/") if (Path(out_dir) / name.rstrip("/")).exists()]
     console.print(f"run folder: {out_dir}" + (f" ({', '.join(written)})" if written else ""))
 

@@ -92,6 +92,8 @@ class Goto(Request):
     max_linear: Optional[Annotated[float, Field(gt=0), at_most(MAX_SPEED, "m/s")]] = None
     max_angular: Optional[Annotated[float, Field(gt=0), at_most(MAX_ANGULAR_SPEED, "rad/s")]] = None
     wait: bool = False  # reply when the goal has ended
+    planner: Optional[Literal["astar"]] = None  # plan around the world's obstacles (timeline/routes.py)
+    inflation: Optional[Annotated[float, Field(ge=0, le=10)]] = None  # m; default: the robot's footprint radius
 
 
 class Spawn(Request):

@@ -139,7 +139,8 @@ class Session:
         try:
             fields = GoalFields(goto=GotoSpec(x=request.x, y=request.y, yaw=request.yaw, tolerance=request.tolerance),
                                 timeout=request.timeout, localization=request.localization,
-                                max_linear=request.max_linear, max_angular=request.max_angular)
+                                max_linear=request.max_linear, max_angular=request.max_angular,
+                                planner=request.planner, inflation=request.inflation)
             goal = goal_step(fields, self.step, LIVE_GOAL, self.rate_hz, self.plan.world,
                              self.robots[request.name].footprint, lambda key: None, [])
         except (MobotError, ValueError) as exc:
@@ -159,7 +160,8 @@ class Session:
                               status=ended.status,
                               time=(ended.step - ended.started) / self.rate_hz,
                               error=ended.error if math.isfinite(ended.error) else None,
-                              pose=spawning.pose_fields(state) if state is not None else None)
+                              pose=spawning.pose_fields(state) if state is not None else None,
+                              **({"reason": ended.reason} if ended.reason else {}))
 
     # -- lockstep: reset, entity states --------------------------------------------------------
 

@@ -74,7 +74,7 @@ class _Life:
         goal = next(g for g in reversed(self.goals) if g["command"] == _command(record.index))
         error = _r(record.error) if math.isfinite(record.error) else None  # a robot whose state broke
         goal.update(status=record.status, ended_at=record.step / rate, error=error, laps=record.laps,
-                    path_length=_r(self.distance - goal["from"]))
+                    path_length=_r(self.distance - goal["from"]), reason=record.reason or None)
 
     def record(self, end: float, rate_hz: int) -> RobotRecord:
         from mobot_cli.record.summary import GoalRecord, OdomError, OdomPose, Pose, RobotRecord

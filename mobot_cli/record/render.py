@@ -83,6 +83,13 @@ def render(tracks: list[Track], floor: list[Polygon], out: Path, title: str, sub
     write_bytes_atomic(out, png, durable=False)
 
 
+def placement(tracks: list[Track], floor: list[Polygon]):
+    """Where a world point (x, y) lands in the picture ``render`` draws of these tracks and floor
+    plan: a function to its pixel (x right, y down, of the saved image)."""
+    canvas = _Canvas(_bounds(tracks, floor))
+    return lambda p: tuple(v / SS for v in canvas.px(p))
+
+
 def preload() -> None:
     """Load the fonts a picture uses (13 and 20 points) and what encoding imports, ahead of the
     first picture (a sweep's fork server, once for all its workers)."""

@@ -112,8 +112,8 @@ class GoalRecord(_Record):
     command: Optional[int]  # its index in the robot's commands list; None: a live goto request
     kind: str  # goto | path | patrol | coverage
     # reached | reached_by_odometry_only (odometry says so, the truth is farther than its tolerance
-    # plus faults.odom_tolerance) | timed_out | blocked | cancelled | unfinished (the run ended
-    # first) | failed (its robot faulted: ``failure`` says how)
+    # plus faults.odom_tolerance) | timed_out | blocked | cancelled | unreachable | unfinished (the
+    # run ended first) | failed (its robot faulted: ``failure`` says how)
     status: str
     started_at: float
     ended_at: Optional[float] = None
@@ -122,6 +122,7 @@ class GoalRecord(_Record):
     error: Optional[float] = None  # m from the goal's last point (a patrol's first) when it ended
     laps: Optional[int] = None  # patrol: rounds completed
     failure: Optional[str] = None  # failed: flipped | flying | runaway | non_finite | out_of_world | off_floor
+    reason: Optional[str] = None  # unreachable: why (planner: astar found no way there)
 
 
 @_record

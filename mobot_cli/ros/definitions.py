@@ -21,6 +21,7 @@ from dataclasses import dataclass
 LASER_SCAN, POINT_CLOUD2 = "sensor_msgs/msg/LaserScan", "sensor_msgs/msg/PointCloud2"
 IMU, CONTACTS_STATE = "sensor_msgs/msg/Imu", "gazebo_msgs/msg/ContactsState"
 RANGE = "sensor_msgs/msg/Range"
+OCCUPANCY_GRID = "nav_msgs/msg/OccupancyGrid"  # /map (ros2/map_topic.py)
 PARTICIPANT_ENTITIES_INFO = "rmw_dds_common/msg/ParticipantEntitiesInfo"
 SEPARATOR = "=" * 80 + "\n"
 
@@ -268,6 +269,41 @@ MESSAGES: dict[str, tuple[str, str]] = {
         "float64 y\n"
         "float64 z\n",
         "RIHS01_1dc585e627c16551e50102b983ec513212ef81bad3b9e9f2423f549df190a40c"),
+    "nav_msgs/msg/OccupancyGrid": (
+        "std_msgs/Header header\n"
+        "nav_msgs/MapMetaData info\n"
+        "int8[] data\n"
+        "================================================================================\n"
+        "MSG: std_msgs/Header\n"
+        "builtin_interfaces/Time stamp\n"
+        "string frame_id\n"
+        "================================================================================\n"
+        "MSG: builtin_interfaces/Time\n"
+        "int32 sec\n"
+        "uint32 nanosec\n"
+        "================================================================================\n"
+        "MSG: nav_msgs/MapMetaData\n"
+        "builtin_interfaces/Time map_load_time\n"
+        "float32 resolution\n"
+        "uint32 width\n"
+        "uint32 height\n"
+        "geometry_msgs/Pose origin\n"
+        "================================================================================\n"
+        "MSG: geometry_msgs/Pose\n"
+        "geometry_msgs/Point position\n"
+        "geometry_msgs/Quaternion orientation\n"
+        "================================================================================\n"
+        "MSG: geometry_msgs/Point\n"
+        "float64 x\n"
+        "float64 y\n"
+        "float64 z\n"
+        "================================================================================\n"
+        "MSG: geometry_msgs/Quaternion\n"
+        "float64 x\n"
+        "float64 y\n"
+        "float64 z\n"
+        "float64 w\n",
+        "RIHS01_8d348150c12913a31ee0ec170fbf25089e4745d17035792a1ba94d6f0bc0cfc7"),
     "rmw_dds_common/msg/ParticipantEntitiesInfo": (
         "rmw_dds_common/Gid gid\n"
         "rmw_dds_common/NodeEntitiesInfo[] node_entities_info_seq\n"

@@ -69,6 +69,7 @@ class Bridge:
         for robot in robots:
             names.check_namespace(robot.namespace, Location(key=f"robots.{robot.name}.namespace"))
         self.settings, self.rate = settings, plan.physics.rate_hz
+        self._world = plan.world  # its grid goes on /map when settings.map
         self.domain_id = names.domain_id(settings.domain_id, env)
         self.config = names.discovery_config(env, settings.ignore_fastdds_type_information)
         self.gid_size = names.gid_size(env)
@@ -108,6 +109,10 @@ class Bridge:
         self._topics = Topics(self._participant, self.settings.node, self.settings.namespace, self.gid_size)
         publisher = RecordPublisher(self._topics, self.rate, self._cmd_vel, self.settings.world_frame)
         publisher.arriving.update(timeline.robots)  # robots placed before the bridge opened
+        if self.settings.map and self._world is not None:
+            from mobot_cli.ros2.map_topic import publish_map
+
+            publish_map(self._topics, self._world)
         self._publisher = publisher
         self._timeline = timeline
         timeline.attach(self)

@@ -28,9 +28,10 @@ from mobot_cli.scenario.limits import (
 GOALS = ("goto", "path", "patrol", "coverage")
 # Settings that only a goal command takes.
 GOAL_SETTINGS = ("timeout", "tolerance", "localization", "max_linear", "max_angular", "acceleration",
-                 "angular_acceleration", "laps")
+                 "angular_acceleration", "laps", "planner", "inflation")
 MAX_WAYPOINTS = 10_000
 MIN_AREA = 1e-6  # m^2: a polygon enclosing less is empty
+MAX_INFLATION = 10.0  # m: the largest radius a planner's map is inflated by
 MAX_AREA_SIDE = 200.0  # m: the largest side of an area's bounding box (its grids stay small)
 
 Point2 = tuple[Coordinate, Coordinate]
@@ -116,6 +117,8 @@ class GoalFields(_Strict):
     max_angular: Optional[Annotated[PositiveFloat, at_most(MAX_ANGULAR_SPEED, "rad/s")]] = None
     acceleration: Optional[Annotated[PositiveFloat, at_most(MAX_ACCELERATION, "m/s^2")]] = None
     angular_acceleration: Optional[Annotated[PositiveFloat, at_most(MAX_ACCELERATION, "rad/s^2")]] = None
+    planner: Optional[Literal["astar"]] = None  # goto, path, patrol: plan around the map's obstacles
+    inflation: Optional[Annotated[Float, Field(ge=0, le=MAX_INFLATION)]] = None  # m; default: the footprint's radius
 
     @property
     def goal(self) -> Optional[str]:
@@ -136,5 +139,9 @@ class GoalFields(_Strict):
             raise ValueError(f"mixes '{goals[0]}' with '{twist[0]}': a command is a twist or a goal")
         if self.laps is not None and goals[0] != "patrol":
             raise ValueError("'laps' goes with 'patrol'")
+        if self.planner is not None and goals[0] == "coverage":
+            raise ValueError("'planner' goes with goto, path or patrol (coverage plans its own lanes)")
+        if self.inflation is not None and self.planner is None:
+            raise ValueError("'inflation' goes with 'planner: astar'")
         if self.tolerance is not None and goals[0] == "goto":
             raise ValueError("a goto's tolerance goes inside it: goto: {x, y, tolerance}")

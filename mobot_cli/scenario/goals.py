@@ -33,7 +33,7 @@ def goal_step(cmd: GoalFields, step: int, index: int, rate: int, world: WorldPla
     """One goal command as a GoalStep starting at ``step``; ``locate`` turns a key path below
     the command into a Location (None for a live request)."""
     kind = cmd.goal
-    control = _control(cmd, rate)
+    control = _control(cmd, rate, footprint)
     if kind == "goto":
         point = (float(cmd.goto.x), float(cmd.goto.y))
         _free(world, point, kind, locate((kind,)))
@@ -58,7 +58,7 @@ def goal_step(cmd: GoalFields, step: int, index: int, rate: int, world: WorldPla
                     spacing=float(cmd.coverage.spacing), control=control)
 
 
-def _control(cmd: GoalFields, rate: int) -> GoalControl:
+def _control(cmd: GoalFields, rate: int, footprint) -> GoalControl:
     tolerance = cmd.goto.tolerance if cmd.goto is not None else cmd.tolerance
     return GoalControl(
         max_linear=cmd.max_linear or DEFAULT.max_linear, max_angular=cmd.max_angular or DEFAULT.max_angular,
@@ -66,7 +66,16 @@ def _control(cmd: GoalFields, rate: int) -> GoalControl:
         angular_acceleration=cmd.angular_acceleration or DEFAULT.angular_acceleration,
         tolerance=tolerance or DEFAULT.tolerance, yaw_tolerance=DEFAULT.yaw_tolerance,
         localization=cmd.localization or DEFAULT.localization,
-        timeout=None if cmd.timeout is None else max(1, steps(cmd.timeout, rate)))
+        timeout=None if cmd.timeout is None else max(1, steps(cmd.timeout, rate)),
+        planner=cmd.planner,
+        inflation=0.0 if cmd.planner is None else
+        cmd.inflation if cmd.inflation is not None else footprint_radius(footprint or DEFAULT_FOOTPRINT))
+
+
+def footprint_radius(footprint: tuple[float, float, float, float]) -> float:
+    """The footprint's circumscribed radius about the robot's origin (it can turn in place within it)."""
+    xmin, xmax, ymin, ymax = footprint
+    return max(math.hypot(x, y) for x in (xmin, xmax) for y in (ymin, ymax))
 
 
 def _free(world: WorldPlan | None, point: tuple[float, float], what: str, where: Location | None) -> None:
@@ -98,7 +107,7 @@ def plan_coverage(world: WorldPlan | None, polygon, spacing: float,
 
     xmin, xmax, ymin, ymax = footprint
     half_width = max(abs(ymin), abs(ymax))
-    radius = max(math.hypot(x, y) for x in (xmin, xmax) for y in (ymin, ymax))
+    radius = footprint_radius(footprint)
     xs, ys = [p[0] for p in polygon], [p[1] for p in polygon]
     cell = max(min(PLAN_CELL, spacing / 3.0), max(max(xs) - min(xs), max(ys) - min(ys)) / PLAN_CELLS)
     pad = radius + PLAN_MARGIN

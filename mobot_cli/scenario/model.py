@@ -218,6 +218,7 @@ class Ros2Spec(Strict):
     cmd_vel_timeout: Optional[PositiveFloat] = None  # s; none: a command holds until the next
     ignore_fastdds_type_information: bool = True
     world_frame: bool = True  # false: no world -> <prefix>odom (slam_toolbox or AMCL publish map -> odom)
+    map: bool = False  # true: the world's occupancy grid on /map (as `mobot map` makes it), transient local
 
     @field_validator("domain_id")
     @classmethod

@@ -70,7 +70,7 @@ def _ros2(scenario: Scenario) -> Ros2Settings | None:
     return Ros2Settings(node=spec.node, namespace=spec.namespace, domain_id=spec.domain_id,
                         cmd_vel_timeout_steps=timeout,
                         ignore_fastdds_type_information=spec.ignore_fastdds_type_information,
-                        world_frame=spec.world_frame)
+                        world_frame=spec.world_frame, map=spec.map)
 
 
 def _world(scenario: Scenario, source: Source, base_dir: Path) -> LoadedWorld:

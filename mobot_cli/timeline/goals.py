@@ -6,7 +6,8 @@ reads the robot once, turns the pose it trusts into a twist (timeline/pursuit.py
 A goal ends ``reached``, ``timed_out`` (its ``timeout``), ``blocked`` (the robot's true pose
 moved less than ``BLOCKED_DISTANCE`` and turned less than ``BLOCKED_TURN`` in
 ``BLOCKED_SECONDS``: it pushes against something) or ``cancelled`` (a live command or goal
-took over); the robot is stopped and ``GoalEnded`` recorded. Progress is judged on the true
+took over) or ``unreachable`` (``planner: astar`` found no way there, at its start: the record
+says why); the robot is stopped and ``GoalEnded`` recorded. Progress is judged on the true
 pose, so wheels spinning against a wall count as blocked even if the encoders say they move.
 A goal driven on odometry that odometry says is reached is checked on the true pose as well:
 farther than its tolerance plus ``faults.odom_tolerance`` from the goal, it ends
@@ -20,7 +21,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 from mobot_cli.common.transforms import Planar
-from mobot_cli.plan import GoalStep, TwistStep
+from mobot_cli.plan import GoalStep, TwistStep, WorldPlan
 from mobot_cli.sim.bullet.world import World
 from mobot_cli.sim.state import RobotState
 from mobot_cli.timeline.pursuit import PlanarPose, Pursuit
@@ -29,7 +30,7 @@ CONTROL_RATE_HZ = 20  # nav2's controller_frequency default
 BLOCKED_SECONDS = 1.0
 BLOCKED_DISTANCE = 0.02  # m
 BLOCKED_TURN = 0.05  # rad
-STATUSES = ("reached", "reached_by_odometry_only", "timed_out", "blocked", "cancelled")
+STATUSES = ("reached", "reached_by_odometry_only", "timed_out", "blocked", "cancelled", "unreachable")
 
 
 @dataclass(frozen=True)
@@ -54,13 +55,17 @@ class GoalEnded:
     started: int  # its start step
     error: float  # m: the true distance from the goal's last point
     laps: int | None = None  # patrol: rounds completed
+    reason: str = ""  # unreachable: why
 
 
 class Driver:
     """Plays ``items`` (GoalSteps and TwistSteps, in order) for robot ``name``."""
 
-    def __init__(self, name: str, items, world: World, rate_hz: int, emit: Callable[[object], None]):
+    def __init__(self, name: str, items, world: World, rate_hz: int, emit: Callable[[object], None],
+                 plan_world: WorldPlan | None = None):
         self.name, self.world, self.emit = name, world, emit
+        self.plan_world = plan_world  # the static world a planned goal's map is drawn from
+        self.floor: float | None = None  # the floor under the robot, found by its first planned goal
         self.items: list[GoalStep | TwistStep] = list(items)
         self.every = max(1, round(rate_hz / CONTROL_RATE_HZ))
         self.dt = self.every / rate_hz
@@ -71,6 +76,7 @@ class Driver:
         self.pursuit: Pursuit | None = None
         self.anchor: tuple[int, float, float, float] = (0, 0.0, 0.0, 0.0)  # blocked check: step, x, y, yaw
         self.lap_ends: list[int] = []  # patrol: route vertices that close a lap
+        self.lap: list[tuple[float, float]] = []  # patrol: the points one more lap adds
         x, y, yaw = world.odom_origin(name)
         self.odom = Planar(x, y, yaw)
         self.odom_tolerance = world.physics.faults.odom_tolerance
@@ -120,10 +126,24 @@ class Driver:
         state = self.world.read(self.name)
         pose = self._pose(state, goal)
         route = [(pose.x, pose.y), *goal.points]
-        if goal.kind == "patrol":
+        self.lap = [*goal.points[1:], goal.points[0]]
+        if goal.control.planner is not None:
+            from mobot_cli.timeline.routes import plan_route  # the world's map: only for planned goals
+
+            planned = plan_route(self.plan_world, (pose.x, pose.y, state.true_z), goal, self.floor)
+            self.floor = planned.floor if not planned.reason else self.floor
+            if planned.reason:
+                self.current = goal
+                self.emit(GoalStarted(step, self.name, goal.index, goal.kind))
+                self._end(step, "unreachable", state, reason=planned.reason)
+                return
+            route = [(pose.x, pose.y), *planned.lead[1:], *planned.lap[1:]]
+            self.lap = list(planned.lap[1:])
+        elif goal.kind == "patrol":
             route.append(goal.points[0])
-            self.lap_ends = [len(route) - 1]
         self.pursuit = Pursuit(route, goal.control, self.dt, yaw=goal.yaw)
+        if goal.kind == "patrol":
+            self.lap_ends = [len(self.pursuit.route) - 1]
         if goal.kind == "patrol" and goal.laps != 1:
             self._add_lap(goal)  # the route holds two laps ahead: one more each time one begins
         self.anchor = (step, state.true_x, state.true_y, state.true_yaw)
@@ -132,7 +152,7 @@ class Driver:
 
     def _add_lap(self, goal: GoalStep) -> None:
         before = len(self.pursuit.route)
-        self.pursuit.extend([*goal.points[1:], goal.points[0]])
+        self.pursuit.extend(self.lap)
         self.lap_ends.append(self.lap_ends[-1] + len(self.pursuit.route) - before)
 
     def _control(self, step: int, state: RobotState | None = None) -> None:
@@ -164,7 +184,7 @@ class Driver:
         turned = abs(math.remainder(state.true_yaw - yaw, math.tau))
         return moved < BLOCKED_DISTANCE and turned < BLOCKED_TURN
 
-    def _end(self, step: int, status: str, state: RobotState, stop: bool = True) -> None:
+    def _end(self, step: int, status: str, state: RobotState, stop: bool = True, reason: str = "") -> None:
         goal = self.current
         if stop:
             self.world.set_command(self.name, 0.0, 0.0)
@@ -173,8 +193,10 @@ class Driver:
         if status == "reached" and goal.control.localization == "odometry" and \
                 error > goal.control.tolerance + self.odom_tolerance:
             status = "reached_by_odometry_only"
-        laps = sum(self.pursuit.passed >= end for end in self.lap_ends) if goal.kind == "patrol" else None
-        self.emit(GoalEnded(step, self.name, goal.index, goal.kind, status, self.started, error, laps))
+        laps = None
+        if goal.kind == "patrol":
+            laps = sum(self.pursuit.passed >= end for end in self.lap_ends) if self.pursuit else 0
+        self.emit(GoalEnded(step, self.name, goal.index, goal.kind, status, self.started, error, laps, reason))
         self.current, self.pursuit, self.lap_ends = None, None, []
         self.wake = step
 

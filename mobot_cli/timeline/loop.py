@@ -284,7 +284,7 @@ class Timeline:
 
     def _driver(self, name: str, script: list) -> Driver:
         # Records go through self._consume as it is when they are made (a consumer may attach later).
-        return Driver(name, script, self.world, self.rate_hz, lambda record: self._consume(record))
+        return Driver(name, script, self.world, self.rate_hz, lambda record: self._consume(record), self.plan.world)
 
     def _cancel(self, name: str) -> None:
         driver = self._drivers.pop(name, None)

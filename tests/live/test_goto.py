@@ -48,6 +48,23 @@ def test_a_goal_into_a_wall_ends_blocked_and_exits_1(house):
     assert out.startswith("t=") and ": blocked after " in out
 
 
+def test_a_planned_goal_goes_through_the_doorway_or_says_why_it_cannot(house):
+    assert mobot(house, "spawn", "p", "--file", "mobot", "-x", "-4", "-y", "-2")[0] == 0
+    # Straight north runs into the wall at y = 1; the doorway is at x = -3..-2.
+    code, out, err = mobot(house, "goto", "p", "-3.2", "2.2", "--planner", "astar", "--ground-truth", "--wait",
+                           "--json")
+    assert code == 0, err
+    reply = json.loads(out)
+    assert reply["status"] == "reached" and "reason" not in reply
+    code, out, err = mobot(house, "goto", "p", "-4", "-2", "--planner", "astar", "--inflation", "0.55", "--wait")
+    assert code == 1, err
+    assert ": unreachable after 0.000 s" in out
+    assert "(no path from the start (-3.2" in out  # where its odometry says it stopped, within the tolerance
+    assert out.rstrip().endswith(") to the goal (-4, -2) at this inflation (0.55 m from obstacles))")
+    code, _, err = mobot(house, "goto", "p", "-4", "-2", "--planner", "dijkstra")
+    assert code == 2 and "planner" in err and "'astar'" in err
+
+
 def test_a_cmd_takes_over_from_a_goal_and_the_record_says_so(house):
     assert mobot(house, "spawn", "c", "--file", "mobot", "-x", "-2.5", "-y", "3")[0] == 0
     code, out, _ = mobot(house, "goto", "c", "-1", "3")
@@ -59,3 +76,5 @@ def test_a_cmd_takes_over_from_a_goal_and_the_record_says_so(house):
     assert [(g["command"], g["kind"], g["status"]) for g in robots["r"]["goals"]] == [(None, "goto", "reached")]
     assert robots["b"]["goals"][0]["status"] == "blocked"
     assert robots["c"]["goals"][0]["status"] == "cancelled"
+    assert [g["status"] for g in robots["p"]["goals"]] == ["reached", "unreachable"]
+    assert robots["p"]["goals"][1]["reason"].startswith("no path from the start")

@@ -44,11 +44,11 @@ def _holds(polygon, x: float, y: float) -> bool:
     return len(polygon) >= 3 and _near_box(polygon, x, y) and contains(polygon, x, y)
 
 
-def obstacle_mask(world: WorldPlan, grid: Grid) -> np.ndarray:
-    """The cells of ``grid`` that some static body's shadow covers."""
+def obstacle_mask(world: WorldPlan, grid: Grid, band: tuple[float, float] = BAND) -> np.ndarray:
+    """The cells of ``grid`` that some static body's shadow (in ``band``, absolute heights) covers."""
     mask = grid.empty()
     xmax, ymax = grid.x0 + grid.nx * grid.cell, grid.y0 + grid.ny * grid.cell
-    for _, polygons in body_shadows(world):
+    for _, polygons in body_shadows(world, band):
         for shape in polygons:
             xs, ys = [p[0] for p in shape], [p[1] for p in shape]
             if max(xs) >= grid.x0 and min(xs) <= xmax and max(ys) >= grid.y0 and min(ys) <= ymax:

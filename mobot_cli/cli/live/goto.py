@@ -28,6 +28,11 @@ def goto(
     max_linear: Optional[float] = typer.Option(None, "--max-linear", help="Top speed, m/s [default: 0.3]."),
     max_angular: Optional[float] = typer.Option(None, "--max-angular", help="Top turn rate, rad/s [default: 1.0]."),
     wait: bool = typer.Option(False, "--wait", help="Return when the goal has ended: reached, timed out or blocked."),
+    planner: Optional[str] = typer.Option(None, "--planner", metavar="astar",
+                                          help="Plan around the world's obstacles (A* on its map)."),
+    inflation: Optional[float] = typer.Option(None, "--inflation", metavar="M",
+                                              help="With --planner: keep this far from obstacles, m "
+                                                   "[default: the robot's footprint radius]."),
     endpoint: common.Endpoint = None,
     timeout: float = typer.Option(5.0, "--timeout", help=common.TIMEOUT_HELP + " With --wait, "
                                   "the wait for the goal comes on top."),
@@ -42,7 +47,7 @@ def goto(
             raise UsageError(f"{flag} {value:g} must be above zero")
     fields = {"name": name, "x": x, "y": y, "yaw": yaw, "tolerance": tolerance, "timeout": goal_timeout,
               "localization": "ground_truth" if ground_truth else None, "max_linear": max_linear,
-              "max_angular": max_angular, "wait": wait}
+              "max_angular": max_angular, "wait": wait, "planner": planner, "inflation": inflation}
     with common.client(endpoint, timeout) as world:
         budget = timeout + (_wall_bound(world, goal_timeout) if wait else 0.0)
         reply = world.call("goto", timeout=budget, **{k: v for k, v in fields.items() if v is not None})
@@ -57,7 +62,7 @@ def goto(
         pose = common.pose_text(reply["pose"]) if reply.get("pose") else "deleted"
         error = f"{reply['error']:.3f} m" if reply.get("error") is not None else "unknown distance"
         common.say(env, f"t={reply['t']:.3f} {name}: {reply['status']} after {reply['time']:.3f} s, "
-                        f"{error} from the goal; {pose}")
+                        f"{error} from the goal; {pose}" + (f" ({reply['reason']})" if reply.get("reason") else ""))
     return ExitCode.OK if reply["status"] == "reached" else ExitCode.EXPECTATION_FAILED
 
 
