@@ -92,6 +92,7 @@ class GoalControl:
     yaw_tolerance: float = 0.05  # rad, for a goal's final heading
     localization: str = "odometry"  # "odometry" (the robot's own odom_*) | "ground_truth"
     timeout: int | None = None  # physics steps from the start; None: no limit
+    local: str = ""  # "" (follow the route as it is) | "dwb" (avoid what the lidar sees: timeline/local.py)
 
 
 @dataclass(frozen=True)

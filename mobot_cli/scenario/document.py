@@ -174,6 +174,8 @@ def _goal(goal: GoalStep, rate: int) -> dict[str, Any]:
         entry["timeout"] = c.timeout / rate
     entry.update(localization=c.localization, max_linear=c.max_linear, max_angular=c.max_angular,
                  acceleration=c.linear_acceleration, angular_acceleration=c.angular_acceleration)
+    if c.local:
+        entry["local"] = c.local
     return entry
 
 

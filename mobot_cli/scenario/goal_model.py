@@ -28,7 +28,8 @@ from mobot_cli.scenario.limits import (
 GOALS = ("goto", "path", "patrol", "coverage")
 # Settings that only a goal command takes.
 GOAL_SETTINGS = ("timeout", "tolerance", "localization", "max_linear", "max_angular", "acceleration",
-                 "angular_acceleration", "laps")
+                 "angular_acceleration", "laps", "local")
+LOCAL_CONTROLLERS = ("dwb",)  # goal setting ``local:``: obstacle avoidance on the robot's own lidar
 MAX_WAYPOINTS = 10_000
 MIN_AREA = 1e-6  # m^2: a polygon enclosing less is empty
 MAX_AREA_SIDE = 200.0  # m: the largest side of an area's bounding box (its grids stay small)
@@ -116,6 +117,7 @@ class GoalFields(_Strict):
     max_angular: Optional[Annotated[PositiveFloat, at_most(MAX_ANGULAR_SPEED, "rad/s")]] = None
     acceleration: Optional[Annotated[PositiveFloat, at_most(MAX_ACCELERATION, "m/s^2")]] = None
     angular_acceleration: Optional[Annotated[PositiveFloat, at_most(MAX_ACCELERATION, "rad/s^2")]] = None
+    local: Optional[Literal["dwb"]] = None  # default: none (the route is followed as it is)
 
     @property
     def goal(self) -> Optional[str]:

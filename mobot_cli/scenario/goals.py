@@ -66,7 +66,7 @@ def _control(cmd: GoalFields, rate: int) -> GoalControl:
         angular_acceleration=cmd.angular_acceleration or DEFAULT.angular_acceleration,
         tolerance=tolerance or DEFAULT.tolerance, yaw_tolerance=DEFAULT.yaw_tolerance,
         localization=cmd.localization or DEFAULT.localization,
-        timeout=None if cmd.timeout is None else max(1, steps(cmd.timeout, rate)))
+        timeout=None if cmd.timeout is None else max(1, steps(cmd.timeout, rate)), local=cmd.local or "")
 
 
 def _free(world: WorldPlan | None, point: tuple[float, float], what: str, where: Location | None) -> None:

@@ -8,6 +8,12 @@ moved less than ``BLOCKED_DISTANCE`` and turned less than ``BLOCKED_TURN`` in
 ``BLOCKED_SECONDS``: it pushes against something) or ``cancelled`` (a live command or goal
 took over); the robot is stopped and ``GoalEnded`` recorded. Progress is judged on the true
 pose, so wheels spinning against a wall count as blocked even if the encoders say they move.
+
+A goal with ``local: dwb`` is driven by the dynamic-window controller (timeline/local.py) along
+the pursuit's route, on the latest scan of each of the robot's lidars (the timeline hands them
+over as they are read). It ends ``stuck`` instead of ``blocked`` when the robot stood still
+because no rollout was free, or when it has not moved ``PROGRESS_DISTANCE`` in
+``PROGRESS_SECONDS`` (nav2's SimpleProgressChecker defaults).
 """
 
 from __future__ import annotations
@@ -26,7 +32,10 @@ CONTROL_RATE_HZ = 20  # nav2's controller_frequency default
 BLOCKED_SECONDS = 1.0
 BLOCKED_DISTANCE = 0.02  # m
 BLOCKED_TURN = 0.05  # rad
-STATUSES = ("reached", "timed_out", "blocked", "cancelled")
+PROGRESS_SECONDS = 10.0  # local: dwb: the robot must move PROGRESS_DISTANCE within this ...
+PROGRESS_DISTANCE = 0.5  # m ... or the goal ends stuck
+HANDOVER = 0.25  # m: local: dwb hands a free last stretch to a stop vertex to the pursuit
+STATUSES = ("reached", "timed_out", "blocked", "cancelled", "stuck")
 
 
 @dataclass(frozen=True)
@@ -56,7 +65,8 @@ class GoalEnded:
 class Driver:
     """Plays ``items`` (GoalSteps and TwistSteps, in order) for robot ``name``."""
 
-    def __init__(self, name: str, items, world: World, rate_hz: int, emit: Callable[[object], None]):
+    def __init__(self, name: str, items, world: World, rate_hz: int, emit: Callable[[object], None],
+                 footprint: tuple[float, float, float, float] | None = None):
         self.name, self.world, self.emit = name, world, emit
         self.items: list[GoalStep | TwistStep] = list(items)
         self.every = max(1, round(rate_hz / CONTROL_RATE_HZ))
@@ -70,6 +80,14 @@ class Driver:
         self.lap_ends: list[int] = []  # patrol: route vertices that close a lap
         x, y, yaw = world.odom_origin(name)
         self.odom = Planar(x, y, yaw)
+        # local: dwb: the latest level scan of each lidar (world x, y points) and the controller
+        self.footprint = footprint
+        self.sees = any(isinstance(item, GoalStep) and item.control.local for item in self.items)
+        self.scans: dict[str, object] = {}
+        self.local = None
+        self.progress_steps = max(1, round(PROGRESS_SECONDS * rate_hz))
+        self.progress: tuple[int, float, float] = (0, 0.0, 0.0)  # step, true x, y: the progress check
+        self.stood = False  # the controller found no free rollout at the last tick
 
     @property
     def finished(self) -> bool:
@@ -120,6 +138,12 @@ class Driver:
             route.append(goal.points[0])
             self.lap_ends = [len(route) - 1]
         self.pursuit = Pursuit(route, goal.control, self.dt, yaw=goal.yaw)
+        self.local = None
+        if goal.control.local:
+            from mobot_cli.timeline.local import Dwb, radius_of  # numpy: only for goals that use it
+
+            self.local = Dwb(goal.control, self.dt, radius_of(self.footprint))
+            self.progress = (step, state.true_x, state.true_y)
         if goal.kind == "patrol" and goal.laps != 1:
             self._add_lap(goal)  # the route holds two laps ahead: one more each time one begins
         self.anchor = (step, state.true_x, state.true_y, state.true_yaw)
@@ -139,16 +163,52 @@ class Driver:
         if goal.kind == "patrol" and len(self.lap_ends) > 1 and pursuit.passed >= self.lap_ends[-2] and \
                 (goal.laps is None or len(self.lap_ends) < goal.laps):
             self._add_lap(goal)  # on its last lap ahead: one more
-        linear, angular = pursuit.update(self._pose(state, goal))
+        pose = self._pose(state, goal)
+        if self.local is not None and pursuit.follow(pose):
+            linear, angular = self._avoid(pose, state)
+        else:
+            linear, angular = pursuit.update(pose)
         if pursuit.done:
             self._end(step, "reached", state)
         elif goal.control.timeout is not None and step - self.started >= goal.control.timeout:
             self._end(step, "timed_out", state)
+        elif self.local is not None and self._no_progress(step, state):
+            self._end(step, "stuck", state)
         elif self._blocked(step, state):
-            self._end(step, "blocked", state)
+            self._end(step, "stuck" if self.local is not None and self.stood else "blocked", state)
         else:
             self.world.set_command(self.name, linear, angular)
             self.wake = step + self.every
+
+    def see(self, sensor, data) -> None:
+        """A lidar reading of this robot (the timeline hands every one over while ``sees``)."""
+        if sensor.kind != "lidar":
+            return
+        from mobot_cli.timeline.local import level_points
+
+        self.scans[sensor.name] = level_points(data)
+
+    def _avoid(self, pose: PlanarPose, state: RobotState) -> tuple[float, float]:
+        """The local controller's twist: lidar points and the route ahead in the robot's frame."""
+        from mobot_cli.timeline.local import WAVE_REACH, in_frame
+
+        points = in_frame(list(self.scans.values()), state.true_x, state.true_y, state.true_yaw)
+        path = in_frame([self.pursuit.ahead(pose, WAVE_REACH)], pose.x, pose.y, pose.yaw)
+        choice = self.local.command(points, path, (state.true_x, state.true_y, state.true_yaw))
+        self.stood = not choice.admissible
+        stop = self.pursuit.route[self.pursuit.stop]
+        if choice.admissible and not choice.blocked_path and math.dist((pose.x, pose.y), stop) < HANDOVER:
+            return self.pursuit.update(pose)  # a free last stretch: the pursuit lands within the tolerance
+        self.pursuit.v, self.pursuit.w = choice.linear, choice.angular  # the final turn starts from it
+        return choice.linear, choice.angular
+
+    def _no_progress(self, step: int, state: RobotState) -> bool:
+        """local: dwb: whether the robot stayed within PROGRESS_DISTANCE for PROGRESS_SECONDS."""
+        since, x, y = self.progress
+        if math.hypot(state.true_x - x, state.true_y - y) >= PROGRESS_DISTANCE:
+            self.progress = (step, state.true_x, state.true_y)
+            return False
+        return step - since >= self.progress_steps
 
     def _blocked(self, step: int, state: RobotState) -> bool:
         """Whether the robot stayed put for BLOCKED_SECONDS (checked once per such window)."""
@@ -168,7 +228,7 @@ class Driver:
         error = math.hypot(state.true_x - target[0], state.true_y - target[1])
         laps = sum(self.pursuit.passed >= end for end in self.lap_ends) if goal.kind == "patrol" else None
         self.emit(GoalEnded(step, self.name, goal.index, goal.kind, status, self.started, error, laps))
-        self.current, self.pursuit, self.lap_ends = None, None, []
+        self.current, self.pursuit, self.lap_ends, self.local = None, None, [], None
         self.wake = step
 
     def _pose(self, state: RobotState, goal: GoalStep) -> PlanarPose:
