@@ -20,7 +20,7 @@ from mobot_cli.scenario.limits import Coordinate, Float, Int, NonNegativeFloat, 
 KINDS = ("within", "collisions", "distance", "upright", "odom_error", "reaches", "visits", "coverage", "goal",
          "clearance")
 OVER_TIME = ("reaches", "visits", "coverage")  # deadline: within: SECONDS
-GOAL_STATUSES = ("reached", "timed_out", "blocked", "cancelled", "unfinished")
+GOAL_STATUSES = ("reached", "timed_out", "blocked", "cancelled", "unfinished", "stuck")
 DEFAULT_VISIT_RADIUS = 0.3  # m
 # Tilt (angle between the robot's z axis and the world's) beyond which a robot has tipped over.
 DEFAULT_MAX_TILT = math.radians(45.0)

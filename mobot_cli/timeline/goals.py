@@ -12,7 +12,7 @@ pose, so wheels spinning against a wall count as blocked even if the encoders sa
 A goal with ``local: dwb`` is driven by the dynamic-window controller (timeline/local.py) along
 the pursuit's route, on the latest scan of each of the robot's lidars (the timeline hands them
 over as they are read). It ends ``stuck`` instead of ``blocked`` when the robot stood still
-because no rollout was free, or when it has not moved ``PROGRESS_DISTANCE`` in
+because no rollout was free or standing was its best, or when it has not moved ``PROGRESS_DISTANCE`` in
 ``PROGRESS_SECONDS`` (nav2's SimpleProgressChecker defaults).
 """
 
@@ -34,6 +34,7 @@ BLOCKED_DISTANCE = 0.02  # m
 BLOCKED_TURN = 0.05  # rad
 PROGRESS_SECONDS = 10.0  # local: dwb: the robot must move PROGRESS_DISTANCE within this ...
 PROGRESS_DISTANCE = 0.5  # m ... or the goal ends stuck
+STILL_LINEAR = 0.01  # m/s: local: dwb commanding less (and turning less than BLOCKED_TURN rad/s) stands
 HANDOVER = 0.25  # m: local: dwb hands a free last stretch to a stop vertex to the pursuit
 STATUSES = ("reached", "timed_out", "blocked", "cancelled", "stuck")
 
@@ -87,7 +88,7 @@ class Driver:
         self.local = None
         self.progress_steps = max(1, round(PROGRESS_SECONDS * rate_hz))
         self.progress: tuple[int, float, float] = (0, 0.0, 0.0)  # step, true x, y: the progress check
-        self.stood = False  # the controller found no free rollout at the last tick
+        self.stood = False  # the controller chose to stand (or found no free rollout) at the last tick
 
     @property
     def finished(self) -> bool:
@@ -195,7 +196,8 @@ class Driver:
         points = in_frame(list(self.scans.values()), state.true_x, state.true_y, state.true_yaw)
         path = in_frame([self.pursuit.ahead(pose, WAVE_REACH)], pose.x, pose.y, pose.yaw)
         choice = self.local.command(points, path, (state.true_x, state.true_y, state.true_yaw))
-        self.stood = not choice.admissible
+        # It stands because nothing free is better, not because something holds it: stuck if it lasts.
+        self.stood = not choice.admissible or (abs(choice.linear) < STILL_LINEAR and abs(choice.angular) < BLOCKED_TURN)
         stop = self.pursuit.route[self.pursuit.stop]
         if choice.admissible and not choice.blocked_path and math.dist((pose.x, pose.y), stop) < HANDOVER:
             return self.pursuit.update(pose)  # a free last stretch: the pursuit lands within the tolerance
