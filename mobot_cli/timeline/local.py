@@ -46,9 +46,9 @@ import numpy as np
 from mobot_cli.plan import GoalControl
 
 SIM_TIME = 1.7  # s: how far ahead each rollout looks (nav2 DWB sim_time)
-STEPS = 10  # poses per rollout
-V_SAMPLES = 7  # target speeds sampled in the window (nav2: vx_samples 20)
-W_SAMPLES = 15  # target turn rates (nav2: vtheta_samples 20)
+STEPS = 8  # poses per rollout (0.11 m apart at 0.5 m/s)
+V_SAMPLES = 6  # target speeds sampled in the window (nav2: vx_samples 20)
+W_SAMPLES = 11  # target turn rates (nav2: vtheta_samples 20)
 CELL = 0.05  # m: distances of the path and goal critics are counted in these (nav2's 0.05 m grid)
 MARGIN = 0.03  # m added to the robot's radius before a lidar point counts as a hit
 INFLATION = 0.55  # m: points nearer the last pose than this (beyond the radius) cost (nav2 inflation_radius)
@@ -60,6 +60,7 @@ OSCILLATION_RESET_ANGLE = 0.2  # rad
 SPIN = 0.05  # m/s: below this a rollout turns on the spot (nav2 Oscillation x_only_threshold)
 WAVE_CELL = 0.1  # m: the free-space distance grid, when the path ahead is blocked
 WAVE_REACH = 2.5  # m: its half width around the robot
+FANS_KEPT = 256  # windows kept (cleared when full)
 WEIGHTS = {  # nav2's default DWB critic scales (nav2_params.yaml)
     "BaseObstacle": 0.02,
     "PathAlign": 32.0,
@@ -90,22 +91,26 @@ class Dwb:
         self.spun_at = (0.0, 0.0, 0.0)  # world x, y, yaw where it was (for the reset)
         ramp = np.arange(1, STEPS + 1) * (SIM_TIME / STEPS)
         self._ramp = ramp  # s: the time of each pose
+        # The window and its rollouts depend on the current twist alone: kept for the twists seen
+        # (a robot cruising or turning at its limits meets the same one tick after tick).
+        self._fans: dict[tuple[float, float], _Fan] = {}
 
     def command(self, obstacles: np.ndarray, path: np.ndarray, pose=(0.0, 0.0, 0.0)) -> Choice:
         """The twist for this tick. ``obstacles``: (n, 2) lidar points in the robot frame;
         ``path``: (m, 2) the path ahead in the robot frame, its last point the local goal;
         ``pose``: the robot's world x, y, yaw (for the oscillation critic's reset only)."""
-        vs, ws = self._window()
-        xs, ys, yaws = self._rollouts(vs, ws)
+        fan = self._fan()
+        vs, ws, xs, ys = fan.vs, fan.ws, fan.xs, fan.ys
         reach = SIM_TIME * max(self.control.max_linear, abs(self.v)) + self.radius + INFLATION
         d2 = np.einsum("ij,ij->i", obstacles, obstacles)
         near = obstacles[d2 <= reach * reach]
-        cost, ok = self._obstacle_cost(xs, ys, near)
-        ok &= self._not_oscillating(vs, ws, pose)
+        cost, ok = self._obstacle_cost(fan, near)
+        if self.spun:
+            ok &= self._not_oscillating(vs, ws, pose)
         path, beyond = _cut(path, LOCAL_PLAN)
         blocked = self._path_blocked(path, near)
-        score = WEIGHTS["BaseObstacle"] * cost
-        fx, fy = xs[:, -1] + FORWARD_POINT * np.cos(yaws[:, -1]), ys[:, -1] + FORWARD_POINT * np.sin(yaws[:, -1])
+        score = WEIGHTS["BaseObstacle"] * cost if len(near) else np.zeros(len(vs))
+        fx, fy = fan.fx, fan.fy
         # The align critics aim the robot's nose (the point ahead of it) at the goal moved
         # FORWARD_POINT on along the line from the robot, as nav2's GoalAlign does: a robot that
         # stops on the goal facing it scores zero.
@@ -118,9 +123,10 @@ class Dwb:
             score += WEIGHTS["GoalDist"] * field.at(xs[:, -1], ys[:, -1]) / CELL
             score += WEIGHTS["GoalAlign"] * field.at(fx - nose[0] + goal[0], fy - nose[1] + goal[1]) / CELL
         else:
-            score += WEIGHTS["PathDist"] * _to_polyline(xs[:, -1], ys[:, -1], path) / CELL
-            score += WEIGHTS["PathAlign"] * _to_polyline(fx, fy, np.vstack([path, nose])) / CELL
-            score += WEIGHTS["GoalDist"] * np.hypot(xs[:, -1] - goal[0], ys[:, -1] - goal[1]) / CELL
+            route = path.tolist()
+            score += (WEIGHTS["PathDist"] / CELL) * _to_polyline(fan.ex, fan.ey, route)
+            score += (WEIGHTS["PathAlign"] / CELL) * _to_polyline(fx, fy, route + [nose.tolist()])
+            score += WEIGHTS["GoalDist"] * np.hypot(fan.ex - goal[0], fan.ey - goal[1]) / CELL
             score += WEIGHTS["GoalAlign"] * np.hypot(fx - nose[0], fy - nose[1]) / CELL
         if not ok.any():
             self._step(0.0, 0.0)
@@ -132,6 +138,16 @@ class Dwb:
             self.spun, self.spun_at = float(np.sign(self.w)), tuple(pose)
         return Choice(self.v, self.w, True, blocked)
 
+    def _fan(self) -> "_Fan":
+        key = (self.v, self.w)
+        fan = self._fans.get(key)
+        if fan is None:
+            if len(self._fans) >= FANS_KEPT:
+                self._fans.clear()
+            vs, ws = self._window()
+            fan = self._fans[key] = _Fan(vs, ws, *self._rollouts(vs, ws))
+        return fan
+
     def _window(self) -> tuple[np.ndarray, np.ndarray]:
         """The target (v, w) pairs: a grid over the reachable window, flattened."""
         c = self.control
@@ -139,10 +155,11 @@ class Dwb:
         v_hi = min(c.max_linear, self.v + c.linear_acceleration * SIM_TIME)
         w_lo = max(-c.max_angular, self.w - c.angular_acceleration * SIM_TIME)
         w_hi = min(c.max_angular, self.w + c.angular_acceleration * SIM_TIME)
-        v = np.unique(np.append(np.linspace(v_lo, v_hi, V_SAMPLES), [min(max(self.v, v_lo), v_hi)]))
-        w = np.unique(np.append(np.linspace(w_lo, w_hi, W_SAMPLES), [min(max(0.0, w_lo), w_hi)]))
-        vv, ww = np.meshgrid(v, w, indexing="ij")
-        return vv.ravel(), ww.ravel()
+        v = np.linspace(v_lo, v_hi, V_SAMPLES)
+        w = np.linspace(w_lo, w_hi, W_SAMPLES)
+        if w_lo < 0.0 < w_hi:  # straight on is always a sample
+            w[np.argmin(np.abs(w))] = 0.0
+        return np.repeat(v, W_SAMPLES), np.tile(w, V_SAMPLES)
 
     def _rollouts(self, vs: np.ndarray, ws: np.ndarray):
         """Poses (T, STEPS) of each target driven from the current twist, speeds ramping at the
@@ -156,20 +173,23 @@ class Dwb:
         ys = np.cumsum(v * np.sin(heading) * h, axis=1)
         return xs, ys, yaw
 
-    def _obstacle_cost(self, xs: np.ndarray, ys: np.ndarray, points: np.ndarray):
+    def _obstacle_cost(self, fan: "_Fan", points: np.ndarray):
         """BaseObstacle: (cost of the last pose, admissible) per rollout."""
-        count = xs.shape[0]
+        count = len(fan.vs)
         if not len(points):
             return np.zeros(count), np.ones(count, dtype=bool)
-        start = float(np.min(np.einsum("ij,ij->i", points, points)))
-        poses = np.stack([xs.ravel(), ys.ravel()], axis=1)
-        d2 = (poses * poses).sum(axis=1)[:, None] + (points * points).sum(axis=1)[None, :] - 2.0 * poses @ points.T
-        nearest = np.sqrt(np.maximum(d2.min(axis=1), 0.0)).reshape(xs.shape)
-        hit = nearest < self.radius
-        ok = ~hit.any(axis=1)
+        squares = np.einsum("ij,ij->i", points, points)
+        start = float(squares.min())
+        near = squares <= (fan.reach + self.radius + INFLATION) ** 2  # what any pose can touch or cost
+        if not near.any():
+            return np.zeros(count), np.ones(count, dtype=bool)
+        d2 = fan.poses_sq[:, None] + squares[near].astype(np.float32)[None, :] \
+            - 2.0 * (fan.poses32 @ points[near].astype(np.float32).T)
+        nearest = d2.min(axis=1).reshape(fan.xs.shape)
+        ok = (nearest >= self.radius * self.radius).all(axis=1)
+        last = np.sqrt(np.maximum(nearest[:, -1], 0.0))
         if start < self.radius * self.radius:  # already within reach of a point: moving away is allowed
-            ok = nearest[:, -1] >= math.sqrt(start)
-        last = nearest[:, -1]
+            ok = last >= math.sqrt(start)
         cost = np.where(last < self.radius + INFLATION, 252.0 * np.exp(-COST_SCALING * (last - self.radius)), 0.0)
         return cost, ok
 
@@ -188,8 +208,7 @@ class Dwb:
         """Whether the path ahead passes within the robot's radius of a point."""
         if not len(points) or len(path) < 2:
             return False
-        a, b = path[:-1], path[1:]
-        return bool((_segments_distance(points, a, b) < self.radius).any())
+        return bool((_to_polyline(points[:, 0], points[:, 1], path.tolist()) < self.radius).any())
 
     def _past(self, path: np.ndarray, points: np.ndarray) -> np.ndarray:
         """The local goal when the path ahead is blocked: its first point clear of every lidar
@@ -204,8 +223,22 @@ class Dwb:
 
     def _step(self, v: float, w: float) -> None:
         c = self.control
-        self.v = float(_toward(self.v, v, c.linear_acceleration * self.dt))
-        self.w = float(_toward(self.w, w, c.angular_acceleration * self.dt))
+        dv, dw = c.linear_acceleration * self.dt, c.angular_acceleration * self.dt
+        self.v = min(max(v, self.v - dv), self.v + dv)
+        self.w = min(max(w, self.w - dw), self.w + dw)
+
+
+class _Fan:
+    """The rollouts of one window: targets, poses, and what the critics read of them."""
+
+    def __init__(self, vs: np.ndarray, ws: np.ndarray, xs: np.ndarray, ys: np.ndarray, yaws: np.ndarray):
+        self.vs, self.ws, self.xs, self.ys = vs, ws, xs, ys
+        self.poses32 = np.stack([xs.ravel(), ys.ravel()], axis=1).astype(np.float32)
+        self.poses_sq = (self.poses32 * self.poses32).sum(axis=1)
+        self.reach = float(np.sqrt(self.poses_sq.max()))  # m: the farthest pose from the robot
+        self.fx = xs[:, -1] + FORWARD_POINT * np.cos(yaws[:, -1])
+        self.fy = ys[:, -1] + FORWARD_POINT * np.sin(yaws[:, -1])
+        self.ex, self.ey = xs[:, -1].copy(), ys[:, -1].copy()
 
 
 class _Wavefront:
@@ -268,13 +301,17 @@ def _cut(path: np.ndarray, length: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _clip(path: np.ndarray, length: float) -> np.ndarray:
-    steps = np.hypot(*np.diff(path, axis=0).T) if len(path) > 1 else np.zeros(0)
-    total = np.concatenate([[0.0], np.cumsum(steps)])
-    if total[-1] <= length:
-        return path
-    k = int(np.searchsorted(total, length))  # total[k - 1] < length <= total[k]
-    f = (length - total[k - 1]) / max(steps[k - 1], 1e-12)
-    return np.vstack([path[:k], path[k - 1] + f * (path[k] - path[k - 1])])
+    """The first ``length`` m of ``path`` (a few points: a plain loop)."""
+    points = path.tolist()
+    left = length
+    for k in range(1, len(points)):
+        step = math.dist(points[k - 1], points[k])
+        if step >= left:
+            f = left / step if step > 0.0 else 0.0
+            a, b = points[k - 1], points[k]
+            return np.array(points[:k] + [[a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])]])
+        left -= step
+    return path
 
 
 def _resample(path: np.ndarray, spacing: float) -> np.ndarray:
@@ -295,22 +332,22 @@ def _toward(current, target, step):
     return np.minimum(np.maximum(target, current - step), current + step)
 
 
-def _segments_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(n, m): distance of each point from each segment a[j]-b[j]."""
-    d = b - a
-    length2 = np.maximum((d * d).sum(axis=1), 1e-12)
-    rel = points[:, None, :] - a[None, :, :]
-    t = np.clip((rel * d[None, :, :]).sum(axis=2) / length2[None, :], 0.0, 1.0)
-    off = rel - t[:, :, None] * d[None, :, :]
-    return np.sqrt((off * off).sum(axis=2))
-
-
-def _to_polyline(x: np.ndarray, y: np.ndarray, path: np.ndarray) -> np.ndarray:
-    """Distance of each (x, y) from the polyline ``path`` (one point: from it)."""
-    points = np.stack([x, y], axis=1)
+def _to_polyline(px: np.ndarray, py: np.ndarray, path: list) -> np.ndarray:
+    """Distance of each point (px, py) from the polyline ``path`` ([[x, y], ...]; one point:
+    from it). A loop over its few segments, vectorised over the many points."""
     if len(path) < 2:
-        return np.hypot(x - path[0, 0], y - path[0, 1])
-    return _segments_distance(points, path[:-1], path[1:]).min(axis=1)
+        return np.hypot(px - path[0][0], py - path[0][1])
+    best = None
+    for (ax, ay), (bx, by) in zip(path[:-1], path[1:]):
+        dx, dy = bx - ax, by - ay
+        rx, ry = px - ax, py - ay
+        length2 = dx * dx + dy * dy
+        if length2 > 1e-12:
+            t = np.clip((rx * dx + ry * dy) / length2, 0.0, 1.0)
+            rx, ry = rx - t * dx, ry - t * dy
+        d2 = rx * rx + ry * ry
+        best = d2 if best is None else np.minimum(best, d2)
+    return np.sqrt(best)
 
 
 def radius_of(footprint: tuple[float, float, float, float] | None) -> float:
@@ -334,10 +371,18 @@ def level_points(scan) -> np.ndarray:
     return local @ rotation.T + np.array(scan.position[:2])
 
 
-def in_frame(clouds: list, x: float, y: float, yaw: float) -> np.ndarray:
-    """World (x, y) points (lists of arrays or of tuples) in the frame of a robot at (x, y, yaw)."""
-    parts = [np.asarray(c, dtype=float).reshape(-1, 2) for c in clouds]
-    points = np.concatenate(parts) if parts else np.zeros((0, 2))
+def joined(clouds: list) -> np.ndarray:
+    """Point clouds (each (n, 2)) as one array."""
+    return np.concatenate(clouds) if clouds else np.zeros((0, 2))
+
+
+def in_frame(points: np.ndarray, x: float, y: float, yaw: float) -> np.ndarray:
+    """World (x, y) points (n, 2) in the frame of a robot at (x, y, yaw)."""
     c, s = math.cos(yaw), math.sin(yaw)
-    dx, dy = points[:, 0] - x, points[:, 1] - y
-    return np.stack([c * dx + s * dy, -s * dx + c * dy], axis=1)
+    return (points - (x, y)) @ np.array([[c, -s], [s, c]])
+
+
+def path_in_frame(points: list, x: float, y: float, yaw: float) -> np.ndarray:
+    """A few world (x, y) points in the frame of a robot at (x, y, yaw), as an (m, 2) array."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([(c * (px - x) + s * (py - y), -s * (px - x) + c * (py - y)) for px, py in points])
