@@ -109,7 +109,7 @@ class GoalRecord(_Record):
 
     command: Optional[int]  # its index in the robot's commands list; None: a live goto request
     kind: str  # goto | path | patrol | coverage
-    status: str  # reached | timed_out | blocked | cancelled | unfinished (the run ended first)
+    status: str  # reached | timed_out | blocked | stuck | cancelled | unfinished (the run ended first)
     started_at: float
     ended_at: Optional[float] = None
     time: float  # s from start to end (or to the end of the record)

@@ -146,3 +146,40 @@ def test_a_point_on_the_path_steers_aside_the_same_way_each_time():
 
 def test_radius_of_a_footprint():
     assert radius_of((-0.2, 0.1, -0.17, 0.17)) == pytest.approx(math.hypot(0.2, 0.17))
+
+
+# -- the bundled house: a patrol of the four rooms' centres, straight segments past furniture ------
+
+ROOMS = [[-2.5, -2.5], [-2.5, 3.0], [3.5, 3.0], [3.5, -2.5]]  # living room, bedroom, study, kitchen
+
+
+def patrol(tmp_path: Path, name: str, local: bool, events=()) -> dict:
+    command = {"at": 0.5, "patrol": ROOMS, "laps": 1, "timeout": 119}
+    if local:
+        command["local"] = "dwb"
+    doc = {"version": 1, "name": name, "world": "house", "duration": 120, "seed": 11,
+           "robots": [{"name": "r", "description": "mobot", "args": {"lidar": "true"},
+                       "pose": {"x": -2.5, "y": -2.5, "yaw": 1.5708},
+                       "sensors": {"scan": {"rate_hz": 10, "samples": 180, "range_max": 8.0}},
+                       "commands": [command]}],
+           "events": list(events)}
+    path = tmp_path / f"{name}.yaml"
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+    done = invoke(["run", str(path), "--out", str(tmp_path / name), "--quiet"])
+    assert done.exit_code == 0, done.stderr
+    return json.loads((tmp_path / name / "summary.json").read_text())["robots"]["r"]
+
+
+def test_house_patrol_of_the_rooms_goes_round_the_furniture(tmp_path):
+    robot = patrol(tmp_path, "pursuit", local=False)
+    assert robot["collisions"] >= 1 and robot["goals"][0]["status"] == "blocked"  # the armchair
+    robot = patrol(tmp_path, "dwb", local=True)
+    (goal,) = robot["goals"]
+    assert robot["collisions"] == 0 and (goal["status"], goal["laps"]) == ("reached", 1)
+    assert 23.0 < goal["path_length"] < 1.1 * 23.0  # measured 23.3 m in 82.9 s
+    box = [{"at": 10.0, "spawn": {"name": "chair", "description": str(DATA / "box.urdf"),
+                                  "pose": {"x": -0.5, "y": 3.0, "yaw": 0.3}}}]  # on the bedroom-study leg
+    robot = patrol(tmp_path, "dwb_box", local=True, events=box)
+    (detour,) = robot["goals"]
+    assert robot["collisions"] == 0 and (detour["status"], detour["laps"]) == ("reached", 1)
+    assert detour["path_length"] > goal["path_length"] + 0.2  # round the box: measured +0.4 m
