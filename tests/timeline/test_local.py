@@ -183,3 +183,21 @@ def test_house_patrol_of_the_rooms_goes_round_the_furniture(tmp_path):
     (detour,) = robot["goals"]
     assert robot["collisions"] == 0 and (detour["status"], detour["laps"]) == ("reached", 1)
     assert detour["path_length"] > goal["path_length"] + 0.2  # round the box: measured +0.4 m
+
+
+def test_the_python_api_goto_takes_local():
+    from mobot_cli.api import Simulation
+    from mobot_cli.errors import UsageError
+
+    with Simulation.open(BOX_WORLD) as sim:
+        sim.spawn("r", "mobot", args={"lidar": "true"})
+        sim.spawn("blind", "mobot", y=2.0)
+        with pytest.raises(UsageError, match="goto 'blind': local: dwb avoids what the robot's lidar sees"):
+            sim.goto("blind", 4.0, 2.0, local="dwb")
+        sim.run_for(0.5)
+        sim.goto("r", *GOAL, local="dwb")
+        while sim.goal_status("r") == "running" and sim.t < 30:
+            sim.run_for(0.5)
+        assert sim.goal_status("r") == "reached"
+        s = sim.state("r")
+        assert math.hypot(s.true_x - GOAL[0], s.true_y - GOAL[1]) < 0.05 and s.collisions == 0
