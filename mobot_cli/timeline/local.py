@@ -7,8 +7,8 @@ Each control tick (``Dwb.command``):
 
 1. The dynamic window: target speeds v in [0, max_linear] and w in [-max_angular, max_angular]
    reachable from the current twist within ``SIM_TIME`` at the acceleration limits
-   (``V_SAMPLES`` x ``W_SAMPLES`` of them, the current twist's neighbours included), as
-   nav2's StandardTrajectoryGenerator samples them.
+   (``V_SAMPLES`` x ``W_SAMPLES`` of them, straight on always among them), as nav2's
+   StandardTrajectoryGenerator samples them.
 2. Rollouts: each target is driven for ``SIM_TIME`` in ``STEPS`` steps, its speeds ramping
    from the current twist at the acceleration limits (so the first step is what the robot can
    do next).
