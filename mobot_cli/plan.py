@@ -111,6 +111,7 @@ class GoalControl:
     timeout: int | None = None  # physics steps from the start; None: no limit
     planner: str | None = None  # "astar": plan around the world's obstacles (timeline/planner.py); None: straight
     inflation: float = 0.0  # m: the planner keeps the robot's centre this far from obstacles
+    local: str = ""  # "" (follow the route as it is) | "dwb" (avoid what the lidar sees: timeline/local.py)
 
 
 @dataclass(frozen=True)

@@ -137,10 +137,14 @@ class Simulation:
         """Drive to (x, y) (then turn to ``yaw``) with the goal controller of a scenario's
         ``goto`` command, from this step on; ``settings``: tolerance, timeout (s), localization,
         max_linear, max_angular, acceleration, angular_acceleration, planner ("astar": plan around
-        the world's obstacles), inflation (m). A running goal is cancelled."""
+        the world's obstacles), inflation (m), local ("dwb": avoid what the robot's lidar sees). A
+        running goal is cancelled."""
         self._known(name)
         if not self._world.has_drive(name):
             raise UsageError(f"robot '{name}' has no drive wheels: it cannot drive to a goal")
+        if settings.get("local") and not any(s.kind == "lidar" for s in self._timeline.robots[name].sensors):
+            raise UsageError(f"goto '{name}': local: {settings['local']} avoids what the robot's lidar sees, "
+                             "and it has no lidar")
         tolerance = settings.pop("tolerance", None)
         try:
             fields = GoalFields(goto=GotoSpec(x=x, y=y, yaw=yaw, tolerance=tolerance), **settings)
@@ -155,7 +159,7 @@ class Simulation:
 
     def goal_status(self, name: str) -> str | None:
         """How the robot's last goal stands: 'running', 'reached', 'reached_by_odometry_only',
-        'timed_out', 'blocked', 'cancelled', 'unreachable'; None when it was never given one."""
+        'timed_out', 'blocked', 'stuck', 'cancelled', 'unreachable'; None when it was never given one."""
         record = self._goals.get(name)
         return None if record is None else "running" if isinstance(record, GoalStarted) else record.status
 

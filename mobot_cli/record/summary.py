@@ -112,8 +112,8 @@ class GoalRecord(_Record):
     command: Optional[int]  # its index in the robot's commands list; None: a live goto request
     kind: str  # goto | path | patrol | coverage
     # reached | reached_by_odometry_only (odometry says so, the truth is farther than its tolerance
-    # plus faults.odom_tolerance) | timed_out | blocked | cancelled | unreachable | unfinished (the
-    # run ended first) | failed (its robot faulted: ``failure`` says how)
+    # plus faults.odom_tolerance) | timed_out | blocked | stuck | cancelled | unreachable | unfinished
+    # (the run ended first) | failed (its robot faulted: ``failure`` says how)
     status: str
     started_at: float
     ended_at: Optional[float] = None

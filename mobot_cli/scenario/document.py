@@ -183,6 +183,8 @@ def _goal(goal: GoalStep, rate: int) -> dict[str, Any]:
                  acceleration=c.linear_acceleration, angular_acceleration=c.angular_acceleration)
     if c.planner is not None:
         entry.update(planner=c.planner, inflation=c.inflation)
+    if c.local:
+        entry["local"] = c.local
     return entry
 
 

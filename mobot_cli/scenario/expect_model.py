@@ -20,8 +20,8 @@ from mobot_cli.scenario.limits import Coordinate, Float, Int, NonNegativeFloat, 
 KINDS = ("within", "collisions", "distance", "upright", "odom_error", "reaches", "visits", "coverage", "goal",
          "clearance")
 OVER_TIME = ("reaches", "visits", "coverage")  # deadline: within: SECONDS
-GOAL_STATUSES = ("reached", "reached_by_odometry_only", "timed_out", "blocked", "cancelled", "unreachable",
-                 "unfinished", "failed")
+GOAL_STATUSES = ("reached", "reached_by_odometry_only", "timed_out", "blocked", "stuck", "cancelled",
+                 "unreachable", "unfinished", "failed")
 DEFAULT_VISIT_RADIUS = 0.3  # m
 # Tilt (angle between the robot's z axis and the world's) beyond which a robot has tipped over.
 DEFAULT_MAX_TILT = math.radians(45.0)

@@ -28,7 +28,8 @@ from mobot_cli.scenario.limits import (
 GOALS = ("goto", "path", "patrol", "coverage")
 # Settings that only a goal command takes.
 GOAL_SETTINGS = ("timeout", "tolerance", "localization", "max_linear", "max_angular", "acceleration",
-                 "angular_acceleration", "laps", "planner", "inflation")
+                 "angular_acceleration", "laps", "planner", "inflation", "local")
+LOCAL_CONTROLLERS = ("dwb",)  # goal setting ``local:``: obstacle avoidance on the robot's own lidar
 MAX_WAYPOINTS = 10_000
 MIN_AREA = 1e-6  # m^2: a polygon enclosing less is empty
 MAX_INFLATION = 10.0  # m: the largest radius a planner's map is inflated by
@@ -119,6 +120,7 @@ class GoalFields(_Strict):
     angular_acceleration: Optional[Annotated[PositiveFloat, at_most(MAX_ACCELERATION, "rad/s^2")]] = None
     planner: Optional[Literal["astar"]] = None  # goto, path, patrol: plan around the map's obstacles
     inflation: Optional[Annotated[Float, Field(ge=0, le=MAX_INFLATION)]] = None  # m; default: the footprint's radius
+    local: Optional[Literal["dwb"]] = None  # default: none (the route is followed as it is)
 
     @property
     def goal(self) -> Optional[str]:

@@ -69,7 +69,8 @@ def _control(cmd: GoalFields, rate: int, footprint) -> GoalControl:
         timeout=None if cmd.timeout is None else max(1, steps(cmd.timeout, rate)),
         planner=cmd.planner,
         inflation=0.0 if cmd.planner is None else
-        cmd.inflation if cmd.inflation is not None else footprint_radius(footprint or DEFAULT_FOOTPRINT))
+        cmd.inflation if cmd.inflation is not None else footprint_radius(footprint or DEFAULT_FOOTPRINT),
+        local=cmd.local or "")
 
 
 def footprint_radius(footprint: tuple[float, float, float, float]) -> float:

@@ -19,7 +19,7 @@ from mobot_cli.assets.description.torque import mass_torque
 from mobot_cli.assets.world.loaded import LoadedWorld, WorldRobot
 from mobot_cli.common.transforms import quat_from_rpy
 from mobot_cli.errors import Location, MobotError, ScenarioError
-from mobot_cli.plan import CommandStep, DriveSpec, RobotPlan, SpawnPose, TwistStep
+from mobot_cli.plan import CommandStep, DriveSpec, GoalStep, RobotPlan, SpawnPose, TwistStep
 from mobot_cli.scenario.goals import goal_step
 from mobot_cli.scenario.model import DriveOverrides, RobotSpec
 from mobot_cli.scenario.sensor_resolve import resolve_sensors
@@ -76,6 +76,7 @@ class RobotResolver:
                                 f"'{spec.description}'", location=self.locate_key(path + ("commands",)),
                                 hint="Add drive: {left_joints, right_joints, wheel_radius, wheel_separation}.")
         self.check_sideways(spec, drive, path)
+        self.check_local(spec, path, commands, sensors)
         in_world = self.world_robot(spec)
         if in_world is not None and "pose" not in spec.model_fields_set:
             members = [(spec.name, spec.namespace, SpawnPose(xyz=in_world.xyz, quat=in_world.quat))]
@@ -95,6 +96,17 @@ class RobotResolver:
                                  sensors=sensors, footprint=tuple(desc.footprint),
                                  holds=desc.holds))
         return out
+
+    def check_local(self, spec: RobotSpec, path: tuple, commands, sensors) -> None:
+        """A goal with ``local:`` obstacle avoidance needs a lidar on the robot to see with."""
+        if any(sensor.kind == "lidar" for sensor in sensors):
+            return
+        for cmd in commands:
+            if isinstance(cmd, GoalStep) and cmd.control.local:
+                raise ScenarioError(
+                    f"robot '{spec.name}': goal 'local: {cmd.control.local}' avoids what the robot's lidar sees, "
+                    "and it has no lidar", location=self.locate_key(path + ("commands", cmd.index, "local")),
+                    hint="Give the robot a lidar (the bundled robot: args: {lidar: \"true\"}), or leave out 'local'.")
 
     def claim(self, name: str, namespace: str, path: tuple) -> None:
         """Reserve a robot name and namespace; a second use is an error."""

@@ -12,6 +12,12 @@ pose, so wheels spinning against a wall count as blocked even if the encoders sa
 A goal driven on odometry that odometry says is reached is checked on the true pose as well:
 farther than its tolerance plus ``faults.odom_tolerance`` from the goal, it ends
 ``reached_by_odometry_only`` (the record's ``error`` says how far it truly is).
+
+A goal with ``local: dwb`` is driven by the dynamic-window controller (timeline/local.py) along
+the pursuit's route, on the latest scan of each of the robot's lidars (the timeline hands them
+over as they are read). It ends ``stuck`` instead of ``blocked`` when the robot stood still
+because no rollout was free or standing was its best, or when it has not moved ``PROGRESS_DISTANCE`` in
+``PROGRESS_SECONDS`` (nav2's SimpleProgressChecker defaults).
 """
 
 from __future__ import annotations
@@ -30,7 +36,11 @@ CONTROL_RATE_HZ = 20  # nav2's controller_frequency default
 BLOCKED_SECONDS = 1.0
 BLOCKED_DISTANCE = 0.02  # m
 BLOCKED_TURN = 0.05  # rad
-STATUSES = ("reached", "reached_by_odometry_only", "timed_out", "blocked", "cancelled", "unreachable")
+PROGRESS_SECONDS = 10.0  # local: dwb: the robot must move PROGRESS_DISTANCE within this ...
+PROGRESS_DISTANCE = 0.5  # m ... or the goal ends stuck
+STILL_LINEAR = 0.01  # m/s: local: dwb commanding less (and turning less than BLOCKED_TURN rad/s) stands
+HANDOVER = 0.25  # m: local: dwb hands a free last stretch to a stop vertex to the pursuit
+STATUSES = ("reached", "reached_by_odometry_only", "timed_out", "blocked", "cancelled", "unreachable", "stuck")
 
 
 @dataclass(frozen=True)
@@ -62,7 +72,8 @@ class Driver:
     """Plays ``items`` (GoalSteps and TwistSteps, in order) for robot ``name``."""
 
     def __init__(self, name: str, items, world: World, rate_hz: int, emit: Callable[[object], None],
-                 plan_world: WorldPlan | None = None):
+                 plan_world: WorldPlan | None = None,
+                 footprint: tuple[float, float, float, float] | None = None):
         self.name, self.world, self.emit = name, world, emit
         self.plan_world = plan_world  # the static world a planned goal's map is drawn from
         self.floor: float | None = None  # the floor under the robot, found by its first planned goal
@@ -80,6 +91,15 @@ class Driver:
         x, y, yaw = world.odom_origin(name)
         self.odom = Planar(x, y, yaw)
         self.odom_tolerance = world.physics.faults.odom_tolerance
+        # local: dwb: the latest level scan of each lidar (world x, y points) and the controller
+        self.footprint = footprint
+        self.sees = any(isinstance(item, GoalStep) and item.control.local for item in self.items)
+        self.scans: dict[str, object] = {}
+        self.cloud = None  # the scans joined: (n, 2) world points
+        self.local = None
+        self.progress_steps = max(1, round(PROGRESS_SECONDS * rate_hz))
+        self.progress: tuple[int, float, float] = (0, 0.0, 0.0)  # step, true x, y: the progress check
+        self.stood = False  # the controller chose to stand (or found no free rollout) at the last tick
 
     @property
     def finished(self) -> bool:
@@ -144,6 +164,12 @@ class Driver:
         self.pursuit = Pursuit(route, goal.control, self.dt, yaw=goal.yaw)
         if goal.kind == "patrol":
             self.lap_ends = [len(self.pursuit.route) - 1]
+        self.local = None
+        if goal.control.local:
+            from mobot_cli.timeline.local import Dwb, radius_of  # numpy: only for goals that use it
+
+            self.local = Dwb(goal.control, self.dt, radius_of(self.footprint))
+            self.progress = (step, state.true_x, state.true_y)
         if goal.kind == "patrol" and goal.laps != 1:
             self._add_lap(goal)  # the route holds two laps ahead: one more each time one begins
         self.anchor = (step, state.true_x, state.true_y, state.true_yaw)
@@ -163,16 +189,56 @@ class Driver:
         if goal.kind == "patrol" and len(self.lap_ends) > 1 and pursuit.passed >= self.lap_ends[-2] and \
                 (goal.laps is None or len(self.lap_ends) < goal.laps):
             self._add_lap(goal)  # on its last lap ahead: one more
-        linear, angular = pursuit.update(self._pose(state, goal))
+        pose = self._pose(state, goal)
+        if self.local is not None and pursuit.follow(pose):
+            linear, angular = self._avoid(pose, state)
+        else:
+            linear, angular = pursuit.update(pose)
         if pursuit.done:
             self._end(step, "reached", state)
         elif goal.control.timeout is not None and step - self.started >= goal.control.timeout:
             self._end(step, "timed_out", state)
+        elif self.local is not None and self._no_progress(step, state):
+            self._end(step, "stuck", state)
         elif self._blocked(step, state):
-            self._end(step, "blocked", state)
+            self._end(step, "stuck" if self.local is not None and self.stood else "blocked", state)
         else:
             self.world.set_command(self.name, linear, angular)
             self.wake = step + self.every
+
+    def see(self, sensor, data) -> None:
+        """A lidar reading of this robot (the timeline hands every one over while ``sees``)."""
+        if sensor.kind != "lidar":
+            return
+        from mobot_cli.timeline.local import level_points
+
+        self.scans[sensor.name] = level_points(data)
+        self.cloud = None  # joined again at the next tick
+
+    def _avoid(self, pose: PlanarPose, state: RobotState) -> tuple[float, float]:
+        """The local controller's twist: lidar points and the route ahead in the robot's frame."""
+        from mobot_cli.timeline.local import WAVE_REACH, in_frame, joined, path_in_frame
+
+        if self.cloud is None:
+            self.cloud = joined(list(self.scans.values()))
+        points = in_frame(self.cloud, state.true_x, state.true_y, state.true_yaw)
+        path = path_in_frame(self.pursuit.ahead(pose, WAVE_REACH), pose.x, pose.y, pose.yaw)
+        choice = self.local.command(points, path, (state.true_x, state.true_y, state.true_yaw))
+        # It stands because nothing free is better, not because something holds it: stuck if it lasts.
+        self.stood = not choice.admissible or (abs(choice.linear) < STILL_LINEAR and abs(choice.angular) < BLOCKED_TURN)
+        stop = self.pursuit.route[self.pursuit.stop]
+        if choice.admissible and not choice.blocked_path and math.dist((pose.x, pose.y), stop) < HANDOVER:
+            return self.pursuit.update(pose)  # a free last stretch: the pursuit lands within the tolerance
+        self.pursuit.v, self.pursuit.w = choice.linear, choice.angular  # the final turn starts from it
+        return choice.linear, choice.angular
+
+    def _no_progress(self, step: int, state: RobotState) -> bool:
+        """local: dwb: whether the robot stayed within PROGRESS_DISTANCE for PROGRESS_SECONDS."""
+        since, x, y = self.progress
+        if math.hypot(state.true_x - x, state.true_y - y) >= PROGRESS_DISTANCE:
+            self.progress = (step, state.true_x, state.true_y)
+            return False
+        return step - since >= self.progress_steps
 
     def _blocked(self, step: int, state: RobotState) -> bool:
         """Whether the robot stayed put for BLOCKED_SECONDS (checked once per such window)."""
@@ -197,7 +263,7 @@ class Driver:
         if goal.kind == "patrol":
             laps = sum(self.pursuit.passed >= end for end in self.lap_ends) if self.pursuit else 0
         self.emit(GoalEnded(step, self.name, goal.index, goal.kind, status, self.started, error, laps, reason))
-        self.current, self.pursuit, self.lap_ends = None, None, []
+        self.current, self.pursuit, self.lap_ends, self.local = None, None, [], None
         self.wake = step
 
     def _pose(self, state: RobotState, goal: GoalStep) -> PlanarPose:

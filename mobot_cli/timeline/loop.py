@@ -194,6 +194,9 @@ class Timeline:
         for robot, reading in readings:
             if self.robots.get(reading.robot) is robot:  # not deleted (or replaced) since it was sensed
                 self._consume(reading)
+                driver = self._drivers.get(reading.robot)
+                if driver is not None and driver.sees:
+                    driver.see(reading.sensor, reading.data)
 
     def _drive(self, step: int) -> None:
         for name, driver in list(self._drivers.items()):
@@ -219,9 +222,13 @@ class Timeline:
         if not due:
             return
         data = self.world.sense([(entry[0], entry[2].name) for entry in due])
+        drivers = self._drivers
         for entry, reading in zip(due, data):
             sensor = entry[2]
             consume(Reading(step, entry[0], sensor, reading))
+            driver = drivers.get(entry[0])
+            if driver is not None and driver.sees:  # a goal avoiding obstacles on this lidar
+                driver.see(sensor, reading)
             later.setdefault(step + max(1, sensor.every), []).append(entry)
 
     # -- what events and requests do --------------------------------------------------------
@@ -284,7 +291,8 @@ class Timeline:
 
     def _driver(self, name: str, script: list) -> Driver:
         # Records go through self._consume as it is when they are made (a consumer may attach later).
-        return Driver(name, script, self.world, self.rate_hz, lambda record: self._consume(record), self.plan.world)
+        return Driver(name, script, self.world, self.rate_hz, lambda record: self._consume(record), self.plan.world,
+                      self.robots[name].footprint)
 
     def _cancel(self, name: str) -> None:
         driver = self._drivers.pop(name, None)

@@ -89,10 +89,37 @@ class Pursuit:
                 return k
         return len(route) - 1
 
-    def update(self, pose: PlanarPose) -> tuple[float, float]:
-        """The twist for this control tick (both zero once ``done``)."""
+    def follow(self, pose: PlanarPose) -> bool:
+        """Carry the progress along the route forward; True while the robot is still on its way
+        to the last point (False once there: ``update`` then turns it to its yaw and stops)."""
         if not self.at_end:
             self._advance(pose)
+        return not self.at_end
+
+    def ahead(self, pose: PlanarPose, length: float) -> list[Point]:
+        """The route from the robot's nearest point on it, ``length`` along it (never past the
+        next stop vertex): the path a local controller follows (timeline/local.py)."""
+        route, stop = self.route, self.stop
+        a, b = route[self.seg], route[self.seg + 1]
+        t = _projection(pose, a, b)
+        points = [(a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]))]
+        left, k = length, self.seg
+        while k < stop:
+            end = route[k + 1]
+            here = points[-1]
+            step = math.dist(here, end)
+            if step >= left:
+                f = left / step if step > 0.0 else 0.0
+                points.append((here[0] + f * (end[0] - here[0]), here[1] + f * (end[1] - here[1])))
+                break
+            points.append(end)
+            left -= step
+            k += 1
+        return points
+
+    def update(self, pose: PlanarPose) -> tuple[float, float]:
+        """The twist for this control tick (both zero once ``done``)."""
+        self.follow(pose)
         if self.at_end and not self.done:
             error = 0.0 if self.yaw is None else _wrap(self.yaw - pose.yaw)
             self.done = abs(error) <= self.control.yaw_tolerance

@@ -1,0 +1,94 @@
+#!/usr/bin/env python3
+"""What does the local controller (``local: dwb``, timeline/local.py) add to a lidar run?
+
+1. scenarios/house_patrol.yaml (the bundled robot with its 180-beam lidar at 5 Hz, a patrol
+   through the house's doorway, 28 simulated s) as it is (pure pursuit) and with ``local: dwb``
+   on its goal, interleaved, medians of --repeat: wall and CPU ratios. The two runs drive
+   slightly different paths, so this is the cost of a whole run, not of the same motion.
+2. One control tick of the controller alone, on a scan of the house taken in the living room:
+   microseconds per call, with the path clear and with the path blocked (the wavefront).
+
+    python3 bench/bench_local.py [--repeat 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import tempfile
+import time
+from dataclasses import replace
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO))
+
+import numpy as np  # noqa: E402
+from common import timed  # noqa: E402  (bench/common.py)
+
+from mobot_cli.plan import GoalControl, GoalStep  # noqa: E402
+from mobot_cli.run import execute  # noqa: E402
+from mobot_cli.scenario.prepare import prepare  # noqa: E402
+from mobot_cli.timeline.local import Dwb  # noqa: E402
+
+
+def with_local(plan):
+    robot = plan.robots[0]
+    commands = tuple(replace(c, control=replace(c.control, local="dwb")) if isinstance(c, GoalStep) else c
+                     for c in robot.commands)
+    return replace(plan, robots=(replace(robot, commands=commands),))
+
+
+def whole_runs(repeat: int, work: Path) -> None:
+    prepared = prepare(REPO / "scenarios" / "house_patrol.yaml")
+    plans = {"pursuit": prepared.plan, "local: dwb": with_local(prepared.plan)}
+    results = {name: [] for name in plans}
+    load = os.getloadavg()[0]
+    for i in range(repeat):
+        for name, plan in plans.items():
+            results[name].append(timed(execute, plan, prepared.resolved_yaml, work / f"run-{i}-{len(name)}"))
+    base_wall = statistics.median(w for w, _ in results["pursuit"])
+    base_cpu = statistics.median(c for _, c in results["pursuit"])
+    for name, values in results.items():
+        wall, cpu = statistics.median(w for w, _ in values), statistics.median(c for _, c in values)
+        print(f"  {name:<11} {wall:7.3f} s wall  {cpu:7.3f} s CPU   wall x{wall / base_wall:5.3f}  "
+              f"CPU x{cpu / base_cpu:5.3f}")
+    pairs = sorted(c / b for (_, b), (_, c) in zip(results["pursuit"], results["local: dwb"]))
+    print(f"  dwb / pursuit, CPU, run by run: median x{statistics.median(pairs):5.3f}, all "
+          f"x{pairs[0]:5.3f}-x{pairs[-1]:5.3f} ({len(pairs)} pairs; load average {load:.1f} before, "
+          f"{os.getloadavg()[0]:.1f} after)")
+
+
+def one_tick(calls: int = 400) -> None:
+    # A room's walls 1.5 m and 2.5 m away, 180 beams, and a chair-sized cluster.
+    angles = np.linspace(-np.pi, np.pi, 180, endpoint=False)
+    reach = np.minimum(1.5 / np.maximum(np.abs(np.cos(angles)), 1e-9), 2.5 / np.maximum(np.abs(np.sin(angles)), 1e-9))
+    walls = np.stack([reach * np.cos(angles), reach * np.sin(angles)], axis=1)
+    chair = np.array([[0.9 + dx, dy] for dx in (-0.15, 0.0, 0.15) for dy in (-0.15, 0.0, 0.15)])
+    clear = np.array([[0.0, 0.0], [0.0, 1.4]])  # the path goes left, away from the chair
+    blocked = np.array([[0.0, 0.0], [1.4, 0.0]])
+    for name, points, path in (("path clear", walls, clear), ("path blocked", np.vstack([walls, chair]), blocked)):
+        dwb = Dwb(GoalControl(), 0.05, 0.26)
+        dwb.v = 0.2
+        started = time.process_time()
+        for _ in range(calls):
+            dwb.command(points, path)
+            dwb.v, dwb.w = 0.2, 0.0
+        print(f"  one tick, {name:<13} {1e6 * (time.process_time() - started) / calls:7.0f} us CPU")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=5)
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory(prefix="mobot-bench-local-") as work:
+        print("house_patrol.yaml, 28 simulated s, pursuit against local: dwb:")
+        whole_runs(args.repeat, Path(work))
+    print("the controller alone (20 ticks a simulated second):")
+    one_tick()
+
+
+if __name__ == "__main__":
+    main()
