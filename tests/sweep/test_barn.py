@@ -63,9 +63,19 @@ def barn_like(folder: Path) -> Path:
     return folder
 
 
+DATA = Path(__file__).resolve().parents[1] / "data" / "barn_like"  # barn_like()'s output (docs/barn.md runs it)
+
+
 @pytest.fixture(scope="module")
-def worlds(tmp_path_factory) -> Path:
-    return barn_like(tmp_path_factory.mktemp("barn") / "BARN")
+def worlds() -> Path:
+    return DATA
+
+
+def test_the_bundled_barn_like_worlds_are_the_generators(tmp_path):
+    made = barn_like(tmp_path / "BARN")
+    files = sorted(p.relative_to(made) for p in made.rglob("*") if p.is_file())
+    assert files == sorted(p.relative_to(DATA) for p in DATA.rglob("*") if p.is_file())
+    assert all((made / f).read_bytes() == (DATA / f).read_bytes() for f in files)
 
 
 def barn(*args: str):
