@@ -28,6 +28,8 @@ def barn(
                                                                   "this mobot's goals take one."),
     local: Optional[str] = typer.Option(None, "--local", help="The goal's local controller (e.g. dwb), where this "
                                                               "mobot's goals take one."),
+    lidar: bool = typer.Option(True, "--lidar/--no-lidar", help="Keep the robot's 2D lidar (scan) on; it is "
+                                                                 "recorded in every run folder (3.2 MB a world)."),
     jobs: Optional[int] = typer.Option(None, "--jobs", "-j", help="Runs at a time [default: the number of cores]."),
     out: Optional[Path] = typer.Option(None, "--out", "-o", help="Output folder [default: barn/barn-<time>]."),
     json_: bool = typer.Option(False, "--json", help="Print barn.json on stdout."),
@@ -45,6 +47,11 @@ def barn(
     from mobot_cli.sweep.barn import check_passed_through
     from mobot_cli.sweep.barn_worlds import Driver, find_folder, load_worlds, parse_numbers
 
+    for flag, value in (("--max-linear", max_linear), ("--max-angular", max_angular)):
+        if not value > 0:
+            raise UsageError(f"must be above 0, got {value:g}", location=Location(file=flag))
+    if robot.endswith((".urdf", ".xacro", ".sdf")) or "/" in robot:  # a file: from here, not from --out
+        robot = str(Path(robot).expanduser().resolve())
     extra = check_passed_through({"planner": planner, "local": local})
     numbers = parse_numbers(worlds)
     barn_dir = find_folder(folder)
@@ -59,7 +66,7 @@ def barn(
         chosen = load_worlds(barn_dir, numbers)
         from mobot_cli.sweep.barn import SWEEP, collect, prepare_sweep
 
-        sweep = prepare_sweep(out_dir, chosen, Driver(robot, engine, max_linear, max_angular, extra))
+        sweep = prepare_sweep(out_dir, chosen, Driver(robot, engine, max_linear, max_angular, extra, lidar))
         runner.prestart(len(sweep.variants))
         runner.start()
         started = time.perf_counter()

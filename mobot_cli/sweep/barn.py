@@ -72,11 +72,11 @@ def run_barn_task(task: Task) -> TaskResult:
 def check_passed_through(extra: dict[str, str | None]) -> tuple[tuple[str, str], ...]:
     """The goal settings given (--planner, --local), refused with a clear message when this
     mobot's goals do not take them."""
-    from mobot_cli.scenario.goal_model import GoalFields
+    from mobot_cli.scenario.model import CommandSpec
 
     given = tuple((k, v) for k, v in extra.items() if v is not None)
     for key, value in given:
-        if key not in GoalFields.model_fields:
+        if key not in CommandSpec.model_fields:
             raise UsageError(f"--{key} {value}: this mobot's goals take no '{key}' setting",
                              location=Location(file=f"--{key}"),
                              hint="Goals drive by pure pursuit along straight segments here; drop the flag, "
@@ -94,12 +94,20 @@ class BarnReport:
     failed_runs: int  # runs mobot could not finish (error, fault, crash)
 
 
+# Where a key of the generated scenario came from: an error about it points at the flag.
+FLAGS = (("commands[0].max_linear", "--max-linear"), ("commands[0].max_angular", "--max-angular"),
+         ("commands[0].planner", "--planner"), ("commands[0].local", "--local"), ("sensors.scan", "--no-lidar"),
+         ("description", "--robot"), ("physics.engine", "--engine"))
+
+
 def prepare_sweep(out_dir: Path, worlds: list[BarnWorld], driver: Driver):
-    """Write the base scenario into ``out_dir`` and prepare every run (a located error, exit 2,
-    for anything the scenario model refuses: a --planner value it does not know, a robot)."""
+    """Write the base scenario into ``out_dir`` and prepare every run. Anything the scenario model
+    refuses (a speed, a --planner value it does not know, a robot) is an error at its flag, exit 2,
+    and leaves nothing behind."""
     from mobot_cli.sweep.expand import expand
     from mobot_cli.sweep.spec import Axis, SweepSpec
 
+    made = not out_dir.exists()
     out_dir.mkdir(parents=True, exist_ok=True)
     scenario = out_dir / SCENARIO
     scenario.write_text(scenario_text(worlds[0], driver), encoding="utf-8")
@@ -108,7 +116,10 @@ def prepare_sweep(out_dir: Path, worlds: list[BarnWorld], driver: Driver):
     try:
         return expand(SweepSpec(scenario=scenario, axes=(axis,), name="barn"))
     except MobotError as exc:
-        raise _at_flag(exc, driver) from None
+        scenario.unlink()
+        if made:
+            out_dir.rmdir()
+        raise _at_flag(exc) from None
 
 
 def _text(path: str) -> str:
@@ -118,11 +129,16 @@ def _text(path: str) -> str:
     return path if parse_value(path) == path else json.dumps(path)
 
 
-def _at_flag(exc: MobotError, driver: Driver) -> MobotError:
-    """An error about a passed-through goal setting points at its flag."""
-    for key, value in driver.extra:
-        if f"'{key}'" in exc.message or (exc.location.key or "").endswith(key) or value in exc.message:
-            return UsageError(f"--{key} {value}: {exc.message}", location=Location(file=f"--{key}"), hint=exc.hint)
+def _at_flag(exc: MobotError) -> MobotError:
+    """An error about a key of the generated scenario, pointed at the flag that set it."""
+    key = exc.location.key or ""
+    for suffix, flag in FLAGS:
+        if key.endswith(suffix) and flag == "--no-lidar":
+            return UsageError("the robot has no 2D lidar on (a sensor on topic scan) to turn off",
+                              location=Location(file=flag), hint="Drop --no-lidar.")
+        if key.endswith(suffix):
+            message = exc.message.removeprefix(f"robot '{ROBOT}': ")
+            return UsageError(message, location=Location(file=flag), hint=exc.hint)
     return exc
 
 

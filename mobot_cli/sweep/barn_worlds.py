@@ -120,6 +120,7 @@ class Driver:
     max_linear: float = 0.5  # m/s, as BARN's DWA baseline (base_local_planner_params.yaml)
     max_angular: float = 1.57  # rad/s, likewise
     extra: tuple[tuple[str, str], ...] = ()  # (goal setting, value): planner, local
+    lidar: bool = True  # False: the robot's lidar (topic .../scan) off, for drivers that do not read it
 
 
 def scenario_text(first: BarnWorld, driver: Driver) -> str:
@@ -140,6 +141,7 @@ def scenario_text(first: BarnWorld, driver: Driver) -> str:
         f"  - name: {ROBOT}",
         f"    description: {json.dumps(driver.robot)}",
         f"    pose: {{x: {START[0]:g}, y: {START[1]:g}, yaw: {START[2]:g}}}",
+        *([] if driver.lidar else ["    sensors: {scan: false}"]),
         "    commands:",
         f"      - {json.dumps({'at': SETTLE, **goal})}",
     ]

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from mobot_cli.cli import invoke
-from mobot_cli.scenario.goal_model import GoalFields
+from mobot_cli.scenario.model import CommandSpec
 from mobot_cli.sweep.barn_score import optimal_time, reference_length
 
 CYLINDER = """    <model name='unit_cylinder_{i}'>
@@ -137,6 +137,11 @@ def test_too_slow_is_a_timeout(worlds, tmp_path):
     (["{worlds}", "--worlds", "2"], "world_2.world: BARN world 2 is missing: no such file"),
     (["{worlds}", "--engine", "ode"], "unknown engine 'ode'"),
     (["{tmp}"], "no BARN worlds (world_N.world) in this folder"),
+    # what the scenario model refuses points at the flag, not at the generated scenario
+    (["{worlds}", "--worlds", "0", "--robot", "nosuch"], "--robot: 'nosuch' is neither a bundled robot"),
+    (["{worlds}", "--worlds", "0", "--max-angular", "0"], "--max-angular: must be above 0, got 0"),
+    (["{worlds}", "--worlds", "0", "--robot", "mobot", "--no-lidar"],
+     "--no-lidar: the robot has no 2D lidar on (a sensor on topic scan) to turn off. Drop --no-lidar."),
 ])
 def test_bad_input_is_a_located_error(worlds, tmp_path, args, message):
     filled = [a.format(missing=tmp_path / "nowhere", worlds=worlds, tmp=tmp_path) for a in args]
@@ -155,7 +160,7 @@ def test_missing_path_file_names_it(worlds, tmp_path):
 
 
 def test_planner_flag_is_checked_against_the_goal_model(worlds, tmp_path):
-    if "planner" not in GoalFields.model_fields:
+    if "planner" not in CommandSpec.model_fields:
         done = barn(str(worlds), "--worlds", "0", "--planner", "astar", "--out", str(tmp_path / "out"))
         assert done.exit_code == 2 and "--planner astar: this mobot's goals take no 'planner' setting" in done.stderr
     else:  # a mobot with planned goals: an unknown planner is refused at its flag
