@@ -11,7 +11,7 @@ from typing import Optional
 import typer
 
 from mobot_cli import __version__
-from mobot_cli.cli import check, inspect, run, serve, xacro
+from mobot_cli.cli import barn, check, inspect, run, serve, xacro
 from mobot_cli.cli import map as map_command
 from mobot_cli.cli import plot as plot_command
 from mobot_cli.cli import sweep as sweep_command
@@ -64,6 +64,7 @@ app.command("xacro")(xacro.xacro)
 app.command("plot")(plot_command.plot)
 app.command("sweep")(sweep_command.sweep)
 app.command("map", context_settings=NEGATIVES)(map_command.map_)  # --origin -6,-5
+app.command("barn")(barn.barn)
 
 # The live world (cli/serve.py) and its clients (cli/live/, sharing cli/live/common.py's options).
 app.command("serve")(serve.serve)

@@ -56,14 +56,15 @@ def failed(index: int, failure: str, reason: str, wall_time: float = 0.0) -> Tas
     return TaskResult(index, FAILED, failure, reason, round(wall_time, 3))
 
 
-def run_task(task: Task) -> TaskResult:
-    """Run one task in this process and say how it went; never raises (but on Ctrl-C)."""
+def run_task(task: Task, watch: Callable[[Any], None] | None = None) -> TaskResult:
+    """Run one task in this process and say how it went; never raises (but on Ctrl-C).
+    ``watch`` is handed the timeline before the run starts (run.execute), to attach a consumer."""
     from mobot_cli.run import execute  # imported once per warm worker
 
     started = time.perf_counter()
     try:
         # summary.json is flushed to disk by the sweep (runner.Syncer): an fsync here would hold the run up.
-        result = execute(task.plan, task.resolved_yaml, Path(task.out_dir), durable=False)
+        result = execute(task.plan, task.resolved_yaml, Path(task.out_dir), watch=watch, durable=False)
     except MobotError as exc:
         kind = "fault" if isinstance(exc, SimulationFault) else "error"
         return failed(task.index, kind, str(exc), time.perf_counter() - started)
