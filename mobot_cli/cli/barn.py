@@ -76,7 +76,7 @@ def barn(
         if bar:
             bar.start()
         try:
-            done = run_sweep(sweep, out_dir / SWEEP, runner, {}, progress=_progress(bar))
+            done = run_sweep(sweep, out_dir / SWEEP, runner, {}, progress=output.sweep_updates(bar))
         finally:
             if bar:
                 bar.stop()
@@ -102,16 +102,6 @@ def _check_out(out_dir: Path) -> None:
     if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())):
         raise UsageError(f"{out_dir} is not empty", location=Location(file="--out"),
                          hint="Choose a new or empty folder for --out.")
-
-
-def _progress(bar):
-    if bar is None:
-        return None
-
-    def update(done: int, failed: int, total: int) -> None:
-        bar.update(bar.task_ids[0], completed=done, failed=failed)
-
-    return update
 
 
 def _print(env, report, wall: float) -> None:

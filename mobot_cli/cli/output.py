@@ -230,6 +230,17 @@ def sweep_progress(env: Environment, total: int, label: str):
     return bar
 
 
+def sweep_updates(bar):
+    """What a sweep calls as runs end (done, failed, total): the bar moves; None without a bar."""
+    if bar is None:
+        return None
+
+    def update(done: int, failed: int, total: int) -> None:
+        bar.update(bar.task_ids[0], completed=done, failed=failed)
+
+    return update
+
+
 def sweep_summary(env: Environment, out_dir, rows: list[dict[str, str]], keys: list[str], total: int, skipped: int,
                   wall: float) -> None:
     """The failed runs (if any) as a table, then one line of counts and where the results are."""

@@ -85,7 +85,7 @@ def _run(env, runner, prepared, out_dir: Path, done: dict, silent: bool):
     if bar:
         bar.start()
     try:
-        return run_sweep(prepared, out_dir, runner, done, progress=_progress(bar))
+        return run_sweep(prepared, out_dir, runner, done, progress=output.sweep_updates(bar))
     except KeyboardInterrupt:
         if bar:
             bar.stop()
@@ -121,13 +121,3 @@ def _executor(name: str, jobs: int, timeout: float | None, address: str | None):
     from mobot_cli.sweep.executor_local import LocalExecutor
 
     return LocalExecutor(jobs, timeout)
-
-
-def _progress(bar):
-    if bar is None:
-        return None
-
-    def update(done: int, failed: int, total: int) -> None:
-        bar.update(bar.task_ids[0], completed=done, failed=failed)
-
-    return update

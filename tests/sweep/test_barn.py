@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 
 from mobot_cli.cli import invoke
-from mobot_cli.scenario.model import CommandSpec
 from mobot_cli.sweep.barn_score import optimal_time, reference_length
 
 CYLINDER = """    <model name='unit_cylinder_{i}'>
@@ -159,10 +158,16 @@ def test_missing_path_file_names_it(worlds, tmp_path):
     assert f"{folder}/path_files/path_0.npy: the reference path of BARN world 0 is missing" in done.stderr
 
 
-def test_planner_flag_is_checked_against_the_goal_model(worlds, tmp_path):
-    if "planner" not in CommandSpec.model_fields:
-        done = barn(str(worlds), "--worlds", "0", "--planner", "astar", "--out", str(tmp_path / "out"))
-        assert done.exit_code == 2 and "--planner astar: this mobot's goals take no 'planner' setting" in done.stderr
-    else:  # a mobot with planned goals: an unknown planner is refused at its flag
-        done = barn(str(worlds), "--worlds", "0", "--planner", "nosuch", "--out", str(tmp_path / "out"))
-        assert done.exit_code == 2 and "--planner nosuch" in done.stderr
+def test_an_unknown_planner_is_refused_at_its_flag(worlds, tmp_path):
+    done = barn(str(worlds), "--worlds", "0", "--planner", "nosuch", "--out", str(tmp_path / "out"))
+    assert done.exit_code == 2
+    assert done.stderr == "mobot: error: --planner: Input should be 'astar', got 'nosuch'\n"
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_planned_goal_goes_round_the_wall_pursuit_runs_into(worlds, tmp_path):
+    # world 1: the straight line to the goal runs into a wall of cylinders (see above)
+    done = barn(str(worlds), "--worlds", "1", "--planner", "astar", "--local", "dwb", "--out", str(tmp_path / "out"))
+    assert done.exit_code == 0, done.stderr
+    [row] = list(csv.DictReader(open(tmp_path / "out" / "barn.csv")))
+    assert row["status"] == "succeeded" and float(row["score"]) > 0.0

@@ -14,12 +14,11 @@ left-out sensors.
 
 from __future__ import annotations
 
-import math
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from mobot_cli.assets.description.sensor_xml import clean_topic
-from mobot_cli.errors import DescriptionError, Location
+from mobot_cli.assets.description.sensor_xml import clean_topic, finite
+from mobot_cli.errors import Location
 
 # words in a plugin's file name -> what it senses (plugins mobot does not simulate)
 OTHER_PLUGINS = (("gps", "GPS"), ("navsat", "GPS"), ("magnetic", "magnetometer"),
@@ -86,13 +85,5 @@ def _reader(plugin: ET.Element, name: str, source: Path):
         text = _text(plugin, tag)
         if not text:
             return default
-        try:
-            value = float(text)
-        except ValueError:
-            value = math.nan
-        if not math.isfinite(value):
-            raise DescriptionError(f"plugin '{name}' has <{tag}> '{text[:40]}', which is not a finite "
-                                   "number", location=Location(file=source, key=f"gazebo.plugin.{name}.{tag}"),
-                                   hint="Write a plain number.")
-        return value
+        return finite(text, f"plugin '{name}'", tag, Location(file=source, key=f"gazebo.plugin.{name}.{tag}"))
     return number

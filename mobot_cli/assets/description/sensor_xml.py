@@ -52,15 +52,7 @@ class SensorXml:
         text = self.text(path)
         if not text:
             return default
-        try:
-            value = float(text)
-        except ValueError:
-            value = math.nan
-        if not math.isfinite(value):
-            raise DescriptionError(f"sensor '{self.name}' has <{path.split('/')[-1]}> "
-                                   f"'{text[:40]}', which is not a finite number",
-                                   location=self.location(path), hint="Write a plain number.")
-        return value
+        return finite(text, f"sensor '{self.name}'", path.split("/")[-1], self.location(path))
 
     def integer(self, path: str, default: int) -> int:
         """A whole number at ``path`` (SDF's unsigned int), or ``default``; read as sdformat reads
@@ -271,3 +263,15 @@ def _plugin_number(plugin: ET.Element, tag: str) -> float | None:
     except ValueError:
         return None
     return value if math.isfinite(value) else None
+
+
+def finite(text: str, owner: str, tag: str, location: Location) -> float:
+    """``text`` as a finite number; a DescriptionError naming ``owner`` and ``<tag>`` otherwise."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value):
+        raise DescriptionError(f"{owner} has <{tag}> '{text[:40]}', which is not a finite number",
+                               location=location, hint="Write a plain number.")
+    return value
