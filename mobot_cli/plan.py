@@ -109,6 +109,8 @@ class GoalControl:
     yaw_tolerance: float = 0.05  # rad, for a goal's final heading
     localization: str = "odometry"  # "odometry" (the robot's own odom_*) | "ground_truth"
     timeout: int | None = None  # physics steps from the start; None: no limit
+    stuck_time: float = 1.0  # s without progress (true pose) after which the goal ends blocked (stuck)
+    danger_distance: float = 0.3  # m: the metrics' danger_time counts the time closer than this
 
 
 @dataclass(frozen=True)
@@ -279,6 +281,7 @@ class Expectation:
     step: int | None = None  # a log row's step; None is the end of the run
     points: tuple[tuple[float, float], ...] = ()  # visits: the checkpoints; coverage: the area
     status: str = ""  # goal: the outcome expected
+    metric: str = ""  # metric: its name (limits: min, max, command)
 
     def limit(self, name: str) -> float | None:
         """One limit by name, or None when the scenario did not give it."""

@@ -34,6 +34,7 @@ class RunOptions:
     ros2_: bool = False
     view: bool = False
     view_port: int = 8080
+    junit: Optional[Path] = None
 
 
 def run(
@@ -56,6 +57,8 @@ def run(
     view: bool = typer.Option(False, "--view", help="Watch the run in a local 3D web page (extra 'view'); "
                               "when it ends the page replays it until Ctrl-C. One file only."),
     view_port: int = typer.Option(8080, "--view-port", help="Port of the --view page on 127.0.0.1 (0: any)."),
+    junit: Optional[Path] = typer.Option(None, "--junit", help="Also write a JUnit XML report: a testcase per "
+                                         "expectation (or per run), metrics and seed as properties."),
 ) -> int:
     """Run scenarios to their end and write odometry, a summary and the resolved scenario of each.
 
@@ -64,7 +67,7 @@ def run(
     0 ok < 1 an expectation failed < 2 bad input < 3 simulation fault. Ctrl-C (130) stops them
     all at once.
     """
-    options = RunOptions(set_, seed, duration, realtime, json_, quiet, skip_missing, ros2_, view, view_port)
+    options = RunOptions(set_, seed, duration, realtime, json_, quiet, skip_missing, ros2_, view, view_port, junit)
     return run_scenarios(ctx.obj, scenario, out, options)
 
 
@@ -73,22 +76,29 @@ def run_scenarios(env: Environment, scenarios: Sequence[Path], out: Optional[Pat
 
     One scenario is `mobot run` as it always was: its errors raise. With several, a scenario
     that fails is reported and the next one runs; Ctrl-C stops them all at once (raised)."""
-    if len(scenarios) == 1:
-        return run_scenario(env, scenarios[0], out, options)
-    if options.view:
-        raise UsageError("--view watches one run: give one scenario file", hint="or run them without --view")
-    folders = _batch_folders(scenarios, out)
-    worst = ExitCode.OK
-    for scenario, folder in zip(scenarios, folders):
-        try:
-            code = run_scenario(env, scenario, folder, options, one_line_json=True)
-        except MobotError as exc:
-            if env.traceback:
-                raise
-            output.report_error(env, exc)
-            code = exc.exit_code
-        worst = max(worst, code)
-    return worst
+    cases: list = []  # --junit: the testcases of every run, written once they are all done
+    try:
+        if len(scenarios) == 1:
+            return run_scenario(env, scenarios[0], out, options, cases=cases)
+        if options.view:
+            raise UsageError("--view watches one run: give one scenario file", hint="or run them without --view")
+        folders = _batch_folders(scenarios, out)
+        worst = ExitCode.OK
+        for scenario, folder in zip(scenarios, folders):
+            try:
+                code = run_scenario(env, scenario, folder, options, one_line_json=True, cases=cases)
+            except MobotError as exc:
+                if env.traceback:
+                    raise
+                output.report_error(env, exc)
+                code = exc.exit_code
+            worst = max(worst, code)
+        return worst
+    finally:
+        if options.junit is not None:
+            from mobot_cli.record import junit
+
+            junit.write(options.junit, "mobot run", cases)
 
 
 def _batch_folders(scenarios: Sequence[Path], out: Optional[Path]) -> list[Optional[Path]]:
@@ -106,7 +116,7 @@ def _batch_folders(scenarios: Sequence[Path], out: Optional[Path]) -> list[Optio
 
 
 def run_scenario(env: Environment, scenario: Path, out: Optional[Path], options: RunOptions,
-                 one_line_json: bool = False) -> int:
+                 one_line_json: bool = False, cases: Optional[list] = None) -> int:
     """Run a scenario to its end, write the run folder and print what `mobot run` prints; the exit code.
     ``one_line_json``: --json prints the summary on one line (several runs: JSON Lines)."""
     from mobot_cli.common.files import check_out_folder
@@ -144,11 +154,15 @@ def run_scenario(env: Environment, scenario: Path, out: Optional[Path], options:
     except BaseException:
         if watcher:
             watcher.close()
+        if cases is not None and options.junit is not None:
+            _junit_cases(cases, scenario, out_dir, None)  # the fault or error summary.json records
         raise
     finally:
         if bar:
             bar.stop()
         ros2.report(env, bridges, quiet=quiet)
+    if cases is not None and options.junit is not None:
+        _junit_cases(cases, scenario, out_dir, result.record)
     # Said during the run (stalled wheels, odometry far from the truth): summary.json has them too.
     output.notices(env, result.record.notices[len(plan.notices):], quiet=quiet)
     if options.json_:
@@ -162,6 +176,16 @@ def run_scenario(env: Environment, scenario: Path, out: Optional[Path], options:
     if any(not r.passed for r in result.expectations):
         return ExitCode.EXPECTATION_FAILED
     return ExitCode.OK
+
+
+def _junit_cases(cases: list, scenario: Path, out_dir: Path, record) -> None:
+    """Add the run's testcases (its record, or the one its folder holds after a fault)."""
+    from mobot_cli.record import junit
+    from mobot_cli.record.summary import RunRecord
+
+    record = record or RunRecord.load(out_dir)
+    if record is not None:
+        cases.extend(junit.run_cases(record, scenario.stem))
 
 
 class _Watcher:

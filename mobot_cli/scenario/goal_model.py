@@ -21,6 +21,7 @@ from mobot_cli.scenario.limits import (
     Coordinate,
     Float,
     Int,
+    NonNegativeFloat,
     PositiveFloat,
     at_most,
 )
@@ -28,7 +29,7 @@ from mobot_cli.scenario.limits import (
 GOALS = ("goto", "path", "patrol", "coverage")
 # Settings that only a goal command takes.
 GOAL_SETTINGS = ("timeout", "tolerance", "localization", "max_linear", "max_angular", "acceleration",
-                 "angular_acceleration", "laps")
+                 "angular_acceleration", "laps", "stuck_time", "danger_distance")
 MAX_WAYPOINTS = 10_000
 MIN_AREA = 1e-6  # m^2: a polygon enclosing less is empty
 MAX_AREA_SIDE = 200.0  # m: the largest side of an area's bounding box (its grids stay small)
@@ -116,6 +117,8 @@ class GoalFields(_Strict):
     max_angular: Optional[Annotated[PositiveFloat, at_most(MAX_ANGULAR_SPEED, "rad/s")]] = None
     acceleration: Optional[Annotated[PositiveFloat, at_most(MAX_ACCELERATION, "m/s^2")]] = None
     angular_acceleration: Optional[Annotated[PositiveFloat, at_most(MAX_ACCELERATION, "rad/s^2")]] = None
+    stuck_time: Optional[Annotated[Float, Field(gt=0, le=1e6)]] = None  # s without progress: blocked (stuck)
+    danger_distance: Optional[Annotated[NonNegativeFloat, Field(le=100)]] = None  # m, for danger_time
 
     @property
     def goal(self) -> Optional[str]:

@@ -66,7 +66,9 @@ def _control(cmd: GoalFields, rate: int) -> GoalControl:
         angular_acceleration=cmd.angular_acceleration or DEFAULT.angular_acceleration,
         tolerance=tolerance or DEFAULT.tolerance, yaw_tolerance=DEFAULT.yaw_tolerance,
         localization=cmd.localization or DEFAULT.localization,
-        timeout=None if cmd.timeout is None else max(1, steps(cmd.timeout, rate)))
+        timeout=None if cmd.timeout is None else max(1, steps(cmd.timeout, rate)),
+        stuck_time=DEFAULT.stuck_time if cmd.stuck_time is None else float(cmd.stuck_time),
+        danger_distance=DEFAULT.danger_distance if cmd.danger_distance is None else float(cmd.danger_distance))
 
 
 def _free(world: WorldPlan | None, point: tuple[float, float], what: str, where: Location | None) -> None:

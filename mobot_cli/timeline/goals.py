@@ -5,8 +5,8 @@ runs, every control period (``CONTROL_RATE_HZ``, whole physics steps). On each c
 reads the robot once, turns the pose it trusts into a twist (timeline/pursuit.py) and commands it.
 A goal ends ``reached``, ``timed_out`` (its ``timeout``), ``blocked`` (the robot's true pose
 moved less than ``BLOCKED_DISTANCE`` and turned less than ``BLOCKED_TURN`` in
-``BLOCKED_SECONDS``: it pushes against something) or ``cancelled`` (a live command or goal
-took over); the robot is stopped and ``GoalEnded`` recorded. Progress is judged on the true
+``BLOCKED_SECONDS``, or the goal's ``stuck_time``: it pushes against something) or ``cancelled``
+(a live command or goal took over); the robot is stopped and ``GoalEnded`` recorded. Progress is judged on the true
 pose, so wheels spinning against a wall count as blocked even if the encoders say they move.
 A goal driven on odometry that odometry says is reached is checked on the true pose as well:
 farther than its tolerance plus ``faults.odom_tolerance`` from the goal, it ends
@@ -26,7 +26,7 @@ from mobot_cli.sim.state import RobotState
 from mobot_cli.timeline.pursuit import PlanarPose, Pursuit
 
 CONTROL_RATE_HZ = 20  # nav2's controller_frequency default
-BLOCKED_SECONDS = 1.0
+BLOCKED_SECONDS = 1.0  # the default of a goal's stuck_time
 BLOCKED_DISTANCE = 0.02  # m
 BLOCKED_TURN = 0.05  # rad
 STATUSES = ("reached", "reached_by_odometry_only", "timed_out", "blocked", "cancelled")
@@ -40,6 +40,9 @@ class GoalStarted:
     robot: str
     index: int
     kind: str
+    # m: the optimal path length for SPL: the polyline from the true start through the goal's points
+    # (a patrol: one lap back to its first point). A planner puts its planned path's length here.
+    optimal: float | None = None
 
 
 @dataclass(frozen=True)
@@ -56,6 +59,15 @@ class GoalEnded:
     laps: int | None = None  # patrol: rounds completed
 
 
+def optimal_length(state: RobotState, goal: GoalStep) -> float:
+    """The straight-line route's length from the robot's true position through ``goal``'s points
+    (a patrol: one lap, back to its first point), m."""
+    route = [(state.true_x, state.true_y), *goal.points]
+    if goal.kind == "patrol":
+        route.append(goal.points[0])
+    return sum(math.dist(a, b) for a, b in zip(route, route[1:]))
+
+
 class Driver:
     """Plays ``items`` (GoalSteps and TwistSteps, in order) for robot ``name``."""
 
@@ -64,6 +76,7 @@ class Driver:
         self.items: list[GoalStep | TwistStep] = list(items)
         self.every = max(1, round(rate_hz / CONTROL_RATE_HZ))
         self.dt = self.every / rate_hz
+        self.rate_hz = rate_hz
         self.blocked_steps = max(1, round(BLOCKED_SECONDS * rate_hz))
         self.current: GoalStep | TwistStep | None = None
         self.started = 0
@@ -127,7 +140,8 @@ class Driver:
         if goal.kind == "patrol" and goal.laps != 1:
             self._add_lap(goal)  # the route holds two laps ahead: one more each time one begins
         self.anchor = (step, state.true_x, state.true_y, state.true_yaw)
-        self.emit(GoalStarted(step, self.name, goal.index, goal.kind))
+        self.blocked_steps = max(1, round(goal.control.stuck_time * self.rate_hz))
+        self.emit(GoalStarted(step, self.name, goal.index, goal.kind, optimal_length(state, goal)))
         self._control(step, state)
 
     def _add_lap(self, goal: GoalStep) -> None:

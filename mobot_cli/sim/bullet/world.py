@@ -67,7 +67,7 @@ class World:
         self._pushed: list[HolonomicDrive] = []  # holonomic drives: a base force every step
         self._odom_every = max(1, round(physics.rate_hz / ODOMETRY_RATE_HZ))
         self._check_every = max(1, round(physics.rate_hz / HEALTH_RATE_HZ))
-        self._contacts = ContactCounter()
+        self._contacts = ContactCounter(name_of=self._hit_name)
         self._contact_every = max(1, round(physics.rate_hz / CONTACT_RATE_HZ))
         self._sensing: Sensing | None = None  # made when the first robot with sensors arrives
         self._clearance: dict[str, float] = {}  # robot -> how far its clearance is measured (m)
@@ -98,7 +98,7 @@ class World:
         self._ramping = []
         self._sprung = []
         self._pushed = []
-        self._contacts = ContactCounter()
+        self._contacts = ContactCounter(name_of=self._hit_name)
         self._sensing = None  # rebuilt with the first robot with sensors: its noise restarts too
         self._clearance = {}
         self._health = Health(self._cid, self.physics.faults, self.physics.rate_hz)
@@ -362,6 +362,11 @@ class World:
             self._sensing = Sensing(self._cid, self.plan, self.seed, self.physics.dt, self.physics.gravity,
                                     self.label, lambda: [r.body for r in self._robots.values()])
         return self._sensing
+
+    def _hit_name(self, other) -> str:
+        """How records name what a robot collided with (a ContactCounter key)."""
+        kind, what = other
+        return f"robot '{what}'" if kind == "robot" else self._statics.get(what, f"body {what}")
 
     def label(self, body: int) -> str:
         """What messages call a body: "robot 'NAME'" or the static body's label."""
