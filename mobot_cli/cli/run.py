@@ -76,18 +76,24 @@ def run_scenarios(env: Environment, scenarios: Sequence[Path], out: Optional[Pat
 
     One scenario is `mobot run` as it always was: its errors raise. With several, a scenario
     that fails is reported and the next one runs; Ctrl-C stops them all at once (raised)."""
-    cases: list = []  # --junit: the testcases of every run, written once they are all done
+    suites: list = []  # --junit: a test suite per run, written once they are all done
     try:
         if len(scenarios) == 1:
-            return run_scenario(env, scenarios[0], out, options, cases=cases)
+            try:
+                return run_scenario(env, scenarios[0], out, options, suites=suites)
+            except MobotError as exc:
+                _junit_refused(suites, 0, scenarios[0], exc)
+                raise
         if options.view:
             raise UsageError("--view watches one run: give one scenario file", hint="or run them without --view")
         folders = _batch_folders(scenarios, out)
         worst = ExitCode.OK
         for scenario, folder in zip(scenarios, folders):
+            before = len(suites)
             try:
-                code = run_scenario(env, scenario, folder, options, one_line_json=True, cases=cases)
+                code = run_scenario(env, scenario, folder, options, one_line_json=True, suites=suites)
             except MobotError as exc:
+                _junit_refused(suites, before, scenario, exc)
                 if env.traceback:
                     raise
                 output.report_error(env, exc)
@@ -98,7 +104,7 @@ def run_scenarios(env: Environment, scenarios: Sequence[Path], out: Optional[Pat
         if options.junit is not None:
             from mobot_cli.record import junit
 
-            junit.write(options.junit, "mobot run", cases)
+            junit.write(options.junit, suites)
 
 
 def _batch_folders(scenarios: Sequence[Path], out: Optional[Path]) -> list[Optional[Path]]:
@@ -116,7 +122,7 @@ def _batch_folders(scenarios: Sequence[Path], out: Optional[Path]) -> list[Optio
 
 
 def run_scenario(env: Environment, scenario: Path, out: Optional[Path], options: RunOptions,
-                 one_line_json: bool = False, cases: Optional[list] = None) -> int:
+                 one_line_json: bool = False, suites: Optional[list] = None) -> int:
     """Run a scenario to its end, write the run folder and print what `mobot run` prints; the exit code.
     ``one_line_json``: --json prints the summary on one line (several runs: JSON Lines)."""
     from mobot_cli.common.files import check_out_folder
@@ -154,15 +160,15 @@ def run_scenario(env: Environment, scenario: Path, out: Optional[Path], options:
     except BaseException:
         if watcher:
             watcher.close()
-        if cases is not None and options.junit is not None:
-            _junit_cases(cases, scenario, out_dir, None)  # the fault or error summary.json records
+        if suites is not None and options.junit is not None:
+            _junit_suite(suites, plan.name, out_dir, None)  # the fault or error summary.json records
         raise
     finally:
         if bar:
             bar.stop()
         ros2.report(env, bridges, quiet=quiet)
-    if cases is not None and options.junit is not None:
-        _junit_cases(cases, scenario, out_dir, result.record)
+    if suites is not None and options.junit is not None:
+        _junit_suite(suites, plan.name, out_dir, result.record)
     # Said during the run (stalled wheels, odometry far from the truth): summary.json has them too.
     output.notices(env, result.record.notices[len(plan.notices):], quiet=quiet)
     if options.json_:
@@ -178,14 +184,22 @@ def run_scenario(env: Environment, scenario: Path, out: Optional[Path], options:
     return ExitCode.OK
 
 
-def _junit_cases(cases: list, scenario: Path, out_dir: Path, record) -> None:
-    """Add the run's testcases (its record, or the one its folder holds after a fault)."""
+def _junit_refused(suites: list, before: int, scenario: Path, exc: MobotError) -> None:
+    """A run that left no record (bad input): its suite says the error."""
+    if len(suites) == before:
+        from mobot_cli.record import junit
+
+        suites.append(junit.failed_suite(scenario.stem, type(exc).__name__, str(exc)))
+
+
+def _junit_suite(suites: list, name: str, out_dir: Path, record) -> None:
+    """Add the run's test suite (from its record, or the one its folder holds after a fault)."""
     from mobot_cli.record import junit
     from mobot_cli.record.summary import RunRecord
 
     record = record or RunRecord.load(out_dir)
     if record is not None:
-        cases.extend(junit.run_cases(record, scenario.stem))
+        suites.append(junit.run_suite(record, name))
 
 
 class _Watcher:

@@ -72,7 +72,7 @@ def sweep(
     if junit is not None:
         from mobot_cli.record import junit as junit_xml
 
-        junit_xml.write(junit, f"mobot sweep {prepared.name}", junit_xml.sweep_cases(rows, prepared.name))
+        junit_xml.write(junit, junit_xml.sweep_suites(rows, out_dir, prepared.name))
     if json_:
         output.emit_json(env, {**report.document, "results": rows})
     elif quiet:

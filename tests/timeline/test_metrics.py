@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import pytest
 from lxml import etree
@@ -74,6 +75,20 @@ def test_forced_collision_names_the_wall_and_fails_the_goal(wall_run):
     assert metrics["success"] is False and metrics["failure"] == "collision" and metrics["spl"] == 0.5
 
 
+def test_no_progress_ends_stuck_after_stuck_time(tmp_path):
+    """Creeping at 5 mm/s moves less than 2 cm in 2 s: no progress, nothing touched."""
+    robot = ("  - name: mobot\n    description: mobot\n    pose: {x: 0.0, y: 0.0, yaw: 0.0}\n    commands:\n"
+             "      - {at: 0.0, goto: {x: 1.0, y: 0.0}, max_linear: 0.005, stuck_time: 2.0, "
+             "localization: ground_truth}\n")
+    path = room_scenario(tmp_path, robot, duration=4.0)
+    done = invoke(["run", path, "--out", tmp_path / "out", "--quiet"])
+    assert done.exit_code == 0, done.stderr
+    (goal,) = json.loads((tmp_path / "out" / "summary.json").read_text())["robots"]["mobot"]["goals"]
+    assert (goal["status"], goal["failure"], goal["collisions"], goal["success"]) == ("blocked", "stuck", 0, False)
+    assert goal["ended_at"] - goal["started_at"] == pytest.approx(2.0)
+    assert goal["path_length"] < 0.02
+
+
 def test_metric_expectations(wall_run):
     _, done, summary = wall_run
     assert done.exit_code == 1
@@ -82,31 +97,72 @@ def test_metric_expectations(wall_run):
     assert not collisions["passed"] and collisions["happened"].startswith("had collisions ")
 
 
+SCHEMA = Path(__file__).parent.parent / "data" / "junit-10.xsd"  # Jenkins xunit-plugin's, which pytest follows
+
+
+def junit(path: Path) -> etree._Element:
+    """The report at ``path``, checked against junit-10.xsd."""
+    document = etree.parse(str(path))
+    schema = etree.XMLSchema(etree.parse(str(SCHEMA)))
+    assert schema.validate(document), schema.error_log
+    return document.getroot()
+
+
+def properties(suite) -> dict[str, str]:
+    return {p.get("name"): p.get("value") for p in suite.find("properties")}
+
+
 def test_junit_of_a_run(wall_run):
     folder, _, summary = wall_run
-    root = etree.parse(str(folder / "run.xml")).getroot()
-    assert root.tag == "testsuites"
+    root = junit(folder / "run.xml")
+    assert (root.tag, root.get("tests"), root.get("failures"), root.get("errors")) == ("testsuites", "2", "1", "0")
     (suite,) = root
-    assert (suite.get("name"), suite.get("tests"), suite.get("failures"), suite.get("errors")) == \
-        ("mobot run", "2", "1", "0")
+    assert (suite.get("name"), suite.get("tests"), suite.get("failures"), suite.get("errors"), suite.get("time")) \
+        == ("sensors", "2", "1", "0", "25.000")
     passed, failed = suite.findall("testcase")
+    assert passed.get("name") == "mobot: metric: have spl at least 0.9 in goal command 0"
     assert passed.find("failure") is None and failed.find("failure") is not None
-    assert "expected to have collisions at most 0" in failed.find("failure").get("message")
-    props = {p.get("name"): p.get("value") for p in passed.find("properties")}
-    assert props["seed"] == str(summary["seed"]) and props["mobot.goal0.spl"] == "1"
-    for case in suite:  # what every JUnit reader requires (Jenkins' junit-10.xsd: name, time)
-        assert case.get("name") and case.get("classname") and float(case.get("time")) > 0
+    assert failed.find("failure").get("message").startswith(
+        "robot 'mobot' was expected to have collisions at most 0 over its goals; it had collisions ")
+    props = properties(suite)
+    assert props["seed"] == str(summary["seed"]) == "11" and props["mobot.goal0.spl"] == "1"
+    assert props["mobot.failure"] == "collision" and props["mobot.goal1.status"] == "blocked"
+
+
+def test_junit_of_a_fault_and_of_bad_input(tmp_path):
+    (tmp_path / "flying.yaml").write_text("version: 1\nname: flying\nduration: 3\nphysics: {gravity: [0, 0, 2.0]}\n"
+                                          "faults: {flying_time: 1.0}\nrobots:\n  - name: mobot\n")
+    (tmp_path / "bad.yaml").write_text("version: 1\nname: bad\nduration: -1\nrobots:\n  - name: mobot\n")
+    done = invoke(["run", tmp_path / "flying.yaml", tmp_path / "bad.yaml", "--out", tmp_path / "runs", "--quiet",
+                   "--junit", tmp_path / "report.xml"])
+    assert done.exit_code == 3
+    flying, bad = junit(tmp_path / "report.xml")
+    (case,) = flying.findall("testcase")
+    assert (case.get("name"), case.find("error").get("type")) == ("run", "flying")
+    assert "robot 'mobot' is flying at step 240" in case.find("error").get("message")
+    assert (flying.get("errors"), properties(flying)["status"]) == ("1", "fault")
+    (case,) = bad.findall("testcase")
+    assert bad.get("name") == "bad" and "duration" in case.find("error").get("message")
 
 
 def test_junit_of_a_sweep(tmp_path):
     path = room_scenario(tmp_path, ROBOT.replace(", stuck_time: 2.0", ""), duration=5.0)
-    done = invoke(["sweep", path, "--grid", "seed=1,2", "--out", tmp_path / "sw", "--quiet", "-j", "1",
+    path.write_text(path.read_text() + "expect:\n  - {robot: mobot, metric: {name: path_length, min: 1.0}}\n")
+    done = invoke(["sweep", path, "--grid", "duration=3,5", "--out", tmp_path / "sw", "--quiet", "-j", "1",
                    "--junit", tmp_path / "sweep.xml"])
-    assert done.exit_code == 0, done.stderr
-    suite = etree.parse(str(tmp_path / "sweep.xml")).getroot()[0]
-    assert (suite.get("tests"), suite.get("failures"), suite.get("errors")) == ("2", "0", "0")
-    seeds = [{p.get("name"): p.get("value") for p in c.find("properties")}["seed"] for c in suite]
-    assert seeds == ["1", "2"]
+    assert done.exit_code == 1, done.stderr
+    root = junit(tmp_path / "sweep.xml")
+    assert (root.get("tests"), root.get("failures"), root.get("errors")) == ("2", "1", "0")
+    short, long = root
+    assert (short.get("name"), long.get("name")) == ("sensors run 0", "sensors run 1")
+    assert short.find("testcase/failure").get("message").startswith(
+        "robot 'mobot' was expected to have path_length at least 1 over its goals; it had path_length 0.")
+    assert long.find("testcase/failure") is None
+    rows = (tmp_path / "sw" / "results.csv").read_text().splitlines()
+    header, first = rows[0].split(","), dict(zip(rows[0].split(","), rows[1].split(",")))
+    assert "mobot.spl" in header and "mobot.clearance_min" in header
+    assert properties(short)["duration"] == "3" and properties(short)["seed"] == first["seed"]
+    assert properties(short)["mobot.path_length"] == first["mobot.path_length"]
 
 
 def _state(v: float, w: float = 0.0, x: float = 0.0, clearance: float = math.inf) -> RobotState:
