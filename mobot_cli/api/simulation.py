@@ -136,7 +136,8 @@ class Simulation:
     def goto(self, name: str, x: float, y: float, yaw: float | None = None, **settings) -> None:
         """Drive to (x, y) (then turn to ``yaw``) with the goal controller of a scenario's
         ``goto`` command, from this step on; ``settings``: tolerance, timeout (s), localization,
-        max_linear, max_angular, acceleration, angular_acceleration. A running goal is cancelled."""
+        max_linear, max_angular, acceleration, angular_acceleration, stuck_time (s), danger_distance (m).
+        A running goal is cancelled."""
         self._known(name)
         if not self._world.has_drive(name):
             raise UsageError(f"robot '{name}' has no drive wheels: it cannot drive to a goal")

@@ -63,7 +63,7 @@ def test_forced_collision_names_the_wall_and_fails_the_goal(wall_run):
     _, _, summary = wall_run
     into = summary["robots"]["mobot"]["goals"][1]
     assert into["status"] == "blocked" and into["success"] is False and into["failure"] == "collision"
-    assert into["collisions"] >= 1 and into["collided_with"] == ["world model 'walls' at (0.00, 0.00, 0.00)"]
+    assert into["collisions"] >= 1 and into["collided_with"] == ["walls"]
     # the front (0.10 m ahead of the axle) meets the wall at x = 3: at 0.3 m/s from x ~ 2, about 3 s on
     log_period = 1 / summary["log_rate_hz"]
     assert into["started_at"] + 2.0 < into["collision_first"] < into["started_at"] + 5.0
@@ -73,6 +73,42 @@ def test_forced_collision_names_the_wall_and_fails_the_goal(wall_run):
     assert into["danger_time"] > 0.0 and into["clearance_min"] < 0.01
     metrics = summary["robots"]["mobot"]["metrics"]
     assert metrics["success"] is False and metrics["failure"] == "collision" and metrics["spl"] == 0.5
+
+
+CRATE = """    <model name="crate">
+      <static>true</static>
+      <pose>1.0 1.0 0.25 0 0 0</pose>
+      <link name="l"><collision name="c"><geometry><box><size>0.4 0.4 0.5</size></box></geometry></collision></link>
+    </model>
+"""
+
+
+def test_collisions_name_the_box_and_the_robot_hit(tmp_path):
+    """One robot drives into a crate, another into a robot standing in its way."""
+    robots = ("  - name: a\n    description: mobot\n    pose: {x: -1.0, y: 1.0, yaw: 0.0}\n    commands:\n"
+              "      - {at: 0.0, goto: {x: 2.0, y: 1.0}, localization: ground_truth, timeout: 20}\n"
+              "  - name: b\n    description: mobot\n    pose: {x: 1.0, y: -1.0, yaw: 1.57}\n"
+              "  - name: c\n    description: mobot\n    pose: {x: -1.0, y: -1.0, yaw: 0.0}\n    commands:\n"
+              "      - {at: 0.0, goto: {x: 2.0, y: -1.0}, localization: ground_truth, timeout: 20}\n")
+    path = room_scenario(tmp_path, robots, duration=20.0)
+    (tmp_path / "room.sdf").write_text((tmp_path / "room.sdf").read_text().replace("  </world>", CRATE + "  </world>"))
+    done = invoke(["run", path, "--out", tmp_path / "out", "--quiet"])
+    assert done.exit_code == 0, done.stderr
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    log_period = 1 / summary["log_rate_hz"]
+    for name, hit in (("a", "crate"), ("c", "b")):
+        (goal,) = summary["robots"][name]["goals"]
+        assert goal["collided_with"] == [hit] and goal["collisions"] >= 1 and goal["failure"] == "collision"
+        # the front (0.10 m ahead of the axle) meets the crate's face (x = 0.8), or b's side (x = 0.83)
+        assert goal["status"] == "blocked" and goal["error"] == pytest.approx(3.0 - 1.7, abs=0.1)
+        assert summary["robots"][name]["collisions"] == goal["collisions"]
+        # when its front (0.10 m ahead of the axle) reaches the face (x = 0.8 for both) PyBullet reports a
+        # contact within 1 mm, sampled at 50 Hz (sim/contacts.py): the robot bounces, and is counted at
+        # the latest when it settles against the face
+        rows = (tmp_path / "out" / "odom" / f"{name}.csv").read_text().splitlines()[1:]
+        touching = next(float(r.split(",")[0]) for r in rows if float(r.split(",")[8]) + 0.10 >= 0.798)
+        assert touching - log_period <= goal["collision_first"] <= touching + 0.2
+    assert summary["robots"]["b"]["collisions"] >= 1 and "metrics" not in summary["robots"]["b"]
 
 
 def test_no_progress_ends_stuck_after_stuck_time(tmp_path):
@@ -180,6 +216,15 @@ def test_jerk_is_zero_at_constant_speed_and_positive_on_a_step():
     # one jump of 0.3 m/s between rows 0.05 s apart: jerk +-0.3 / 0.05^2 on two rows, squared times 0.05
     assert step.jerk_linear == pytest.approx(2 * (0.3 / 0.05 ** 2) ** 2 * 0.05)
     assert step.jerk_angular > 0.0
+
+
+def test_first_collision_is_the_row_the_count_rose_on():
+    meter = Meter(_state(0.1), 0, 240, 0.3)
+    for k in range(1, 20):
+        state = _state(0.1, x=0.01 * k)
+        state.collisions, state.hit = (0, "") if k < 7 else (1, "crate") if k < 12 else (2, "b")
+        meter.add(state, k * 5)
+    assert meter.first_collision == 7 * 5 / 240 and meter.collisions == 2 and meter.hits == ["crate", "b"]
 
 
 def test_danger_time_counts_the_periods_closer_than_the_danger_distance():
