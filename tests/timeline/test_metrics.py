@@ -111,6 +111,25 @@ def test_collisions_name_the_box_and_the_robot_hit(tmp_path):
     assert summary["robots"]["b"]["collisions"] >= 1 and "metrics" not in summary["robots"]["b"]
 
 
+def test_metrics_are_deterministic_and_agree_on_the_kinematic_engine(wall_run, tmp_path):
+    folder, _, physics = wall_run
+    path = folder / "scenario.yaml"
+    texts = []
+    for k in range(2):
+        invoke(["run", path, "--out", tmp_path / f"k{k}", "--quiet", "--set", "physics.engine=kinematic",
+                "--junit", tmp_path / f"k{k}.xml"])
+        summary = json.loads((tmp_path / f"k{k}" / "summary.json").read_text())
+        del summary["wall_time"], summary["real_time_factor"]
+        texts.append((json.dumps(summary), (tmp_path / f"k{k}.xml").read_bytes()))
+    assert texts[0] == texts[1]
+    kinematic = json.loads(texts[0][0])["robots"]["mobot"]["goals"]
+    for ours, theirs in zip(kinematic, physics["robots"]["mobot"]["goals"]):
+        assert (ours["status"], ours["failure"], ours["collided_with"]) == \
+            (theirs["status"], theirs["failure"], theirs["collided_with"])
+        assert ours["path_length"] == pytest.approx(theirs["path_length"], abs=0.02)
+        assert ours["clearance_min"] == pytest.approx(theirs["clearance_min"], abs=0.01)
+
+
 def test_no_progress_ends_stuck_after_stuck_time(tmp_path):
     """Creeping at 5 mm/s moves less than 2 cm in 2 s: no progress, nothing touched."""
     robot = ("  - name: mobot\n    description: mobot\n    pose: {x: 0.0, y: 0.0, yaw: 0.0}\n    commands:\n"
