@@ -112,6 +112,8 @@ class GoalControl:
     planner: str | None = None  # "astar": plan around the world's obstacles (timeline/planner.py); None: straight
     inflation: float = 0.0  # m: the planner keeps the robot's centre this far from obstacles
     local: str = ""  # "" (follow the route as it is) | "dwb" (avoid what the lidar sees: timeline/local.py)
+    stuck_time: float = 1.0  # s without progress (true pose) after which the goal ends blocked (stuck)
+    danger_distance: float = 0.3  # m: the metrics' danger_time counts the time closer than this
 
 
 @dataclass(frozen=True)
@@ -282,6 +284,7 @@ class Expectation:
     step: int | None = None  # a log row's step; None is the end of the run
     points: tuple[tuple[float, float], ...] = ()  # visits: the checkpoints; coverage: the area
     status: str = ""  # goal: the outcome expected
+    metric: str = ""  # metric: its name (limits: min, max, command)
 
     def limit(self, name: str) -> float | None:
         """One limit by name, or None when the scenario did not give it."""

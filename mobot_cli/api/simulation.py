@@ -137,8 +137,8 @@ class Simulation:
         """Drive to (x, y) (then turn to ``yaw``) with the goal controller of a scenario's
         ``goto`` command, from this step on; ``settings``: tolerance, timeout (s), localization,
         max_linear, max_angular, acceleration, angular_acceleration, planner ("astar": plan around
-        the world's obstacles), inflation (m), local ("dwb": avoid what the robot's lidar sees). A
-        running goal is cancelled."""
+        the world's obstacles), inflation (m), local ("dwb": avoid what the robot's lidar sees),
+        stuck_time (s), danger_distance (m). A running goal is cancelled."""
         self._known(name)
         if not self._world.has_drive(name):
             raise UsageError(f"robot '{name}' has no drive wheels: it cannot drive to a goal")

@@ -92,15 +92,21 @@ def _goal_table(goals: list) -> Any:
     """One row per goal command: how it ended, how long it took, how far the robot drove."""
     from rich.table import Table
 
-    table = Table(title="goals", caption="time in s; path driven and final distance from the goal in m")
-    for column in ("robot", "command", "status", "time", "path", "error"):
-        table.add_column(column, justify="left" if column in ("robot", "command", "status") else "right")
+    table = Table(title="goals", caption="time in s; path driven, final distance from the goal and least "
+                                         "clearance in m; hits: collisions (docs/metrics.md)")
+    for column in ("robot", "command", "status", "time", "path", "error", "spl", "clear", "hits", "failure"):
+        table.add_column(column, justify="left" if column in ("robot", "command", "status", "failure") else "right")
     for name, goal in goals:
         which = f"{goal.command} {goal.kind}" if goal.command is not None else f"live {goal.kind}"
         laps = f" ({goal.laps} lap{'s' if goal.laps != 1 else ''})" if goal.laps is not None else ""
         table.add_row(name, which, goal.status + laps, f"{goal.time:.2f}", f"{goal.path_length:.2f}",
-                      "-" if goal.error is None else f"{goal.error:.3f}")
+                      _maybe(goal.error, 3), _maybe(goal.spl, 2), _maybe(goal.clearance_min, 3),
+                      "-" if goal.collisions is None else str(goal.collisions), goal.failure or "-")
     return table
+
+
+def _maybe(value, digits: int) -> str:
+    return "-" if value is None else f"{value:.{digits}f}"
 
 
 def check_result(env: Environment, result: dict[str, Any]) -> None:

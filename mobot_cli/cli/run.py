@@ -34,6 +34,7 @@ class RunOptions:
     ros2_: bool = False
     view: bool = False
     view_port: int = 8080
+    junit: Optional[Path] = None
 
 
 def run(
@@ -56,6 +57,8 @@ def run(
     view: bool = typer.Option(False, "--view", help="Watch the run in a local 3D web page (extra 'view'); "
                               "when it ends the page replays it until Ctrl-C. One file only."),
     view_port: int = typer.Option(8080, "--view-port", help="Port of the --view page on 127.0.0.1 (0: any)."),
+    junit: Optional[Path] = typer.Option(None, "--junit", help="Also write a JUnit XML report: a testcase per "
+                                         "expectation (or per run), metrics and seed as properties."),
 ) -> int:
     """Run scenarios to their end and write odometry, a summary and the resolved scenario of each.
 
@@ -64,7 +67,7 @@ def run(
     0 ok < 1 an expectation failed < 2 bad input < 3 simulation fault. Ctrl-C (130) stops them
     all at once.
     """
-    options = RunOptions(set_, seed, duration, realtime, json_, quiet, skip_missing, ros2_, view, view_port)
+    options = RunOptions(set_, seed, duration, realtime, json_, quiet, skip_missing, ros2_, view, view_port, junit)
     return run_scenarios(ctx.obj, scenario, out, options)
 
 
@@ -73,22 +76,35 @@ def run_scenarios(env: Environment, scenarios: Sequence[Path], out: Optional[Pat
 
     One scenario is `mobot run` as it always was: its errors raise. With several, a scenario
     that fails is reported and the next one runs; Ctrl-C stops them all at once (raised)."""
-    if len(scenarios) == 1:
-        return run_scenario(env, scenarios[0], out, options)
-    if options.view:
-        raise UsageError("--view watches one run: give one scenario file", hint="or run them without --view")
-    folders = _batch_folders(scenarios, out)
-    worst = ExitCode.OK
-    for scenario, folder in zip(scenarios, folders):
-        try:
-            code = run_scenario(env, scenario, folder, options, one_line_json=True)
-        except MobotError as exc:
-            if env.traceback:
+    suites: list = []  # --junit: a test suite per run, written once they are all done
+    try:
+        if len(scenarios) == 1:
+            try:
+                return run_scenario(env, scenarios[0], out, options, suites=suites)
+            except MobotError as exc:
+                _junit_refused(suites, 0, scenarios[0], exc)
                 raise
-            output.report_error(env, exc)
-            code = exc.exit_code
-        worst = max(worst, code)
-    return worst
+        if options.view:
+            raise UsageError("--view watches one run: give one scenario file", hint="or run them without --view")
+        folders = _batch_folders(scenarios, out)
+        worst = ExitCode.OK
+        for scenario, folder in zip(scenarios, folders):
+            before = len(suites)
+            try:
+                code = run_scenario(env, scenario, folder, options, one_line_json=True, suites=suites)
+            except MobotError as exc:
+                _junit_refused(suites, before, scenario, exc)
+                if env.traceback:
+                    raise
+                output.report_error(env, exc)
+                code = exc.exit_code
+            worst = max(worst, code)
+        return worst
+    finally:
+        if options.junit is not None:
+            from mobot_cli.record import junit
+
+            junit.write(options.junit, suites)
 
 
 def _batch_folders(scenarios: Sequence[Path], out: Optional[Path]) -> list[Optional[Path]]:
@@ -106,7 +122,7 @@ def _batch_folders(scenarios: Sequence[Path], out: Optional[Path]) -> list[Optio
 
 
 def run_scenario(env: Environment, scenario: Path, out: Optional[Path], options: RunOptions,
-                 one_line_json: bool = False) -> int:
+                 one_line_json: bool = False, suites: Optional[list] = None) -> int:
     """Run a scenario to its end, write the run folder and print what `mobot run` prints; the exit code.
     ``one_line_json``: --json prints the summary on one line (several runs: JSON Lines)."""
     from mobot_cli.common.files import check_out_folder
@@ -144,11 +160,15 @@ def run_scenario(env: Environment, scenario: Path, out: Optional[Path], options:
     except BaseException:
         if watcher:
             watcher.close()
+        if suites is not None and options.junit is not None:
+            _junit_suite(suites, plan.name, out_dir, None)  # the fault or error summary.json records
         raise
     finally:
         if bar:
             bar.stop()
         ros2.report(env, bridges, quiet=quiet)
+    if suites is not None and options.junit is not None:
+        _junit_suite(suites, plan.name, out_dir, result.record)
     # Said during the run (stalled wheels, a car's clamped turn, odometry far from the truth): in summary.json too.
     output.notices(env, result.record.notices[len(plan.notices):], quiet=quiet)
     if options.json_:
@@ -161,6 +181,24 @@ def run_scenario(env: Environment, scenario: Path, out: Optional[Path], options:
     if any(not r.passed for r in result.expectations):
         return ExitCode.EXPECTATION_FAILED
     return ExitCode.OK
+
+
+def _junit_refused(suites: list, before: int, scenario: Path, exc: MobotError) -> None:
+    """A run that left no record (bad input): its suite says the error."""
+    if len(suites) == before:
+        from mobot_cli.record import junit
+
+        suites.append(junit.failed_suite(scenario.stem, type(exc).__name__, str(exc)))
+
+
+def _junit_suite(suites: list, name: str, out_dir: Path, record) -> None:
+    """Add the run's test suite (from its record, or the one its folder holds after a fault)."""
+    from mobot_cli.record import junit
+    from mobot_cli.record.summary import RunRecord
+
+    record = record or RunRecord.load(out_dir)
+    if record is not None:
+        suites.append(junit.run_suite(record, name))
 
 
 class _Watcher:

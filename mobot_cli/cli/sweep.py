@@ -38,6 +38,8 @@ def sweep(
     resume: bool = typer.Option(False, "--resume", help="Finish the sweep in --out, skipping runs in results.csv."),
     json_: bool = typer.Option(False, "--json", help="Print sweep.json and every row as JSON on stdout."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),
+    junit: Optional[Path] = typer.Option(None, "--junit", help="Also write a JUnit XML report: a testcase per run, "
+                                         "its seed, swept values and metrics as properties."),
 ) -> int:
     """Run variants of a scenario (grid, zip or random values); exit 1 when any run fails."""
     env = ctx.obj
@@ -67,6 +69,10 @@ def sweep(
         runner.close()
     total = len(prepared.variants)
     rows = [r for _, r in sorted(report.rows.items())]
+    if junit is not None:
+        from mobot_cli.record import junit as junit_xml
+
+        junit_xml.write(junit, junit_xml.sweep_suites(rows, out_dir, prepared.name))
     if json_:
         output.emit_json(env, {**report.document, "results": rows})
     elif quiet:

@@ -22,16 +22,18 @@ from mobot_cli import __version__
 from mobot_cli.common.files import write_text_atomic
 from mobot_cli.common.installed import version
 from mobot_cli.errors import OutputError, SimulationFault, cannot_write
-from mobot_cli.plan import Plan, RobotPlan
+from mobot_cli.plan import GoalControl, GoalStep, Plan, RobotPlan
 from mobot_cli.record.outcome import SUMMARY, Status
 from mobot_cli.record.sinks import CsvSink
 from mobot_cli.sim.state import RobotState
+from mobot_cli.timeline import metrics
 from mobot_cli.timeline.expect import Checker, Result, odom_error
 from mobot_cli.timeline.goals import GoalEnded, GoalStarted
+from mobot_cli.timeline.metrics import Meter
 from mobot_cli.timeline.records import Deleted, Reading, Record, Sample, Sink, Spawned
 
 if TYPE_CHECKING:  # the record's classes are made when it is written (record/outcome.py)
-    from mobot_cli.record.summary import LiveInfo, RobotRecord, RunRecord, SensorRecord
+    from mobot_cli.record.summary import GoalRecord, LiveInfo, RobotMetrics, RobotRecord, RunRecord, SensorRecord
 
 
 @dataclass
@@ -48,8 +50,20 @@ class _Life:
     readings: dict[str, int] = field(default_factory=dict)  # sensor name -> readings recorded
     goals: list[dict] = field(default_factory=list)  # GoalRecord fields, and the distance at the start
     worst: tuple[float, int] = (0.0, 0)  # the largest odometry position error so far (m), its step
+    rate: int = 1
+    meter: Optional[Meter] = None  # its whole life's metrics, once it drives to goals
+    running: list[dict] = field(default_factory=list)  # goals whose meter still runs (or waits for a row)
 
     def add(self, state: RobotState, step: int) -> None:
+        if self.meter is None and self.first is None and any(isinstance(c, GoalStep) for c in self.plan.commands):
+            self.meter = Meter(state, step, self.rate, self._danger(0))
+        elif self.meter is not None:
+            self.meter.add(state, step)
+        for goal in self.running:
+            if goal["meter"] is None:
+                goal["meter"] = Meter(state, step, self.rate, goal["danger"])
+            else:
+                goal["meter"].add(state, step)
         if self.first is None:
             self.first = state
         else:
@@ -64,25 +78,34 @@ class _Life:
         """Its robot faulted: the goal it was driving to failed (tipped over: ``flipped``)."""
         for goal in self.goals:
             if goal["status"] == "unfinished":
-                goal.update(status="failed", failure="flipped" if kind == "tipped_over" else kind)
+                goal.update(status="failed", fault=kind)
 
     def started(self, record: GoalStarted, rate: int) -> None:
-        self.goals.append({"command": _command(record.index), "kind": record.kind, "status": "unfinished",
-                           "started_at": record.step / rate, "from": self.distance})
+        danger = self._danger(record.index)
+        if self.meter is None and self.last is not None:  # a goal a live request gave: from now on
+            self.meter = Meter(self.last, record.step, rate, danger)
+        goal = {"command": _command(record.index), "kind": record.kind, "status": "unfinished",
+                "started_at": record.step / rate, "from": self.distance, "meter": None,
+                "danger": danger, "optimal": record.optimal}
+        self.goals.append(goal)
+        self.running.append(goal)
 
     def ended(self, record: GoalEnded, rate: int) -> None:
         goal = next(g for g in reversed(self.goals) if g["command"] == _command(record.index))
         error = _r(record.error) if math.isfinite(record.error) else None  # a robot whose state broke
         goal.update(status=record.status, ended_at=record.step / rate, error=error, laps=record.laps,
                     path_length=_r(self.distance - goal["from"]), reason=record.reason or None)
+        self.running = [g for g in self.running if g is not goal]
+
+    def _danger(self, index: int) -> float:
+        """The danger distance of goal command ``index`` (the default for a live goal)."""
+        step = next((c for c in self.plan.commands if isinstance(c, GoalStep) and c.index == index), None)
+        return (step.control if step is not None else GoalControl()).danger_distance
 
     def record(self, end: float, rate_hz: int) -> RobotRecord:
-        from mobot_cli.record.summary import GoalRecord, OdomError, OdomPose, Pose, RobotRecord
+        from mobot_cli.record.summary import OdomError, OdomPose, Pose, RobotRecord
 
-        goals = [GoalRecord(**{k: v for k, v in g.items() if k != "from"},
-                            time=_r(g.get("ended_at", end) - g["started_at"]),
-                            **({} if "path_length" in g else {"path_length": _r(self.distance - g["from"])}))
-                 for g in self.goals]
+        goals = [self._goal(g, end) for g in self.goals]
         s = self.last
         position, yaw = odom_error(self.first, s)
         return RobotRecord(
@@ -94,7 +117,44 @@ class _Life:
             distance=_r(self.distance), collisions=s.collisions,
             odom_error=OdomError(position=_r(position), yaw=_r(yaw), max_position=_r(self.worst[0]),
                                  max_position_at=_r(self.worst[1] / rate_hz)), goals=goals,
-            sensors=[self._sensor(spec, rate_hz) for spec in self.plan.sensors])
+            sensors=[self._sensor(spec, rate_hz) for spec in self.plan.sensors], metrics=self._metrics(goals))
+
+    def _goal(self, g: dict, end: float) -> GoalRecord:
+        """One goal's record, its metrics from its meter."""
+        from mobot_cli.record.summary import GoalRecord
+
+        path_length = g["path_length"] if "path_length" in g else _r(self.distance - g["from"])
+        meter: Optional[Meter] = g["meter"]
+        collisions = meter.collisions if meter is not None else 0
+        success = g["status"] == "reached"
+        fields = {k: v for k, v in g.items() if k not in ("from", "meter", "danger", "optimal", "fault", "path_length")}
+        found = {}
+        if meter is not None:
+            found = dict(collision_first=_opt(meter.first_collision), collided_with=list(meter.hits),
+                         clearance_min=_opt(meter.least_clearance), clearance_mean=_opt(meter.clearance_mean),
+                         danger_time=_r(meter.danger_time), jerk_linear=_r(meter.jerk_linear),
+                         jerk_angular=_r(meter.jerk_angular))
+        return GoalRecord(**fields, time=_r(g.get("ended_at", end) - g["started_at"]), path_length=path_length,
+                          failure=metrics.failure(g["status"], collisions, g.get("fault")), success=success,
+                          collisions=collisions, optimal_length=_opt(g["optimal"]),
+                          spl=_opt(metrics.spl(success, g["optimal"], path_length)), **found)
+
+    def _metrics(self, goals: list[GoalRecord]) -> Optional[RobotMetrics]:
+        """The robot's metrics over its life, when it drove to goals."""
+        from mobot_cli.record.summary import RobotMetrics
+
+        meter = self.meter
+        if meter is None or not goals:
+            return None
+        spls = [g.spl for g in goals if g.spl is not None]
+        return RobotMetrics(
+            success=all(g.success for g in goals), collisions=meter.collisions,
+            collision_first=_opt(meter.first_collision), collided_with=list(meter.hits),
+            time=_r(sum(g.time for g in goals)), path_length=_r(meter.path_length),
+            spl=_r(sum(spls) / len(spls)) if spls else None, clearance_min=_opt(meter.least_clearance),
+            clearance_mean=_opt(meter.clearance_mean), danger_time=_r(meter.danger_time),
+            jerk_linear=_r(meter.jerk_linear), jerk_angular=_r(meter.jerk_angular),
+            failure=next((g.failure for g in goals if g.failure is not None), None))
 
     def _sensor(self, spec, rate_hz: int) -> SensorRecord:
         from mobot_cli.record.sensor_files import sensor_file
@@ -142,6 +202,7 @@ class Recording:
                 _remove_if_empty(out_dir)  # nothing written, not even the summary: leave nothing
             raise failure from exc
         self.sinks.append(self.checker)
+        self.checker.metric_value = self._metric_value
 
     def __call__(self, record: Record) -> None:
         """Take one record of the timeline (the Consumer interface)."""
@@ -166,6 +227,19 @@ class Recording:
         except OSError as exc:
             raise self._failed(exc) from exc
 
+    def _metric_value(self, robot: str, command: int | None, name: str) -> float | None:
+        """A metric of a robot (``command``: of that goal command; None: over its life) as the
+        record will hold it, for ``metric`` checks; None when not measured."""
+        life = self._lives.get(robot)
+        if life is None or life.last is None:
+            return None
+        rate = self.plan.physics.rate_hz
+        record = life.record(life.deleted_at if life.deleted_at is not None else self.last_step / rate, rate)
+        source = record.metrics if command is None else \
+            next((g for g in record.goals if g.command == command), None)
+        value = getattr(source, name, None)
+        return None if value is None else float(value)
+
     def _failed(self, exc: OSError) -> OutputError:
         """The first failed write, as the error to report: later ones follow from it (a full
         disk stays full)."""
@@ -181,7 +255,8 @@ class Recording:
             key = f"{name}__{lives}"
         self._renamed = self._renamed or key != name
         self._keys[name] = key
-        self._lives[key] = _Life(key, record.robot, record.step / self.plan.physics.rate_hz)
+        self._lives[key] = _Life(key, record.robot, record.step / self.plan.physics.rate_hz,
+                                 rate=self.plan.physics.rate_hz)
         for sink in self.sinks:
             sink.spawned(record.step, key, record.robot)
 
@@ -318,6 +393,10 @@ def _command(index: int) -> int | None:
 def preload() -> None:
     """Look up what every summary records, once (a sweep's fork server, for all its workers)."""
     version("pybullet")
+
+
+def _opt(value: float | None) -> float | None:
+    return None if value is None else _r(value)
 
 
 def _r(value: float) -> float:

@@ -121,8 +121,41 @@ class GoalRecord(_Record):
     path_length: float  # m the robot truly drove meanwhile (from the log rows)
     error: Optional[float] = None  # m from the goal's last point (a patrol's first) when it ended
     laps: Optional[int] = None  # patrol: rounds completed
-    failure: Optional[str] = None  # failed: flipped | flying | runaway | non_finite | out_of_world | off_floor
+    # Why it did not succeed (docs/metrics.md): timeout | collision | stuck | unreachable, or its robot's
+    # fault (flipped | flying | runaway | non_finite | out_of_world | off_floor); None on success
+    failure: Optional[str] = None
     reason: Optional[str] = None  # unreachable: why (planner: astar found no way there)
+    # The metrics (timeline/metrics.py, docs/metrics.md), from the true states of the log rows
+    success: Optional[bool] = None  # reached (on the truth)
+    collisions: Optional[int] = None  # new collision events meanwhile
+    collision_first: Optional[float] = None  # s, sim time of the first
+    collided_with: list[str] = dataclasses.field(default_factory=list)  # what they were with, once each
+    optimal_length: Optional[float] = None  # m: the straight-line route (or a planner's path)
+    spl: Optional[float] = None  # success x optimal_length / max(path_length, optimal_length)
+    clearance_min: Optional[float] = None  # m; None: nothing within timeline/metrics.py's REACH
+    clearance_mean: Optional[float] = None  # m, of min(clearance, REACH)
+    danger_time: Optional[float] = None  # s closer than the goal's danger_distance
+    jerk_linear: Optional[float] = None  # m^2/s^5: the integral of the squared jerk of the forward speed
+    jerk_angular: Optional[float] = None  # rad^2/s^5: ... of the yaw rate
+
+
+@_record
+class RobotMetrics(_Record):
+    """A robot's metrics over its life, kept for robots that drove to goals (docs/metrics.md)."""
+
+    success: bool  # every goal succeeded
+    collisions: int
+    collision_first: Optional[float] = None
+    collided_with: list[str] = dataclasses.field(default_factory=list)
+    time: float  # s, its goals' time together
+    path_length: float  # m over its life
+    spl: Optional[float] = None  # the mean of its goals'
+    clearance_min: Optional[float] = None
+    clearance_mean: Optional[float] = None
+    danger_time: float
+    jerk_linear: float
+    jerk_angular: float
+    failure: Optional[str] = None  # its first failed goal's
 
 
 @_record
@@ -141,6 +174,14 @@ class RobotRecord(_Record):
     odom_error: OdomError
     sensors: list[SensorRecord] = dataclasses.field(default_factory=list)
     goals: list[GoalRecord] = dataclasses.field(default_factory=list)
+    metrics: Optional[RobotMetrics] = None  # robots that drove to goals
+
+    def to_dict(self) -> dict:
+        """As every record, without ``metrics`` when it has none (summaries without goals stay as they were)."""
+        out = super().to_dict()
+        if out["metrics"] is None:
+            del out["metrics"]
+        return out
 
 
 @_record

@@ -12,7 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from mobot_cli.plan import CommandStep, DriveSpec, GoalStep, Plan, RobotPlan, TwistStep
+from mobot_cli.plan import CommandStep, DriveSpec, GoalControl, GoalStep, Plan, RobotPlan, TwistStep
 from mobot_cli.scenario.expect_resolve import expect_document
 from mobot_cli.scenario.goals import area_form
 from mobot_cli.scenario.model import RobotSpec, Scenario
@@ -185,6 +185,11 @@ def _goal(goal: GoalStep, rate: int) -> dict[str, Any]:
         entry.update(planner=c.planner, inflation=c.inflation)
     if c.local:
         entry["local"] = c.local
+    default = GoalControl()  # the metrics' settings only when given: resolved scenarios stay as they were
+    if c.stuck_time != default.stuck_time:
+        entry["stuck_time"] = c.stuck_time
+    if c.danger_distance != default.danger_distance:
+        entry["danger_distance"] = c.danger_distance
     return entry
 
 

@@ -18,7 +18,10 @@ from mobot_cli.scenario.goal_model import Area, Waypoints, check_area
 from mobot_cli.scenario.limits import Coordinate, Float, Int, NonNegativeFloat, PositiveFloat, Seconds
 
 KINDS = ("within", "collisions", "distance", "upright", "odom_error", "reaches", "visits", "coverage", "goal",
-         "clearance")
+         "clearance", "metric")
+# The metrics a ``metric`` check may bound (timeline/metrics.py NUMERIC; success is 0 or 1)
+METRICS = ("success", "collisions", "time", "path_length", "spl", "clearance_min", "clearance_mean",
+           "danger_time", "jerk_linear", "jerk_angular")
 OVER_TIME = ("reaches", "visits", "coverage")  # deadline: within: SECONDS
 GOAL_STATUSES = ("reached", "reached_by_odometry_only", "timed_out", "blocked", "stuck", "cancelled",
                  "unreachable", "unfinished", "failed")
@@ -124,6 +127,24 @@ class GoalCheck(_Strict):
     status: Literal[GOAL_STATUSES] = "reached"
 
 
+class MetricCheck(_Strict):
+    """Bounds on one navigation metric (docs/metrics.md) of goal command ``command`` or, without
+    it, of the robot's whole life."""
+
+    name: Literal[METRICS]
+    min: Optional[Float] = None
+    max: Optional[Float] = None
+    command: Optional[Annotated[Int, Field(ge=0)]] = None
+
+    @model_validator(mode="after")
+    def _bounds(self) -> "MetricCheck":
+        if self.min is None and self.max is None:
+            raise ValueError(f"give 'min', 'max' or both for metric '{self.name}'")
+        if self.min is not None and self.max is not None and self.min > self.max:
+            raise ValueError(f"min {self.min:g} is above max {self.max:g}")
+        return self
+
+
 class ExpectSpec(_Strict):
     """One expectation: a robot (or ``all``), one check and when it applies."""
 
@@ -140,6 +161,7 @@ class ExpectSpec(_Strict):
     radius: Optional[PositiveFloat] = None  # visits: how close counts as a visit
     coverage: Optional[CoverageCheck] = None
     goal: Optional[GoalCheck] = None
+    metric: Optional[MetricCheck] = None  # checked at the end of the run, from summary.json's metrics
 
     @field_validator("at", mode="before")
     @classmethod
@@ -168,11 +190,14 @@ class ExpectSpec(_Strict):
         if isinstance(self.within, (int, float)) and kind not in OVER_TIME:
             raise ValueError(f"'within: {self.within:g}' is a deadline, for " + ", ".join(OVER_TIME)
                              + "; an area is within: {x, y, radius} or {xmin, xmax, ymin, ymax}")
-        if (kind in OVER_TIME or kind == "goal") and "at" in self.model_fields_set:
+        if (kind in OVER_TIME or kind in ("goal", "metric")) and "at" in self.model_fields_set:
             raise ValueError(f"'{kind}' takes no 'at': " + ("it checks how the command ended" if kind == "goal"
+                             else "it is measured over the run" if kind == "metric"
                              else "give its deadline as within: SECONDS"))
         if self.radius is not None and kind != "visits":
             raise ValueError("'radius' goes with 'visits' (reaches takes {x, y, radius})")
+        if kind == "metric" and self.metric.command is not None and self.robot == "all":
+            raise ValueError("a metric of a goal command names one robot: goal commands are a robot's own")
         if kind == "goal" and self.robot == "all":
             raise ValueError("a goal check names one robot: goal commands are a robot's own")
         return self

@@ -42,13 +42,18 @@ def resolve_expectations(scenario: Scenario, source: Source, robots: Sequence[Ro
                                 location=source.locate_key(path + ("robot",)),
                                 hint=did_you_mean(spec.robot, [*names, *fleets, ALL]))
         if spec.kind == "goal":
-            _goal_command(spec, {r.name: r for r in plans}[members[0]], source.locate_key(path + ("goal", "command")))
+            _goal_command(spec.goal.command, {r.name: r for r in plans}[members[0]],
+                          source.locate_key(path + ("goal", "command")))
+        if spec.kind == "metric" and spec.metric.command is not None:
+            _goal_command(spec.metric.command, {r.name: r for r in plans}[members[0]],
+                          source.locate_key(path + ("metric", "command")))
         limits = _limits(spec)
         points = area_polygon(spec.coverage.area) if spec.kind == "coverage" else \
             tuple((float(x), float(y)) for x, y in spec.visits) if spec.kind == "visits" else ()
         status = spec.goal.status if spec.kind == "goal" else ""
-        out.extend(Expectation(robot=name, kind=spec.kind, limits=limits, step=step, points=points, status=status)
-                   for name in members)
+        metric = spec.metric.name if spec.kind == "metric" else ""
+        out.extend(Expectation(robot=name, kind=spec.kind, limits=limits, step=step, points=points, status=status,
+                               metric=metric) for name in members)
     return tuple(out), notices
 
 
@@ -63,10 +68,9 @@ def _log_row(at: float, rate: int, log_every: int, total: int) -> tuple[int, str
     return row, f"expectation at {at:g} s is checked on the nearest log row, {row / rate:g} s"
 
 
-def _goal_command(spec: ExpectSpec, robot: RobotPlan, where) -> None:
+def _goal_command(index: int, robot: RobotPlan, where) -> None:
     """A located error unless the robot's command at that index is a goal."""
     goals = {c.index: c.kind for c in robot.commands if isinstance(c, GoalStep)}
-    index = spec.goal.command
     if index not in goals:
         listed = ", ".join(f"{i} ({kind})" for i, kind in goals.items()) or "none"
         raise ScenarioError(f"robot '{robot.name}' has no goal command at index {index} of its commands "
@@ -87,6 +91,8 @@ def _limits(spec: ExpectSpec) -> tuple[tuple[str, float], ...]:
         return (("min", float(spec.coverage.min)), *deadline)
     if kind == "goal":
         return (("command", float(spec.goal.command)),)
+    if kind == "metric":
+        return tuple((k, float(v)) for k, v in spec.metric.model_dump(exclude_none=True).items() if k != "name")
     if kind == "within":
         shape = spec.within.model_dump(exclude_none=True)
         order = ("x", "y", "radius") if "radius" in shape else ("xmin", "xmax", "ymin", "ymax")
@@ -114,6 +120,10 @@ def expect_document(expectations: Sequence[Expectation], rate: int) -> dict[str,
         limits = dict(e.limits)
         if e.kind in OVER_TIME or e.kind == "goal":
             items.append(_over_time(e, limits))
+            continue
+        if e.kind == "metric":
+            check = {"name": e.metric, **{k: int(v) if k == "command" else v for k, v in limits.items()}}
+            items.append({"robot": e.robot, "metric": check})
             continue
         if e.kind == "collisions":
             check = int(limits["max"])

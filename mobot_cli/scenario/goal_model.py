@@ -21,6 +21,7 @@ from mobot_cli.scenario.limits import (
     Coordinate,
     Float,
     Int,
+    NonNegativeFloat,
     PositiveFloat,
     at_most,
 )
@@ -28,7 +29,7 @@ from mobot_cli.scenario.limits import (
 GOALS = ("goto", "path", "patrol", "coverage")
 # Settings that only a goal command takes.
 GOAL_SETTINGS = ("timeout", "tolerance", "localization", "max_linear", "max_angular", "acceleration",
-                 "angular_acceleration", "laps", "planner", "inflation", "local")
+                 "angular_acceleration", "laps", "planner", "inflation", "local", "stuck_time", "danger_distance")
 LOCAL_CONTROLLERS = ("dwb",)  # goal setting ``local:``: obstacle avoidance on the robot's own lidar
 MAX_WAYPOINTS = 10_000
 MIN_AREA = 1e-6  # m^2: a polygon enclosing less is empty
@@ -121,6 +122,8 @@ class GoalFields(_Strict):
     planner: Optional[Literal["astar"]] = None  # goto, path, patrol: plan around the map's obstacles
     inflation: Optional[Annotated[Float, Field(ge=0, le=MAX_INFLATION)]] = None  # m; default: the footprint's radius
     local: Optional[Literal["dwb"]] = None  # default: none (the route is followed as it is)
+    stuck_time: Optional[Annotated[Float, Field(gt=0, le=1e6)]] = None  # s without progress: blocked (stuck)
+    danger_distance: Optional[Annotated[NonNegativeFloat, Field(le=100)]] = None  # m, for danger_time
 
     @property
     def goal(self) -> Optional[str]:

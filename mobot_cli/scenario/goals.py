@@ -70,7 +70,9 @@ def _control(cmd: GoalFields, rate: int, footprint) -> GoalControl:
         planner=cmd.planner,
         inflation=0.0 if cmd.planner is None else
         cmd.inflation if cmd.inflation is not None else footprint_radius(footprint or DEFAULT_FOOTPRINT),
-        local=cmd.local or "")
+        local=cmd.local or "",
+        stuck_time=DEFAULT.stuck_time if cmd.stuck_time is None else float(cmd.stuck_time),
+        danger_distance=DEFAULT.danger_distance if cmd.danger_distance is None else float(cmd.danger_distance))
 
 
 def footprint_radius(footprint: tuple[float, float, float, float]) -> float:

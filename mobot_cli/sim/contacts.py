@@ -9,7 +9,7 @@ count, for both robots.
 
 from __future__ import annotations
 
-from typing import Hashable, Iterable, Protocol
+from typing import Callable, Hashable, Iterable, Protocol
 
 from mobot_cli.sim.pb import p
 
@@ -32,12 +32,15 @@ class Counted(Protocol):
     name: str
     body: int
     collisions: int
+    hit: str  # what its last collision was with (the counter's ``name_of``)
 
 
 class ContactCounter:
     """Counts collision events per robot; call ``sample`` at a fixed rate."""
 
-    def __init__(self, release_samples: int = RELEASE_SAMPLES) -> None:
+    def __init__(self, release_samples: int = RELEASE_SAMPLES,
+                 name_of: Callable[[Hashable], str] | None = None) -> None:
+        self._name_of = name_of  # ("body", uid) or ("robot", name) -> how records name it
         self._samples = 0
         self._release = release_samples
         self._last_touch: dict[tuple[str, Hashable], int] = {}
@@ -84,6 +87,8 @@ class ContactCounter:
             last = self._last_touch.get(key)
             if last is None or self._samples - last > self._release:
                 robot.collisions += 1
+                if self._name_of is not None:
+                    robot.hit = self._name_of(other)
             self._last_touch[key] = self._samples
 
     def forget(self, name: str) -> None:

@@ -44,6 +44,7 @@ class RobotState:
     # whose wheels cannot give one); the odom message carries odom_vy. Not columns.
     odom_vy: float = 0.0
     true_vy: float = 0.0
+    hit: str = ""  # what its last collision was with, as messages name it ("static body 'box'"); not a column
 
     # Column order of the odom CSV (DESIGN.md), without the leading time column.
     CSV_FIELDS = (

@@ -65,7 +65,7 @@ def check_out_dir(sweep: Sweep, out_dir: Path, resume: bool) -> dict[int, dict[s
     check_out_folder(out_dir)
     if out_dir.is_dir():
         check_unlocked(out_dir)
-    header = columns(sweep.keys, sweep.robots())
+    header = columns(sweep.keys, sweep.robots(), sweep.measured())
     stored = out_dir / "sweep.json"
     if not resume:
         if stored.exists():
@@ -106,7 +106,7 @@ def run_sweep(sweep: Sweep, out_dir: Path, executor: Executor, done_rows: dict[i
 def _run(sweep: Sweep, out_dir: Path, executor: Executor, done_rows: dict[int, dict[str, str]],
          progress: Progress | None) -> SweepReport:
     total = len(sweep.variants)
-    header = columns(sweep.keys, sweep.robots())
+    header = columns(sweep.keys, sweep.robots(), sweep.measured())
     document = sweep_document(sweep, executor.name, executor.jobs, executor.timeout)
     write_document(out_dir / "sweep.json", document)
     report = SweepReport(out_dir, document, dict(done_rows), skipped=len(done_rows))

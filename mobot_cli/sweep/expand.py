@@ -53,6 +53,14 @@ class Sweep:
             names.update(dict.fromkeys([r.name for r in plan.robots] + spawned))
         return list(names)
 
+    def measured(self) -> list[str]:
+        """The robots that drive to goals in any run: their metrics are columns too."""
+        from mobot_cli.plan import GoalStep
+
+        return [name for prepared in self.prepared
+                for robot in [*prepared.plan.robots, *(e.spawn for e in prepared.plan.events if e.spawn is not None)]
+                if any(isinstance(c, GoalStep) for c in robot.commands) for name in [robot.name]]
+
 
 def derive_seed(sweep_seed: int, index: int) -> int:
     """A run's seed: a hash of the sweep seed and the run's index, in 0..2**32-1."""

@@ -15,17 +15,20 @@ from typing import Any, Iterable
 from mobot_cli.common.files import write_json_atomic, write_text_atomic
 from mobot_cli.common.numbers import number  # not run.sinks: that imports PyBullet into the sweep
 from mobot_cli.sweep.expand import Sweep, Variant
-from mobot_cli.sweep.task import TaskResult
+from mobot_cli.sweep.task import ROBOT_METRICS, TaskResult
 
 ROBOT_FIELDS = ("distance", "x", "y", "yaw", "collisions")
 
 
-def columns(keys: Iterable[str], robots: Iterable[str]) -> list[str]:
-    """run, status, failure, seed, the swept keys, expectations, wall time, per robot figures,
-    folder and reason (free text last). A swept seed is the seed column, not a second one."""
+def columns(keys: Iterable[str], robots: Iterable[str], measured: Iterable[str] = ()) -> list[str]:
+    """run, status, failure, seed, the swept keys, expectations, wall time, per robot figures
+    (and the metrics of the ``measured`` robots, those with goals), folder and reason (free text
+    last). A swept seed is the seed column, not a second one."""
     head = ["run", "status", "failure", "seed", *(k for k in keys if k != "seed"), "expect_passed",
             "expect_failed", "wall_time"]
-    per_robot = [f"{name}.{f}" for name in robots for f in ROBOT_FIELDS]
+    measured = set(measured)
+    per_robot = [f"{name}.{f}" for name in robots
+                 for f in (*ROBOT_FIELDS, *(ROBOT_METRICS if name in measured else ()))]
     return head + per_robot + ["folder", "reason"]
 
 
@@ -40,6 +43,11 @@ def row(variant: Variant, outcome: TaskResult, folder: str) -> dict[str, str]:
         for f in ROBOT_FIELDS:
             value = figures[f]
             out[f"{name}.{f}"] = str(value) if f == "collisions" else number(value)
+        for f in ROBOT_METRICS:
+            if f in figures:
+                value = figures[f]
+                out[f"{name}.{f}"] = "" if value is None else str(value).lower() if isinstance(value, (bool, str)) \
+                    else number(value)
     return out
 
 

@@ -20,6 +20,9 @@ if TYPE_CHECKING:  # the sweep starts its workers before it imports these (execu
     from mobot_cli.record.summary import RobotRecord
 
 PASSED, FAILED = "passed", "failed"
+# Of robots that drive to goals: their metrics over the run (summary.json's robots.NAME.metrics)
+ROBOT_METRICS = ("success", "spl", "time", "path_length", "collision_first", "clearance_min", "clearance_mean",
+                 "danger_time", "jerk_linear", "jerk_angular", "failure")
 
 
 @dataclass(frozen=True)
@@ -94,4 +97,7 @@ def run_task_elsewhere(task: Task) -> TaskResult:
 
 def _figures(robot: RobotRecord) -> dict[str, Any]:
     pose = robot.final_pose
-    return {"distance": robot.distance, "x": pose.x, "y": pose.y, "yaw": pose.yaw, "collisions": robot.collisions}
+    figures = {"distance": robot.distance, "x": pose.x, "y": pose.y, "yaw": pose.yaw, "collisions": robot.collisions}
+    if robot.metrics is not None:
+        figures.update((k, getattr(robot.metrics, k)) for k in ROBOT_METRICS)
+    return figures

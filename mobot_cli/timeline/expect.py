@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Any, Optional
+from typing import TYPE_CHECKING, Any, Callable, Optional
 
 from mobot_cli.common.transforms import Planar
 from mobot_cli.plan import Expectation, Plan, RobotPlan
@@ -101,6 +101,9 @@ class Checker(Sink):
         self._areas = coverage_areas(plan)
         self.sweeps: dict[tuple[str, tuple], Sweep] = {}  # (robot, area) -> its footprint's sweep
         self._robot_sweeps: dict[str, list[Sweep]] = {}
+        # ``metric`` checks: (robot, goal command index or None, metric name) -> its value, None when
+        # not measured; the run record's metrics, set by whoever keeps them (record/recording.py)
+        self.metric_value: Optional[Callable[[str, Optional[int], str], Optional[float]]] = None
 
     def spawned(self, step: int, key: str, robot: RobotPlan) -> None:
         self.present.add(key)
@@ -159,6 +162,10 @@ class Checker(Sink):
         """Every expectation, for every robot it names, in the scenario's order."""
         out = []
         for index, exp in enumerate(self.plan.expectations):
+            if exp.kind == "metric":
+                names = list(self.figures) if exp.robot == "all" else [exp.robot]
+                out.extend(self._metric(exp, name) for name in names)
+                continue
             if exp.kind in TRACKED:
                 out.extend(self._tracked_results(index, exp))
                 continue
@@ -173,6 +180,17 @@ class Checker(Sink):
                 [n for n in figures if exp.kind != "within" or n in present]
             out.extend(self._check(exp, name, figures.get(name), name in present) for name in names)
         return out
+
+    def _metric(self, exp: Expectation, name: str) -> Result:
+        command = exp.limit("command")
+        command = None if command is None else int(command)
+        value = self.metric_value(name, command, exp.metric) if self.metric_value is not None else None
+        expected = describe(exp, self.rate)
+        if value is None:  # no goal, a goal that never started, nothing within the clearance's reach
+            return Result(name, exp.kind, expected, f"had no {exp.metric} measured", False)
+        low, high = exp.limit("min"), exp.limit("max")
+        ok = (low is None or value >= low) and (high is None or value <= high)
+        return Result(name, exp.kind, expected, f"had {exp.metric} {value:.6g}", ok)
 
     def _tracked_results(self, index: int, exp: Expectation) -> list[Result]:
         expected = describe(exp, self.rate)
@@ -258,6 +276,12 @@ def describe(exp: Expectation, rate: int) -> str:
     lim = exp.limit
     if exp.kind in TRACKED:
         return _describe_tracked(exp)
+    if exp.kind == "metric":
+        low, high, command = lim("min"), lim("max"), lim("command")
+        span = f"{low:g}..{high:g}" if low is not None and high is not None else \
+            f"at least {low:g}" if low is not None else f"at most {high:g}"
+        of = "over its goals" if command is None else f"in goal command {int(command)}"
+        return f"have {exp.metric} {span} {of}"
     if exp.kind == "within":
         if lim("radius") is not None:
             return f"be within {lim('radius'):g} m of ({lim('x'):g}, {lim('y'):g}) {when}"

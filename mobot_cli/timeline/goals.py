@@ -5,9 +5,9 @@ runs, every control period (``CONTROL_RATE_HZ``, whole physics steps). On each c
 reads the robot once, turns the pose it trusts into a twist (timeline/pursuit.py) and commands it.
 A goal ends ``reached``, ``timed_out`` (its ``timeout``), ``blocked`` (the robot's true pose
 moved less than ``BLOCKED_DISTANCE`` and turned less than ``BLOCKED_TURN`` in
-``BLOCKED_SECONDS``: it pushes against something) or ``cancelled`` (a live command or goal
-took over) or ``unreachable`` (``planner: astar`` found no way there, at its start: the record
-says why); the robot is stopped and ``GoalEnded`` recorded. Progress is judged on the true
+``BLOCKED_SECONDS``, or the goal's ``stuck_time``: it pushes against something) or ``cancelled``
+(a live command or goal took over) or ``unreachable`` (``planner: astar`` found no way there, at
+its start: the record says why); the robot is stopped and ``GoalEnded`` recorded. Progress is judged on the true
 pose, so wheels spinning against a wall count as blocked even if the encoders say they move.
 A goal driven on odometry that odometry says is reached is checked on the true pose as well:
 farther than its tolerance plus ``faults.odom_tolerance`` from the goal, it ends
@@ -33,7 +33,7 @@ from mobot_cli.sim.state import RobotState
 from mobot_cli.timeline.pursuit import PlanarPose, Pursuit
 
 CONTROL_RATE_HZ = 20  # nav2's controller_frequency default
-BLOCKED_SECONDS = 1.0
+BLOCKED_SECONDS = 1.0  # the default of a goal's stuck_time
 BLOCKED_DISTANCE = 0.02  # m
 BLOCKED_TURN = 0.05  # rad
 PROGRESS_SECONDS = 10.0  # local: dwb: the robot must move PROGRESS_DISTANCE within this ...
@@ -51,6 +51,9 @@ class GoalStarted:
     robot: str
     index: int
     kind: str
+    # m: the optimal path length for SPL: the polyline from the true start through the goal's points
+    # (a patrol: one lap back to its first point). A planner puts its planned path's length here.
+    optimal: float | None = None
 
 
 @dataclass(frozen=True)
@@ -68,6 +71,15 @@ class GoalEnded:
     reason: str = ""  # unreachable: why
 
 
+def optimal_length(state: RobotState, goal: GoalStep) -> float:
+    """The straight-line route's length from the robot's true position through ``goal``'s points
+    (a patrol: one lap, back to its first point), m."""
+    route = [(state.true_x, state.true_y), *goal.points]
+    if goal.kind == "patrol":
+        route.append(goal.points[0])
+    return sum(math.dist(a, b) for a, b in zip(route, route[1:]))
+
+
 class Driver:
     """Plays ``items`` (GoalSteps and TwistSteps, in order) for robot ``name``."""
 
@@ -80,6 +92,7 @@ class Driver:
         self.items: list[GoalStep | TwistStep] = list(items)
         self.every = max(1, round(rate_hz / CONTROL_RATE_HZ))
         self.dt = self.every / rate_hz
+        self.rate_hz = rate_hz
         self.blocked_steps = max(1, round(BLOCKED_SECONDS * rate_hz))
         self.current: GoalStep | TwistStep | None = None
         self.started = 0
@@ -159,8 +172,13 @@ class Driver:
                 return
             route = [(pose.x, pose.y), *planned.lead[1:], *planned.lap[1:]]
             self.lap = list(planned.lap[1:])
-        elif goal.kind == "patrol":
-            route.append(goal.points[0])
+            # SPL's optimal length: the planned way (a patrol's first lap), from the true start
+            way = [(state.true_x, state.true_y), *route[1:]]
+            optimal = sum(math.dist(a, b) for a, b in zip(way, way[1:]))
+        else:
+            if goal.kind == "patrol":
+                route.append(goal.points[0])
+            optimal = optimal_length(state, goal)
         self.pursuit = Pursuit(route, goal.control, self.dt, yaw=goal.yaw)
         if goal.kind == "patrol":
             self.lap_ends = [len(self.pursuit.route) - 1]
@@ -173,7 +191,8 @@ class Driver:
         if goal.kind == "patrol" and goal.laps != 1:
             self._add_lap(goal)  # the route holds two laps ahead: one more each time one begins
         self.anchor = (step, state.true_x, state.true_y, state.true_yaw)
-        self.emit(GoalStarted(step, self.name, goal.index, goal.kind))
+        self.blocked_steps = max(1, round(goal.control.stuck_time * self.rate_hz))
+        self.emit(GoalStarted(step, self.name, goal.index, goal.kind, optimal))
         self._control(step, state)
 
     def _add_lap(self, goal: GoalStep) -> None:

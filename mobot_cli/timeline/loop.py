@@ -23,6 +23,7 @@ from mobot_cli.sim.bullet.world import World
 from mobot_cli.sim.clearance import REACH_MARGIN
 from mobot_cli.sim.engine import open_world
 from mobot_cli.timeline.goals import Driver
+from mobot_cli.timeline.metrics import REACH as METRICS_REACH
 from mobot_cli.timeline.records import Consumer, Deleted, Reading, Record, Sample, Spawned
 
 
@@ -245,6 +246,8 @@ class Timeline:
             reach = max(self._clearance.get(robot.name, 0.0), self._clearance.get("all", 0.0))
             if reach:
                 self.world.watch_clearance(robot.name, reach)
+        if any(isinstance(cmd, GoalStep) for cmd in robot.commands):
+            self.world.watch_clearance(robot.name, METRICS_REACH)  # the goals' metrics
         state = self.world.read(robot.name)
         self._consume(Spawned(self.step, robot, by, state))
         script = [cmd for cmd in robot.commands if not isinstance(cmd, CommandStep)]
@@ -286,6 +289,7 @@ class Timeline:
         """Start driving to ``goal`` now (a goal already running ends ``cancelled``)."""
         self._cancel(name)
         self._stops.pop(name, None)
+        self.world.watch_clearance(name, METRICS_REACH)  # the goal's metrics
         driver = self._drivers[name] = self._driver(name, [dataclasses.replace(goal, step=self.step)])
         driver.tick(self.step)
 

@@ -13,7 +13,7 @@ for byte, as in a new client (tests/sim/test_clients.py).
 from __future__ import annotations
 
 import threading
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Iterable, Optional
 
 from mobot_cli.sim.pb import p
@@ -28,6 +28,7 @@ class Stage:
     solids: set[int]
     ground: Optional[int]
     probes: Any  # placement.Probes: shapes made once per client
+    names: dict[int, str] = field(default_factory=dict)  # static body id -> its name in the world
 
 
 _idle: list[tuple[int, Optional[Stage]]] = []  # kept clients, each empty or holding a stage

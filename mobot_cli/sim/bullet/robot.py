@@ -32,6 +32,7 @@ class SimRobot:
         self.cmd = (0.0, 0.0)
         self.cmd_y = 0.0  # the sideways part of the command (holonomic drives)
         self.collisions = 0  # collision events so far, counted by the World's ContactCounter
+        self.hit = ""  # what the last of them was with
         self.joints: dict[str, int] = {}  # every non-fixed joint
         self.links: dict[str, int] = {p.getBodyInfo(body, physicsClientId=cid)[0].decode(): -1}
         for index in range(p.getNumJoints(body, physicsClientId=cid)):
@@ -124,7 +125,7 @@ class SimRobot:
         state = RobotState(
             self.cmd[0], self.cmd[1], *odom, pos[0], pos[1], pos[2], roll, pitch, yaw,
             true_vx, true_wz, joint_positions={n: j[0] for n, j in zip(self.joints, joints)},
-            collisions=self.collisions,
+            collisions=self.collisions, hit=self.hit,
             joint_velocities={n: j[1] for n, j in zip(self.joints, joints)}, cmd_linear_y=self.cmd_y)
         if isinstance(self.drive, HolonomicDrive):
             state.true_vy = lin[0] * rot[1] + lin[1] * rot[4] + lin[2] * rot[7]  # along the body y axis

@@ -67,7 +67,7 @@ class World:
         self._pushed: list[HolonomicDrive] = []  # holonomic drives: a base force every step
         self._odom_every = max(1, round(physics.rate_hz / ODOMETRY_RATE_HZ))
         self._check_every = max(1, round(physics.rate_hz / HEALTH_RATE_HZ))
-        self._contacts = ContactCounter()
+        self._contacts = ContactCounter(name_of=self._hit_name)
         self._contact_every = max(1, round(physics.rate_hz / CONTACT_RATE_HZ))
         self._sensing: Sensing | None = None  # made when the first robot with sensors arrives
         self._clearance: dict[str, float] = {}  # robot -> how far its clearance is measured (m)
@@ -75,8 +75,8 @@ class World:
         # Said once during the run (a stalled robot, a clamped car turn); a Timeline hands them on to summary.json.
         self.notices: list[str] = []
         if stage is not None:
-            self._probes, self._statics, self._solids, self._ground = \
-                stage.probes, stage.statics, stage.solids, stage.ground
+            self._probes, self._statics, self._solids, self._ground, self._names = \
+                stage.probes, stage.statics, stage.solids, stage.ground, stage.names
             return
         self._probes = placement.Probes(self._cid)
         try:
@@ -98,7 +98,7 @@ class World:
         self._ramping = []
         self._sprung = []
         self._pushed = []
-        self._contacts = ContactCounter()
+        self._contacts = ContactCounter(name_of=self._hit_name)
         self._sensing = None  # rebuilt with the first robot with sensors: its noise restarts too
         self._clearance = {}
         self._health = Health(self._cid, self.physics.faults, self.physics.rate_hz)
@@ -112,11 +112,13 @@ class World:
             physicsClientId=cid)
         p.setGravity(*physics.gravity, physicsClientId=cid)
         self._statics: dict[int, str] = {}
+        self._names: dict[int, str] = {}  # static body id -> its name (what a collision was with)
         self._solids: set[int] = set()  # static bodies with an inside (not planes)
         self._ground: int | None = None
         if world.ground_plane:
             self._ground = self._plane(0.0)
             self._statics[self._ground] = "the ground plane"
+            self._names[self._ground] = "ground_plane"
         for body in world.bodies:
             if body.shapes:
                 uids = static_shapes.create(cid, body)
@@ -131,6 +133,7 @@ class World:
                 friction.set_friction(cid, uids[0], links_with_friction(body.urdf), {}, friction.DEFAULT_FRICTION)
             for uid in uids:
                 self._statics[uid] = body.label or f"static body '{body.name}'"
+                self._names[uid] = body.name
                 if not any(shape.kind == "plane" for shape in body.shapes):
                     self._solids.add(uid)
 
@@ -363,6 +366,12 @@ class World:
                                     self.label, lambda: [r.body for r in self._robots.values()])
         return self._sensing
 
+    def _hit_name(self, other) -> str:
+        """How records name what a robot collided with (a ContactCounter key): the other robot's
+        name, or the world body's."""
+        kind, what = other
+        return what if kind == "robot" else self._names.get(what, f"body {what}")
+
     def label(self, body: int) -> str:
         """What messages call a body: "robot 'NAME'" or the static body's label."""
         for name, robot in self._robots.items():
@@ -400,8 +409,8 @@ class World:
     def close(self) -> None:
         """Let go of the PyBullet client (see clients.keep_clients); the world is unusable afterwards."""
         if self._cid >= 0:
-            stage = Stage((self.physics, self.plan), self._statics, self._solids, self._ground, self._probes) \
-                if self._pristine else None
+            stage = Stage((self.physics, self.plan), self._statics, self._solids, self._ground, self._probes,
+                          self._names) if self._pristine else None
             release(self._cid, stage, [robot.body for robot in self._robots.values()])
             self._cid = -1
 

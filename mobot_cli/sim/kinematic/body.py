@@ -253,4 +253,5 @@ class Mover:
             odom_x, odom_y, odom_yaw = c * dx + s * dy, -s * dx + c * dy, wrap_angle(self.yaw - yaw0)
         cmd, tilt = robot.cmd, self.tilt
         return RobotState(cmd[0], cmd[1], odom_x, odom_y, odom_yaw, v, w, self.x, self.y, self.z, tilt[0], tilt[1],
-                          wrap_angle(self.yaw), v, w, dict(self.positions), robot.collisions, self.velocities)
+                          wrap_angle(self.yaw), v, w, dict(self.positions), robot.collisions, self.velocities,
+                          hit=robot.hit)

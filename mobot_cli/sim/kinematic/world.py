@@ -77,7 +77,8 @@ class KinematicWorld(World):
         self._contact_every = max(1, round(physics.rate_hz / CONTACT_RATE_HZ))
         sample_hz = physics.rate_hz / self._contact_every
         # A pair must be apart 0.1 s before touching again counts again, at any rate.
-        self._contacts = ContactCounter(max(1, round(RELEASE_SAMPLES * sample_hz / CONTACT_RATE_HZ)))
+        self._contacts = ContactCounter(max(1, round(RELEASE_SAMPLES * sample_hz / CONTACT_RATE_HZ)),
+                                        name_of=self._hit_name)
         self._idle = 0  # samples without touches not yet told to _contacts
 
     def reset(self) -> None:
