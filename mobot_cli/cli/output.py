@@ -93,16 +93,25 @@ def _goal_table(goals: list) -> Any:
     from rich.table import Table
 
     table = Table(title="goals", caption="time in s; path driven, final distance from the goal and least "
-                                         "clearance in m; hits: collisions (docs/metrics.md)")
-    for column in ("robot", "command", "status", "time", "path", "error", "spl", "clear", "hits", "failure"):
-        table.add_column(column, justify="left" if column in ("robot", "command", "status", "failure") else "right")
+                                         "clearance in m; hits: collisions; (why it failed): docs/metrics.md")
+    for column in ("robot", "command", "status", "time", "path", "error", "spl", "clear", "hits"):
+        table.add_column(column, justify="left" if column in ("robot", "command", "status") else "right",
+                         overflow="fold")
     for name, goal in goals:
         which = f"{goal.command} {goal.kind}" if goal.command is not None else f"live {goal.kind}"
         laps = f" ({goal.laps} lap{'s' if goal.laps != 1 else ''})" if goal.laps is not None else ""
-        table.add_row(name, which, goal.status + laps, f"{goal.time:.2f}", f"{goal.path_length:.2f}",
+        table.add_row(name, which, _status(goal) + laps, f"{goal.time:.2f}", f"{goal.path_length:.2f}",
                       _maybe(goal.error, 3), _maybe(goal.spl, 2), _maybe(goal.clearance_min, 3),
-                      "-" if goal.collisions is None else str(goal.collisions), goal.failure or "-")
+                      "-" if goal.collisions is None else str(goal.collisions))
     return table
+
+
+def _status(goal) -> str:
+    """A goal's status, and its metrics' failure where that says more (blocked (collision))."""
+    said = {"timed_out": "timeout", "unreachable": "unreachable", "stuck": "stuck"}.get(goal.status)
+    if not goal.failure or goal.failure == said:
+        return goal.status
+    return f"{goal.status} ({goal.failure})"
 
 
 def _maybe(value, digits: int) -> str:
