@@ -20,14 +20,14 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from mobot_cli.assets.description import holonomic, steering
-from mobot_cli.assets.description.frames import LinkTree
+from mobot_cli.assets.description.frames import LinkTree, movable_joint
 from mobot_cli.assets.description.plugin_values import disagreement as _disagreement
 from mobot_cli.assets.description.plugin_values import number as _number
 from mobot_cli.assets.description.plugin_values import texts as _texts
 from mobot_cli.assets.description.steering import Detected
 from mobot_cli.assets.description.torque import with_torque
 from mobot_cli.assets.description.wheels import Wheel, wheel
-from mobot_cli.errors import DescriptionError, Location, Notice, did_you_mean
+from mobot_cli.errors import Location, Notice
 from mobot_cli.plan import DriveSpec
 
 _LEFT_TAGS = ("leftJoint", "left_joint", "leftFrontJoint", "leftRearJoint")
@@ -103,17 +103,12 @@ def drive_from_joints(urdf: ET.Element | str, left: tuple[str, ...], right: tupl
     robot = ET.fromstring(urdf) if isinstance(urdf, str) else urdf
     tree = LinkTree(robot)
     notices = notices if notices is not None else []
-    joint_types = {j.name: j.type for j in tree.joints}
     wheels = []
     for side, names in (("left", left), ("right", right)):
         for name in names:
-            if joint_types.get(name) in (None, "fixed"):
-                problem = "is fixed" if name in joint_types else "is not in the description"
-                raise DescriptionError(
-                    f"drive names {side} wheel joint '{name}', which {problem}",
-                    location=Location(file=source, key=f"drive.{side}_joints"),
-                    hint=did_you_mean(name, [n for n, t in joint_types.items() if t != "fixed"])
-                    or "Name continuous wheel joints.")
+            movable_joint(tree, name, f"drive names {side} wheel joint",
+                          Location(file=source, key=f"drive.{side}_joints"), "Name continuous wheel joints.",
+                          place="the description")
             wheels.append(wheel(tree, name, strict=False))
     sides = {**{n: "left" for n in left}, **{n: "right" for n in right}}
     return with_torque(robot, _spec(wheels, source="scenario", notices=notices, file=source,  # type: ignore[arg-type]
@@ -138,17 +133,11 @@ def _from_plugin(plugin: ET.Element, tree: LinkTree, notices: list[Notice],
         notices.append(Notice(f"the {label} plugin names no left or right joints; "
                               "detecting the wheels from the URDF instead", Location(file=file)))
         return None
-    joint_types = {j.name: j.type for j in tree.joints}
     wheels: list[tuple[str, Wheel]] = []
     for side, names in (("left", left), ("right", right)):
         for name in dict.fromkeys(names):
-            if joint_types.get(name) in (None, "fixed"):
-                problem = "is fixed" if name in joint_types else "is not in the URDF"
-                raise DescriptionError(
-                    f"the {label} plugin names {side} wheel joint '{name}', which {problem}",
-                    location=Location(file=file, key=f"gazebo.plugin.{side}_joint"),
-                    hint=did_you_mean(name, [n for n, t in joint_types.items() if t != "fixed"])
-                    or "Name a continuous wheel joint.")
+            movable_joint(tree, name, f"the {label} plugin names {side} wheel joint",
+                          Location(file=file, key=f"gazebo.plugin.{side}_joint"), "Name a continuous wheel joint.")
             wheels.append((side, wheel(tree, name, strict=False)))  # type: ignore[arg-type]
     for side, found in wheels:
         if (side == "left") != (found.y > 0):

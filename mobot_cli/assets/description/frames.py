@@ -12,6 +12,7 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
 from mobot_cli.common.transforms import Frame, Vec, rpy_matrix
+from mobot_cli.errors import DescriptionError, Location, did_you_mean
 
 
 def floats(text: str | None, count: int, default: tuple[float, ...]) -> tuple[float, ...]:
@@ -99,3 +100,16 @@ def _joint_row(joint: ET.Element) -> JointRow:
         origin=origin_frame(joint),
         axis=(axis[0] / norm, axis[1] / norm, axis[2] / norm),
         lower=lower, upper=upper)
+
+
+def movable_joint(tree: LinkTree, name: str, who: str, location: Location, hint: str,
+                  place: str = "the URDF") -> JointRow:
+    """The movable joint ``name`` that ``who`` names ("the X plugin names left_joint"), or a
+    located DescriptionError saying it is fixed or not in ``place``, with the nearest movable name."""
+    joints = {j.name: j for j in tree.joints}
+    found = joints.get(name)
+    if found is None or found.type == "fixed":
+        problem = "is fixed" if found is not None else f"is not in {place}"
+        raise DescriptionError(f"{who} '{name}', which {problem}", location=location,
+                               hint=did_you_mean(name, [n for n, j in joints.items() if j.type != "fixed"]) or hint)
+    return found

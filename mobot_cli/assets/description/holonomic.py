@@ -18,11 +18,11 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from mobot_cli.assets.description.frames import LinkTree
+from mobot_cli.assets.description.frames import LinkTree, movable_joint
 from mobot_cli.assets.description.plugin_values import disagreement, number, texts
 from mobot_cli.assets.description.process import roller_links
 from mobot_cli.assets.description.wheels import Wheel, wheel
-from mobot_cli.errors import DescriptionError, Location, Notice, did_you_mean
+from mobot_cli.errors import Location, Notice
 from mobot_cli.plan import DriveSpec
 
 MECANUM_LABELS = ("mecanum-drive", "mecanum_drive", "mecanumdrive")
@@ -61,7 +61,6 @@ def from_plugin(element: ET.Element, robot: ET.Element, tree: LinkTree, notices:
         sides = {w.joint: "left" if w.y > 0 else "right" for w in found}
         return holonomic_spec("omni", found, sides, odometry="ground_truth", source="plugin",
                               notices=notices, file=file)
-    joint_types = {j.name: j.type for j in tree.joints}
     found, sides = [], {}
     for side, tag in CORNERS:
         names = texts(element, tag)
@@ -70,13 +69,9 @@ def from_plugin(element: ET.Element, robot: ET.Element, tree: LinkTree, notices:
                                   "URDF instead", Location(file=file)))
             return None
         for name in names:
-            if joint_types.get(name) in (None, "fixed"):
-                problem = "is fixed" if name in joint_types else "is not in the description"
-                raise DescriptionError(
-                    f"the {label} plugin names {tag} '{name}', which {problem}",
-                    location=Location(file=file, key=f"gazebo.plugin.{tag}"),
-                    hint=did_you_mean(name, [n for n, t in joint_types.items() if t != "fixed"])
-                    or "Name a continuous wheel joint.")
+            movable_joint(tree, name, f"the {label} plugin names {tag}",
+                          Location(file=file, key=f"gazebo.plugin.{tag}"), "Name a continuous wheel joint.",
+                          place="the description")
             found.append(wheel(tree, name, strict=False))
             sides[name] = side
     radius = number(element, "wheel_radius")

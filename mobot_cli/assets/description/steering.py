@@ -18,10 +18,10 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
 
-from mobot_cli.assets.description.frames import JointRow, LinkTree
+from mobot_cli.assets.description.frames import JointRow, LinkTree, movable_joint
 from mobot_cli.assets.description.wheels import PARALLEL, Wheel, carried_by_body, wheel, wheel_radius
 from mobot_cli.common.transforms import mat_vec
-from mobot_cli.errors import DescriptionError, Location, Notice, did_you_mean
+from mobot_cli.errors import DescriptionError, Location, Notice
 from mobot_cli.plan import DriveSpec
 from mobot_cli.sim.steering import curvature
 
@@ -106,15 +106,8 @@ def _number(plugin: ET.Element, tag: str) -> float | None:
 
 def _joint(tree: LinkTree, plugin_label: str, name: str, tag: str, file: Path | None) -> JointRow:
     """The movable joint a plugin names, or a located DescriptionError."""
-    joints = {j.name: j for j in tree.joints}
-    found = joints.get(name)
-    if found is None or found.type == "fixed":
-        problem = "is fixed" if found is not None else "is not in the URDF"
-        raise DescriptionError(f"the {plugin_label} plugin names {tag} '{name}', which {problem}",
-                               location=Location(file=file, key=f"gazebo.plugin.{tag}"),
-                               hint=did_you_mean(name, [n for n, j in joints.items() if j.type != "fixed"])
-                               or "Name a movable joint of the robot.")
-    return found
+    return movable_joint(tree, name, f"the {plugin_label} plugin names {tag}",
+                         Location(file=file, key=f"gazebo.plugin.{tag}"), "Name a movable joint of the robot.")
 
 
 def _from_ackermann_plugin(plugin: ET.Element, label: str, tree: LinkTree, notices: list[Notice],
