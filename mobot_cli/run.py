@@ -27,7 +27,6 @@ class RunResult:
     out_dir: Path
     record: RunRecord
     expectations: list[Result] = field(default_factory=list)  # empty when the run did not finish
-    notices: list[str] = field(default_factory=list)  # said by the simulation during the run (a car's clamped turn)
 
 
 def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | None = None,
@@ -72,8 +71,7 @@ def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | 
             for attachment in opened:
                 attachment.close()
             record = recording.close(status, error, said=timeline.notices, fault=fault)  # the world's too
-    return RunResult(out_dir=out_dir, record=record, expectations=recording.results,
-                     notices=list(world.notices))
+    return RunResult(out_dir=out_dir, record=record, expectations=recording.results)
 
 
 def _play(timeline: Timeline, progress: Progress | None) -> None:
