@@ -58,6 +58,7 @@ LOCAL_PLAN = 1.5  # m of the path ahead the critics see (nav2 prunes the plan to
 OSCILLATION_RESET = 0.05  # m
 OSCILLATION_RESET_ANGLE = 0.2  # rad
 SPIN = 0.05  # m/s: below this a rollout turns on the spot (nav2 Oscillation x_only_threshold)
+PATH_SLACK = 0.05  # m: how much nearer than the footprint's radius a path may pass a point (the planner's cell)
 WAVE_CELL = 0.1  # m: the free-space distance grid, when the path ahead is blocked
 WAVE_REACH = 2.5  # m: its half width around the robot
 FANS_KEPT = 256  # windows kept (cleared when full)
@@ -155,8 +156,8 @@ class Dwb:
         v_hi = min(c.max_linear, self.v + c.linear_acceleration * SIM_TIME)
         w_lo = max(-c.max_angular, self.w - c.angular_acceleration * SIM_TIME)
         w_hi = min(c.max_angular, self.w + c.angular_acceleration * SIM_TIME)
-        v = np.linspace(v_lo, v_hi, V_SAMPLES)
-        w = np.linspace(w_lo, w_hi, W_SAMPLES)
+        v = _spaced(v_lo, v_hi, _V_INDEX)
+        w = _spaced(w_lo, w_hi, _W_INDEX)
         if w_lo < 0.0 < w_hi:  # straight on is always a sample
             w[np.argmin(np.abs(w))] = 0.0
         return np.repeat(v, W_SAMPLES), np.tile(w, V_SAMPLES)
@@ -180,16 +181,20 @@ class Dwb:
             return np.zeros(count), np.ones(count, dtype=bool)
         squares = np.einsum("ij,ij->i", points, points)
         start = float(squares.min())
-        near = squares <= (fan.reach + self.radius + INFLATION) ** 2  # what any pose can touch or cost
-        if not near.any():
+        # Only a point within the farthest pose's reach plus the radius can touch a pose: every
+        # pose is checked against those; only the last poses cost, against the points they reach.
+        touch = squares <= (fan.reach + self.radius) ** 2
+        cost_near = squares <= (fan.reach + self.radius + INFLATION) ** 2
+        if not cost_near.any():
             return np.zeros(count), np.ones(count, dtype=bool)
-        d2 = fan.poses_sq[:, None] + squares[near].astype(np.float32)[None, :] \
-            - 2.0 * (fan.poses32 @ points[near].astype(np.float32).T)
-        nearest = d2.min(axis=1).reshape(fan.xs.shape)
-        ok = (nearest >= self.radius * self.radius).all(axis=1)
-        last = np.sqrt(np.maximum(nearest[:, -1], 0.0))
+        last = np.sqrt(np.maximum(_min_d2(fan.last32, fan.last_sq, points[cost_near], squares[cost_near]), 0.0))
         if start < self.radius * self.radius:  # already within reach of a point: moving away is allowed
             ok = last >= math.sqrt(start)
+        elif touch.any():
+            nearest = _min_d2(fan.poses32, fan.poses_sq, points[touch], squares[touch]).reshape(fan.xs.shape)
+            ok = (nearest >= self.radius * self.radius).all(axis=1)
+        else:
+            ok = np.ones(count, dtype=bool)
         cost = np.where(last < self.radius + INFLATION, 252.0 * np.exp(-COST_SCALING * (last - self.radius)), 0.0)
         return cost, ok
 
@@ -205,10 +210,17 @@ class Dwb:
         return ~((vs < SPIN) & (np.sign(ws) == -self.spun))
 
     def _path_blocked(self, path: np.ndarray, points: np.ndarray) -> bool:
-        """Whether the path ahead passes within the robot's radius of a point."""
+        """Whether the path ahead runs into a point: passes nearer than the footprint's radius
+        less ``PATH_SLACK``. A planned path keeps that radius from the map's obstacles on the
+        planner's grid, so a doorway or a gap it threads is not blocked; something new on it is."""
         if not len(points) or len(path) < 2:
             return False
-        return bool((_to_polyline(points[:, 0], points[:, 1], path.tolist()) < self.radius).any())
+        reach = self.radius - MARGIN - PATH_SLACK
+        lo, hi = path.min(axis=0) - reach, path.max(axis=0) + reach
+        inside = points[((points >= lo) & (points <= hi)).all(axis=1)]  # nothing outside can be that near
+        if not len(inside):
+            return False
+        return bool((_to_polyline(inside[:, 0], inside[:, 1], path.tolist()) < reach).any())
 
     def _past(self, path: np.ndarray, points: np.ndarray) -> np.ndarray:
         """The local goal when the path ahead is blocked: its first point clear of every lidar
@@ -239,6 +251,8 @@ class _Fan:
         self.fx = xs[:, -1] + FORWARD_POINT * np.cos(yaws[:, -1])
         self.fy = ys[:, -1] + FORWARD_POINT * np.sin(yaws[:, -1])
         self.ex, self.ey = xs[:, -1].copy(), ys[:, -1].copy()
+        self.last32 = np.stack([self.ex, self.ey], axis=1).astype(np.float32)
+        self.last_sq = (self.last32 * self.last32).sum(axis=1)
 
 
 class _Wavefront:
@@ -328,26 +342,41 @@ def _nearest(samples: np.ndarray, points: np.ndarray) -> np.ndarray:
     return np.sqrt(np.maximum(d2.min(axis=1), 0.0))
 
 
+_V_INDEX = np.arange(V_SAMPLES, dtype=float)
+_W_INDEX = np.arange(W_SAMPLES, dtype=float)
+
+
+def _spaced(lo: float, hi: float, index: np.ndarray) -> np.ndarray:
+    """np.linspace(lo, hi, len(index)), the same numbers, without its per-call overhead."""
+    values = index * ((hi - lo) / (len(index) - 1)) + lo
+    values[-1] = hi
+    return values
+
+
+def _min_d2(poses32: np.ndarray, poses_sq: np.ndarray, points: np.ndarray, squares: np.ndarray) -> np.ndarray:
+    """Each pose's squared distance (float32) to its nearest point."""
+    d2 = poses_sq[:, None] + squares.astype(np.float32)[None, :] - 2.0 * (poses32 @ points.astype(np.float32).T)
+    return d2.min(axis=1)
+
+
 def _toward(current, target, step):
     return np.minimum(np.maximum(target, current - step), current + step)
 
 
 def _to_polyline(px: np.ndarray, py: np.ndarray, path: list) -> np.ndarray:
     """Distance of each point (px, py) from the polyline ``path`` ([[x, y], ...]; one point:
-    from it). A loop over its few segments, vectorised over the many points."""
+    from it), vectorised over the points and the segments at once."""
     if len(path) < 2:
         return np.hypot(px - path[0][0], py - path[0][1])
-    best = None
-    for (ax, ay), (bx, by) in zip(path[:-1], path[1:]):
-        dx, dy = bx - ax, by - ay
-        rx, ry = px - ax, py - ay
-        length2 = dx * dx + dy * dy
-        if length2 > 1e-12:
-            t = np.clip((rx * dx + ry * dy) / length2, 0.0, 1.0)
-            rx, ry = rx - t * dx, ry - t * dy
-        d2 = rx * rx + ry * ry
-        best = d2 if best is None else np.minimum(best, d2)
-    return np.sqrt(best)
+    ends = np.asarray(path, dtype=float)
+    ax, ay = ends[:-1, 0:1], ends[:-1, 1:2]
+    dx, dy = ends[1:, 0:1] - ax, ends[1:, 1:2] - ay
+    length2 = dx * dx + dy * dy
+    rx, ry = px[None, :] - ax, py[None, :] - ay
+    # A segment of no length: t = 0 (its end point), from a zero numerator over 1.
+    t = np.minimum(np.maximum((rx * dx + ry * dy) / np.where(length2 > 1e-12, length2, 1.0), 0.0), 1.0)
+    rx, ry = rx - t * dx, ry - t * dy
+    return np.sqrt((rx * rx + ry * ry).min(axis=0))
 
 
 def radius_of(footprint: tuple[float, float, float, float] | None) -> float:
