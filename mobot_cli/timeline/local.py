@@ -368,6 +368,15 @@ def _to_polyline(px: np.ndarray, py: np.ndarray, path: list) -> np.ndarray:
     from it), vectorised over the points and the segments at once."""
     if len(path) < 2:
         return np.hypot(px - path[0][0], py - path[0][1])
+    if len(path) == 2:  # one segment (most ticks): fewer numpy calls than the general form
+        (ax, ay), (bx, by) = path
+        dx, dy = bx - ax, by - ay
+        rx, ry = px - ax, py - ay
+        length2 = dx * dx + dy * dy
+        if length2 > 1e-12:
+            t = np.minimum(np.maximum((rx * dx + ry * dy) / length2, 0.0), 1.0)
+            rx, ry = rx - t * dx, ry - t * dy
+        return np.sqrt(rx * rx + ry * ry)
     ends = np.asarray(path, dtype=float)
     ax, ay = ends[:-1, 0:1], ends[:-1, 1:2]
     dx, dy = ends[1:, 0:1] - ax, ends[1:, 1:2] - ay
