@@ -32,6 +32,7 @@ from mobot_cli.sweep.task import RunTask, Task, TaskResult, failed, run_task
 
 OnDone = Callable[[TaskResult], None]
 POLL_S = 0.5  # how often a wait wakes up to look at deadlines when none is closer
+CLOSE_WAIT_S = 10.0  # how long close() waits for workers still starting
 READY = "ready"  # a worker's first message: imports done, the timeout clock may start
 
 
@@ -140,11 +141,13 @@ class LocalExecutor:
     def close(self) -> None:
         """Stop workers that prestart started and run did not take (the sweep ended early)."""
         self._closed.set()
-        self._stop_all(self._take_early())
+        # Bounded: a sweep that ends must not wait on a start that never ends. A worker started
+        # after this gives up dies with the sweep (guard.die_with_sweep), the fork server too.
+        self._stop_all(self._take_early(CLOSE_WAIT_S))
 
-    def _take_early(self) -> list[_Worker]:
+    def _take_early(self, timeout: float | None = None) -> list[_Worker]:
         for starter in self._starters:
-            starter.join()
+            starter.join(timeout)
         self._starters = []
         workers, self._early = self._early, []
         return workers

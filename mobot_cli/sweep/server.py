@@ -64,8 +64,16 @@ def start_tracker() -> None:
 
 
 def context():
-    """The fork server with mobot imported where the platform has one, else plain spawn."""
+    """The fork server with mobot imported where the platform has one, else plain spawn.
+
+    What starting a worker imports is imported here, in the calling (main) thread, so that the
+    pool's starter thread imports nothing: a Ctrl-C that lands in the main thread in the middle
+    of an import can leave Python's import lock taken (the interrupt is raised between taking it
+    and the code that gives it back), and a thread that imports after that waits for ever, and
+    the sweep with it, silent."""
     if "forkserver" in multiprocessing.get_all_start_methods():
+        from multiprocessing import popen_forkserver, resource_tracker  # noqa: F401  (forkserver, spawn, ...)
+
         ctx = multiprocessing.get_context("forkserver")
         ctx.set_forkserver_preload(["mobot_cli.sweep.preload"])
         return ctx
