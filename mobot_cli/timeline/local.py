@@ -125,8 +125,13 @@ class Dwb:
             score += WEIGHTS["GoalAlign"] * field.at(fx - nose[0] + goal[0], fy - nose[1] + goal[1]) / CELL
         else:
             route = path.tolist()
-            score += (WEIGHTS["PathDist"] / CELL) * _to_polyline(fan.ex, fan.ey, route)
-            score += (WEIGHTS["PathAlign"] / CELL) * _to_polyline(fx, fy, route + [nose.tolist()])
+            # PathDist of the last poses and PathAlign of the points ahead of them in one call; the
+            # align critic's path goes on to the nose target: one more segment.
+            both = _to_polyline(fan.efx, fan.efy, route)
+            count = len(vs)
+            align = np.minimum(both[count:], _to_polyline(fx, fy, [route[-1], nose.tolist()]))
+            score += (WEIGHTS["PathDist"] / CELL) * both[:count]
+            score += (WEIGHTS["PathAlign"] / CELL) * align
             score += WEIGHTS["GoalDist"] * np.hypot(fan.ex - goal[0], fan.ey - goal[1]) / CELL
             score += WEIGHTS["GoalAlign"] * np.hypot(fx - nose[0], fy - nose[1]) / CELL
         if not ok.any():
@@ -216,11 +221,7 @@ class Dwb:
         if not len(points) or len(path) < 2:
             return False
         reach = self.radius - MARGIN - PATH_SLACK
-        lo, hi = path.min(axis=0) - reach, path.max(axis=0) + reach
-        inside = points[((points >= lo) & (points <= hi)).all(axis=1)]  # nothing outside can be that near
-        if not len(inside):
-            return False
-        return bool((_to_polyline(inside[:, 0], inside[:, 1], path.tolist()) < reach).any())
+        return bool((_to_polyline(points[:, 0], points[:, 1], path.tolist()) < reach).any())
 
     def _past(self, path: np.ndarray, points: np.ndarray) -> np.ndarray:
         """The local goal when the path ahead is blocked: its first point clear of every lidar
@@ -251,6 +252,7 @@ class _Fan:
         self.fx = xs[:, -1] + FORWARD_POINT * np.cos(yaws[:, -1])
         self.fy = ys[:, -1] + FORWARD_POINT * np.sin(yaws[:, -1])
         self.ex, self.ey = xs[:, -1].copy(), ys[:, -1].copy()
+        self.efx, self.efy = np.concatenate([self.ex, self.fx]), np.concatenate([self.ey, self.fy])
         self.last32 = np.stack([self.ex, self.ey], axis=1).astype(np.float32)
         self.last_sq = (self.last32 * self.last32).sum(axis=1)
 
