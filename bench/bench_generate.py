@@ -37,7 +37,7 @@ def main() -> None:
     args = parser.parse_args()
     from mobot_cli.assets.resources import ResourceResolver
     from mobot_cli.assets.world.build import build_world
-    from mobot_cli.assets.world.generate import generate, load_generated
+    from mobot_cli.assets.world.generate.make import generate, load_generated
 
     load_generated("barn", 0, {})  # imports
     print(f"{'world':<24}{'obstacles':>10}{'generate ms':>14}{'+ SDF + plan ms':>18}{'load SDF ms':>14}")

@@ -84,7 +84,7 @@ def _world(scenario: Scenario, source: Source, base_dir: Path) -> tuple[LoadedWo
     """The scenario's world and, for a generated one, its SDF text; errors inside a world file
     keep their own file and line."""
     if isinstance(scenario.world, GeneratedWorld):
-        from mobot_cli.assets.world.generate import load_generated
+        from mobot_cli.assets.world.generate.make import load_generated
 
         spec = scenario.world.generate
         return load_generated(spec.kind, spec.seed, spec.parameters())

@@ -75,7 +75,7 @@ class GenerateSpec(BaseModel):
 
     def parameters(self) -> dict[str, Any]:
         """Every parameter of the kind, the ones not given at the generator's defaults."""
-        from mobot_cli.assets.world.generate import parameters
+        from mobot_cli.assets.world.generate.make import parameters
 
         out = parameters(self.kind)
         for name in out:

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from mobot_cli.assets.world import occupancy
-from mobot_cli.assets.world.generate import generate, load_generated
 from mobot_cli.assets.world.generate.barn import CELL, CYLINDER_RADIUS, START
+from mobot_cli.assets.world.generate.make import generate, load_generated
 from mobot_cli.assets.world.generate.sdf import to_plan, to_sdf
 from mobot_cli.assets.world.worldplan import load_world
 from mobot_cli.common.raster import Grid

@@ -18,8 +18,8 @@ from collections import deque
 
 import numpy as np
 
-from mobot_cli.assets.world.generate import Obstacle, rounded
 from mobot_cli.assets.world.generate.barn_grid import CELL, CYLINDER_RADIUS, GOAL, START
+from mobot_cli.assets.world.generate.shapes import Obstacle, rounded
 
 HEIGHT = 1.0  # m
 X0, Y0 = START[0] - 14.5 * CELL, 5.0 + CYLINDER_RADIUS  # centre of cell (0, 0): the grid is centred on the start's x

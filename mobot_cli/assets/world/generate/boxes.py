@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from mobot_cli.assets.world.generate import Obstacle, rounded
+from mobot_cli.assets.world.generate.shapes import Obstacle, rounded
 from mobot_cli.assets.world.generate.walls import room_walls
 
 TRIES = 200  # places tried per box

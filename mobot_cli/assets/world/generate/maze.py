@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mobot_cli.assets.world.generate import Obstacle
+from mobot_cli.assets.world.generate.shapes import Obstacle
 from mobot_cli.assets.world.generate.walls import runs
 from mobot_cli.assets.world.generate.walls import wall as wall_box
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from xml.sax.saxutils import quoteattr
 
-from mobot_cli.assets.world.generate import Generated, Obstacle
+from mobot_cli.assets.world.generate.shapes import Generated, Obstacle
 from mobot_cli.plan import StaticBody, StaticShape, WorldPlan
 
 HEAD = """<?xml version="1.0"?>

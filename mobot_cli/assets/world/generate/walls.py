@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from mobot_cli.assets.world.generate import Obstacle, rounded
+from mobot_cli.assets.world.generate.shapes import Obstacle, rounded
 
 
 def wall(name: str, a: tuple[float, float], b: tuple[float, float], thickness: float,
