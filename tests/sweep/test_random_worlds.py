@@ -15,6 +15,8 @@ import time
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mobot_cli.assets.world.worldplan import load_world
 from mobot_cli.cli import invoke
@@ -144,3 +146,25 @@ def test_bad_free_space_draws_are_located_errors(tmp_path):
         assert result.stderr.startswith(f"mobot: error: {path}:4, key 'random.{line.split(':')[0]}': "), result.stderr
         assert words in result.stderr, (line, result.stderr)
         assert not (tmp_path / "out").exists()
+
+
+ITEM = st.one_of(st.integers(-10, 10), st.floats(-10, 10), st.text(max_size=2))
+FIELD = st.one_of(st.none(), st.booleans(), st.integers(-20, 20), st.floats(allow_nan=True, allow_infinity=True),
+                  st.text(max_size=3), st.lists(ITEM, max_size=5))
+
+
+@settings(max_examples=200, deadline=None)
+@given(key=st.sampled_from(["robots.r.pose", "robots.r.commands.0.goto", "robots.r.pose.x", "world.generate.seed"]),
+       value=st.dictionaries(st.sampled_from(["region", "clearance", "yaw", "other"]), FIELD, max_size=4))
+def test_any_free_space_entry_is_a_draw_or_a_located_error(key, value):
+    from mobot_cli.errors import Location, MobotError
+    from mobot_cli.sweep.freedraw import FreeDraw, parse
+
+    where = Location(file="sweep.yaml", line=4, key=f"random.{key}")
+    try:
+        draw = parse(key, value, where)
+    except MobotError as exc:
+        assert exc.location == where
+        return
+    assert isinstance(draw, FreeDraw) and draw.region[0] < draw.region[1] and draw.region[2] < draw.region[3]
+    assert 0 <= draw.clearance <= 10 and draw.yaw[0] <= draw.yaw[1]
