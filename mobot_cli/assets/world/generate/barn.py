@@ -96,10 +96,11 @@ def _region(free: np.ndarray, seeds: list[tuple[int, int]]) -> np.ndarray:
 
 
 def _largest_touching(free: np.ndarray, col: int) -> np.ndarray:
-    best = np.zeros_like(free)
+    best, seen = np.zeros_like(free), np.zeros_like(free)
     for r in range(free.shape[0]):
-        if free[r, col] and not best[r, col]:
+        if free[r, col] and not seen[r, col]:  # each region is searched once
             region = _region(free, [(r, col)])
+            seen |= region
             if region.sum() > best.sum():
                 best = region
     return best
