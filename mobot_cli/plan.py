@@ -321,3 +321,5 @@ class Plan:
     notices: tuple[str, ...] = field(default=())
     expectations: tuple[Expectation, ...] = ()
     ros2: Ros2Settings | None = None  # None: the world does not join ROS 2 unless asked (--ros2)
+    # a generated world (``world: {generate: ...}``) as an SDF world file: the run folder keeps it
+    generated_world: str = ""

@@ -17,7 +17,8 @@ MIN_RESOLUTION = 0.001
 
 def map_(
     ctx: typer.Context,
-    world: str = typer.Argument(..., help="A bundled world name or a Gazebo .world/.sdf (or .world.xacro) file."),
+    world: str = typer.Argument(..., help="A bundled world name, a Gazebo .world/.sdf (or .world.xacro) file, or a "
+                                          "scenario (.yaml) whose world it maps (a generated one too)."),
     resolution: float = typer.Option(0.05, "--resolution", help="Cell side, m."),
     band: str = typer.Option("0.02,2.0", "--band", metavar="ZMIN,ZMAX",
                              help="Heights above the floor (m) whose geometry is an obstacle."),
@@ -29,7 +30,6 @@ def map_(
 ) -> None:
     """Write the world's occupancy grid for nav2's map_server: map.yaml and a trinary map.pgm."""
     from mobot_cli.assets.world import occupancy
-    from mobot_cli.assets.world.worldplan import load_world
     from mobot_cli.ros.map_files import grid_cells, write_map
 
     _check("--resolution", resolution, MIN_RESOLUTION, MAX_RESOLUTION)
@@ -41,7 +41,7 @@ def map_(
     if extent and min(extent) <= 0:
         raise UsageError(f"--size {size}: width and height must be positive", hint="e.g. --size 12,10")
     corner = _pair("--origin", origin, "X,Y") if origin else None
-    loaded = load_world(world, Path.cwd())
+    loaded = _world(world)
     floor = occupancy.floor_under(loaded.plan, [])
     try:
         grid = occupancy.grid_for(loaded.plan, resolution, (floor + low, floor + high), corner, extent)
@@ -58,6 +58,19 @@ def map_(
                          f"({grid.x0:g}, {grid.y0:g}), {int(occupied.sum())} occupied "
                          f"(band {low:g}..{high:g} m above the floor at z = {floor:g} m"
                          + (f", inflated by {robot_radius:g} m" if robot_radius else "") + ")\n")
+
+
+def _world(world: str):
+    """The world to map: a world (name or file) loaded, or a scenario's world (its ``world:``,
+    generated ones included) with the notices loading it gave."""
+    from mobot_cli.assets.world.loaded import LoadedWorld
+    from mobot_cli.assets.world.worldplan import load_world
+    from mobot_cli.scenario.prepare import SCENARIO_SUFFIXES, prepare
+
+    if world.endswith(SCENARIO_SUFFIXES):
+        plan = prepare(world).plan
+        return LoadedWorld(plan=plan.world, notices=plan.notices)
+    return load_world(world, Path.cwd())
 
 
 def _pair(option: str, text: str, form: str) -> tuple[float, float]:

@@ -257,7 +257,7 @@ def sweep_updates(bar):
 
 
 def sweep_summary(env: Environment, out_dir, rows: list[dict[str, str]], keys: list[str], total: int, skipped: int,
-                  wall: float) -> None:
+                  wall: float, goals: dict[str, Any] | None = None) -> None:
     """The failed runs (if any) as a table, then one line of counts and where the results are."""
     from rich.markup import escape
     from rich.table import Table
@@ -278,6 +278,12 @@ def sweep_summary(env: Environment, out_dir, rows: list[dict[str, str]], keys: l
     resumed = f" ({skipped} from before --resume)" if skipped else ""
     console.print(f"{len(rows)} of {total} runs done{resumed}: {len(rows) - len(failed)} passed, "
                   f"{len(failed)} failed, in {wall:.1f} s", highlight=False)
+    for name, g in (goals or {}).items():  # robots with goals: their success rate over the runs
+        if g["runs"]:
+            console.print(f"{name}: goals reached in {g['successes']} of {g['runs']} runs (success rate "
+                          f"{g['success_rate']:.2f}), mean SPL {g['mean_spl']:.3f}"
+                          + (f", mean time {g['mean_time']:.2f} s" if g["mean_time"] is not None else ""),
+                          highlight=False)
     console.print(f"results: {out_dir}/results.csv", highlight=False)
 
 

@@ -79,7 +79,7 @@ def sweep(
         output.sweep_failures(env, out_dir, len(report.failed), total)
     else:
         output.sweep_summary(env, out_dir, rows, list(prepared.keys), total, report.skipped,
-                             time.perf_counter() - started)
+                             time.perf_counter() - started, report.document.get("goals"))
     return ExitCode.EXPECTATION_FAILED if report.failed else ExitCode.OK
 
 

@@ -194,6 +194,10 @@ class Recording:
             out_dir.mkdir(parents=True, exist_ok=True)
             (out_dir / SUMMARY).unlink(missing_ok=True)  # a reused folder must not look finished early
             write_text_atomic(out_dir / "scenario.yaml", resolved_yaml, durable=False)  # summary.json is
+            if plan.generated_world:  # a world made from a seed, kept to open in Gazebo or map
+                from mobot_cli.assets.world.generate.make import GENERATED_FILE
+
+                write_text_atomic(out_dir / GENERATED_FILE, plan.generated_world, durable=False)
             self.sinks = make_sinks(plan, out_dir, self.checker.sweeps)
         except OSError as exc:
             failure = self._failed(exc)

@@ -37,11 +37,10 @@ def resolved_document(scenario: Scenario, plan: Plan, base_dir: Path) -> dict[st
     for entry in robots:  # the world's own robot model, named without a description: keep it so
         if entry["name"] in implicit and entry["name"] in plan.world.robot_models:
             del entry["description"], entry["args"]
-    local_world = base_dir / scenario.world
     return {
         "version": 1,
         "name": scenario.name,
-        "world": str(local_world.resolve()) if local_world.is_file() else scenario.world,
+        "world": _world(scenario, base_dir),
         **({"skip_missing": True} if scenario.skip_missing else {}),
         "physics": {"rate_hz": rate, "gravity": list(plan.physics.gravity),
                     "solver_iterations": plan.physics.solver_iterations,
@@ -57,6 +56,14 @@ def resolved_document(scenario: Scenario, plan: Plan, base_dir: Path) -> dict[st
         **expect_document(plan.expectations, rate),
         **_ros2(scenario, plan),
     }
+
+
+def _world(scenario: Scenario, base_dir: Path) -> Any:
+    """A world file as an absolute path, a generated world with every parameter, a name as given."""
+    if not isinstance(scenario.world, str):
+        return scenario.world.document()
+    local_world = base_dir / scenario.world
+    return str(local_world.resolve()) if local_world.is_file() else scenario.world
 
 
 def _ros2(scenario: Scenario, plan: Plan) -> dict[str, Any]:

@@ -12,7 +12,7 @@ from typing import Any, Iterable
 from pydantic import BaseModel, ValidationError
 
 from mobot_cli.errors import ScenarioError, did_you_mean, shown
-from mobot_cli.scenario.model import Scenario
+from mobot_cli.scenario.model import WORLD_TAGS, Scenario
 from mobot_cli.scenario.sensor_model import HINTS as SENSOR_HINTS
 from mobot_cli.scenario.source import PathKey, Source
 
@@ -43,6 +43,7 @@ def validate_ready(source: Source) -> Scenario:
 def _to_scenario_error(exc: ValidationError, source: Source) -> ScenarioError:
     # A mistyped key also makes the real one "missing": report the unknown key first.
     err = sorted(exc.errors(), key=lambda e: e["type"] != "extra_forbidden")[0]
+    err = {**err, "loc": _untagged(err["loc"])}
     path = _data_path(err["loc"], source.data)
     kind = err["type"]
     message = err["msg"].removeprefix("Value error, ")
@@ -58,10 +59,15 @@ def _to_scenario_error(exc: ValidationError, source: Source) -> ScenarioError:
         message += f", got {shown(err.get('input'))}"
     if kind != "extra_forbidden" and len(path) > 3 and path[2] == "sensors":
         hint = SENSOR_HINTS.get(str(path[-1]))
-    more = len({_data_path(e["loc"], source.data) for e in exc.errors()}) - 1
+    more = len({_data_path(_untagged(e["loc"]), source.data) for e in exc.errors()}) - 1
     if more:
         message += f" (and {more} more problem{'s' if more > 1 else ''})"
     return ScenarioError(message, location=source.locate_key(path), hint=hint)
+
+
+def _untagged(loc: tuple) -> tuple:
+    """An error location without the tags of ``world:``'s two forms (pydantic puts them in)."""
+    return tuple(part for part in loc if part not in WORLD_TAGS)
 
 
 def _data_path(loc: tuple, data: Any) -> PathKey:

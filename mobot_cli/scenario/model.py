@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from typing import Annotated, Literal, Optional, Union
 
-from pydantic import AfterValidator, BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import AfterValidator, BaseModel, ConfigDict, Discriminator, Field, Tag, field_validator, model_validator
 
 from mobot_cli.errors import shown
 from mobot_cli.scenario.expect_model import ExpectSpec
@@ -46,6 +46,19 @@ from mobot_cli.scenario.limits import (
     gravity_length,
 )
 from mobot_cli.scenario.sensor_model import SensorEntry, SensorKey
+from mobot_cli.scenario.world_model import GeneratedWorld
+
+# ``world:`` is a name or path, or a mapping ``{generate: ...}``; the tags never reach a message
+# (scenario/load.py drops them from error locations).
+WORLD_TAGS = ("world_file", "world_generate")
+
+
+def _world_form(value: object) -> str:
+    return WORLD_TAGS[1] if isinstance(value, (dict, GeneratedWorld)) else WORLD_TAGS[0]
+
+
+WorldField = Annotated[Union[Annotated[Reference, Tag(WORLD_TAGS[0])], Annotated[GeneratedWorld, Tag(WORLD_TAGS[1])]],
+                       Discriminator(_world_form)]
 
 
 class Strict(BaseModel):
@@ -265,7 +278,7 @@ class Scenario(Strict):
 
     version: Literal[1]
     name: str = "scenario"
-    world: Reference = "empty"
+    world: WorldField = "empty"  # a bundled name, a file, or {generate: ...} (world_model.py)
     # World models whose files are missing (Fuel includes, meshes) are left out with a warning.
     skip_missing: bool = False
     # All defaults, made once without validating them (frozen: one serves every scenario).

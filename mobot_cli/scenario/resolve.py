@@ -16,6 +16,7 @@ from mobot_cli.scenario.model import Scenario
 from mobot_cli.scenario.robots import RobotResolver, unlisted_robots
 from mobot_cli.scenario.source import Source
 from mobot_cli.scenario.units import steps
+from mobot_cli.scenario.world_model import GeneratedWorld
 
 DEFAULT_LOG_RATE_HZ = 50  # the log runs at most this fast when log.rate_hz is not given
 
@@ -43,7 +44,7 @@ def resolve(scenario: Scenario, source: Source) -> Plan:
                       solver_iterations=scenario.physics.solver_iterations, engine=scenario.physics.engine,
                       faults=faults)
     base_dir = source.file.parent.resolve() if source.file else Path.cwd()
-    world = _world(scenario, source, base_dir)
+    world, generated = _world(scenario, source, base_dir)
     notices.extend(world.notices)
     ctx = RobotResolver(rate, steps(scenario.settle, rate), total, base_dir=base_dir, source=source,
                         world=world, skip_missing=scenario.skip_missing)
@@ -58,7 +59,8 @@ def resolve(scenario: Scenario, source: Source) -> Plan:
     return Plan(name=scenario.name, physics=physics, world=world.plan, robots=robots,
                 total_steps=total, settle_steps=ctx.settle, log_every=log_every, seed=scenario.seed,
                 formats=tuple(dict.fromkeys(scenario.log.formats)), events=events,
-                notices=tuple(dict.fromkeys(notices)), expectations=expectations, ros2=_ros2(scenario))
+                notices=tuple(dict.fromkeys(notices)), expectations=expectations, ros2=_ros2(scenario),
+                generated_world=generated)
 
 
 def _ros2(scenario: Scenario) -> Ros2Settings | None:
@@ -73,10 +75,21 @@ def _ros2(scenario: Scenario) -> Ros2Settings | None:
                         world_frame=spec.world_frame, map=spec.map)
 
 
-def _world(scenario: Scenario, source: Source, base_dir: Path) -> LoadedWorld:
-    """The scenario's world; errors inside a world file keep their own file and line."""
+def world_of(scenario: Scenario, source: Source) -> LoadedWorld:
+    """The scenario's world alone (a sweep draws poses in it before preparing the run)."""
+    return _world(scenario, source, source.file.parent.resolve() if source.file else Path.cwd())[0]
+
+
+def _world(scenario: Scenario, source: Source, base_dir: Path) -> tuple[LoadedWorld, str]:
+    """The scenario's world and, for a generated one, its SDF text; errors inside a world file
+    keep their own file and line."""
+    if isinstance(scenario.world, GeneratedWorld):
+        from mobot_cli.assets.world.generate.make import load_generated
+
+        spec = scenario.world.generate
+        return load_generated(spec.kind, spec.seed, spec.parameters())
     try:
-        return load_world(scenario.world, base_dir, skip_missing=scenario.skip_missing)
+        return load_world(scenario.world, base_dir, skip_missing=scenario.skip_missing), ""
     except MobotError as exc:
         if exc.location.file is not None:
             raise

@@ -11,19 +11,16 @@ import math
 from dataclasses import asdict, dataclass
 from typing import Iterable, Sequence
 
-# run.py, static worlds 0-299: the Jackal starts here (world frame, yaw in rad) ...
-START = (-2.25, 3.0, 1.57)
-# ... and its goal lies 10 m ahead (GOAL_POSITION [0, 10] relative to the start).
-GOAL = (START[0] + 0.0, START[1] + 10.0)
+# run.py, static worlds 0-299: the start, the goal 10 m ahead, the cylinders and their grid
+from mobot_cli.assets.world.generate.barn_grid import CELL, CYLINDER_RADIUS, GOAL, START  # noqa: F401
+
 GOAL_RADIUS = 1.0  # m: the episode succeeds once the robot is this close to the goal
 TIMEOUT = 100.0  # s after the robot starts moving
 MOVED = 0.1  # m from the start: the clock starts when the robot has moved this far
 OPTIMAL_SPEED = 2.0  # m/s: optimal time = reference path length / this
 WORLDS = 300  # static BARN worlds, numbered 0..299
 
-# path_coord_to_gazebo_coord: the path files hold cells of a grid of cylinders of radius 0.075 m
-CYLINDER_RADIUS = 0.075
-CELL = 2 * CYLINDER_RADIUS
+# path_coord_to_gazebo_coord: the path files hold cells of BARN's grid of cylinders
 X_SHIFT = -CYLINDER_RADIUS - 30 * CELL
 Y_SHIFT = CYLINDER_RADIUS + 5
 

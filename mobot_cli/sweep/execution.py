@@ -17,6 +17,7 @@ from mobot_cli.sweep.results import (
     ResultsCsv,
     columns,
     folder,
+    goal_summary,
     read_rows,
     rewrite_sorted,
     row,
@@ -147,6 +148,9 @@ def _run(sweep: Sweep, out_dir: Path, executor: Executor, done_rows: dict[int, d
         failed = len(report.failed)
         document.update(status=status, counts={"total": total, "passed": len(report.rows) - failed,
                                                "failed": failed, "not_run": total - len(report.rows)})
+        measured = sweep.measured()
+        if measured:  # robots with goals: their success rate over the runs
+            document["goals"] = goal_summary(report.rows.values(), measured)
         write_document(out_dir / "sweep.json", document)
     return report
 

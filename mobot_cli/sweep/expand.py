@@ -91,7 +91,7 @@ def expand(spec: SweepSpec) -> Sweep:
     sweep_seed = spec.seed if spec.seed is not None else base.plan.seed
     axes = [a if a.kind != "random" else Axis(a.kind, a.keys, a.where, rows=random_rows(a, spec.samples, sweep_seed))
             for a in spec.axes]
-    keys = tuple(k for a in axes for k in a.keys)
+    keys = tuple(k for a in axes for k in a.keys) + tuple(c for d in spec.free for c in d.columns())
     seed_swept = "seed" in keys or "seed" in (item.partition("=")[0].strip() for item in sets)
     for axis in axes:
         for row in axis.rows:
@@ -101,6 +101,8 @@ def expand(spec: SweepSpec) -> Sweep:
     for index, combo in enumerate(itertools.product(*(a.rows for a in axes))):
         params = tuple(zip(keys, (v for row in combo for v in row)))
         seed = derive_seed(sweep_seed, index)
+        if spec.free:
+            params += _free_draws(spec, sets, params, origins, sweep_seed, index)
         overrides = sets + [f"{k}={v}" for k, v in params] + ([] if seed_swept else [f"seed={seed}"])
         run = _reseeded(done.get(_without_seed(overrides)), overrides)
         if run is None:
@@ -110,6 +112,28 @@ def expand(spec: SweepSpec) -> Sweep:
         prepared.append(run)
     name = spec.name or base.plan.name
     return Sweep(spec, name, sweep_seed, keys, tuple(variants), tuple(prepared))
+
+
+def _free_draws(spec: SweepSpec, sets: list[str], params: tuple, origins: dict[str, Location],
+                sweep_seed: int, index: int) -> tuple:
+    """Run ``index``'s poses and goals drawn in free space of its own world (its other values set):
+    only the world is loaded here, the run is prepared (and checked) with the drawn values."""
+    from mobot_cli.scenario.load import validate_ready
+    from mobot_cli.scenario.overrides import read_ready
+    from mobot_cli.scenario.resolve import world_of
+    from mobot_cli.sweep.freedraw import draw, rng_for, starts
+
+    note = f"run {index}" + "".join(f", {k}={v}" for k, v in params)
+    try:
+        source = read_ready(spec.scenario, sets + [f"{k}={v}" for k, v in params])
+        scenario = validate_ready(source)
+        world = world_of(scenario, source).plan
+    except MobotError as exc:
+        raise _relocated(exc, origins, note) from None
+    drawn = draw(spec.free, world, starts(scenario), rng_for(sweep_seed, index), note)
+    for (key, value), d in zip(drawn, (d for d in spec.free for _ in d.columns())):
+        origins[f"{key}={value}"] = d.where
+    return tuple(drawn)
 
 
 def _is_seed(override: str) -> bool:

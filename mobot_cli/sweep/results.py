@@ -118,6 +118,23 @@ def sweep_document(sweep: Sweep, executor: str, jobs: int, timeout: float | None
     }
 
 
+def goal_summary(rows: Iterable[dict[str, str]], measured: Iterable[str]) -> dict[str, dict[str, Any]]:
+    """Per robot that drives to goals: how many runs measured it, its success rate, the mean SPL
+    over those runs and the mean time of the successful ones (sweep.json's ``goals``)."""
+    out = {}
+    rows = list(rows)
+    for name in dict.fromkeys(measured):
+        judged = [r for r in rows if r.get(f"{name}.success") in ("true", "false")]
+        won = [r for r in judged if r[f"{name}.success"] == "true"]
+        spl = [float(r[f"{name}.spl"]) for r in judged if r.get(f"{name}.spl")]
+        times = [float(r[f"{name}.time"]) for r in won if r.get(f"{name}.time")]
+        out[name] = {"runs": len(judged), "successes": len(won),
+                     "success_rate": round(len(won) / len(judged), 4) if judged else None,
+                     "mean_spl": round(sum(spl) / len(spl), 4) if spl else None,
+                     "mean_time": round(sum(times) / len(times), 4) if times else None}
+    return out
+
+
 def folder(index: int, total: int) -> str:
     """A run's folder inside the sweep folder: runs/0000, runs/0001, ..."""
     width = max(4, len(str(total - 1)))

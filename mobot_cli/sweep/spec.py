@@ -48,6 +48,7 @@ class SweepSpec:
     name: str | None = None
     sweep_file: Path | None = None
     where: dict[str, Location] = field(default_factory=dict)  # "samples", "seed", ... -> location
+    free: tuple[Any, ...] = ()  # random poses and goals in free space (sweep/freedraw.py FreeDraw)
 
 
 def split_values(text: str) -> list[str]:
@@ -178,6 +179,7 @@ def check_spec(spec: SweepSpec) -> SweepSpec:
     seen: dict[str, Location] = {}
     named = [(item.partition("=")[0].strip(), where) for item, where in spec.sets]
     named += [(k, w) for axis in spec.axes for k, w in zip(axis.keys, axis.where)]
+    named += [(c, d.where) for d in spec.free for c in (d.key, *d.columns())]
     for key, where in named:
         if key in seen:
             raise UsageError(f"key '{key}' is given twice (also at {seen[key]})", location=where,
@@ -212,14 +214,23 @@ def load_sweep_file(path: Path) -> SweepSpec:
         columns = [[_text(v) for v in _list(source, ("zip", k), vs)] for k, vs in zipped.items()]
         axes.append(_zip_axis(list(zipped), columns, [_at(source, "zip", k) for k in zipped]))
     randoms = _mapping(source, "random")
+    free = []
     if randoms:
-        bounds = []
+        from mobot_cli.sweep import freedraw
+
+        bounds, keys = [], []
         for key, pair in randoms.items():
             where = _at(source, "random", key)
+            if isinstance(pair, dict):
+                free.append(freedraw.parse(key, pair, where))
+                continue
             if not isinstance(pair, list) or len(pair) != 2:
-                raise ScenarioError("a random key takes [LOW, HIGH]", location=where, hint="e.g. [-3.14, 3.14]")
+                raise ScenarioError("a random key takes [LOW, HIGH] (or, for a pose or goal, a region)",
+                                    location=where, hint="e.g. [-3.14, 3.14], or {region: [-4, -0.5, 1, 4.5], "
+                                                         "clearance: 0.4}")
             bounds.append(_bounds(pair[0], pair[1], where))
-        axes.append(Axis("random", tuple(randoms), tuple(_at(source, "random", k) for k in randoms),
+            keys.append(key)
+        axes.append(Axis("random", tuple(keys), tuple(_at(source, "random", k) for k in keys),
                          bounds=tuple(bounds)))
     fixed = [(f"{k}={_text(v)}", _at(source, "set", k)) for k, v in _mapping(source, "set").items()]
     where = {k: source.locate_key((k,)) if k in data else Location(file=path) for k in ("samples", "seed")}
@@ -227,7 +238,8 @@ def load_sweep_file(path: Path) -> SweepSpec:
     if name is not None:
         _sweep_name(name, source.locate_key(("name",)))
     return SweepSpec(scenario=scenario, axes=tuple(axes), sets=tuple(fixed), samples=_int(source, "samples"),
-                     seed=_int(source, "seed"), name=name or path.stem, sweep_file=path, where=where)
+                     seed=_int(source, "seed"), name=name or path.stem, sweep_file=path, where=where,
+                     free=tuple(free))
 
 
 def _sweep_name(name: Any, where: Location) -> None:

@@ -59,7 +59,8 @@ def test_bundled_scenarios_have_no_sensor_notices():
         plan = prepare(path).plan
         assert sensor_notices(plan) == [], path.name
         # The bundled robot's sensors are opt-in: only a robot given xacro args (house_patrol's lidar) has any.
-        opted = {r["name"] for r in yaml.safe_load(path.read_text())["robots"] if r.get("args")}
+        robots = yaml.safe_load(path.read_text())["robots"]
+        opted = {r["name"] for r in robots if r.get("args") or r.get("description", "mobot") != "mobot"}
         assert all(not r.sensors or r.name in opted for r in plan.robots), path.name
 
 
