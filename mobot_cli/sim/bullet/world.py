@@ -363,7 +363,8 @@ class World:
             from mobot_cli.sim.sensing.rig import Sensing  # worlds without sensors never load it
 
             self._sensing = Sensing(self._cid, self.plan, self.seed, self.physics.dt, self.physics.gravity,
-                                    self.label, lambda: [r.body for r in self._robots.values()])
+                                    self.label, lambda: [r.body for r in self._robots.values()],
+                                    self.physics.renderer, self.notices, lambda: self._steps)
         return self._sensing
 
     def _hit_name(self, other) -> str:
@@ -409,6 +410,10 @@ class World:
     def close(self) -> None:
         """Let go of the PyBullet client (see clients.keep_clients); the world is unusable afterwards."""
         if self._cid >= 0:
+            if self._sensing is not None:
+                if self._sensing.changed_scene:
+                    self._pristine = False  # the EGL renderer's visual twins are in it
+                self._sensing.close()
             stage = Stage((self.physics, self.plan), self._statics, self._solids, self._ground, self._probes,
                           self._names) if self._pristine else None
             release(self._cid, stage, [robot.body for robot in self._robots.values()])

@@ -17,6 +17,7 @@ gives the same readings.
 * imu: orientation of the sensor frame in the world (REP 145), angular velocity in the sensor
   frame, and linear acceleration as a real IMU measures it (specific force: +9.81 m/s^2 up at
   rest), averaged over the time since the previous reading;
+* camera, depth, rgbd: an ImageData rendered when first read (sim/sensing/camera.py);
 * contact: PyBullet's contact points of the sensor's link with anything but what the robot
   stands on (a contact whose normal points steeply up into the link, as sim/contacts.py).
 """
@@ -37,7 +38,7 @@ from mobot_cli.sim.contacts import CONTACT_SLOP, SUPPORT_NORMAL_Z
 from mobot_cli.sim.pb import p
 from mobot_cli.sim.sensing import lidar
 
-KINDS = ("lidar", "range", "imu", "contact")
+KINDS = ("lidar", "range", "imu", "contact", "camera", "depth", "rgbd")
 # Scans waiting to be cast (ScanData): at most this many, and this many rays (a VLP-16 scan
 # has 30,000), so readers that never read still see memory stay flat.
 MAX_WAITING_SCANS = 50  # a chunk of the .npy (record/sensor_files.py) reads them all at once
@@ -180,7 +181,8 @@ class Sensing:
     """Every sensor of the robots in one world; ``read`` computes the readings due."""
 
     def __init__(self, cid: int, world: WorldPlan, seed: int, dt: float, gravity: tuple[float, float, float],
-                 label: Callable[[int], str], robot_bodies: Callable[[], list[int]]):
+                 label: Callable[[int], str], robot_bodies: Callable[[], list[int]],
+                 renderer: str = "auto", notices: list[str] | None = None, step_now: Callable[[], int] | None = None):
         self.cid, self.world, self.seed, self.dt = cid, world, seed, dt
         self.gravity = np.array(gravity, dtype=float)
         self.label = label  # body id -> what messages call it
@@ -189,6 +191,29 @@ class Sensing:
         self._scene = None
         self._scene_built = False
         self._waiting: _Waiting | None | bool = None  # False: no scene to wait for (PyBullet casts)
+        self.renderer, self.notices, self.step_now = renderer, notices if notices is not None else [], step_now
+        self._cameras = None  # sim/sensing/camera.py's Cameras, made for the first camera
+
+    def close(self) -> None:
+        """Let go of the renderer (the world is closing)."""
+        if self._cameras is not None:
+            self._cameras.close()
+
+    @property
+    def changed_scene(self) -> bool:
+        """Bodies were added to the PyBullet world for a renderer (its EGL plugin's visual twins)."""
+        cameras = self._cameras
+        return cameras is not None and cameras.changed_scene
+
+    @property
+    def cameras(self):
+        """What renders this world's camera images (made at the first camera reading)."""
+        if self._cameras is None:
+            from mobot_cli.sim.sensing.camera import Cameras  # worlds without cameras never load it
+
+            self._cameras = Cameras(self.cid, self.world, self.renderer, self.notices,
+                                    self.step_now or (lambda: -1))
+        return self._cameras
 
     def add(self, name: str, body: int, links: dict[str, int], sensors: tuple[SensorSpec, ...]) -> None:
         """Mount a robot's sensors; SpawnError for a sensor on a link the robot lacks."""
@@ -244,6 +269,10 @@ class Sensing:
                 scans.append((rig, data))
             elif rig.spec.kind == "imu":
                 data = self._imu(step, rig, position, quat)
+            elif rig.spec.kind in ("camera", "depth", "rgbd"):
+                from mobot_cli.sim.sensing.camera import ImageData
+
+                data = ImageData(self.cameras, rig.spec, rig.rng, step, position, quat)
             else:
                 data = self._contacts(rig)
             out.append(data)
