@@ -35,6 +35,9 @@ from mobot_cli.plan import SensorSpec, WorldPlan
 from mobot_cli.sim.pb import p
 
 RENDERERS = ("auto", "tiny", "egl")
+# The depth buffer where nothing was drawn: 1 as float32 keeps it, less 2 ulps (TinyRenderer
+# leaves 0.9999999); a surface just inside the far clip stays below (1 - d is ~1e-5 at 0.99 far).
+CLEARED = float(np.float32(1.0) - 2 * np.finfo(np.float32).epsneg)
 LUMA = np.array([0.299, 0.587, 0.114], dtype=np.float32)  # mono8 from RGB (ITU-R BT.601)
 
 
@@ -128,7 +131,7 @@ class Renderer:
         buffer = np.asarray(out[3], dtype=np.float64).reshape(h, w)
         with np.errstate(divide="ignore"):
             depth = far * near / (far - (far - near) * buffer)
-        depth[(buffer >= 1.0) | (depth > far)] = np.inf
+        depth[(buffer >= CLEARED) | (depth > far)] = np.inf
         return np.ascontiguousarray(rgb), depth.astype(np.float32)
 
 
