@@ -54,7 +54,7 @@ def file_stem(sensor: str) -> str:
 def sensor_file(key: str, spec: SensorSpec) -> str:
     """The run-folder path of a sensor's readings, relative to the folder."""
     if spec.kind in ("camera", "depth", "rgbd"):
-        return f"sensors/{file_stem(key)}/{file_stem(spec.name)}"
+        return f"sensors/{file_stem(key)}/{file_stem(spec.name)}/frames.csv"  # beside its frames
     return f"sensors/{file_stem(key)}/{file_stem(spec.name)}.{'npy' if spec.kind == 'lidar' else 'csv'}"
 
 
@@ -191,7 +191,7 @@ class SensorFilesSink(Sink):
     def _open(self, key: str, spec: SensorSpec) -> NpyRows | _CsvRows | CameraFrames:
         path = self.out_dir / sensor_file(key, spec)
         if spec.kind in ("camera", "depth", "rgbd"):
-            return CameraFrames(path, camera_files.describe(key, self.robots[key], spec, self.rate))
+            return CameraFrames(path.parent, camera_files.describe(key, self.robots[key], spec, self.rate))
         path.parent.mkdir(parents=True, exist_ok=True)
         if spec.kind == "lidar":
             # Written whole at the first reading, not fsynced (summary.json is the record that is).
