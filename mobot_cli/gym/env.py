@@ -35,11 +35,11 @@ import numpy as np
 from gymnasium import spaces
 
 from mobot_cli.api import RobotState, Scan, Simulation, Status
-from mobot_cli.api.numbers import bounded
 from mobot_cli.api.cameras import pick_camera
+from mobot_cli.api.numbers import bounded
 from mobot_cli.api.sensors import pick, robot_plan
-from mobot_cli.gym.camera import camera_observation, camera_space
 from mobot_cli.errors import SimulationFault, UsageError
+from mobot_cli.gym.camera import camera_observation, camera_space
 from mobot_cli.scenario.limits import (
     MAX_ANGULAR_SPEED,
     MAX_COORDINATE,

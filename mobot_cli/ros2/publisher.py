@@ -236,7 +236,8 @@ class RecordPublisher:
             from mobot_cli.ros.camera_cdr import camera_info
 
             frame = robot.messages.sensor_frames[reading.sensor.name].frame
-            self._write(writers["camera_info"], camera_info(stamp_of(reading.step, self.rate)[1], frame, reading.sensor))
+            stamp = stamp_of(reading.step, self.rate)[1]
+            self._write(writers["camera_info"], camera_info(stamp, frame, reading.sensor))
 
     def _write(self, writer: dds.Writer, data: bytes) -> None:
         if writer.write(data):
@@ -281,8 +282,9 @@ class RecordPublisher:
         namespace = robot.namespace
         self.statics.pop(name, None)
         plan = robot.messages.plan
-        sensors = {sensor_topics.topic(plan, spec) for spec in plan.sensors if spec.kind not in sensor_topics.CAMERA_KINDS}
-        sensors |= {name for spec in plan.sensors if spec.kind in sensor_topics.CAMERA_KINDS
+        cameras = sensor_topics.CAMERA_KINDS
+        sensors = {sensor_topics.topic(plan, spec) for spec in plan.sensors if spec.kind not in cameras}
+        sensors |= {name for spec in plan.sensors if spec.kind in cameras
                     for name in sensor_topics.camera_topics(plan, spec).values()}
         self.topics.drop(*(names.join(namespace, t) for t in ("odom", "joint_states", "robot_description", "cmd_vel")),
                          *sensors)

@@ -84,7 +84,8 @@ class Renderer:
         why = "physics.renderer: tiny" if wanted == "tiny" else "no GPU found"
         if wanted == "egl" or (wanted == "auto" and gpu_present()):
             self.plugin = self._load_egl()
-            why = "its EGL plugin did not load" + (", although physics.renderer asks for egl" if wanted == "egl" else "")
+            why = "its EGL plugin did not load" + (", although physics.renderer asks for egl"
+                                                   if wanted == "egl" else "")
         if self.plugin >= 0:
             self.name = "egl"
             _visual_twins(cid, world)
