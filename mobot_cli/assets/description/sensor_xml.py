@@ -173,7 +173,9 @@ class SensorXml:
         """Image size, format, horizontal field of view, clip planes and noise of a camera
         (``<camera>``), with SDFormat's defaults (camera.sdf: 320 x 240 R8G8B8, 1.047 rad,
         clip 0.1 .. 100 m); the topic is its plugin's ``<camera_name>`` (gazebo_ros publishes
-        ``CAMERA_NAME/image_raw``), gz's ``<topic>``, else the sensor's name."""
+        ``CAMERA_NAME/image_raw``), gz's ``<topic>`` (without a last ``/image_raw``: the images
+        go there), else the sensor's name. Without ``<update_rate>``, a ROS 1 plugin's
+        ``<updateRate>`` sets the rate, as gazebo_ros_openni_kinect and gazebo_ros_camera do."""
         mean, stddev = self.noise("camera/noise", "gaussian")
         values = dict(width=self.integer("camera/image/width", 320), height=self.integer("camera/image/height", 240),
                       image_format=self.text("camera/image/format") or "R8G8B8",
@@ -184,7 +186,14 @@ class SensorXml:
         if self.plugin is not None:
             name = (self.plugin.findtext("camera_name") or self.plugin.findtext("cameraName") or "").strip()
         name = clean_topic(name) or (self.text("topic") if self.text("topic") not in _UNSET else "")
-        values["topic"] = clean_topic(name) or clean_topic(self.name)
+        name = clean_topic(name)
+        values["topic"] = (name.removesuffix("image_raw").rstrip("/") if name != "image_raw" else "") \
+            or clean_topic(self.name)
+        if not self.text("update_rate") and self.plugin is not None:
+            for tag in ("updateRate", "update_rate"):
+                if (self.plugin.findtext(tag) or "").strip():
+                    values["rate_hz"] = self.plugin_number(tag, 0.0)
+                    break
         return values
 
     def plugin_number(self, tag: str, default: float) -> float:

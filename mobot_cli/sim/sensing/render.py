@@ -146,8 +146,10 @@ def encode(rgb: np.ndarray, encoding: str) -> np.ndarray:
 
 
 def image_noise(rgb: np.ndarray, mean: float, stddev: float, rng: np.random.Generator) -> np.ndarray:
-    """Gazebo's gaussian image noise: on each pixel value in [0, 1], clamped."""
-    noisy = rgb.astype(np.float32) + (rng.normal(mean, stddev, rgb.shape) * 255.0).astype(np.float32)
+    """Gazebo's gaussian image noise: one value per pixel, added to each of its channels in [0, 1],
+    clamped."""
+    noise = (rng.normal(mean, stddev, rgb.shape[:2]) * 255.0).astype(np.float32)
+    noisy = rgb.astype(np.float32) + noise[:, :, None]
     return np.clip(np.rint(noisy), 0, 255).astype(np.uint8)
 
 
