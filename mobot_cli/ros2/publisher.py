@@ -221,6 +221,12 @@ class RecordPublisher:
         if writer is not None and writer.readers:
             self._write(writer, robot.messages.reading(stamp_of(reading.step, self.rate)[1], reading))
 
+    def wants_image(self, reading: Reading) -> bool:
+        """A camera reading whose image or depth topic has a reader now (it must be rendered at its step)."""
+        robot = self.robots.get(reading.robot)
+        writers = robot.cameras.get(reading.sensor.name) if robot is not None else None
+        return bool(writers) and any(w.readers for role, w in writers.items() if role != "camera_info")
+
     def _camera(self, robot: _Robot, reading: Reading) -> None:
         from mobot_cli.ros import camera_cdr
 

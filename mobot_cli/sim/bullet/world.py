@@ -410,10 +410,8 @@ class World:
     def close(self) -> None:
         """Let go of the PyBullet client (see clients.keep_clients); the world is unusable afterwards."""
         if self._cid >= 0:
-            if self._sensing is not None:
-                if self._sensing.changed_scene:
-                    self._pristine = False  # the EGL renderer's visual twins are in it
-                self._sensing.close()
+            if self._sensing is not None and self._sensing.release():
+                self._pristine = False  # the EGL renderer's visual twins are in it
             stage = Stage((self.physics, self.plan), self._statics, self._solids, self._ground, self._probes,
                           self._names) if self._pristine else None
             release(self._cid, stage, [robot.body for robot in self._robots.values()])

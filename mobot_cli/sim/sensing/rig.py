@@ -5,8 +5,7 @@ the readings due at a step (each sensor at its own rate), and every lidar due at
 is cast in one batch (sim/sensing/lidar.py). With one robot in the world only the static world can
 be in a scan's way: the scan keeps its pose and waits, and the waiting scans are cast
 together when one of them is first read (``ScanData.ranges``) or 50 wait. Noise comes from a
-generator per sensor, seeded by the run's seed and the robot's and sensor's names: the same seed
-gives the same readings.
+generator per sensor, seeded by the run's seed and the robot's and sensor's names.
 
 * lidar: ranges (m, float32) on Gazebo's beam grid, +inf for no return, with gaussian noise
   and range quantisation as the ``<ray>`` block asks, clamped to [range_min, range_max];
@@ -194,25 +193,19 @@ class Sensing:
         self.renderer, self.notices, self.step_now = renderer, notices if notices is not None else [], step_now
         self._cameras = None  # sim/sensing/camera.py's Cameras, made for the first camera
 
-    def close(self) -> None:
-        """Let go of the renderer (the world is closing)."""
-        if self._cameras is not None:
-            self._cameras.close()
-
-    @property
-    def changed_scene(self) -> bool:
-        """Bodies were added to the PyBullet world for a renderer (its EGL plugin's visual twins)."""
-        cameras = self._cameras
-        return cameras is not None and cameras.changed_scene
+    def release(self) -> bool:
+        """Let go of the renderer (the world is closing); True when it added bodies to the world."""
+        cameras, self._cameras = self._cameras, None
+        if cameras is not None:
+            cameras.close()
+        return cameras is not None and cameras.changed_scene  # the EGL plugin's visual twins
 
     @property
     def cameras(self):
         """What renders this world's camera images (made at the first camera reading)."""
         if self._cameras is None:
             from mobot_cli.sim.sensing.camera import Cameras  # worlds without cameras never load it
-
-            self._cameras = Cameras(self.cid, self.world, self.renderer, self.notices,
-                                    self.step_now or (lambda: -1))
+            self._cameras = Cameras(self.cid, self.world, self.renderer, self.notices, self.step_now or (lambda: -1))
         return self._cameras
 
     def add(self, name: str, body: int, links: dict[str, int], sensors: tuple[SensorSpec, ...]) -> None:
@@ -271,7 +264,6 @@ class Sensing:
                 data = self._imu(step, rig, position, quat)
             elif rig.spec.kind in ("camera", "depth", "rgbd"):
                 from mobot_cli.sim.sensing.camera import ImageData
-
                 data = ImageData(self.cameras, rig.spec, rig.rng, step, position, quat)
             else:
                 data = self._contacts(rig)
@@ -363,7 +355,6 @@ class Sensing:
                 continue  # what it stands on
             found.append(Contact(self.label(other), tuple(c[5]), tuple(normal), max(0.0, -c[8]), float(c[9])))
         return ContactData(tuple(found))
-
 
 
 def _aabb(cid: int, body: int) -> tuple[np.ndarray, np.ndarray]:
