@@ -194,3 +194,12 @@ def test_the_egl_renderer_sees_the_box_where_tiny_does(seen, tmp_path, capfd):
     box = np.abs(tiny.depth - 2.85) < 0.3
     assert np.isfinite(image.depth[box]).mean() > 0.97
     assert np.median(np.abs(image.depth[box] - tiny.depth[box])) < 0.02
+
+
+def test_a_live_reading_of_a_camera_gives_its_intrinsics_not_its_pixels(seen):
+    from mobot_cli.live.readings import reading_fields
+
+    reading, _, robot = seen
+    fields = reading_fields(robot, reading, 240)
+    assert (fields["kind"], fields["width"], fields["height"], fields["encoding"]) == ("rgbd", 160, 120, "rgb8")
+    assert fields["cx"] == 79.5 and fields["topic"] == "/r/front" and "image" not in fields
