@@ -22,7 +22,6 @@ LASER_SCAN, POINT_CLOUD2 = "sensor_msgs/msg/LaserScan", "sensor_msgs/msg/PointCl
 IMU, CONTACTS_STATE = "sensor_msgs/msg/Imu", "gazebo_msgs/msg/ContactsState"
 RANGE = "sensor_msgs/msg/Range"
 IMAGE, CAMERA_INFO = "sensor_msgs/msg/Image", "sensor_msgs/msg/CameraInfo"  # cameras (docs/cameras.md)
-COMPRESSED_IMAGE = "sensor_msgs/msg/CompressedImage"
 OCCUPANCY_GRID = "nav_msgs/msg/OccupancyGrid"  # /map (ros2/map_topic.py)
 PARTICIPANT_ENTITIES_INFO = "rmw_dds_common/msg/ParticipantEntitiesInfo"
 SEPARATOR = "=" * 80 + "\n"
@@ -351,19 +350,6 @@ MESSAGES: dict[str, tuple[str, str]] = {
         'uint32 width\n'
         'bool do_rectify\n',
         "RIHS01_b3dfd68ff46c9d56c80fd3bd4ed22c7a4ddce8c8348f2f59c299e73118e7e275"),
-    "sensor_msgs/msg/CompressedImage": (
-        'std_msgs/Header header\n'
-        'string format\n'
-        'uint8[] data\n'
-        '================================================================================\n'
-        'MSG: std_msgs/Header\n'
-        'builtin_interfaces/Time stamp\n'
-        'string frame_id\n'
-        '================================================================================\n'
-        'MSG: builtin_interfaces/Time\n'
-        'int32 sec\n'
-        'uint32 nanosec\n',
-        "RIHS01_15640771531571185e2efc8a100baf923961a4d15d5569652e6cb6691e8e371a"),
     "rmw_dds_common/msg/ParticipantEntitiesInfo": (
         "rmw_dds_common/Gid gid\n"
         "rmw_dds_common/NodeEntitiesInfo[] node_entities_info_seq\n"

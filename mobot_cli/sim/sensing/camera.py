@@ -34,7 +34,8 @@ class Cameras:
 
     @property
     def changed_scene(self) -> bool:
-        return self._renderer is not None and self._renderer.name == "egl"
+        """The renderer added its rendering bodies to the world (sim/sensing/render.py)."""
+        return self._renderer is not None
 
     @property
     def renderer(self) -> render.Renderer:

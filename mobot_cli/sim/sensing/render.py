@@ -6,6 +6,13 @@
 * ``egl``: PyBullet's eglRendererPlugin (OpenGL through EGL: a GPU's driver, or Mesa's llvmpipe
   without one). It draws visual shapes only, so the world's collision-only bodies get visual twins
   without collision (``_visual_twins``) when it is chosen.
+
+TinyRenderer draws the ground as a visual-only grid of FLOOR_CELLS x FLOOR_CELLS squares,
+FLOOR_SIZE m across, centred near the world's origin, in place of the ground plane (whose own
+drawing is made transparent): it draws PyBullet's infinite plane in ~40 ms a 320 x 240 frame (its
+triangles reach behind the camera), the grid in ~5 ms (measured here). EGL draws a flat box
+there (a mesh body made after its plugin loaded crashes PyBullet 3.2.7). The rendering bodies have
+no collision shape, so rays, contacts and physics never meet them.
 * ``auto``: egl when a GPU's render node is there (/dev/dri/renderD*) and the plugin loads, else
   tiny: on CPUs alone, Mesa's llvmpipe behind EGL is no faster than TinyRenderer (bench/README.md).
 
@@ -35,6 +42,11 @@ from mobot_cli.plan import SensorSpec, WorldPlan
 from mobot_cli.sim.pb import p
 
 RENDERERS = ("auto", "tiny", "egl")
+FLOOR_CELLS, FLOOR_SIZE = 16, 512.0  # m: the ground as cameras see it ends 256 m from the origin
+FLOOR_RGBA = (0.6, 0.6, 0.6, 1.0)
+# TinyRenderer drops the whole grid from a camera exactly above one of its vertices (measured): the
+# grid is shifted off round coordinates, where robots are placed and move along the axes.
+FLOOR_SHIFT = (0.3183099, 0.2718282)
 # The depth buffer where nothing was drawn: 1 as float32 keeps it, less 2 ulps (TinyRenderer
 # leaves 0.9999999); a surface just inside the far clip stays below (1 - d is ~1e-5 at 0.99 far).
 CLEARED = float(np.float32(1.0) - 2 * np.finfo(np.float32).epsneg)
@@ -91,6 +103,7 @@ class Renderer:
             _visual_twins(cid, world)
             self.notice = "cameras render with PyBullet's EGL plugin (OpenGL)"
         else:
+            _floor(cid)
             self.notice = f"cameras render with PyBullet's TinyRenderer (software; {why})"
 
     def _load_egl(self) -> int:
@@ -174,9 +187,41 @@ def _visual_twins(cid: int, world: WorldPlan) -> None:
             p.createMultiBody(0.0, -1, visual, basePosition=body.xyz, baseOrientation=body.quat,
                               useMaximalCoordinates=True, physicsClientId=cid)
     if world.ground_plane:
-        floor = p.createVisualShape(p.GEOM_BOX, halfExtents=(500.0, 500.0, 0.001), rgbaColor=(0.6, 0.6, 0.6, 1.0),
+        floor = p.createVisualShape(p.GEOM_BOX, halfExtents=(500.0, 500.0, 0.001), rgbaColor=FLOOR_RGBA,
                                     visualFramePosition=(0.0, 0.0, -0.001), physicsClientId=cid)
         p.createMultiBody(0.0, -1, floor, physicsClientId=cid)
+
+
+def _floor(cid: int) -> None:
+    """Every horizontal plane body drawn as a grid (see the module) at its height."""
+    for index in range(p.getNumBodies(physicsClientId=cid)):
+        uid = p.getBodyUniqueId(index, physicsClientId=cid)
+        try:
+            with _quiet():  # PyBullet prints its failure on stdout
+                shapes = p.getCollisionShapeData(uid, -1, physicsClientId=cid)
+        except p.error:  # a robot's base without a collision shape
+            continue
+        if len(shapes) != 1 or shapes[0][2] != p.GEOM_PLANE:
+            continue
+        position, orientation = p.getBasePositionAndOrientation(uid, physicsClientId=cid)
+        if abs(abs(p.getMatrixFromQuaternion(orientation)[8]) - 1.0) > 1e-9:
+            continue  # a tilted plane keeps its own drawing
+        p.changeVisualShape(uid, -1, rgbaColor=(0.0, 0.0, 0.0, 0.0), physicsClientId=cid)
+        vertices, indices = _grid(FLOOR_CELLS, FLOOR_SIZE / FLOOR_CELLS)
+        visual = p.createVisualShape(p.GEOM_MESH, vertices=vertices, indices=indices, rgbaColor=FLOOR_RGBA,
+                                     physicsClientId=cid)
+        p.createMultiBody(0.0, -1, visual, basePosition=(*FLOOR_SHIFT, position[2]), physicsClientId=cid)
+
+
+def _grid(n: int, cell: float) -> tuple[list, list]:
+    """A flat square mesh of n x n cells facing +z."""
+    vertices = [[(i - n / 2) * cell, (j - n / 2) * cell, 0.0] for i in range(n + 1) for j in range(n + 1)]
+    indices = []
+    for i in range(n):
+        for j in range(n):
+            a = i * (n + 1) + j
+            indices += [a, a + n + 1, a + 1, a + 1, a + n + 1, a + n + 2]
+    return vertices, indices
 
 
 def _visual_args(shape) -> dict | None:
