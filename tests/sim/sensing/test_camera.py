@@ -203,3 +203,18 @@ def test_a_live_reading_of_a_camera_gives_its_intrinsics_not_its_pixels(seen):
     fields = reading_fields(robot, reading, 240)
     assert (fields["kind"], fields["width"], fields["height"], fields["encoding"]) == ("rgbd", 160, 120, "rgb8")
     assert fields["cx"] == 79.5 and fields["topic"] == "/r/front" and "image" not in fields
+
+
+@pytest.mark.parametrize("engine", ["bullet", "kinematic"])
+def test_robots_see_each_other(tmp_path, engine):
+    """A second robot spawned 1.2 m ahead fills the bottom middle of the image at its distance."""
+    with Simulation.open(scenario(tmp_path, engine=engine)) as sim:
+        sim.step(24)
+        before = sim.image("r").depth.copy()
+        sim.spawn("other", "mobot", x=1.2, y=0.0, yaw=math.pi)
+        sim.step(24)
+        after = sim.image("r").depth
+    rows, cols = np.nonzero(~np.isclose(after, before, atol=0.05, rtol=0.0))
+    assert len(rows) > 100 and abs(cols.mean() - 79.5) < 10  # straight ahead
+    # its chassis's nearest face (0.1 m ahead of its axle, turned to face us) at ~1.1 m
+    assert np.min(after[rows, cols]) == pytest.approx(1.1, abs=0.05)
