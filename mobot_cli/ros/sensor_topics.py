@@ -27,6 +27,7 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from functools import lru_cache
 
+from mobot_cli.common.transforms import quat_mul
 from mobot_cli.plan import RobotPlan, SensorSpec
 from mobot_cli.ros.definitions import CONTACTS_STATE, IMAGE, IMU, LASER_SCAN, POINT_CLOUD2, RANGE
 
@@ -88,7 +89,7 @@ def sensor_frame(robot: RobotPlan, spec: SensorSpec) -> SensorFrame:
             return SensorFrame(prefix + name)
         own = spec.frame_id if spec.frame_id and spec.frame_id != spec.link else \
             f"{spec.link}_{_UNSAFE.sub('_', spec.name)}_optical"
-        return SensorFrame(prefix + own, prefix + spec.link, spec.xyz, _turned(spec.quat))
+        return SensorFrame(prefix + own, prefix + spec.link, spec.xyz, quat_mul(spec.quat, OPTICAL))
     if name in links and (name != spec.link or at_link):
         return SensorFrame(prefix + name)
     if name in links:  # a pose inside the link: a frame of its own
@@ -109,10 +110,3 @@ def rate_hz(spec: SensorSpec, physics_rate_hz: int) -> float:
     """Readings per simulated second."""
     return physics_rate_hz / max(1, spec.every)
 
-
-def _turned(quat: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
-    """The sensor's orientation followed by OPTICAL (Hamilton product quat * OPTICAL, x y z w)."""
-    x1, y1, z1, w1 = quat
-    x2, y2, z2, w2 = OPTICAL
-    return (w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2, w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-            w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2, w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2)
