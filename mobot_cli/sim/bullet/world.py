@@ -77,14 +77,18 @@ class World:
         if stage is not None:
             self._probes, self._statics, self._solids, self._ground, self._names = \
                 stage.probes, stage.statics, stage.solids, stage.ground, stage.names
-            return
-        self._probes = placement.Probes(self._cid)
-        try:
-            self._build(world)
-        except BaseException:
-            self._pristine = False
-            self.close()
-            raise
+        else:
+            self._probes = placement.Probes(self._cid)
+            try:
+                self._build(world)
+            except BaseException:
+                self._pristine = False
+                self.close()
+                raise
+        if physics.renderer != "tiny":  # EGL draws only the bodies made after its plugin loads: the robots
+            from mobot_cli.sim.sensing.render import preload
+
+            preload(self._cid, physics.renderer)
 
     def reset(self) -> None:
         """Back to the world as built, at step 0, with no robots: PyBullet's own reset, then the
@@ -411,7 +415,11 @@ class World:
         """Let go of the PyBullet client (see clients.keep_clients); the world is unusable afterwards."""
         if self._cid >= 0:
             if self._sensing is not None and self._sensing.release():
-                self._pristine = False  # the EGL renderer's visual twins are in it
+                self._pristine = False  # the renderer's bodies (sim/sensing/render.py) are in it
+            if self.physics.renderer != "tiny":
+                from mobot_cli.sim.sensing.render import discard
+
+                self._pristine = not discard(self._cid) and self._pristine
             stage = Stage((self.physics, self.plan), self._statics, self._solids, self._ground, self._probes,
                           self._names) if self._pristine else None
             release(self._cid, stage, [robot.body for robot in self._robots.values()])

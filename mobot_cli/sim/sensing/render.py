@@ -14,7 +14,12 @@ triangles reach behind the camera), the grid in ~5 ms (measured here). EGL draws
 there (a mesh body made after its plugin loaded crashes PyBullet 3.2.7). The rendering bodies have
 no collision shape, so rays, contacts and physics never meet them.
 * ``auto``: egl when a GPU's render node is there (/dev/dri/renderD*) and the plugin loads, else
-  tiny: on CPUs alone, Mesa's llvmpipe behind EGL is no faster than TinyRenderer (bench/README.md).
+  tiny, which needs nothing.
+
+The EGL plugin draws only the bodies made after it loaded, so a World asking for it loads it
+once its static world is built (``preload``; PyBullet 3.2.7 crashes making a body without a visual
+shape while it is loaded), before any robot, and lets it go as it closes (``discard``); the
+Renderer made at the first image takes it over.
 
 The EGL plugin prints its GL versions and more on stdout from C; those prints are sent to
 /dev/null (C's buffers flushed there) so that `--json` output stays JSON.
@@ -86,6 +91,35 @@ def _fflush() -> None:
         pass
 
 
+_PRELOADED: dict[int, int] = {}  # client -> the EGL plugin loaded for it, not yet taken by a Renderer
+
+
+def preload(cid: int, wanted: str) -> None:
+    """At a world's start: load the EGL plugin when ``wanted`` is egl, or auto with a GPU."""
+    if wanted == "egl" or (wanted == "auto" and gpu_present()):
+        _PRELOADED[cid] = _load_egl(cid)
+
+
+def discard(cid: int) -> bool:
+    """At a world's close: unload a plugin no Renderer took; whether one was loaded."""
+    plugin = _PRELOADED.pop(cid, -1)
+    if plugin >= 0:
+        with _quiet():
+            p.unloadPlugin(plugin, physicsClientId=cid)
+    return plugin >= 0
+
+
+def _load_egl(cid: int) -> int:
+    spec = importlib.util.find_spec("eglRenderer")
+    if spec is None or spec.origin is None:
+        return -1
+    with _quiet():  # the plugin prints its EGL and GL versions
+        try:
+            return p.loadPlugin(spec.origin, "_eglRendererPlugin", physicsClientId=cid)
+        except p.error:
+            return -1
+
+
 class Renderer:
     """The renderer of one PyBullet client, chosen at its first image (``notice`` says which)."""
 
@@ -95,7 +129,7 @@ class Renderer:
         self.plugin = -1
         why = "physics.renderer: tiny" if wanted == "tiny" else "no GPU found"
         if wanted == "egl" or (wanted == "auto" and gpu_present()):
-            self.plugin = self._load_egl()
+            self.plugin = _PRELOADED.pop(cid, -1)
             why = "its EGL plugin did not load" + (", although physics.renderer asks for egl"
                                                    if wanted == "egl" else "")
         if self.plugin >= 0:
@@ -105,16 +139,6 @@ class Renderer:
         else:
             _floor(cid)
             self.notice = f"cameras render with PyBullet's TinyRenderer (software; {why})"
-
-    def _load_egl(self) -> int:
-        spec = importlib.util.find_spec("eglRenderer")
-        if spec is None or spec.origin is None:
-            return -1
-        with _quiet():  # the plugin prints its EGL and GL versions
-            try:
-                return p.loadPlugin(spec.origin, "_eglRendererPlugin", physicsClientId=self.cid)
-            except p.error:
-                return -1
 
     def close(self) -> None:
         """Unload the EGL plugin (it prints as it goes)."""
