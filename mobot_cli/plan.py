@@ -32,6 +32,7 @@ class Physics:
     # "kinematic": robots follow their commanded twist (sim/kinematic/world.py)
     engine: str = "bullet"
     faults: FaultLimits = FaultLimits()  # checked by the World, so every door gets them
+    renderer: str = "auto"  # cameras: "auto" | "tiny" | "egl" (sim/sensing/render.py)
 
     @property
     def dt(self) -> float:
@@ -166,7 +167,7 @@ class SensorSpec:
     """
 
     name: str  # the <sensor name>, unique within the robot
-    kind: str  # "lidar" | "range" | "imu" | "contact"
+    kind: str  # "lidar" | "range" | "imu" | "contact" | "camera" | "depth" | "rgbd"
     link: str  # the link it rides on
     every: int  # physics steps between two readings: update_rate rounded to whole steps
     xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)  # pose in the link frame
@@ -186,6 +187,13 @@ class SensorSpec:
     radiation: str = ""  # range: "ultrasound" | "infrared", as sensor_msgs/Range's radiation_type
     field_of_view: float = 0.0  # rad, range: the arc the plugin reports (its rays are the axes')
     reading_noise_stddev: float = 0.0  # m, range: the plugin's gaussian noise on the reading itself
+    # cameras ("camera": RGB, "depth": depth only, "rgbd": both; docs/cameras.md): the image size,
+    # its sensor_msgs/Image encoding ("rgb8", "bgr8", "mono8"); field_of_view is the horizontal
+    # field of view (rad) and range_min/range_max the clip planes (m). The camera looks along the
+    # sensor frame's +x (z up), as Gazebo's; its images are in the optical frame (REP 103).
+    width: int = 0
+    height: int = 0
+    encoding: str = ""
 
 
 @dataclass(frozen=True)

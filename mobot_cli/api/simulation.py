@@ -15,6 +15,7 @@ from typing import Iterable, Mapping
 
 from pydantic import ValidationError
 
+from mobot_cli.api.cameras import CameraImage, Wanted, image_of, pick_camera
 from mobot_cli.api.numbers import bounded
 from mobot_cli.api.sensors import Latest, Range, Scan, pick, range_of, robot_plan
 from mobot_cli.errors import MobotError, SimulationFault, UsageError, did_you_mean
@@ -52,6 +53,8 @@ class Simulation:
             self._timeline.attach(self._goal_record)
             self._latest = Latest(self.plan.physics.rate_hz)  # every sensor's last reading
             self._timeline.attach(self._latest)
+            self._cameras = Wanted()  # cameras asked for: rendered as their frames pass
+            self._timeline.attach(self._cameras)
         except BaseException:
             self._world.close()
             raise
@@ -211,6 +214,25 @@ class Simulation:
         self._sense_now()
         reading = self._latest.get(name, spec.name)
         return None if reading is None else range_of(reading, self._latest.rate_hz)
+
+    def image(self, name: str, camera: str | None = None) -> CameraImage | None:
+        """A camera's latest frame as numpy arrays (``rgb``, ``depth``), None before its first;
+        ``camera`` may be left out when the robot has one. From the first ask on, the camera's
+        frames are rendered as they come (docs/cameras.md)."""
+        self._known(name)
+        spec = pick_camera(name, self._timeline.robots[name].sensors, camera)
+        self._sense_now()
+        self._cameras.cameras.add((name, spec.name))
+        reading = self._latest.get(name, spec.name)
+        if reading is None:
+            return None
+        step, data = reading.step, reading.data
+        if data.rgb is None and data.depth is None:  # its frame passed unrendered: the view now
+            step, data = self.step_count, self._world.sense([(name, spec.name)])[0]
+        from mobot_cli.ros.sensor_topics import sensor_frame
+
+        frame = sensor_frame(self._timeline.robots[name], spec).frame
+        return image_of(name, spec, step, data, self.plan.physics.rate_hz, frame)
 
     def _sense_now(self) -> None:
         """Take the readings due at this step now rather than as the next step begins, so that a

@@ -202,6 +202,11 @@ def sensor_lines(s: dict[str, Any]) -> list[str]:
                   f"noise {s['noise_stddev']:g} + {s['reading_noise_stddev']:g} m")
     elif s["kind"] == "imu":
         detail = f"noise: gyro {s['noise_stddev']:g} rad/s, accel {s['accel_noise_stddev']:g} m/s^2"
+    elif s["kind"] in ("camera", "depth", "rgbd"):
+        what = {"camera": "RGB", "depth": "depth", "rgbd": "RGB-D"}[s["kind"]]
+        detail = (f"{what} {s['width']} x {s['height']} {s['image_format']}, field of view "
+                  f"{s['horizontal_fov']:.3f} rad, clip {s['clip_near']:g}..{s['clip_far']:g} m, "
+                  f"noise {s['noise_stddev']:g}")
     else:
         detail = f"contacts of {s['collision'] or 'the whole link'}"
     frame = f", frame {s['frame_id']}" if s["frame_id"] != s["link"] else ""

@@ -15,7 +15,11 @@ by the goal's distance from the spawn pose (at least 1 m), yaw by pi, speeds by 
 speeds, ranges by the lidar's ``range_max``. ``normalize=False`` keeps SI units. Reward
 and termination are yours to give (callables of a ``StepOutcome``); by default the reward is
 minus the distance to the goal per control period, and an episode ends when the robot is
-within ``goal_tolerance``. Every ``reset`` builds the world afresh, so ``reset(seed=s)``
+within ``goal_tolerance``. ``camera=True`` (or a camera's name) adds the robot's camera to the
+Dict: ``"image"`` uint8 (H, W, 3), or (H, W, 1) for mono8, as Stable-Baselines3's CnnPolicy and
+MultiInputPolicy take images, and for a depth camera ``"depth"`` float32 (H, W, 1) with nothing
+within the far clip as the far clip (divided by it when normalized); the camera renders only
+at its own rate (docs/cameras.md). Every ``reset`` builds the world afresh, so ``reset(seed=s)``
 always starts the same episode, the lidar's noise included.
 """
 
@@ -31,9 +35,11 @@ import numpy as np
 from gymnasium import spaces
 
 from mobot_cli.api import RobotState, Scan, Simulation, Status
+from mobot_cli.api.cameras import pick_camera
 from mobot_cli.api.numbers import bounded
 from mobot_cli.api.sensors import pick, robot_plan
 from mobot_cli.errors import SimulationFault, UsageError
+from mobot_cli.gym.camera import camera_observation, camera_space
 from mobot_cli.scenario.limits import (
     MAX_ANGULAR_SPEED,
     MAX_COORDINATE,
@@ -75,7 +81,7 @@ class MobotEnv(gym.Env):
                  max_angular: float = 2.0, settle: float = 0.5, reward: Optional[Reward] = None,
                  terminated: Optional[Termination] = None, args: Optional[dict[str, str]] = None,
                  scan: bool = True, scan_sensor: Optional[str] = None, out: str | Path | None = None,
-                 normalize: bool = True, holonomic: bool = False):
+                 normalize: bool = True, holonomic: bool = False, camera: bool | str = False):
         self.world, self.description, self.robot = str(world), description, robot
         self.holonomic = holonomic
         # Every number checked here, before a world exists (docs/errors.md "Limits").
@@ -92,7 +98,7 @@ class MobotEnv(gym.Env):
         self.terminated_fn = terminated or (lambda o: o.distance < self.goal_tolerance)
         self.args = dict(args or {})
         self.out = None if out is None else Path(out)  # episode k's run folder: out/episode_000k
-        plan = robot_plan(self.robot, self.description, args=self.args) if scan or holonomic else None
+        plan = robot_plan(self.robot, self.description, args=self.args) if scan or holonomic or camera else None
         if holonomic and (plan.drive is None or plan.drive.kind not in HOLONOMIC):
             kind = f"a {plan.drive.kind} drive" if plan.drive is not None else "no drive"
             raise UsageError(f"holonomic=True: robot '{self.robot}' ({self.description}) has {kind}",
@@ -123,6 +129,10 @@ class MobotEnv(gym.Env):
                 "odom": spaces.Box(-odom, odom, dtype=np.float32),
                 "goal": spaces.Box(-goal, goal, dtype=np.float32),
                 "scan": spaces.Box(0.0, top, (beams,) if rows <= 1 else (rows, beams), np.float32)})
+        self._camera = None
+        if camera:
+            self._camera = pick_camera(self.robot, plan.sensors, camera if isinstance(camera, str) else None)
+            self.observation_space = camera_space(self.observation_space, self._camera, normalize, odom, goal)
         self._low, self._high = tuple(float(v) for v in -high), tuple(float(v) for v in high)
         self._sim: Simulation | None = None
         self._steps_per_action = 0
@@ -150,6 +160,12 @@ class MobotEnv(gym.Env):
         self._goal = self._goal_in_odom()
         scan = self._scan()
         return self._observation(self._sim.state(self.robot), scan), self._info(scan)
+
+    def _observation(self, s: RobotState, scan: Scan | None):
+        obs = self._base_observation(s, scan)
+        if self._camera is None:
+            return obs
+        return camera_observation(obs, self._sim.image(self.robot, self._camera.name), self._camera, self.normalize)
 
     def step(self, action):
         """Hold ``action`` for one control period."""
@@ -219,7 +235,7 @@ class MobotEnv(gym.Env):
             return np.full(self.observation_space["scan"].shape, self._range_max, np.float32)
         return np.minimum(scan.ranges, self._range_max).astype(np.float32)
 
-    def _observation(self, s: RobotState, scan: Scan | None):
+    def _base_observation(self, s: RobotState, scan: Scan | None):
         gx, gy = self._goal
         flat = np.array([s.odom_x, s.odom_y, s.odom_yaw, s.odom_vx, s.odom_wz, gx, gy], dtype=np.float32) / self._scale
         if self._lidar is None:

@@ -14,6 +14,7 @@ from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.plan import RobotPlan
 from mobot_cli.ros import sensor_topics
 from mobot_cli.sim.sensing.lidar import angle_step
+from mobot_cli.sim.sensing.render import intrinsics
 from mobot_cli.timeline.records import Deleted, Reading, Record
 
 
@@ -70,6 +71,10 @@ def reading_fields(robot: RobotPlan, reading: Reading, rate_hz: int) -> dict[str
     elif spec.kind == "imu":
         fields.update(orientation=list(data.orientation), angular_velocity=list(data.angular_velocity),
                       linear_acceleration=list(data.linear_acceleration))
+    elif spec.kind in ("camera", "depth", "rgbd"):  # the pixels go to ROS 2, the run folder and the API
+        fx, fy, cx, cy = intrinsics(spec)
+        fields.update(width=spec.width, height=spec.height, encoding=spec.encoding, fx=fx, fy=fy, cx=cx, cy=cy,
+                      clip_near=spec.range_min, clip_far=spec.range_max)
     else:
         fields["contacts"] = [{"other": c.other, "position": list(c.position), "normal": list(c.normal),
                                "depth": c.depth, "force": c.force} for c in data.contacts]

@@ -112,7 +112,11 @@ class BagSink(Sink):
 
     def reading(self, key: str, reading: Reading) -> None:
         self.pending.append((key, reading))
-        self.waiting_bytes += getattr(reading.data, "nbytes", 64)  # a scan's ranges are cast when written
+        if reading.sensor.kind in sensor_topics.CAMERA_KINDS:  # rendered now, while the world is where it was
+            images = (reading.data.rgb, reading.data.depth)
+            self.waiting_bytes += sum(a.nbytes for a in images if a is not None)
+        else:
+            self.waiting_bytes += getattr(reading.data, "nbytes", 64)  # a scan's ranges are cast when written
         if self.waiting_bytes >= CHUNK_BYTES:
             self._record()
 
@@ -224,11 +228,22 @@ class _RobotTopics:
             self.cmd_vel = sink.topic(f"{ns}/cmd_vel", TWIST)
             self.joint_states = sink.topic(f"{ns}/joint_states", JOINT_STATE)
             self.description = sink.topic(f"{ns}/robot_description", STRING, latched=True)
-        self.sensor_connections = {spec.name: _sensor_topic(sink, plan, spec) for spec in plan.sensors}
+        self.sensor_connections = {spec.name: _sensor_topic(sink, plan, spec) for spec in plan.sensors
+                                   if spec.kind not in sensor_topics.CAMERA_KINDS}
+        self.cameras = {spec.name: _camera_topics(sink, plan, spec) for spec in plan.sensors
+                        if spec.kind in sensor_topics.CAMERA_KINDS}
 
     def write_reading(self, records: Records, reading: Reading, rate: int) -> None:
-        """One sensor reading as its ROS message."""
+        """One sensor reading as its ROS message (a camera's: image, depth image, camera info)."""
         ns, stamp = stamp_of(reading.step, rate)
+        if reading.sensor.name in self.cameras:
+            from mobot_cli.ros import camera_cdr
+
+            spec, connections = reading.sensor, self.cameras[reading.sensor.name]
+            frame = self.messages.sensor_frames[spec.name].frame
+            records.write(ns, [(connections[topic], data) for topic, data in camera_cdr.messages(
+                stamp, frame, spec, reading.data, {role: role for role in connections})])
+            return
         records.write(ns, [(self.sensor_connections[reading.sensor.name], self.messages.reading(stamp, reading))])
 
 
@@ -254,3 +269,15 @@ def _sensor_topic(sink: BagSink, plan: RobotPlan, spec):
     if name not in sink.sensor_topics:
         sink.sensor_topics[name] = sink.topic(name, sensor_topics.message_type(spec))
     return sink.sensor_topics[name]
+
+
+def _camera_topics(sink: BagSink, plan: RobotPlan, spec) -> dict:
+    """A camera's connections by role (image, depth, camera_info), each added once per topic name."""
+    from mobot_cli.ros.definitions import CAMERA_INFO, IMAGE
+
+    out = {}
+    for role, name in sensor_topics.camera_topics(plan, spec).items():
+        if name not in sink.sensor_topics:
+            sink.sensor_topics[name] = sink.topic(name, CAMERA_INFO if role == "camera_info" else IMAGE)
+        out[role] = sink.sensor_topics[name]
+    return out

@@ -35,3 +35,22 @@ def encode_rgb(image) -> bytes:
 
 def _chunk(kind: bytes, body: bytes) -> bytes:
     return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+
+
+def encode_array(array: np.ndarray) -> bytes:
+    """A numpy image as PNG file bytes: uint8 (H, W) grey, uint8 (H, W, 3) RGB or uint16 (H, W)
+    16-bit grey (camera frames, record/camera_files.py); rows Up-filtered as ``encode_rgb``'s."""
+    if array.dtype == np.uint16 and array.ndim == 2:
+        depth, colour, rows = 16, 0, array.astype(">u2").view(np.uint8).reshape(array.shape[0], -1)
+    elif array.dtype == np.uint8 and array.ndim in (2, 3):
+        depth, colour = 8, 0 if array.ndim == 2 else 2
+        rows = array.reshape(array.shape[0], -1)
+    else:
+        raise ValueError(f"encode_array takes uint8 grey or RGB or uint16 grey, not {array.dtype} {array.shape}")
+    height, width = array.shape[:2]
+    data = np.empty((height, rows.shape[1] + 1), dtype=np.uint8)
+    data[:, 0] = UP
+    data[0, 1:] = rows[0]
+    np.subtract(rows[1:], rows[:-1], out=data[1:, 1:])
+    header = struct.pack(">IIBBBBB", width, height, depth, colour, 0, 0, 0)
+    return SIGNATURE + _chunk(b"IHDR", header) + _chunk(b"IDAT", zlib.compress(data, 1)) + _chunk(b"IEND", b"")

@@ -8,7 +8,8 @@
 * range: ``<sensor>.csv``: t, range (m; range_max when nothing is in its field of view);
 * imu: ``<sensor>.csv``: t, qx, qy, qz, qw, wx, wy, wz, ax, ay, az;
 * contact: ``<sensor>.csv``: t, contacts, other, x, y, z, nx, ny, nz, depth, force, one row
-  per contact point (a reading without contact is one row with contacts 0).
+  per contact point (a reading without contact is one row with contacts 0);
+* camera, depth, rgbd: a folder ``<sensor>/`` of PNG frames (record/camera_files.py).
 
 Files stream as readings come: rows are appended in chunks, flushed, and only then does the
 .npy header (fixed size, written first) learn the new row count, so a killed run leaves
@@ -29,6 +30,8 @@ import numpy as np
 
 from mobot_cli.common.numbers import number
 from mobot_cli.plan import Plan, RobotPlan, SensorSpec
+from mobot_cli.record import camera_files
+from mobot_cli.record.camera_files import CameraFrames
 from mobot_cli.ros import sensor_topics
 from mobot_cli.sim.sensing.lidar import angle_step, axis_angles
 from mobot_cli.timeline.records import Reading, Sink
@@ -50,6 +53,8 @@ def file_stem(sensor: str) -> str:
 
 def sensor_file(key: str, spec: SensorSpec) -> str:
     """The run-folder path of a sensor's readings, relative to the folder."""
+    if spec.kind in ("camera", "depth", "rgbd"):
+        return f"sensors/{file_stem(key)}/{file_stem(spec.name)}/frames.csv"  # beside its frames
     return f"sensors/{file_stem(key)}/{file_stem(spec.name)}.{'npy' if spec.kind == 'lidar' else 'csv'}"
 
 
@@ -158,7 +163,7 @@ class SensorFilesSink(Sink):
     def __init__(self, plan: Plan, out_dir: Path):
         self.rate = plan.physics.rate_hz
         self.out_dir = out_dir
-        self.files: dict[tuple[str, str], NpyRows | _CsvRows] = {}
+        self.files: dict[tuple[str, str], NpyRows | _CsvRows | CameraFrames] = {}
         self.robots: dict[str, RobotPlan] = {}
 
     def spawned(self, step: int, key: str, robot: RobotPlan) -> None:
@@ -175,14 +180,18 @@ class SensorFilesSink(Sink):
             target.append(t, data)
         elif spec.kind == "range":
             target.write([[number(t), number(data.range)]])
+        elif spec.kind in ("camera", "depth", "rgbd"):
+            target.append(reading.step, t, data)
         elif spec.kind == "imu":
             target.write([[number(v) for v in (t, *data.orientation, *data.angular_velocity,
                                                 *data.linear_acceleration)]])
         else:
             target.write(_contact_rows(t, data.contacts))
 
-    def _open(self, key: str, spec: SensorSpec) -> NpyRows | _CsvRows:
+    def _open(self, key: str, spec: SensorSpec) -> NpyRows | _CsvRows | CameraFrames:
         path = self.out_dir / sensor_file(key, spec)
+        if spec.kind in ("camera", "depth", "rgbd"):
+            return CameraFrames(path.parent, camera_files.describe(key, self.robots[key], spec, self.rate))
         path.parent.mkdir(parents=True, exist_ok=True)
         if spec.kind == "lidar":
             # Written whole at the first reading, not fsynced (summary.json is the record that is).

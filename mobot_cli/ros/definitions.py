@@ -21,6 +21,7 @@ from dataclasses import dataclass
 LASER_SCAN, POINT_CLOUD2 = "sensor_msgs/msg/LaserScan", "sensor_msgs/msg/PointCloud2"
 IMU, CONTACTS_STATE = "sensor_msgs/msg/Imu", "gazebo_msgs/msg/ContactsState"
 RANGE = "sensor_msgs/msg/Range"
+IMAGE, CAMERA_INFO = "sensor_msgs/msg/Image", "sensor_msgs/msg/CameraInfo"  # cameras (docs/cameras.md)
 OCCUPANCY_GRID = "nav_msgs/msg/OccupancyGrid"  # /map (ros2/map_topic.py)
 PARTICIPANT_ENTITIES_INFO = "rmw_dds_common/msg/ParticipantEntitiesInfo"
 SEPARATOR = "=" * 80 + "\n"
@@ -304,6 +305,51 @@ MESSAGES: dict[str, tuple[str, str]] = {
         "float64 z\n"
         "float64 w\n",
         "RIHS01_8d348150c12913a31ee0ec170fbf25089e4745d17035792a1ba94d6f0bc0cfc7"),
+    "sensor_msgs/msg/Image": (
+        'std_msgs/Header header\n'
+        'uint32 height\n'
+        'uint32 width\n'
+        'string encoding\n'
+        'uint8 is_bigendian\n'
+        'uint32 step\n'
+        'uint8[] data\n'
+        '================================================================================\n'
+        'MSG: std_msgs/Header\n'
+        'builtin_interfaces/Time stamp\n'
+        'string frame_id\n'
+        '================================================================================\n'
+        'MSG: builtin_interfaces/Time\n'
+        'int32 sec\n'
+        'uint32 nanosec\n',
+        "RIHS01_d31d41a9a4c4bc8eae9be757b0beed306564f7526c88ea6a4588fb9582527d47"),
+    "sensor_msgs/msg/CameraInfo": (
+        'std_msgs/Header header\n'
+        'uint32 height\n'
+        'uint32 width\n'
+        'string distortion_model\n'
+        'float64[] d\n'
+        'float64[9] k\n'
+        'float64[9] r\n'
+        'float64[12] p\n'
+        'uint32 binning_x\n'
+        'uint32 binning_y\n'
+        'sensor_msgs/RegionOfInterest roi\n'
+        '================================================================================\n'
+        'MSG: std_msgs/Header\n'
+        'builtin_interfaces/Time stamp\n'
+        'string frame_id\n'
+        '================================================================================\n'
+        'MSG: builtin_interfaces/Time\n'
+        'int32 sec\n'
+        'uint32 nanosec\n'
+        '================================================================================\n'
+        'MSG: sensor_msgs/RegionOfInterest\n'
+        'uint32 x_offset\n'
+        'uint32 y_offset\n'
+        'uint32 height\n'
+        'uint32 width\n'
+        'bool do_rectify\n',
+        "RIHS01_b3dfd68ff46c9d56c80fd3bd4ed22c7a4ddce8c8348f2f59c299e73118e7e275"),
     "rmw_dds_common/msg/ParticipantEntitiesInfo": (
         "rmw_dds_common/Gid gid\n"
         "rmw_dds_common/NodeEntitiesInfo[] node_entities_info_seq\n"

@@ -32,7 +32,7 @@ from mobot_cli.plan import Plan, Ros2Settings
 from mobot_cli.ros2 import inputs, names
 from mobot_cli.sim.holonomic import KINDS as HOLONOMIC
 from mobot_cli.timeline.loop import Timeline
-from mobot_cli.timeline.records import Record, Sample
+from mobot_cli.timeline.records import Reading, Record, Sample
 
 # Records wait and are published together at most this long (wall time): a world stepping in
 # real time sends every sample as it comes (they are 20 ms apart), a fast one sends a few at a
@@ -122,6 +122,8 @@ class Bridge:
             self._thread.start()
 
     def __call__(self, record: Record) -> None:
+        if isinstance(record, Reading) and self._publisher is not None and self._publisher.wants_image(record):
+            record.data.rgb  # noqa: B018 - rendered now, while the world is where the camera saw it
         if not self._threaded:
             self._pending.append(record)
             now = time.monotonic()

@@ -7,7 +7,8 @@ every sample and ``<ns>/robot_description`` once. Each robot's ``<ns>/cmd_vel`` 
 here too, so that the node's endpoints in the graph are always the ones that exist.
 
 Every sensor's readings go out on its bag topic (``<ns>/scan``, ``<ns>/points``, ``<ns>/range``, ``<ns>/imu``,
-``<ns>/bumper``: ros/sensor_topics.py), at the sensor's rate, the bag's bytes
+``<ns>/bumper``, a camera's ``<ns>/<camera>/image_raw``, ``depth/image_raw`` and ``camera_info``:
+ros/sensor_topics.py), at the sensor's rate, the bag's bytes
 (``RobotMessages.reading``), reliable, volatile, keep last 10 as ros_gz_bridge publishes
 them (a reliable writer also serves the best-effort readers nav2 and slam_toolbox make);
 their writers exist from the robot's arrival, so the graph lists them before the first reading.
@@ -20,14 +21,14 @@ use with ROS's default QoS. A record type the timeline does not make yet gets a 
 from __future__ import annotations
 
 import struct
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable
 
 from mobot_cli.errors import MobotError
 from mobot_cli.plan import RobotPlan
 from mobot_cli.ros import sensor_topics
 from mobot_cli.ros.cdr import Packer
-from mobot_cli.ros.definitions import MESSAGES
+from mobot_cli.ros.definitions import CAMERA_INFO, IMAGE, MESSAGES
 from mobot_cli.ros.messages import (
     CLOCK,
     CLOCK_PACKER,
@@ -143,6 +144,7 @@ class _Robot:
     odom: dds.Writer
     joint_states: dds.Writer
     sensors: dict[str, dds.Writer]  # sensor name -> the writer of its topic
+    cameras: dict[str, dict[str, dds.Writer]] = field(default_factory=dict)  # camera -> role -> writer
 
 
 class RecordPublisher:
@@ -209,11 +211,39 @@ class RecordPublisher:
                 write(self.tf, packer.pack(tf_values))
 
     def reading(self, reading: Reading) -> None:
-        """A sensor reading on its bag topic, built only while someone reads it."""
+        """A sensor reading on its bag topic, built only while someone reads it (a camera's image
+        is rendered only then: sim/sensing/camera.py)."""
         robot = self.robots.get(reading.robot)
+        if robot is not None and reading.sensor.name in robot.cameras:
+            self._camera(robot, reading)
+            return
         writer = robot.sensors.get(reading.sensor.name) if robot is not None else None
         if writer is not None and writer.readers:
             self._write(writer, robot.messages.reading(stamp_of(reading.step, self.rate)[1], reading))
+
+    def wants_image(self, reading: Reading) -> bool:
+        """A camera reading whose image or depth topic has a reader now (it must be rendered at its step)."""
+        robot = self.robots.get(reading.robot)
+        writers = robot.cameras.get(reading.sensor.name) if robot is not None else None
+        return bool(writers) and any(w.readers for role, w in writers.items() if role != "camera_info")
+
+    def _camera(self, robot: _Robot, reading: Reading) -> None:
+        from mobot_cli.ros import camera_cdr
+
+        writers = {role: w for role, w in robot.cameras[reading.sensor.name].items() if w.readers}
+        if set(writers) - {"camera_info"}:  # camera_info alone needs no image
+            frame = robot.messages.sensor_frames[reading.sensor.name].frame
+            stamp = stamp_of(reading.step, self.rate)[1]
+            for role, data in camera_cdr.messages(stamp, frame, reading.sensor, reading.data,
+                                                  {role: role for role in robot.cameras[reading.sensor.name]}):
+                if role in writers:
+                    self._write(writers[role], data)
+        elif writers:
+            from mobot_cli.ros.camera_cdr import camera_info
+
+            frame = robot.messages.sensor_frames[reading.sensor.name].frame
+            stamp = stamp_of(reading.step, self.rate)[1]
+            self._write(writers["camera_info"], camera_info(stamp, frame, reading.sensor))
 
     def _write(self, writer: dds.Writer, data: bytes) -> None:
         if writer.write(data):
@@ -232,10 +262,14 @@ class RecordPublisher:
             return
         messages = RobotMessages(plan, state)
         sensors = {spec.name: self.topics.writer(sensor_topics.topic(plan, spec), sensor_topics.message_type(spec))
-                   for spec in plan.sensors}
+                   for spec in plan.sensors if spec.kind not in sensor_topics.CAMERA_KINDS}
+        cameras = {spec.name: {role: self.topics.writer(name, CAMERA_INFO if role == "camera_info" else IMAGE)
+                               for role, name in sensor_topics.camera_topics(plan, spec).items()}
+                   for spec in plan.sensors if spec.kind in sensor_topics.CAMERA_KINDS}
         self.robots[plan.name] = _Robot(messages, namespace,
                                         self.topics.writer(names.join(namespace, "odom"), ODOMETRY),
-                                        self.topics.writer(names.join(namespace, "joint_states"), JOINT_STATE), sensors)
+                                        self.topics.writer(names.join(namespace, "joint_states"), JOINT_STATE), sensors,
+                                        cameras)
         self.topics.publish(names.join(namespace, "robot_description"), STRING, messages.description(), dds.LATCHED)
         statics = messages.statics(state)
         self.statics[plan.name] = statics if self.world_frame else statics[1:]
@@ -253,7 +287,11 @@ class RecordPublisher:
         robot = self.robots.pop(name)
         namespace = robot.namespace
         self.statics.pop(name, None)
-        sensors = {sensor_topics.topic(robot.messages.plan, spec) for spec in robot.messages.plan.sensors}
+        plan = robot.messages.plan
+        cameras = sensor_topics.CAMERA_KINDS
+        sensors = {sensor_topics.topic(plan, spec) for spec in plan.sensors if spec.kind not in cameras}
+        sensors |= {name for spec in plan.sensors if spec.kind in cameras
+                    for name in sensor_topics.camera_topics(plan, spec).values()}
         self.topics.drop(*(names.join(namespace, t) for t in ("odom", "joint_states", "robot_description", "cmd_vel")),
                          *sensors)
         self.publish_statics(stamp_of(self.clock_step if self.clock_step >= 0 else 0, self.rate)[1])

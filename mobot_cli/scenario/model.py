@@ -74,6 +74,7 @@ class PhysicsSpec(Strict):
     gravity: Annotated[Vector3, AfterValidator(gravity_length)] = (0.0, 0.0, -9.81)
     solver_iterations: Annotated[Int, Field(gt=0, le=1000)] = 50
     engine: Annotated[str, AfterValidator(check_engine)] = "bullet"
+    renderer: Literal["auto", "tiny", "egl"] = "auto"  # cameras (docs/cameras.md)
 
 
 class FaultsSpec(Strict):

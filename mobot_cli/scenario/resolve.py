@@ -42,7 +42,7 @@ def resolve(scenario: Scenario, source: Source) -> Plan:
                          max_speed=given.max_speed, odom_tolerance=given.odom_tolerance)
     physics = Physics(rate_hz=rate, gravity=tuple(scenario.physics.gravity),
                       solver_iterations=scenario.physics.solver_iterations, engine=scenario.physics.engine,
-                      faults=faults)
+                      faults=faults, renderer=scenario.physics.renderer)
     base_dir = source.file.parent.resolve() if source.file else Path.cwd()
     world, generated = _world(scenario, source, base_dir)
     notices.extend(world.notices)

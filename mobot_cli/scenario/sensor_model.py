@@ -17,7 +17,7 @@ from typing import Annotated, Any, Literal, Optional
 
 from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, StrictBool, model_validator
 
-from mobot_cli.assets.description.sensors import MAX_SAMPLES
+from mobot_cli.assets.description.sensors import IMAGE_FORMATS, MAX_IMAGE_SIDE, MAX_SAMPLES
 from mobot_cli.common.transforms import quat_from_rpy
 from mobot_cli.errors import shown
 from mobot_cli.scenario.limits import MAX_COORDINATE, MAX_RATE_HZ, Float, Int, NonNegativeFloat, Vector3
@@ -27,6 +27,7 @@ KEY_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_.-]*(/[A-Za-z_][A-Za-z0-9_.-]*)*$")
 TOPIC_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$")
 LIDAR_FIELDS = ("samples", "min_angle", "max_angle", "vertical_samples", "vertical_min_angle",
                 "vertical_max_angle", "range_min", "range_max", "range_resolution")
+CAMERA_FIELDS = ("width", "height", "image_format", "horizontal_fov", "clip_near", "clip_far")
 
 
 def _label(value: str) -> str:
@@ -101,7 +102,13 @@ HINTS = {
     "range_resolution": "Give a distance in metres, 0 or more (0: ranges are not rounded).",
     "noise_stddev": "A standard deviation is 0 or more.",
     "accel_noise_stddev": "A standard deviation is 0 or more.",
-    "type": "Use ray, gpu_ray, lidar, gpu_lidar, imu or contact.",
+    "type": "Use ray, gpu_ray, lidar, gpu_lidar, imu, contact, camera, depth_camera or rgbd_camera.",
+    "width": f"Give a whole number of pixels from 1 to {MAX_IMAGE_SIDE}.",
+    "height": f"Give a whole number of pixels from 1 to {MAX_IMAGE_SIDE}.",
+    "horizontal_fov": "Give an angle in radians above 0 and below pi.",
+    "clip_near": "Give a distance in metres above 0.",
+    "clip_far": "Give a distance in metres beyond clip_near.",
+    "image_format": "Use " + ", ".join(IMAGE_FORMATS) + ".",
 }
 
 
@@ -111,7 +118,8 @@ class SensorOverride(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True, defer_build=True)
 
     enabled: Optional[StrictBool] = None
-    type: Optional[Literal["ray", "gpu_ray", "lidar", "gpu_lidar", "imu", "contact"]] = None
+    type: Optional[Literal["ray", "gpu_ray", "lidar", "gpu_lidar", "imu", "contact", "camera", "depth",
+                           "depth_camera", "rgbd_camera", "rgbd"]] = None
     link: Optional[Label] = None
     rate_hz: Optional[Annotated[Float, Field(gt=0, le=MAX_RATE_HZ)]] = None
     pose: Optional[SensorPose] = None
@@ -130,6 +138,12 @@ class SensorOverride(BaseModel):
     collision: Optional[Label] = None
     topic: Optional[Topic] = None
     frame_id: Optional[Label] = None
+    width: Optional[Annotated[Int, Field(ge=1, le=MAX_IMAGE_SIDE)]] = None  # cameras (docs/cameras.md)
+    height: Optional[Annotated[Int, Field(ge=1, le=MAX_IMAGE_SIDE)]] = None
+    image_format: Optional[Literal[tuple(IMAGE_FORMATS)]] = None  # type: ignore[valid-type]
+    horizontal_fov: Optional[Annotated[Float, Field(gt=0, lt=math.pi)]] = None
+    clip_near: Optional[Annotated[Distance, Field(gt=0)]] = None
+    clip_far: Optional[Annotated[Distance, Field(gt=0)]] = None
 
     @model_validator(mode="after")
     def _off_alone(self) -> "SensorOverride":

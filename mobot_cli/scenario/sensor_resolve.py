@@ -14,6 +14,7 @@ from typing import Protocol
 
 from mobot_cli.assets.description.robot import RobotDescription
 from mobot_cli.assets.description.sensors import (
+    CAMERA_DEFAULTS,
     KINDS,
     DescribedSensor,
     check_values,
@@ -23,7 +24,7 @@ from mobot_cli.assets.description.sensors import (
 from mobot_cli.errors import Location, ScenarioError, did_you_mean
 from mobot_cli.plan import SensorSpec
 from mobot_cli.scenario.model import RobotSpec
-from mobot_cli.scenario.sensor_model import LIDAR_FIELDS, TOPIC_RE, SensorOverride
+from mobot_cli.scenario.sensor_model import CAMERA_FIELDS, LIDAR_FIELDS, TOPIC_RE, SensorOverride
 from mobot_cli.scenario.units import steps
 
 
@@ -39,8 +40,10 @@ class Context(Protocol):
 
 # A check about a pair of values names the larger; the scenario may have set the smaller.
 PARTNER = {"max_angle": "min_angle", "vertical_max_angle": "vertical_min_angle",
-           "range_max": "range_min", "samples": "vertical_samples"}
-ONLY = {**{f: "lidar" for f in LIDAR_FIELDS}, "accel_noise_stddev": "imu", "collision": "contact"}
+           "range_max": "range_min", "samples": "vertical_samples", "clip_far": "clip_near"}
+ONLY = {**{f: "lidar" for f in LIDAR_FIELDS}, "accel_noise_stddev": "imu", "collision": "contact",
+        **{f: "camera" for f in CAMERA_FIELDS}}
+CAMERA_KINDS = ("camera", "depth", "rgbd")
 
 
 def find_sensors(key: str, sensors: tuple[DescribedSensor, ...]) -> list[DescribedSensor]:
@@ -132,8 +135,9 @@ def _switch(key: str, spec: RobotSpec, desc: RobotDescription, path: tuple,
 
 def _added(key: str, entry: SensorOverride, where: tuple, ctx: Context) -> DescribedSensor:
     _fields_fit(KINDS[entry.type], entry, where, ctx)  # type: ignore[index]
+    defaults = CAMERA_DEFAULTS if KINDS[entry.type] in CAMERA_KINDS else {}  # type: ignore[index]
     added = replace(DescribedSensor(name=key.replace("/", "_"), type=entry.type,  # type: ignore[arg-type]
-                                    link=entry.link), **entry.changes())  # type: ignore[arg-type]
+                                    link=entry.link, **defaults), **entry.changes())  # type: ignore[arg-type]
     if added.topic:
         return added
     return replace(added, topic=key if TOPIC_RE.match(key) else default_topic(added))
@@ -141,7 +145,8 @@ def _added(key: str, entry: SensorOverride, where: tuple, ctx: Context) -> Descr
 
 def _fields_fit(kind: str, entry: SensorOverride, where: tuple, ctx: Context) -> None:
     for name in sorted(entry.model_fields_set):
-        if ONLY.get(name, kind) not in (kind, "lidar" if kind == "range" else kind):
+        family = "lidar" if kind == "range" else "camera" if kind in CAMERA_KINDS else kind
+        if ONLY.get(name, kind) not in (kind, family):
             raise ScenarioError(f"'{name}' applies to {ONLY[name]} sensors, and this one is "
                                 f"{'an' if kind == 'imu' else 'a'} {kind}",
                                 location=ctx.locate_key(where + (name,)),
@@ -214,4 +219,4 @@ def _choices(key: str, desc: RobotDescription, adding: bool) -> str:
         return f"Did you mean '{close[0]}'?"
     named = (f"Its sensors answer to {', '.join(repr(k) for k in keys)}" if keys
              else f"'{desc.name}' has no sensors mobot simulates")
-    return named + ("; to add one, give type (lidar, imu or contact) and link." if adding else ".")
+    return named + ("; to add one, give type (lidar, imu, contact or camera) and link." if adding else ".")

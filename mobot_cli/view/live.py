@@ -22,6 +22,7 @@ from mobot_cli.sim.state import RobotState
 from mobot_cli.timeline.loop import Timeline
 from mobot_cli.timeline.records import Deleted, Record, Sample, Spawned
 from mobot_cli.view import readings
+from mobot_cli.view.camera_panel import CAMERA_KINDS, CameraFeed
 from mobot_cli.view.panel import RobotList, Row, aim_camera, color_of, follow
 from mobot_cli.view.paths import LivePath, lighter
 from mobot_cli.view.robot import Robots, template_of
@@ -61,6 +62,7 @@ class LiveView:
         self.robot_list = RobotList(server)
         self.robots: dict[str, _Robot] = {}
         self.models = Robots(server)
+        self.camera = CameraFeed(server)  # the selected robot's camera in the panel
         for robot in plan.robots:  # load each URDF now, before the clock runs, not at its spawn
             template_of(robot.urdf)
         self.step = 0
@@ -92,7 +94,9 @@ class LiveView:
             self._events.append(("deleted", record.name))
         else:
             robot, sensor = getattr(record, "robot", None), getattr(record, "sensor", None)
-            if isinstance(robot, str) and sensor is not None:
+            if getattr(sensor, "kind", None) in CAMERA_KINDS:
+                self.camera.take(record, self.robot_list.selected)
+            elif isinstance(robot, str) and sensor is not None:
                 with self._lock:
                     self._readings[(robot, getattr(sensor, "name", str(sensor)))] = record
 
@@ -151,6 +155,7 @@ class LiveView:
                 self.on_frame()
             self.robot_list.show(rows, force=force)
             self._draw_readings()
+            self.camera.draw()
 
     def _robot(self, name: str, state: RobotState, watched: bool) -> Row:
         robot = self.robots[name]

@@ -64,12 +64,11 @@ def test_turtlebot3_burger_lds_and_imu(corpus_path):
     assert imu.spec(every=1).horizontal is None and imu.spec(every=1).frame_id == "imu_link"
 
 
-def test_turtlebot3_waffle_pi_camera_is_left_out_with_one_notice(corpus_path):
+def test_turtlebot3_waffle_pi_camera_is_read(corpus_path):
     robot = load_robot(str(corpus_path / "turtlebot3/turtlebot3_description/urdf/"
                                          "turtlebot3_waffle_pi.urdf.xacro"))
-    assert sorted(by_name(robot)) == ["imu", "lds_lfcd_sensor"]
-    assert sensor_notices(robot) == [
-        "sensors of types mobot does not simulate are left out: camera 'Pi Camera'"]
+    assert sorted(by_name(robot)) == ["Pi Camera", "imu", "lds_lfcd_sensor"]  # tests/assets/test_cameras.py
+    assert sensor_notices(robot) == []
 
 
 def test_turtlebot3_sdf_model_sensors_posed_in_the_urdf_link_frame(corpus):
@@ -128,7 +127,9 @@ def test_linorobot2_laser_and_imu(corpus_path, name):
         (360, -3.1416, 3.1416, 0.08, 12.0)
     # the remapping wins over the ROS 1 <topicName> and the sensor's __default_topic__
     assert (imu.link, imu.topic, imu.frame_id, imu.rate_hz) == ("imu_link", "imu/data", "imu_link", 20.0)
-    assert sensor_notices(robot) == ["sensors of types mobot does not simulate are left out: depth 'camera'"]
+    assert sensor_notices(robot) == []  # its depth 'camera' is an RGB-D camera now (tests/assets/test_cameras.py)
+    camera = by_name(robot)["camera"]
+    assert (camera.kind, camera.frame_id, camera.width, camera.height) == ("rgbd", "camera_depth_link", 640, 480)
 
 
 @pytest.mark.parametrize("model, topic", [("dolly_gazebo/models/dolly", "laser_scan"),
@@ -154,7 +155,7 @@ def test_dolly_in_its_world_keeps_its_laser(corpus):
 def test_every_field_and_sdformat_defaults():
     robot = load_robot(str(HERE / "every_field.urdf.xacro"), {"rate": "12.5"})
     sensors = by_name(robot)
-    assert list(sensors) == ["front_lidar", "puck", "plain", "imu_sensor", "bumper"]
+    assert list(sensors) == ["front_lidar", "puck", "plain", "imu_sensor", "bumper", "front_camera"]
     front = sensors["front_lidar"]
     assert (front.rate_hz, front.topic, front.frame_id) == (12.5, "front/scan", "laser_optical")
     assert front.xyz == (0.05, 0.0, 0.02) and front.quat == pytest.approx(YAW_90)
@@ -182,7 +183,7 @@ def test_every_field_and_sdformat_defaults():
                                                                       "bumper_states", 50.0)
     assert bumper.collision == "front_bumper_collision_1"
     assert [n.message for n in robot.notices] == [
-        "sensors of types mobot does not simulate are left out: camera 'front_camera', navsat 'gnss'",
+        "sensors of types mobot does not simulate are left out: navsat 'gnss'",
         "no drive wheels found: the robot will not move on commands"]
 
 

@@ -169,6 +169,33 @@ class SensorXml:
                     radiation="ultrasound", field_of_view=self.plugin_number("fov", 2 * half),
                     reading_noise_stddev=abs(self.plugin_number("gaussianNoise", 0.0)))
 
+    def camera(self) -> dict:
+        """Image size, format, horizontal field of view, clip planes and noise of a camera
+        (``<camera>``), with SDFormat's defaults (camera.sdf: 320 x 240 R8G8B8, 1.047 rad,
+        clip 0.1 .. 100 m); the topic is its plugin's ``<camera_name>`` (gazebo_ros publishes
+        ``CAMERA_NAME/image_raw``), gz's ``<topic>`` (without a last ``/image_raw``: the images
+        go there), else the sensor's name. Without ``<update_rate>``, a ROS 1 plugin's
+        ``<updateRate>`` sets the rate, as gazebo_ros_openni_kinect and gazebo_ros_camera do."""
+        mean, stddev = self.noise("camera/noise", "gaussian")
+        values = dict(width=self.integer("camera/image/width", 320), height=self.integer("camera/image/height", 240),
+                      image_format=self.text("camera/image/format") or "R8G8B8",
+                      horizontal_fov=self.number("camera/horizontal_fov", 1.047),
+                      clip_near=self.number("camera/clip/near", 0.1), clip_far=self.number("camera/clip/far", 100.0),
+                      noise_mean=mean, noise_stddev=stddev)
+        name = ""
+        if self.plugin is not None:
+            name = (self.plugin.findtext("camera_name") or self.plugin.findtext("cameraName") or "").strip()
+        name = clean_topic(name) or (self.text("topic") if self.text("topic") not in _UNSET else "")
+        name = clean_topic(name)
+        values["topic"] = (name.removesuffix("image_raw").rstrip("/") if name != "image_raw" else "") \
+            or clean_topic(self.name)
+        if not self.text("update_rate") and self.plugin is not None:
+            for tag in ("updateRate", "update_rate"):
+                if (self.plugin.findtext(tag) or "").strip():
+                    values["rate_hz"] = self.plugin_number(tag, 0.0)
+                    break
+        return values
+
     def plugin_number(self, tag: str, default: float) -> float:
         """A finite number in the plugin at ``tag``, or ``default`` when absent or empty."""
         text = (self.plugin.findtext(tag) or "").strip() if self.plugin is not None else ""
@@ -233,7 +260,7 @@ class SensorXml:
                 text = (self.plugin.findtext(tag) or "").strip()
                 if text:
                     return text
-        for tag in ("gz_frame_id", "ignition_frame_id", "frame_id"):
+        for tag in ("camera/optical_frame_id", "gz_frame_id", "ignition_frame_id", "frame_id"):
             if self.text(tag):
                 return self.text(tag)
         return ""

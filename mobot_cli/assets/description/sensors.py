@@ -3,8 +3,10 @@
 Types ray, gpu_ray, lidar and gpu_lidar are lidars (2D with one vertical sample), unless a range
 plugin reads them (gazebo_ros's ray sensor with output_type sensor_msgs/Range, gazebo_ros_range,
 hector's sonar): then they are range sensors, as Gazebo classic's sonar is. imu and contact (a
-bumper) are the others mobot simulates, with IMUs that are model plugins (plugin_sensors.py);
-cameras, GPS and the rest of SDFormat's types are left out with one notice. SDF models reach
+bumper) are the others mobot simulates, with IMUs that are model plugins (plugin_sensors.py).
+Cameras (docs/cameras.md): camera is RGB, depth_camera (gz) depth only, depth (Gazebo classic:
+gazebo_ros_camera publishes its image and its depth) and rgbd_camera/rgbd both. GPS and the rest
+of SDFormat's types are left out with one notice. SDF models reach
 this module as URDF: model_to_urdf copies each link's sensors into such blocks, posed in the
 URDF link frame. Absent elements take
 SDFormat's defaults (sdf/1.6 sensor.sdf, lidar.sdf, imu.sdf, noise.sdf): update_rate 0 (every
@@ -26,19 +28,29 @@ from mobot_cli.errors import DescriptionError, Location, Notice, did_you_mean
 from mobot_cli.plan import RayAxis, SensorSpec
 
 LIDAR_TYPES = ("ray", "gpu_ray", "lidar", "gpu_lidar")
-KINDS = {**{t: "lidar" for t in LIDAR_TYPES}, "sonar": "range", "imu": "imu", "contact": "contact"}
+CAMERA_TYPES = {"camera": "camera", "depth_camera": "depth", "depth": "rgbd", "rgbd_camera": "rgbd", "rgbd": "rgbd"}
+CAMERA_KINDS = ("camera", "depth", "rgbd")
+KINDS = {**{t: "lidar" for t in LIDAR_TYPES}, "sonar": "range", "imu": "imu", "contact": "contact",
+         **CAMERA_TYPES}
 RAY_KINDS = ("lidar", "range")  # sensors that cast rays: scan axes and a range
 # SDFormat's other sensor types (sdf/1.9 sensor.sdf): real, but not simulated by mobot.
 OTHER_TYPES = ("air_pressure", "air_speed", "altimeter", "boundingbox_camera", "boundingbox",
-               "camera", "custom", "depth_camera", "depth", "dvl", "force_torque", "gps",
+               "custom", "dvl", "force_torque", "gps",
                "logical_camera", "magnetometer", "multicamera", "navsat", "rfid", "rfidtag",
-               "rgbd_camera", "rgbd", "segmentation_camera", "segmentation",
+               "segmentation_camera", "segmentation",
                "thermal_camera", "thermal", "wide_angle_camera", "wireless_receiver",
                "wireless_transmitter")
 SONAR_TURN = quat_from_rpy(0.0, math.pi / 2, 0.0)  # x onto -z: along a Gazebo sonar's cone
 OTHER_TYPES += ("wideanglecamera",)  # Gazebo classic's spelling, which sdformat reads (turtlebot3_burger_cam)
 MAX_SAMPLES = 100_000  # rays along one axis of a scan
 MAX_RAYS = 1_000_000  # rays in one reading (horizontal x vertical samples)
+# SDFormat's camera.sdf defaults, which a camera added in a scenario's sensors: starts from
+CAMERA_DEFAULTS = dict(width=320, height=240, image_format="R8G8B8", horizontal_fov=1.047, clip_near=0.1,
+                       clip_far=100.0)
+MAX_IMAGE_SIDE = 4096  # pixels along one side of a camera's image
+# <image><format> -> the sensor_msgs/Image encoding mobot renders (others: rgb8, with a notice)
+IMAGE_FORMATS = {"R8G8B8": "rgb8", "RGB_INT8": "rgb8", "B8G8R8": "bgr8", "BGR_INT8": "bgr8",
+                 "L8": "mono8", "L_INT8": "mono8", "R_FLOAT32": "rgb8", "FLOAT32": "rgb8"}
 
 
 @dataclass(frozen=True)
@@ -74,6 +86,12 @@ class DescribedSensor:
     radiation: str = ""  # a range sensor's "ultrasound" or "infrared"; "" for every other kind
     field_of_view: float = 0.0  # rad, a range sensor's, as its plugin reports it
     reading_noise_stddev: float = 0.0  # m, a range plugin's gaussian noise on the reading
+    width: int = 0  # cameras: image size in pixels
+    height: int = 0
+    image_format: str = ""  # cameras: <image><format> as written (R8G8B8, L8, ...)
+    horizontal_fov: float = 0.0  # rad, cameras
+    clip_near: float = 0.0  # m, cameras
+    clip_far: float = 0.0
 
     @property
     def kind(self) -> str:
@@ -83,6 +101,13 @@ class DescribedSensor:
     def spec(self, every: int, source: str = "") -> SensorSpec:
         """The plan's form, reading every ``every`` physics steps."""
         lidar = self.kind in RAY_KINDS
+        if self.kind in CAMERA_KINDS:
+            return SensorSpec(
+                name=self.name, kind=self.kind, link=self.link, every=every, xyz=self.xyz, quat=self.quat,
+                topic=self.topic, frame_id=self.frame_id or self.link, range_min=self.clip_near,
+                range_max=self.clip_far, noise_mean=self.noise_mean, noise_stddev=self.noise_stddev, source=source,
+                field_of_view=self.horizontal_fov, width=self.width, height=self.height,
+                encoding=IMAGE_FORMATS.get(self.image_format, "rgb8"))
         return SensorSpec(
             name=self.name, kind=self.kind, link=self.link, every=every, xyz=self.xyz,
             quat=self.quat, topic=self.topic, frame_id=self.frame_id or self.link,
@@ -108,11 +133,15 @@ def sensor_summary(sensor: DescribedSensor) -> dict:
              "range_max", "range_resolution", "noise_mean", "noise_stddev")
     ranged = (*lidar, "radiation", "field_of_view", "reading_noise_stddev")
     own = {"lidar": lidar, "range": ranged, "imu": ("noise_mean", "noise_stddev", "accel_noise_stddev"),
-           "contact": ("collision",)}[sensor.kind]
+           "contact": ("collision",)}.get(sensor.kind) or CAMERA_FIELDS
     out = {"name": sensor.name, "type": sensor.type, "kind": sensor.kind, "link": sensor.link,
            "topic": sensor.topic, "frame_id": sensor.frame_id or sensor.link,
            "rate_hz": sensor.rate_hz, "xyz": list(sensor.xyz), "quat": list(sensor.quat)}
     return {**out, **{name: getattr(sensor, name) for name in own}}
+
+
+CAMERA_FIELDS = ("width", "height", "image_format", "horizontal_fov", "clip_near", "clip_far", "noise_mean",
+                 "noise_stddev")
 
 
 def read_sensors(robot: ET.Element, source: Path,
@@ -166,6 +195,8 @@ def default_topic(sensor: DescribedSensor) -> str:
     """The topic of a sensor whose block names none: scan, points (3D), imu or bumper."""
     if sensor.kind == "lidar":
         return "scan" if sensor.vertical_samples <= 1 else "points"
+    if sensor.kind in CAMERA_KINDS:
+        return "camera"
     return {"range": "range", "contact": "bumper"}.get(sensor.kind, "imu")
 
 
@@ -220,6 +251,11 @@ def _read(xml: SensorXml) -> DescribedSensor:
         values["quat"] = quat_mul(values["quat"], SONAR_TURN)
     elif kind == "imu":
         values.update(xml.imu())
+    elif kind in CAMERA_KINDS:
+        values.update(xml.camera())
+        if values["image_format"] not in IMAGE_FORMATS:
+            xml.notices.append(Notice(f"sensor '{xml.name}' has <format> '{values['image_format'][:40]}': "
+                                      "mobot renders it as rgb8", xml.location("camera/image/format")))
     else:
         values["collision"] = xml.text("contact/collision")
     return DescribedSensor(**values)
@@ -265,7 +301,9 @@ XML_KEYS = {
     "vertical_resolution": "ray.scan.vertical.resolution", "range_min": "ray.range.min",
     "range_max": "ray.range.max", "range_resolution": "ray.range.resolution",
     "noise_stddev": "noise.stddev", "accel_noise_stddev": "imu.linear_acceleration.noise.stddev",
-    "collision": "contact.collision", "reading_noise_stddev": "plugin.gaussianNoise"}
+    "collision": "contact.collision", "reading_noise_stddev": "plugin.gaussianNoise",
+    "width": "camera.image.width", "height": "camera.image.height", "horizontal_fov": "camera.horizontal_fov",
+    "clip_near": "camera.clip.near", "clip_far": "camera.clip.far"}
 XML_NAMES = {"rate_hz": "<update_rate>", "samples": "<horizontal><samples>",
              "min_angle": "<horizontal><min_angle>", "max_angle": "<horizontal><max_angle>",
              "resolution": "<horizontal><resolution>", "vertical_samples": "<vertical><samples>",
@@ -274,7 +312,9 @@ XML_NAMES = {"rate_hz": "<update_rate>", "samples": "<horizontal><samples>",
              "vertical_resolution": "<vertical><resolution>", "range_min": "<range><min>",
              "range_max": "<range><max>", "range_resolution": "<range><resolution>",
              "noise_stddev": "<noise><stddev>", "accel_noise_stddev": "the accelerometer's <stddev>",
-             "collision": "<contact><collision>", "reading_noise_stddev": "the plugin's <gaussianNoise>"}
+             "collision": "<contact><collision>", "reading_noise_stddev": "the plugin's <gaussianNoise>",
+             "width": "<image><width>", "height": "<image><height>", "horizontal_fov": "<horizontal_fov>",
+             "clip_near": "<clip><near>", "clip_far": "<clip><far>"}
 
 
 def check_values(sensor: DescribedSensor,
@@ -296,6 +336,8 @@ def check_values(sensor: DescribedSensor,
             f"({sensor.reading_noise_stddev:g})", "Give {field} a value of 0 or more."
     if sensor.kind in RAY_KINDS:
         return _check_lidar(sensor)
+    if sensor.kind in CAMERA_KINDS:
+        return _check_camera(sensor)
     if sensor.kind == "contact" and contact_collision(sensor.collision, collisions) is None:
         return "collision", f"counts contacts of collision '{sensor.collision}', which link " \
             f"'{sensor.link}' does not have", (did_you_mean(sensor.collision, collisions)
@@ -329,4 +371,20 @@ def _check_lidar(s: DescribedSensor) -> tuple[str, str, str] | None:
     if s.range_resolution < 0:
         return "range_resolution", f"has a negative range resolution ({s.range_resolution:g})", \
             "Give {field} a distance of 0 or more (0: not quantised)."
+    return None
+
+
+def _check_camera(s: DescribedSensor) -> tuple[str, str, str] | None:
+    for side in ("width", "height"):
+        if not 1 <= getattr(s, side) <= MAX_IMAGE_SIDE:
+            return side, f"has an image {side} of {getattr(s, side)} pixels", \
+                f"Give {{field}} a whole number of pixels from 1 to {MAX_IMAGE_SIDE}."
+    if not 0.0 < s.horizontal_fov < math.pi:
+        return "horizontal_fov", f"has a horizontal field of view of {s.horizontal_fov:g} rad", \
+            "Give {field} an angle above 0 and below pi (a pinhole camera sees less than 180 degrees)."
+    if s.clip_near <= 0:
+        return "clip_near", f"has a near clip of {s.clip_near:g} m", "Give {field} a distance above 0."
+    if s.clip_far <= s.clip_near:
+        return "clip_far", f"has far clip {s.clip_far:g} m, not beyond its near clip {s.clip_near:g} m", \
+            "Give {field} the farthest distance it sees."
     return None

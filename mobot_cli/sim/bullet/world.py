@@ -77,14 +77,18 @@ class World:
         if stage is not None:
             self._probes, self._statics, self._solids, self._ground, self._names = \
                 stage.probes, stage.statics, stage.solids, stage.ground, stage.names
-            return
-        self._probes = placement.Probes(self._cid)
-        try:
-            self._build(world)
-        except BaseException:
-            self._pristine = False
-            self.close()
-            raise
+        else:
+            self._probes = placement.Probes(self._cid)
+            try:
+                self._build(world)
+            except BaseException:
+                self._pristine = False
+                self.close()
+                raise
+        if physics.renderer != "tiny":  # EGL draws only the bodies made after its plugin loads: the robots
+            from mobot_cli.sim.sensing.render import preload
+
+            preload(self._cid, physics.renderer)
 
     def reset(self) -> None:
         """Back to the world as built, at step 0, with no robots: PyBullet's own reset, then the
@@ -363,7 +367,8 @@ class World:
             from mobot_cli.sim.sensing.rig import Sensing  # worlds without sensors never load it
 
             self._sensing = Sensing(self._cid, self.plan, self.seed, self.physics.dt, self.physics.gravity,
-                                    self.label, lambda: [r.body for r in self._robots.values()])
+                                    self.label, lambda: [r.body for r in self._robots.values()],
+                                    self.physics.renderer, self.notices, lambda: self._steps)
         return self._sensing
 
     def _hit_name(self, other) -> str:
@@ -409,6 +414,12 @@ class World:
     def close(self) -> None:
         """Let go of the PyBullet client (see clients.keep_clients); the world is unusable afterwards."""
         if self._cid >= 0:
+            if self._sensing is not None and self._sensing.release():
+                self._pristine = False  # the renderer's bodies (sim/sensing/render.py) are in it
+            if self.physics.renderer != "tiny":
+                from mobot_cli.sim.sensing.render import discard
+
+                self._pristine = not discard(self._cid) and self._pristine
             stage = Stage((self.physics, self.plan), self._statics, self._solids, self._ground, self._probes,
                           self._names) if self._pristine else None
             release(self._cid, stage, [robot.body for robot in self._robots.values()])

@@ -5,8 +5,7 @@ the readings due at a step (each sensor at its own rate), and every lidar due at
 is cast in one batch (sim/sensing/lidar.py). With one robot in the world only the static world can
 be in a scan's way: the scan keeps its pose and waits, and the waiting scans are cast
 together when one of them is first read (``ScanData.ranges``) or 50 wait. Noise comes from a
-generator per sensor, seeded by the run's seed and the robot's and sensor's names: the same seed
-gives the same readings.
+generator per sensor, seeded by the run's seed and the robot's and sensor's names.
 
 * lidar: ranges (m, float32) on Gazebo's beam grid, +inf for no return, with gaussian noise
   and range quantisation as the ``<ray>`` block asks, clamped to [range_min, range_max];
@@ -17,6 +16,7 @@ gives the same readings.
 * imu: orientation of the sensor frame in the world (REP 145), angular velocity in the sensor
   frame, and linear acceleration as a real IMU measures it (specific force: +9.81 m/s^2 up at
   rest), averaged over the time since the previous reading;
+* camera, depth, rgbd: an ImageData rendered when first read (sim/sensing/camera.py);
 * contact: PyBullet's contact points of the sensor's link with anything but what the robot
   stands on (a contact whose normal points steeply up into the link, as sim/contacts.py).
 """
@@ -37,7 +37,7 @@ from mobot_cli.sim.contacts import CONTACT_SLOP, SUPPORT_NORMAL_Z
 from mobot_cli.sim.pb import p
 from mobot_cli.sim.sensing import lidar
 
-KINDS = ("lidar", "range", "imu", "contact")
+KINDS = ("lidar", "range", "imu", "contact", "camera", "depth", "rgbd")
 # Scans waiting to be cast (ScanData): at most this many, and this many rays (a VLP-16 scan
 # has 30,000), so readers that never read still see memory stay flat.
 MAX_WAITING_SCANS = 50  # a chunk of the .npy (record/sensor_files.py) reads them all at once
@@ -180,7 +180,8 @@ class Sensing:
     """Every sensor of the robots in one world; ``read`` computes the readings due."""
 
     def __init__(self, cid: int, world: WorldPlan, seed: int, dt: float, gravity: tuple[float, float, float],
-                 label: Callable[[int], str], robot_bodies: Callable[[], list[int]]):
+                 label: Callable[[int], str], robot_bodies: Callable[[], list[int]],
+                 renderer: str = "auto", notices: list[str] | None = None, step_now: Callable[[], int] | None = None):
         self.cid, self.world, self.seed, self.dt = cid, world, seed, dt
         self.gravity = np.array(gravity, dtype=float)
         self.label = label  # body id -> what messages call it
@@ -189,6 +190,23 @@ class Sensing:
         self._scene = None
         self._scene_built = False
         self._waiting: _Waiting | None | bool = None  # False: no scene to wait for (PyBullet casts)
+        self.renderer, self.notices, self.step_now = renderer, notices if notices is not None else [], step_now
+        self._cameras = None  # sim/sensing/camera.py's Cameras, made for the first camera
+
+    def release(self) -> bool:
+        """Let go of the renderer (the world is closing); True when it added bodies to the world."""
+        cameras, self._cameras = self._cameras, None
+        if cameras is not None:
+            cameras.close()
+        return cameras is not None and cameras.changed_scene  # the EGL plugin's visual twins
+
+    @property
+    def cameras(self):
+        """What renders this world's camera images (made at the first camera reading)."""
+        if self._cameras is None:
+            from mobot_cli.sim.sensing.camera import Cameras  # worlds without cameras never load it
+            self._cameras = Cameras(self.cid, self.world, self.renderer, self.notices, self.step_now or (lambda: -1))
+        return self._cameras
 
     def add(self, name: str, body: int, links: dict[str, int], sensors: tuple[SensorSpec, ...]) -> None:
         """Mount a robot's sensors; SpawnError for a sensor on a link the robot lacks."""
@@ -244,6 +262,9 @@ class Sensing:
                 scans.append((rig, data))
             elif rig.spec.kind == "imu":
                 data = self._imu(step, rig, position, quat)
+            elif rig.spec.kind in ("camera", "depth", "rgbd"):
+                from mobot_cli.sim.sensing.camera import ImageData
+                data = ImageData(self.cameras, rig.spec, rig.rng, step, position, quat)
             else:
                 data = self._contacts(rig)
             out.append(data)
@@ -334,7 +355,6 @@ class Sensing:
                 continue  # what it stands on
             found.append(Contact(self.label(other), tuple(c[5]), tuple(normal), max(0.0, -c[8]), float(c[9])))
         return ContactData(tuple(found))
-
 
 
 def _aabb(cid: int, body: int) -> tuple[np.ndarray, np.ndarray]:

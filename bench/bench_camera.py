@@ -1,0 +1,137 @@
+"""Cameras: frames per second per renderer, size and world; what a camera costs a run.
+
+    python3 bench/bench_camera.py [--corpus PATH] [--frames 30] [--repeat 3] [--seconds 10]
+
+1. Frames per second of one camera (RGB: ``camera``; depth: ``depth_camera``) at 320x240 and
+   640x480 in the empty world, the bundled house and the AWS small house (corpus), for each
+   renderer that loads here (TinyRenderer always; the EGL plugin when it loads): the robot stands
+   still, each frame is taken and read through the world's sensing as a run does, best of
+   ``--repeat`` rounds of ``--frames`` frames, the configurations interleaved round by round.
+2. The issue's goal: the bundled mobot with ``camera:=true`` (320x240 RGB-D at 15 Hz) driving in
+   the bundled house for ``--seconds`` simulated seconds with the physics engine, recorded (the
+   PNG frames written), against the same run without the camera: real-time factors, interleaved.
+3. The same pair on the kinematic engine: the cost of one camera on a kinematic run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from bench.common import REPO  # noqa: E402
+from mobot_cli.api.simulation import Simulation  # noqa: E402
+from mobot_cli.cli import invoke  # noqa: E402
+from mobot_cli.sim.sensing import render  # noqa: E402
+
+SMALL_HOUSE = "aws-robomaker-small-house-world/worlds/small_house.world"
+POSES = {"empty": (0.0, 0.0, 0.0), "house": (-3.0, -2.5, 0.0), "small house": (3.5, 1.0, 0.0)}
+
+
+def scenario(folder: Path, world: str, pose, kind: str, size: tuple[int, int], renderer: str) -> Path:
+    path = folder / f"{abs(hash((world, kind, size, renderer)))}.yaml"
+    x, y, yaw = pose
+    path.write_text(f"version: 1\nname: cam\nworld: {world}\nduration: 1000\nsettle: 0.0\n"
+                    f"physics: {{renderer: {renderer}}}\nrobots:\n  - name: r\n    description: mobot\n"
+                    f"    pose: {{x: {x}, y: {y}, yaw: {yaw}}}\n    sensors:\n"
+                    f"      cam: {{type: {kind}, link: base_link, width: {size[0]}, height: {size[1]}, "
+                    f"rate_hz: 240, clip_far: 20.0, pose: {{xyz: [0.1, 0, 0.2]}}}}\n")
+    return path
+
+
+def fps(sim: Simulation, frames: int) -> float:
+    """Frames a second, each taken and read as a run reads it."""
+    world = sim._world  # noqa: SLF001 - the world's sensing, without the timeline's bookkeeping
+    started = time.perf_counter()
+    for _ in range(frames):
+        data = world.sense([("r", "cam")])[0]
+        data.rgb, data.depth  # noqa: B018 - reading renders
+    return frames / (time.perf_counter() - started)
+
+
+def renderers() -> list[str]:
+    out = ["tiny"]
+    if render.egl_ships():
+        with tempfile.TemporaryDirectory() as tmp, Simulation.open(
+                scenario(Path(tmp), "empty", (0, 0, 0), "camera", (32, 24), "egl")) as sim:
+            sim.image("r")
+            if any("EGL plugin (OpenGL)" in n for n in sim._timeline.notices):  # noqa: SLF001
+                out.append("egl")
+    return out
+
+
+def rendering(worlds: dict[str, str], frames: int, repeat: int, tmp: Path) -> None:
+    configs = [(label, world, kind, size, renderer) for label, world in worlds.items()
+               for renderer in renderers() for size in ((320, 240), (640, 480)) for kind in ("camera", "depth_camera")]
+    sims = {}
+    for label, world, kind, size, renderer in configs:
+        sim = Simulation.open(scenario(tmp, world, POSES[label], kind, size, renderer))
+        sim.step(10)
+        fps(sim, 2)  # warm: the renderer is made, meshes are loaded
+        sims[(label, kind, size, renderer)] = sim
+    best = dict.fromkeys(sims, 0.0)
+    for _ in range(repeat):
+        for key, sim in sims.items():
+            best[key] = max(best[key], fps(sim, frames))
+    print("| world | renderer | size | RGB fps | depth fps |\n|---|---|---|---|---|")
+    for label in worlds:
+        for renderer in renderers():
+            for size in ((320, 240), (640, 480)):
+                rgb, depth = best[(label, "camera", size, renderer)], best[(label, "depth_camera", size, renderer)]
+                print(f"| {label} | {renderer} | {size[0]}x{size[1]} | {rgb:.1f} | {depth:.1f} |")
+    for sim in sims.values():
+        sim.close()
+
+
+def run_factor(tmp: Path, engine: str, camera: bool, seconds: float, renderer: str) -> float:
+    """Real-time factor of a recorded run of the bundled mobot driving in the bundled house."""
+    path = tmp / f"run_{engine}_{camera}_{renderer}.yaml"
+    path.write_text(f"version: 1\nname: run\nworld: house\nduration: {seconds}\nsettle: 0.5\n"
+                    f"physics: {{engine: {engine}, renderer: {renderer}}}\n"
+                    "robots:\n  - name: r\n    description: mobot\n"
+                    f"    args: {{camera: '{str(camera).lower()}'}}\n    pose: {{x: -3.0, y: -2.5}}\n"
+                    "    commands:\n      - {at: 0.5, linear: 0.2, angular: 0.1}\n")
+    started = time.perf_counter()
+    done = invoke(["run", str(path), "--out", str(tmp / f"out_{engine}_{camera}_{renderer}"), "--quiet"])
+    assert done.exit_code == 0, done.stderr
+    return seconds / (time.perf_counter() - started)
+
+
+def runs(tmp: Path, seconds: float, repeat: int, renderers: list[str]) -> None:
+    for engine in ("bullet", "kinematic"):
+        cases = [(False, "tiny")] + [(True, r) for r in renderers]
+        best = dict.fromkeys(cases, 0.0)
+        for _ in range(repeat):
+            for camera, renderer in cases:
+                best[(camera, renderer)] = max(best[(camera, renderer)],
+                                               run_factor(tmp, engine, camera, seconds, renderer))
+        without = best[(False, "tiny")]
+        withs = ", ".join(f"{best[(True, r)]:.1f}x with it on {r} ({without / best[(True, r)]:.2f}x the time)"
+                          for r in renderers)
+        print(f"{engine}: {seconds:g} s in the bundled house, recorded, a 320x240 RGB-D camera at 15 Hz: "
+              f"{without:.1f}x real time without the camera, {withs}; best of {repeat}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--corpus", type=Path, default=Path(os.environ.get(
+        "MOBOT_CORPUS", REPO.parent / "shared" / "corpus")))
+    parser.add_argument("--frames", type=int, default=30)
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--seconds", type=float, default=10.0)
+    args = parser.parse_args()
+    worlds = {"empty": "empty", "house": "house"}
+    if (args.corpus / SMALL_HOUSE).is_file():
+        worlds["small house"] = str((args.corpus / SMALL_HOUSE).resolve())
+    with tempfile.TemporaryDirectory() as tmp:
+        rendering(worlds, args.frames, args.repeat, Path(tmp))
+        runs(Path(tmp), args.seconds, args.repeat, renderers())
+
+
+if __name__ == "__main__":
+    main()
