@@ -41,6 +41,7 @@ from mobot_cli.sim.kinematic.collide import (
     static_boxes,
 )
 from mobot_cli.sim.kinematic.holonomic import HolonomicMover
+from mobot_cli.sim.kinematic.pairs import close_pairs
 from mobot_cli.sim.placement import body_bounds
 from mobot_cli.sim.state import RobotState
 
@@ -68,6 +69,8 @@ class KinematicWorld(World):
         self._by_body: dict[int, object] = {}  # body id -> SimRobot, of the robots in _order
         # robot i, j -> their distance when last measured plus both travels then (-inf: never)
         self._measured = np.zeros((0, 0))
+        self._room = self._measured  # _measured is its top-left corner (see _reindex)
+        self._reach = np.zeros(0)
         self._near: dict[str, Near] = {}
         self._floor = Floor(self._cid, world)
         self._flat = self._floor.flat and world.ground_plane  # the floor is z = 0 everywhere
@@ -100,6 +103,7 @@ class KinematicWorld(World):
         """The root link's world pose and velocity now (its body put where it is first)."""
         if name in self._movers:
             self._movers[name].sync(full=True)
+            self._robot_boxes.forget()  # its wheels turned: its box may have changed
         return super().kinematics(name)
 
     def spawn(self, robot: RobotPlan) -> None:
@@ -139,17 +143,35 @@ class KinematicWorld(World):
         self._near.pop(name, None)
 
     def _reindex(self, grown: bool = True) -> None:
-        """Robots in spawn order, each knowing its row in the pair matrix (a new one: unmeasured)."""
-        self._order = list(self._movers.values())
+        """Robots in spawn order, each knowing its row in the pair matrix (a new one: unmeasured).
+
+        A spawn appends (the matrix grows into room kept for it, doubling: a fleet spawns in
+        linear time); a removal renumbers everyone."""
+        movers = self._movers
+        if grown and len(self._order) == len(movers) - 1:
+            mover = next(reversed(movers.values()))
+            mover.index = len(self._order)
+            self._order.append(mover)
+            self._by_body[mover.robot.body] = mover.robot
+            self._reach = np.append(self._reach, mover.reach)
+            n = len(self._order)
+            if n > len(self._room):
+                room = np.full((2 * n, 2 * n), -np.inf)
+                room[:n - 1, :n - 1] = self._measured
+                self._room = room
+            self._room[n - 1, :n] = -np.inf
+            self._room[:n, n - 1] = -np.inf
+            self._measured = self._room[:n, :n]
+            return
+        self._order = list(movers.values())
         self._by_body = {m.robot.body: m.robot for m in self._order}
         self._reach = np.array([m.reach for m in self._order])
         for index, mover in enumerate(self._order):
             mover.index = index
-        if grown:
-            n = len(self._order)
-            measured = np.full((n, n), -np.inf)
-            measured[:n - 1, :n - 1] = self._measured
-            self._measured = measured
+        n, had = len(self._order), min(len(self._order), len(self._measured))
+        measured = np.full((n, n), -np.inf)
+        measured[:had, :had] = self._measured[:had, :had]
+        self._room = self._measured = measured
 
     def set_command(self, name: str, linear: float, angular: float, linear_y: float = 0.0) -> None:
         """Command a body twist (m/s, rad/s; ``linear_y`` sideways, holonomic drives only);
@@ -203,22 +225,21 @@ class KinematicWorld(World):
         rows = [mover.index for mover, _ in moves]
         bound[rows] = [mover.bound for mover, _ in moves]
         reach = self._reach
-        dx, dy = x[:, None] - x[None, :], y[:, None] - y[None, :]
         # First the pairs no farther apart along x and y than any pair's circles and steps can
-        # reach (most are farther), then the test itself on them alone, as numbers computed the
-        # same way for every pair would give.
+        # reach (most are farther), found by a sweep along x (sim/kinematic/pairs.py), then the
+        # test itself on them alone, in the order and with the numbers an all-pairs pass gives.
         limit = 2.0 * (bound.max() + reach.max()) + CONTACT_SLOP + 1e-9
-        close = np.abs(dx) <= limit
-        close &= np.abs(dy) <= limit
-        np.fill_diagonal(close, False)
+        moving = None
         if len(rows) < n:  # only the moving robots' rows
-            close &= np.isin(np.arange(n), rows)[:, None]
-        i, j = np.nonzero(close)
+            moving = np.zeros(n, bool)
+            moving[rows] = True
+        i, j = close_pairs(x, y, limit, moving)
         if not len(i):
             return {}
+        dx, dy = x[i] - x[j], y[i] - y[j]
         travel = np.fromiter([m.travel for m in everyone], float, n)
         margin = bound[i] + bound[j] + CONTACT_SLOP
-        gap = np.hypot(dx[i, j], dy[i, j]) - reach[i] - reach[j]
+        gap = np.hypot(dx, dy) - reach[i] - reach[j]
         left = self._measured[i, j] - travel[i] - travel[j]
         keep = (gap <= margin) & (left <= margin)
         out: dict[Mover, list[Mover]] = {}
@@ -366,6 +387,7 @@ class KinematicWorld(World):
     def sense(self, due: list[tuple[str, str]]) -> list[object]:
         """Readings due now: the robots' bodies are put where they are first."""
         self._sync_all(full=True)
+        self._robot_boxes.forget()  # wheels turned: boxes may have changed
         rigs = self._sensors().rigs
         if any(rigs[robot][sensor].spec.kind == "contact" for robot, sensor in due):
             from mobot_cli.sim.pb import p
