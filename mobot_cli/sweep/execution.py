@@ -94,7 +94,8 @@ def check_out_dir(sweep: Sweep, out_dir: Path, resume: bool) -> dict[int, dict[s
 def run_sweep(sweep: Sweep, out_dir: Path, executor: Executor, done_rows: dict[int, dict[str, str]],
               progress: Progress | None = None, pictures: bool = True) -> SweepReport:
     """Run every run not in ``done_rows``, holding the folder's lock; Ctrl-C stops it, keeping the
-    finished rows; ``pictures`` draws each run's trajectory.png. A file of the sweep folder that cannot be written stops it with an OutputError."""
+    finished rows; ``pictures`` draws each run's trajectory.png. A file of the sweep folder that
+    cannot be written stops it with an OutputError."""
     try:
         (out_dir / "runs").mkdir(parents=True, exist_ok=True)
         with FolderLock(out_dir):
