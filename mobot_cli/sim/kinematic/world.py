@@ -83,6 +83,7 @@ class KinematicWorld(World):
         self._contacts = ContactCounter(max(1, round(RELEASE_SAMPLES * sample_hz / CONTACT_RATE_HZ)),
                                         name_of=self._hit_name)
         self._idle = 0  # samples without touches not yet told to _contacts
+        self._all_synced = -1  # the step at which every body was last put where its robot is
 
     def reset(self) -> None:
         """Back to the world as built, at step 0, with no robots (see World.reset)."""
@@ -96,6 +97,7 @@ class KinematicWorld(World):
         super().teleport(name, pose, linear, angular)
         mover = self._movers[name]
         mover.relocate(self._steps)
+        self._all_synced = -1
         self._measured[mover.index, :] = -np.inf  # its distances to the others: measure again
         self._measured[:, mover.index] = -np.inf
 
@@ -180,6 +182,7 @@ class KinematicWorld(World):
         check_command(robot.name, robot.drive.spec if robot.drive is not None else None, linear_y)
         robot.cmd, robot.cmd_y = (float(linear), float(angular)), float(linear_y)
         mover = self._movers[name]
+        self._all_synced = -1  # a car's steering joints turn now
         if isinstance(mover, HolonomicMover):
             mover.command(float(linear), float(angular), float(linear_y))
         else:
@@ -381,8 +384,13 @@ class KinematicWorld(World):
         self._contacts.record(pairs)
 
     def _sync_all(self, full: bool = False) -> None:
+        # Every body was put where its robot is at this step already (a fleet's spawns): a spawn
+        # would otherwise look at every robot again, N^2 looks for a fleet.
+        if not full and self._all_synced == self._steps:
+            return
         for mover in self._movers.values():
             mover.sync(full)
+        self._all_synced = self._steps
 
     def sense(self, due: list[tuple[str, str]]) -> list[object]:
         """Readings due now: the robots' bodies are put where they are first."""
