@@ -14,6 +14,9 @@ it when it puts bodies where their robots are with their wheels turned).
 
 from __future__ import annotations
 
+from itertools import islice
+from typing import Iterable
+
 import numpy as np
 
 from mobot_cli.sim.pb import p
@@ -55,16 +58,15 @@ class RobotBoxes:
         self._bodies.append(body)
         self._known.add(body)
 
-    def near(self, cid: int, step: int, robots: list[int], body: int) -> list[int]:
-        """Those of ``robots`` (body ids, in spawn order) whose boxes meet ``body``'s, in that order.
-
-        ``robots`` must list the robots measured before in the same order, and may end with new ones.
-        """
-        if self._at != step or len(self._bodies) > len(robots) or self._bodies != robots[:len(self._bodies)]:
+    def near(self, cid: int, step: int, robots: Iterable, count: int, body: int) -> list[int]:
+        """The bodies of ``robots`` (``count`` objects with a ``body`` id, in spawn order) whose
+        boxes meet ``body``'s, in that order. ``robots`` lists the robots measured before in the same
+        order (a removal calls ``forget()``), and may end with new ones: only those are looked at."""
+        if self._at != step or len(self._bodies) > count:
             self.forget()
             self._at = step
-        for other in robots[len(self._bodies):]:
-            self._add(cid, other)
+        for other in islice(robots, len(self._bodies), None):  # skips the known ones in C
+            self._add(cid, other.body)
         n = len(self._bodies)
         if not n:
             return []

@@ -250,7 +250,8 @@ class World:
         xyz = placement.link_frame_xyz(cid, uid)
         others = dict(self._statics)
         # Only the robots whose boxes meet this one's can be reached into (sim/broadphase.py).
-        near = set(self._robot_boxes.near(cid, self._steps, [r.body for r in self._robots.values()], uid))
+        robots = self._robots
+        near = set(self._robot_boxes.near(cid, self._steps, robots.values(), len(robots), uid))
         if near:
             others.update({r.body: f"robot '{n}'" for n, r in self._robots.items() if r.body in near})
         part = functools.partial(self._part, uid)
