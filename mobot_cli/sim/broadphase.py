@@ -45,28 +45,29 @@ class RobotBoxes:
         """Measure every box again at the next query."""
         self._at: int | None = None
         self._bodies: list[int] = []
-        self._known: set[int] = set()
+        self._robots: list = []
         self._lo = np.empty((16, 3))
         self._hi = np.empty((16, 3))
 
-    def _add(self, cid: int, body: int) -> None:
+    def _add(self, cid: int, robot) -> None:
+        body = robot.body
         n = len(self._bodies)
         if n == len(self._lo):  # grow by doubling: a fleet costs linear time
             self._lo = np.concatenate([self._lo, np.empty_like(self._lo)])
             self._hi = np.concatenate([self._hi, np.empty_like(self._hi)])
         self._lo[n], self._hi[n] = body_box(cid, body)
         self._bodies.append(body)
-        self._known.add(body)
+        self._robots.append(robot)
 
-    def near(self, cid: int, step: int, robots: Iterable, count: int, body: int) -> list[int]:
-        """The bodies of ``robots`` (``count`` objects with a ``body`` id, in spawn order) whose
+    def near(self, cid: int, step: int, robots: Iterable, count: int, body: int) -> list:
+        """Those of ``robots`` (``count`` objects with a ``body`` id, in spawn order) whose
         boxes meet ``body``'s, in that order. ``robots`` lists the robots measured before in the same
         order (a removal calls ``forget()``), and may end with new ones: only those are looked at."""
         if self._at != step or len(self._bodies) > count:
             self.forget()
             self._at = step
         for other in islice(robots, len(self._bodies), None):  # skips the known ones in C
-            self._add(cid, other.body)
+            self._add(cid, other)
         n = len(self._bodies)
         if not n:
             return []
@@ -74,4 +75,4 @@ class RobotBoxes:
         lo_b, hi_b = np.array(lo) - SLACK, np.array(hi) + SLACK
         # Apart on some axis: one box ends before the other starts (NaN is never apart: asked).
         apart = ((self._hi[:n] < lo_b) | (self._lo[:n] > hi_b)).any(axis=1)
-        return [self._bodies[i] for i in np.flatnonzero(~apart).tolist() if self._bodies[i] != body]
+        return [self._robots[i] for i in np.flatnonzero(~apart).tolist() if self._bodies[i] != body]

@@ -251,9 +251,8 @@ class World:
         others = dict(self._statics)
         # Only the robots whose boxes meet this one's can be reached into (sim/broadphase.py).
         robots = self._robots
-        near = set(self._robot_boxes.near(cid, self._steps, robots.values(), len(robots), uid))
-        if near:
-            others.update({r.body: f"robot '{n}'" for n, r in self._robots.items() if r.body in near})
+        others.update({r.body: f"robot '{r.name}'" for r in self._robot_boxes.near(cid, self._steps, robots.values(),
+                                                                                   len(robots), uid)})
         part = functools.partial(self._part, uid)
         placement.check_clear(cid, uid, others, name, xyz, z_auto=z_auto, part=part)
         box = placement.body_bounds(self._probes, uid)
