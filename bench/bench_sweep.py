@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """How fast do sweeps go? Wall time of a 16- or 32-run sweep at 1 and 2 jobs, and per-run overhead.
 
-1. A 16-run grid (or 32 with ``--runs 32``; bundled robot, ``--seconds`` simulated each) through
+1. A 16-run grid (or 32 with ``--runs 32``; bundled robot, ``--seconds`` simulated each, no pictures) through
    the local pool at ``--jobs 1`` and ``--jobs 2``: the wall time of the whole sweep (workers
    started, runs, results.csv), runs per second, and the speed-up (goal: >= 1.8x on 2 cores).
 2. Per-run overhead in a warm worker beyond the simulation loop (goal: <= 100 ms; the
@@ -74,7 +74,7 @@ def sweep_seconds(sweep, work: Path, jobs: int, tag: str) -> tuple[float, list[f
 
     executor.run = run
     started = time.perf_counter()
-    run_sweep(sweep, work / tag, executor, {})
+    run_sweep(sweep, work / tag, executor, {}, pictures=False)  # as `mobot sweep` without --pictures
     return time.perf_counter() - started, finished
 
 
