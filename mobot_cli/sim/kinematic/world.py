@@ -41,7 +41,7 @@ from mobot_cli.sim.kinematic.collide import (
     static_boxes,
 )
 from mobot_cli.sim.kinematic.holonomic import HolonomicMover
-from mobot_cli.sim.kinematic.pairs import close_pairs
+from mobot_cli.sim.kinematic.pairs import robot_pairs
 from mobot_cli.sim.placement import body_bounds
 from mobot_cli.sim.state import RobotState
 
@@ -217,38 +217,8 @@ class KinematicWorld(World):
             self._count()
 
     def _robot_pairs(self, moves) -> dict[Mover, list[Mover]]:
-        """The robots each moving robot might touch this step, in one numpy pass over all pairs:
-        not those whose circles (reach) stay apart by more than both their steps, nor those
-        whose distance, last measured, is more than both have travelled since (and this step)."""
-        everyone = self._order
-        n = len(everyone)
-        x = np.fromiter([m.x for m in everyone], float, n)
-        y = np.fromiter([m.y for m in everyone], float, n)
-        bound = np.zeros(n)
-        rows = [mover.index for mover, _ in moves]
-        bound[rows] = [mover.bound for mover, _ in moves]
-        reach = self._reach
-        # First the pairs no farther apart along x and y than any pair's circles and steps can
-        # reach (most are farther), found by a sweep along x (sim/kinematic/pairs.py), then the
-        # test itself on them alone, in the order and with the numbers an all-pairs pass gives.
-        limit = 2.0 * (bound.max() + reach.max()) + CONTACT_SLOP + 1e-9
-        moving = None
-        if len(rows) < n:  # only the moving robots' rows
-            moving = np.zeros(n, bool)
-            moving[rows] = True
-        i, j = close_pairs(x, y, limit, moving)
-        if not len(i):
-            return {}
-        dx, dy = x[i] - x[j], y[i] - y[j]
-        travel = np.fromiter([m.travel for m in everyone], float, n)
-        margin = bound[i] + bound[j] + CONTACT_SLOP
-        gap = np.hypot(dx, dy) - reach[i] - reach[j]
-        left = self._measured[i, j] - travel[i] - travel[j]
-        keep = (gap <= margin) & (left <= margin)
-        out: dict[Mover, list[Mover]] = {}
-        for a, b in zip(i[keep].tolist(), j[keep].tolist()):
-            out.setdefault(everyone[a], []).append(everyone[b])
-        return out
+        """The robots each moving robot might touch this step (sim/kinematic/pairs.py)."""
+        return robot_pairs(self._order, self._reach, self._measured, moves)
 
     def _move(self, mover: Mover, motion, others: list[Mover]) -> bool:
         """One robot's step, asking PyBullet what is in its way (step() makes a step in open
