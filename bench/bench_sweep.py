@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """How fast do sweeps go? Wall time of a 16- or 32-run sweep at 1 and 2 jobs, and per-run overhead.
 
-1. A 16-run grid (or 32 with ``--runs 32``; bundled robot, ``--seconds`` simulated each) through
+1. A 16-run grid (or 32 with ``--runs 32``; bundled robot, ``--seconds`` simulated each, no pictures) through
    the local pool at ``--jobs 1`` and ``--jobs 2``: the wall time of the whole sweep (workers
    started, runs, results.csv), runs per second, and the speed-up (goal: >= 1.8x on 2 cores).
 2. Per-run overhead in a warm worker beyond the simulation loop (goal: <= 100 ms; the
@@ -74,7 +74,7 @@ def sweep_seconds(sweep, work: Path, jobs: int, tag: str) -> tuple[float, list[f
 
     executor.run = run
     started = time.perf_counter()
-    run_sweep(sweep, work / tag, executor, {})
+    run_sweep(sweep, work / tag, executor, {}, pictures=False)  # as `mobot sweep` without --pictures
     return time.perf_counter() - started, finished
 
 
@@ -91,14 +91,16 @@ def loop_only(plans) -> float:
     return statistics.median(times)
 
 
-def whole_command(tree: Path, scenario: Path, out: Path, runs: int) -> tuple[float, float, float, float]:
+def whole_command(tree: Path, scenario: Path, out: Path, runs: int,
+                  extra: tuple[str, ...] = ()) -> tuple[float, float, float, float]:
     """(wall s, CPU s of every process, CPU s of the sweep process alone, median in-worker wall s
     of one run) of one whole ``mobot sweep --jobs 2`` with ``tree`` first on the path."""
     shutil.rmtree(out, ignore_errors=True)
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     started = time.perf_counter()
     subprocess.run([sys.executable, "-m", "mobot_cli", "sweep", str(scenario), "--grid",
-                    "seed=" + ",".join(str(i) for i in range(runs)), "--jobs", "2", "--out", str(out), "--quiet"],
+                    "seed=" + ",".join(str(i) for i in range(runs)), "--jobs", "2", "--out", str(out), "--quiet",
+                    *extra],
                    check=True, cwd=scenario.parent, env={**os.environ, "PYTHONPATH": str(tree)})
     wall = time.perf_counter() - started
     mid = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -124,21 +126,25 @@ def command_main(trees: list[Path], repeat: int, runs: int) -> None:
     try:
         scenario = work / "one.yaml"
         scenario.write_text(one_robot("kinematic", 10))
-        figures: dict[Path, list[tuple[float, float, float, float]]] = {t: [] for t in trees}
-        for i, tree in enumerate(trees):  # not counted: a new folder's first run fills its caches
-            whole_command(tree, scenario, work / f"out{i}", runs)
+        # Each tree without pictures (the default) and with --pictures (what every sweep drew before)
+        cases = [(tree, extra) for tree in trees for extra in ((), ("--pictures",))]
+        figures: dict[tuple, list[tuple[float, float, float, float]]] = {c: [] for c in cases}
+        for i, (tree, extra) in enumerate(cases):  # not counted: a new folder's first run fills its caches
+            whole_command(tree, scenario, work / f"out{i}", runs, extra)
         load = os.getloadavg()[0]
         for _ in range(repeat):  # interleaved: every tree sees the same load
-            for i, tree in enumerate(trees):
-                figures[tree].append(whole_command(tree, scenario, work / f"out{i}", runs))
+            for i, (tree, extra) in enumerate(cases):
+                figures[(tree, extra)].append(whole_command(tree, scenario, work / f"out{i}", runs, extra))
         print(f"{runs}-run `mobot sweep --jobs 2` of the kinematic 60 s script, whole command, medians of "
               f"{repeat} (load average {load:.1f} before, {os.getloadavg()[0]:.1f} after)")
         print(f"{'tree':<40} {'wall s':>7} {'runs/s':>7} {'CPU s':>6} {'sweep CPU s':>11} {'one run ms':>10}")
-        for tree, rows in figures.items():
+        for (tree, extra), rows in figures.items():
             wall, cpu, parent, per_run = (statistics.median(r[k] for r in rows) for k in range(4))
-            print(f"{str(tree):<40} {wall:>7.3f} {runs / wall:>7.1f} {cpu:>6.2f} {parent:>11.2f} "
+            label = f"{tree} {' '.join(extra)}".strip()
+            print(f"{label:<40} {wall:>7.3f} {runs / wall:>7.1f} {cpu:>6.2f} {parent:>11.2f} "
                   f"{per_run * 1000:>10.0f}   (walls {', '.join(f'{r[0]:.2f}' for r in rows)})")
             print(f"{'':<40} {bytecode_state(tree)}")
+        print("goal: >= 60 runs/s without pictures (the row with --pictures is what every sweep did before)")
     finally:
         shutil.rmtree(work, ignore_errors=True)
 

@@ -31,19 +31,20 @@ class RunResult:
 
 def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | None = None,
             attachments: Sequence[Attachment] = (),
-            watch: Callable[[Timeline], None] | None = None, durable: bool = True) -> RunResult:
+            watch: Callable[[Timeline], None] | None = None, durable: bool = True,
+            pictures: bool = True) -> RunResult:
     """Run a plan and write its run folder; summary.json is written last and says how it ended.
 
     ``attachments`` (the ROS 2 bridge) open after the robots are placed and close at the end;
     ``watch`` is called with the timeline once its robots are spawned, to attach more consumers
     (a live view). ``durable=False`` leaves flushing summary.json to disk to the caller (a sweep
-    does it off the worker's clock)."""
+    does it off the worker's clock); ``pictures=False`` draws no trajectory.png (a sweep's runs)."""
     with open_world(plan.physics, plan.world, seed=plan.seed) as world:
         # The robots are spawned and checked before the folder is made: a spawn refused
         # (inside furniture, below the floor) leaves no run folder behind.
         timeline = Timeline(plan, world)
         timeline.start()
-        recording = Recording(plan, out_dir, resolved_yaml, durable)
+        recording = Recording(plan, out_dir, resolved_yaml, durable, pictures)
         status, error, fault = Status.OK, None, None
         opened: list[Attachment] = []
         try:

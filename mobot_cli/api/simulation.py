@@ -19,7 +19,7 @@ from mobot_cli.api.cameras import CameraImage, Wanted, image_of, pick_camera
 from mobot_cli.api.numbers import bounded
 from mobot_cli.api.sensors import Latest, Range, Scan, pick, range_of, robot_plan
 from mobot_cli.errors import MobotError, SimulationFault, UsageError, did_you_mean
-from mobot_cli.plan import Plan
+from mobot_cli.plan import Plan, RobotPlan
 from mobot_cli.record.recording import Recording
 from mobot_cli.record.summary import RunRecord, Status
 from mobot_cli.scenario.goal_model import GoalFields, GotoSpec
@@ -176,6 +176,12 @@ class Simulation:
         self._open()
         plan = robot_plan(name, description, rate_hz=self.rate_hz, x=x, y=y, z=z, yaw=yaw, args=args,
                           namespace=namespace, base_dir=self._base_dir)
+        self._timeline.spawn(dataclasses.replace(plan, spawn_step=self.step_count), "request")
+
+    def spawn_plan(self, plan: RobotPlan) -> None:
+        """Place a robot resolved before (``api.sensors.robot_plan``), as ``spawn`` does: the same
+        robot again in another Simulation without resolving its description again."""
+        self._open()
         self._timeline.spawn(dataclasses.replace(plan, spawn_step=self.step_count), "request")
 
     def delete(self, name: str) -> None:

@@ -38,6 +38,8 @@ def sweep(
     resume: bool = typer.Option(False, "--resume", help="Finish the sweep in --out, skipping runs in results.csv."),
     json_: bool = typer.Option(False, "--json", help="Print sweep.json and every row as JSON on stdout."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but errors."),
+    pictures: bool = typer.Option(False, "--pictures", help="Draw each run's trajectory.png (`mobot plot RUN_DIR` "
+                                  "draws any run folder later)."),
     junit: Optional[Path] = typer.Option(None, "--junit", help="Also write a JUnit XML report: a testcase per run, "
                                          "its seed, swept values and metrics as properties."),
 ) -> int:
@@ -64,7 +66,7 @@ def sweep(
         done = check_out_dir(prepared, out_dir, resume)
         runner.start()  # e.g. join the Ray cluster: a failure here leaves no sweep folder behind
         started = time.perf_counter()
-        report = _run(env, runner, prepared, out_dir, done, quiet or json_)
+        report = _run(env, runner, prepared, out_dir, done, quiet or json_, pictures)
     finally:
         runner.close()
     total = len(prepared.variants)
@@ -83,7 +85,7 @@ def sweep(
     return ExitCode.EXPECTATION_FAILED if report.failed else ExitCode.OK
 
 
-def _run(env, runner, prepared, out_dir: Path, done: dict, silent: bool):
+def _run(env, runner, prepared, out_dir: Path, done: dict, silent: bool, pictures: bool = False):
     """The runs, with a progress bar unless ``silent``; Ctrl-C says where the finished rows are."""
     from mobot_cli.sweep.execution import run_sweep
 
@@ -91,7 +93,7 @@ def _run(env, runner, prepared, out_dir: Path, done: dict, silent: bool):
     if bar:
         bar.start()
     try:
-        return run_sweep(prepared, out_dir, runner, done, progress=output.sweep_updates(bar))
+        return run_sweep(prepared, out_dir, runner, done, progress=output.sweep_updates(bar), pictures=pictures)
     except KeyboardInterrupt:
         if bar:
             bar.stop()

@@ -20,13 +20,16 @@ Dict: ``"image"`` uint8 (H, W, 3), or (H, W, 1) for mono8, as Stable-Baselines3'
 MultiInputPolicy take images, and for a depth camera ``"depth"`` float32 (H, W, 1) with nothing
 within the far clip as the far clip (divided by it when normalized); the camera renders only
 at its own rate (docs/cameras.md). Every ``reset`` builds the world afresh, so ``reset(seed=s)``
-always starts the same episode, the lidar's noise included.
+always starts the same episode, the lidar's noise included; without ``out`` it does so from
+what the first reset made and kept: the scenario prepared (only its seed changes), the robot
+resolved, and the PyBullet client with the world's static bodies (sim/bullet/clients.py), so
+an episode is byte for byte the one a build from nothing gives (tests/run/test_scale_golden.py).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Callable, Optional
 
@@ -47,6 +50,8 @@ from mobot_cli.scenario.limits import (
     MAX_SECONDS,
     MAX_SPEED,
 )
+from mobot_cli.scenario.prepare import Prepared, prepare_target
+from mobot_cli.sim.bullet.clients import keep_at_least
 from mobot_cli.sim.holonomic import KINDS as HOLONOMIC
 
 
@@ -138,6 +143,7 @@ class MobotEnv(gym.Env):
         self._steps_per_action = 0
         self._count = 0
         self._episodes = 0
+        self._kept: dict[str, Any] = {}  # what resets reuse: see _open and _robot_plan
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         """A fresh world at t = 0 with the robot at its pose, settled; ``seed`` seeds the world."""
@@ -146,15 +152,14 @@ class MobotEnv(gym.Env):
         world_seed = int(self.np_random.integers(0, 2**31 - 1))
         out = None if self.out is None else self.out / f"episode_{self._episodes:04d}"
         self._episodes += 1
-        self._sim = Simulation.open(self.world, seed=world_seed, out=out)
+        self._sim = self._open(world_seed, out)
         rate = self._sim.rate_hz
         steps = rate / self.control_hz
         if abs(steps - round(steps)) > 1e-9 or round(steps) < 1:
             raise UsageError(f"control_hz {self.control_hz:g} is not a whole number of physics steps at {rate} Hz",
                              hint=f"Pick a divisor of {rate}, e.g. 10 at 240 Hz.")
         self._steps_per_action = round(steps)
-        x, y, yaw = self.pose
-        self._sim.spawn(self.robot, self.description, x=x, y=y, yaw=yaw, args=self.args)
+        self._sim.spawn_plan(self._robot_plan(rate))
         self._sim.run_for(self.settle)
         self._count = 0
         self._goal = self._goal_in_odom()
@@ -166,6 +171,30 @@ class MobotEnv(gym.Env):
         if self._camera is None:
             return obs
         return camera_observation(obs, self._sim.image(self.robot, self._camera.name), self._camera, self.normalize)
+
+    def _open(self, world_seed: int, out: Path | None) -> Simulation:
+        """The world at t = 0 with ``world_seed``: prepared once (the seed is the only thing that
+        differs between resets), built in a kept PyBullet client that holds its static bodies.
+        With ``out`` (a run folder per episode, whose scenario.yaml names the seed) it is prepared
+        each time."""
+        if out is not None:
+            return Simulation.open(self.world, seed=world_seed, out=out)
+        key = (self.world, Path.cwd())
+        if self._kept.get("world") != key:
+            self._kept.update(world=key, prepared=prepare_target(self.world, [f"seed={world_seed}"]))
+            keep_at_least(1)
+        prepared: Prepared = self._kept["prepared"]
+        return Simulation(Prepared(prepared.scenario, replace(prepared.plan, seed=world_seed), prepared.resolved_yaml))
+
+    def _robot_plan(self, rate: int):
+        """The robot resolved as Simulation.spawn resolves it, once for its settings."""
+        key = (self.robot, self.description, tuple(self.pose), tuple(sorted(self.args.items())), rate, Path.cwd())
+        if self._kept.get("robot") != key:
+            x, y, yaw = self.pose
+            plan = robot_plan(self.robot, self.description, rate_hz=rate, x=x, y=y, yaw=yaw, args=self.args,
+                              base_dir=Path.cwd())
+            self._kept.update(robot=key, robot_plan=plan)
+        return self._kept["robot_plan"]
 
     def step(self, action):
         """Hold ``action`` for one control period."""

@@ -175,7 +175,8 @@ class Recording:
     summary.json with status ``error`` and that message, where it can.
     """
 
-    def __init__(self, plan: Plan, out_dir: Path, resolved_yaml: str, durable: bool = True):
+    def __init__(self, plan: Plan, out_dir: Path, resolved_yaml: str, durable: bool = True,
+                 pictures: bool = True):
         self.plan, self.out_dir = plan, out_dir
         self.durable = durable  # summary.json flushed to disk here (a sweep flushes it itself)
         self.checker = Checker(plan)
@@ -198,7 +199,7 @@ class Recording:
                 from mobot_cli.assets.world.generate.make import GENERATED_FILE
 
                 write_text_atomic(out_dir / GENERATED_FILE, plan.generated_world, durable=False)
-            self.sinks = make_sinks(plan, out_dir, self.checker.sweeps)
+            self.sinks = make_sinks(plan, out_dir, self.checker.sweeps, pictures)
         except OSError as exc:
             failure = self._failed(exc)
             self._save(self._record(Status.ERROR, str(failure), 0, None))
@@ -367,8 +368,9 @@ class Recording:
                 for key, life in self._lives.items() if life.worst[0] > tolerance]
 
 
-def make_sinks(plan: Plan, out_dir: Path, sweeps: dict | None = None) -> list[Sink]:
-    """The sinks a plan's ``formats`` ask for; trajectory.png draws ``sweeps`` (the checker's)."""
+def make_sinks(plan: Plan, out_dir: Path, sweeps: dict | None = None, pictures: bool = True) -> list[Sink]:
+    """The sinks a plan's ``formats`` ask for; trajectory.png draws ``sweeps`` (the checker's), unless
+    ``pictures`` is False (sweeps draw none unless asked: `mobot plot` draws any run folder later)."""
     sinks: list[Sink] = []
     if "csv" in plan.formats:
         sinks.append(CsvSink(plan, out_dir))
@@ -376,6 +378,8 @@ def make_sinks(plan: Plan, out_dir: Path, sweeps: dict | None = None) -> list[Si
         from mobot_cli.record.bag import BagSink  # imports rosbags: only when a bag is asked for
 
         sinks.append(BagSink(plan, out_dir))
+    if not pictures:
+        return sinks
     from mobot_cli.record.trajectory import TrajectorySink
 
     sinks.append(TrajectorySink(plan, out_dir, sweeps))  # every run; last, as it draws when closed

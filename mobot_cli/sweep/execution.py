@@ -93,19 +93,20 @@ def check_out_dir(sweep: Sweep, out_dir: Path, resume: bool) -> dict[int, dict[s
 
 
 def run_sweep(sweep: Sweep, out_dir: Path, executor: Executor, done_rows: dict[int, dict[str, str]],
-              progress: Progress | None = None) -> SweepReport:
+              progress: Progress | None = None, pictures: bool = True) -> SweepReport:
     """Run every run not in ``done_rows``, holding the folder's lock; Ctrl-C stops it, keeping the
-    finished rows. A file of the sweep folder that cannot be written stops it with an OutputError."""
+    finished rows; ``pictures`` draws each run's trajectory.png. A file of the sweep folder that
+    cannot be written stops it with an OutputError."""
     try:
         (out_dir / "runs").mkdir(parents=True, exist_ok=True)
         with FolderLock(out_dir):
-            return _run(sweep, out_dir, executor, done_rows, progress)
+            return _run(sweep, out_dir, executor, done_rows, progress, pictures)
     except OSError as exc:
         raise cannot_write(exc.filename or out_dir, exc) from exc
 
 
 def _run(sweep: Sweep, out_dir: Path, executor: Executor, done_rows: dict[int, dict[str, str]],
-         progress: Progress | None) -> SweepReport:
+         progress: Progress | None, pictures: bool = True) -> SweepReport:
     total = len(sweep.variants)
     header = columns(sweep.keys, sweep.robots(), sweep.measured())
     document = sweep_document(sweep, executor.name, executor.jobs, executor.timeout)
@@ -113,7 +114,7 @@ def _run(sweep: Sweep, out_dir: Path, executor: Executor, done_rows: dict[int, d
     report = SweepReport(out_dir, document, dict(done_rows), skipped=len(done_rows))
     todo = [v for v in sweep.variants if v.index not in done_rows]
     tasks = [Task(v.index, sweep.prepared[v.index].plan, sweep.prepared[v.index].resolved_yaml,
-                  str((out_dir / folder(v.index, total)).resolve())) for v in todo]
+                  str((out_dir / folder(v.index, total)).resolve()), pictures) for v in todo]
     results = ResultsCsv(out_dir / "results.csv", header)
     syncer = Syncer()  # each run's summary.json to disk, while the next runs go on
 

@@ -33,6 +33,7 @@ class Task:
     plan: Plan
     resolved_yaml: str
     out_dir: str
+    pictures: bool = True  # draw trajectory.png (`mobot sweep --pictures`)
 
 
 @dataclass(frozen=True)
@@ -67,7 +68,8 @@ def run_task(task: Task, watch: Callable[[Any], None] | None = None) -> TaskResu
     started = time.perf_counter()
     try:
         # summary.json is flushed to disk by the sweep (runner.Syncer): an fsync here would hold the run up.
-        result = execute(task.plan, task.resolved_yaml, Path(task.out_dir), watch=watch, durable=False)
+        result = execute(task.plan, task.resolved_yaml, Path(task.out_dir), watch=watch, durable=False,
+                         pictures=task.pictures)
     except MobotError as exc:
         kind = "fault" if isinstance(exc, SimulationFault) else "error"
         return failed(task.index, kind, str(exc), time.perf_counter() - started)

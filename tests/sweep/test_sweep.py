@@ -327,3 +327,19 @@ def test_the_bundled_passing_sweep_exits_0_with_every_row_passed(tmp_path):
         ("bullet", "encoder"), ("bullet", "ground_truth"), ("kinematic", "encoder"), ("kinematic", "ground_truth")]
     assert all((r["status"], r["expect_failed"], r["mobot.collisions"]) == ("passed", "0", "0") for r in table)
     assert all(float(r["mobot.x"]) == pytest.approx(1.0, abs=0.05) for r in table)  # 1 m east, then north
+
+
+def test_pictures_only_when_asked(scenario, two_jobs, tmp_path):
+    """No trajectory.png in a sweep's runs unless --pictures; the other files are the same bytes,
+    and `mobot plot` draws a run folder later."""
+    assert not list(two_jobs.rglob("*.png"))
+    out = tmp_path / "pictures"
+    result = invoke(["sweep", scenario, *GRID, "--jobs", "2", "--out", out, "--quiet", "--pictures"])
+    assert result.exit_code == 1
+    assert len(list((out / "runs").glob("*/trajectory.png"))) == 6
+    for name in ("odom/mobot.csv", "scenario.yaml"):
+        assert (out / "runs" / "0003" / name).read_bytes() == (two_jobs / "runs" / "0003" / name).read_bytes()
+    copy = tmp_path / "later"
+    shutil.copytree(two_jobs / "runs" / "0003", copy)
+    assert invoke(["plot", copy]).exit_code == 0
+    assert (copy / "trajectory.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

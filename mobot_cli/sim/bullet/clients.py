@@ -50,6 +50,15 @@ def keep_clients(count: int) -> None:
         p.disconnect(physicsClientId=cid)
 
 
+def keep_at_least(count: int) -> None:
+    """Keep at least ``count`` clients (keep_clients), never fewer than asked before: for a
+    Gymnasium env, whose every reset builds the same world again."""
+    with _idle_lock:
+        more = count > _keep
+    if more:
+        keep_clients(count)
+
+
 def connect(key: Any = None) -> tuple[int, Optional[Stage]]:
     """A PyBullet client (DIRECT, headless) and, when a kept one holds the static world for
     ``key``, that stage (else None: an empty client, new or reset)."""

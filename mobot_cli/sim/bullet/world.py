@@ -15,6 +15,7 @@ from mobot_cli.common.streams import silenced
 from mobot_cli.errors import SimulationFault, SpawnError, WorldError, did_you_mean
 from mobot_cli.plan import Physics, RobotPlan, SpawnPose, WorldPlan
 from mobot_cli.sim import clearance, entity, parts, placement, static_shapes, surroundings
+from mobot_cli.sim.broadphase import RobotBoxes
 from mobot_cli.sim.bullet import friction
 from mobot_cli.sim.bullet.clients import Stage, connect, release
 from mobot_cli.sim.bullet.faults import Health
@@ -72,6 +73,7 @@ class World:
         self._sensing: Sensing | None = None  # made when the first robot with sensors arrives
         self._clearance: dict[str, float] = {}  # robot -> how far its clearance is measured (m)
         self._health = Health(self._cid, physics.faults, physics.rate_hz)
+        self._robot_boxes = RobotBoxes()  # the robots' boxes, for spawn checks (sim/broadphase.py)
         # Said once during the run (a stalled robot, a clamped car turn); a Timeline hands them on to summary.json.
         self.notices: list[str] = []
         if stage is not None:
@@ -106,6 +108,7 @@ class World:
         self._sensing = None  # rebuilt with the first robot with sensors: its noise restarts too
         self._clearance = {}
         self._health = Health(self._cid, self.physics.faults, self.physics.rate_hz)
+        self._robot_boxes.forget()
         self._build(self.plan)
 
     def _build(self, world: WorldPlan) -> None:
@@ -250,7 +253,10 @@ class World:
         cid = self._cid
         xyz = placement.link_frame_xyz(cid, uid)
         others = dict(self._statics)
-        others.update({r.body: f"robot '{n}'" for n, r in self._robots.items() if r.body != uid})
+        # Only the robots whose boxes meet this one's can be reached into (sim/broadphase.py).
+        robots = self._robots
+        others.update({r.body: f"robot '{r.name}'" for r in self._robot_boxes.near(cid, self._steps, robots.values(),
+                                                                                   len(robots), uid)})
         part = functools.partial(self._part, uid)
         placement.check_clear(cid, uid, others, name, xyz, z_auto=z_auto, part=part)
         box = placement.body_bounds(self._probes, uid)
@@ -280,6 +286,7 @@ class World:
         (world frame, of its root link's origin), checked like a spawn: SpawnError leaves it where it was."""
         robot = self._robot(name)
         saved = entity.saved(robot)
+        self._robot_boxes.forget()  # it moves, whether it stays there or not
         try:
             if pose.z_auto:
                 self._rest(robot.body, pose, name)
@@ -288,6 +295,7 @@ class World:
             self._check_placed(robot.body, name, pose.z_auto)
         except BaseException:
             entity.restore(robot, saved)
+            self._robot_boxes.forget()
             raise
         entity.set_twist(robot, linear, angular)
         self._health.moved(robot, self._steps)
@@ -297,6 +305,7 @@ class World:
         robot = self._robot(name)
         p.removeBody(robot.body, physicsClientId=self._cid)
         self._pristine = False
+        self._robot_boxes.forget()
         del self._robots[name]
         self._contacts.forget(name)
         if self._sensing is not None:

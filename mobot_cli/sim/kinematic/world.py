@@ -41,6 +41,7 @@ from mobot_cli.sim.kinematic.collide import (
     static_boxes,
 )
 from mobot_cli.sim.kinematic.holonomic import HolonomicMover
+from mobot_cli.sim.kinematic.pairs import robot_pairs
 from mobot_cli.sim.placement import body_bounds
 from mobot_cli.sim.state import RobotState
 
@@ -68,6 +69,8 @@ class KinematicWorld(World):
         self._by_body: dict[int, object] = {}  # body id -> SimRobot, of the robots in _order
         # robot i, j -> their distance when last measured plus both travels then (-inf: never)
         self._measured = np.zeros((0, 0))
+        self._room = self._measured  # _measured is its top-left corner (see _reindex)
+        self._reach = np.zeros(0)
         self._near: dict[str, Near] = {}
         self._floor = Floor(self._cid, world)
         self._flat = self._floor.flat and world.ground_plane  # the floor is z = 0 everywhere
@@ -80,6 +83,7 @@ class KinematicWorld(World):
         self._contacts = ContactCounter(max(1, round(RELEASE_SAMPLES * sample_hz / CONTACT_RATE_HZ)),
                                         name_of=self._hit_name)
         self._idle = 0  # samples without touches not yet told to _contacts
+        self._all_synced = -1  # the step at which every body was last put where its robot is
 
     def reset(self) -> None:
         """Back to the world as built, at step 0, with no robots (see World.reset)."""
@@ -93,6 +97,7 @@ class KinematicWorld(World):
         super().teleport(name, pose, linear, angular)
         mover = self._movers[name]
         mover.relocate(self._steps)
+        self._all_synced = -1
         self._measured[mover.index, :] = -np.inf  # its distances to the others: measure again
         self._measured[:, mover.index] = -np.inf
 
@@ -100,6 +105,7 @@ class KinematicWorld(World):
         """The root link's world pose and velocity now (its body put where it is first)."""
         if name in self._movers:
             self._movers[name].sync(full=True)
+            self._robot_boxes.forget()  # its wheels turned: its box may have changed
         return super().kinematics(name)
 
     def spawn(self, robot: RobotPlan) -> None:
@@ -139,17 +145,35 @@ class KinematicWorld(World):
         self._near.pop(name, None)
 
     def _reindex(self, grown: bool = True) -> None:
-        """Robots in spawn order, each knowing its row in the pair matrix (a new one: unmeasured)."""
-        self._order = list(self._movers.values())
+        """Robots in spawn order, each knowing its row in the pair matrix (a new one: unmeasured).
+
+        A spawn appends (the matrix grows into room kept for it, doubling: a fleet spawns in
+        linear time); a removal renumbers everyone."""
+        movers = self._movers
+        if grown and len(self._order) == len(movers) - 1:
+            mover = next(reversed(movers.values()))
+            mover.index = len(self._order)
+            self._order.append(mover)
+            self._by_body[mover.robot.body] = mover.robot
+            self._reach = np.append(self._reach, mover.reach)
+            n = len(self._order)
+            if n > len(self._room):
+                room = np.full((2 * n, 2 * n), -np.inf)
+                room[:n - 1, :n - 1] = self._measured
+                self._room = room
+            self._room[n - 1, :n] = -np.inf
+            self._room[:n, n - 1] = -np.inf
+            self._measured = self._room[:n, :n]
+            return
+        self._order = list(movers.values())
         self._by_body = {m.robot.body: m.robot for m in self._order}
         self._reach = np.array([m.reach for m in self._order])
         for index, mover in enumerate(self._order):
             mover.index = index
-        if grown:
-            n = len(self._order)
-            measured = np.full((n, n), -np.inf)
-            measured[:n - 1, :n - 1] = self._measured
-            self._measured = measured
+        n, had = len(self._order), min(len(self._order), len(self._measured))
+        measured = np.full((n, n), -np.inf)
+        measured[:had, :had] = self._measured[:had, :had]
+        self._room = self._measured = measured
 
     def set_command(self, name: str, linear: float, angular: float, linear_y: float = 0.0) -> None:
         """Command a body twist (m/s, rad/s; ``linear_y`` sideways, holonomic drives only);
@@ -158,6 +182,7 @@ class KinematicWorld(World):
         check_command(robot.name, robot.drive.spec if robot.drive is not None else None, linear_y)
         robot.cmd, robot.cmd_y = (float(linear), float(angular)), float(linear_y)
         mover = self._movers[name]
+        self._all_synced = -1  # a car's steering joints turn now
         if isinstance(mover, HolonomicMover):
             mover.command(float(linear), float(angular), float(linear_y))
         else:
@@ -192,39 +217,8 @@ class KinematicWorld(World):
             self._count()
 
     def _robot_pairs(self, moves) -> dict[Mover, list[Mover]]:
-        """The robots each moving robot might touch this step, in one numpy pass over all pairs:
-        not those whose circles (reach) stay apart by more than both their steps, nor those
-        whose distance, last measured, is more than both have travelled since (and this step)."""
-        everyone = self._order
-        n = len(everyone)
-        x = np.fromiter([m.x for m in everyone], float, n)
-        y = np.fromiter([m.y for m in everyone], float, n)
-        bound = np.zeros(n)
-        rows = [mover.index for mover, _ in moves]
-        bound[rows] = [mover.bound for mover, _ in moves]
-        reach = self._reach
-        dx, dy = x[:, None] - x[None, :], y[:, None] - y[None, :]
-        # First the pairs no farther apart along x and y than any pair's circles and steps can
-        # reach (most are farther), then the test itself on them alone, as numbers computed the
-        # same way for every pair would give.
-        limit = 2.0 * (bound.max() + reach.max()) + CONTACT_SLOP + 1e-9
-        close = np.abs(dx) <= limit
-        close &= np.abs(dy) <= limit
-        np.fill_diagonal(close, False)
-        if len(rows) < n:  # only the moving robots' rows
-            close &= np.isin(np.arange(n), rows)[:, None]
-        i, j = np.nonzero(close)
-        if not len(i):
-            return {}
-        travel = np.fromiter([m.travel for m in everyone], float, n)
-        margin = bound[i] + bound[j] + CONTACT_SLOP
-        gap = np.hypot(dx[i, j], dy[i, j]) - reach[i] - reach[j]
-        left = self._measured[i, j] - travel[i] - travel[j]
-        keep = (gap <= margin) & (left <= margin)
-        out: dict[Mover, list[Mover]] = {}
-        for a, b in zip(i[keep].tolist(), j[keep].tolist()):
-            out.setdefault(everyone[a], []).append(everyone[b])
-        return out
+        """The robots each moving robot might touch this step (sim/kinematic/pairs.py)."""
+        return robot_pairs(self._order, self._reach, self._measured, moves)
 
     def _move(self, mover: Mover, motion, others: list[Mover]) -> bool:
         """One robot's step, asking PyBullet what is in its way (step() makes a step in open
@@ -360,12 +354,18 @@ class KinematicWorld(World):
         self._contacts.record(pairs)
 
     def _sync_all(self, full: bool = False) -> None:
+        # Every body was put where its robot is at this step already (a fleet's spawns): a spawn
+        # would otherwise look at every robot again, N^2 looks for a fleet.
+        if not full and self._all_synced == self._steps:
+            return
         for mover in self._movers.values():
             mover.sync(full)
+        self._all_synced = self._steps
 
     def sense(self, due: list[tuple[str, str]]) -> list[object]:
         """Readings due now: the robots' bodies are put where they are first."""
         self._sync_all(full=True)
+        self._robot_boxes.forget()  # wheels turned: boxes may have changed
         rigs = self._sensors().rigs
         if any(rigs[robot][sensor].spec.kind == "contact" for robot, sensor in due):
             from mobot_cli.sim.pb import p
