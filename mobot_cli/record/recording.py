@@ -278,7 +278,8 @@ class Recording:
 
     def _sample(self, sample: Sample) -> None:
         if self._renamed:
-            sample = Sample(sample.step, {self._keys[n]: s for n, s in sample.states.items()}, sample.complete)
+            sample = Sample(sample.step, {self._keys[n]: s for n, s in sample.states.items()}, sample.complete,
+                            sample.movers)
         for sink in self.sinks:
             sink.write(sample)
         lives = self._lives
@@ -372,6 +373,10 @@ def make_sinks(plan: Plan, out_dir: Path, sweeps: dict | None = None) -> list[Si
         from mobot_cli.record.bag import BagSink  # imports rosbags: only when a bag is asked for
 
         sinks.append(BagSink(plan, out_dir))
+    if "csv" in plan.formats:
+        from mobot_cli.record.movers_csv import MoversCsvSink
+
+        sinks.append(MoversCsvSink(out_dir, plan.physics.rate_hz))  # movers.csv, when there are movers
     from mobot_cli.record.trajectory import TrajectorySink
 
     sinks.append(TrajectorySink(plan, out_dir, sweeps))  # every run; last, as it draws when closed

@@ -41,6 +41,7 @@ class TrajectorySink(Sink):
         self.tracks: list = []  # plot.render.Track, created lazily to keep Pillow out of the run
         self.open: dict[str, tuple[object, Planar]] = {}
         self.last_step = 0
+        self.movers: dict[str, list[tuple[float, float]]] = {}  # mover name -> its path (docs/movers.md)
 
     def deleted(self, step: int, key: str) -> None:
         self.open.pop(key, None)
@@ -55,6 +56,9 @@ class TrajectorySink(Sink):
             points, to_world = entry
             points.true.append((state.true_x, state.true_y))
             points.odom.append(to_world(state.odom_x, state.odom_y))
+        if sample.movers:
+            for name, (x, y, _) in sample.movers.items():
+                self.movers.setdefault(name, []).append((x, y))
         self.last_step = sample.step
 
     def reading(self, key: str, reading: Reading) -> None:
@@ -69,8 +73,9 @@ class TrajectorySink(Sink):
             raise named(exc, self.path) from None
 
     def _tracks(self) -> list[Drawn]:
-        return [drawn(t.label, t.true, t.odom, t.start_z, t.scan,
-                      [s for (name, _), s in self.sweeps.items() if name == t.label]) for t in self.tracks]
+        robots = [drawn(t.label, t.true, t.odom, t.start_z, t.scan,
+                        [s for (name, _), s in self.sweeps.items() if name == t.label]) for t in self.tracks]
+        return robots + [drawn(f"mover {name}", path, [], None) for name, path in self.movers.items()]
 
     def _subtitle(self) -> str:
         return f"{self.last_step / self.rate:g} s simulated; {_robots(len(self.tracks))}"

@@ -45,6 +45,7 @@ from mobot_cli.scenario.limits import (
     check_name,
     gravity_length,
 )
+from mobot_cli.scenario.mover_model import MoverSpec
 from mobot_cli.scenario.sensor_model import SensorEntry, SensorKey
 
 
@@ -281,6 +282,7 @@ class Scenario(Strict):
     events: list[EventSpec] = []
     expect: list[ExpectSpec] = []
     ros2: Optional[Ros2Spec] = None
+    movers: list[MoverSpec] = []  # docs/movers.md
 
     @field_validator("name")
     @classmethod

@@ -23,6 +23,7 @@ class Sample(NamedTuple):
     step: int
     states: dict[str, RobotState]
     complete: bool = True
+    movers: dict | None = None  # on complete rows of a world with movers: name -> (x, y, yaw)
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 from mobot_cli.common.streams import silenced
 from mobot_cli.errors import SimulationFault, SpawnError, WorldError, did_you_mean
-from mobot_cli.plan import Physics, RobotPlan, SpawnPose, WorldPlan
+from mobot_cli.plan import MoverPlan, Physics, RobotPlan, SpawnPose, WorldPlan
 from mobot_cli.sim import clearance, entity, parts, placement, static_shapes, surroundings
 from mobot_cli.sim.bullet import friction
 from mobot_cli.sim.bullet.clients import Stage, connect, release
@@ -28,6 +28,7 @@ from mobot_cli.sim.pb import p
 from mobot_cli.sim.state import RobotState
 
 if TYPE_CHECKING:
+    from mobot_cli.sim.movers.stage import Stage
     from mobot_cli.sim.sensing.rig import Sensing
 
 __all__ = ["World", "RobotState"]
@@ -67,9 +68,10 @@ class World:
         self._pushed: list[HolonomicDrive] = []  # holonomic drives: a base force every step
         self._odom_every = max(1, round(physics.rate_hz / ODOMETRY_RATE_HZ))
         self._check_every = max(1, round(physics.rate_hz / HEALTH_RATE_HZ))
-        self._contacts = ContactCounter(name_of=self._hit_name)
+        self._contacts = ContactCounter(name_of=self._hit_name, person=self._is_person)
         self._contact_every = max(1, round(physics.rate_hz / CONTACT_RATE_HZ))
         self._sensing: Sensing | None = None  # made when the first robot with sensors arrives
+        self._stage: Stage | None = None  # the movers (sim/movers/stage.py), made with the first
         self._clearance: dict[str, float] = {}  # robot -> how far its clearance is measured (m)
         self._health = Health(self._cid, physics.faults, physics.rate_hz)
         # Said once during the run (a stalled robot, a clamped car turn); a Timeline hands them on to summary.json.
@@ -77,6 +79,7 @@ class World:
         if stage is not None:
             self._probes, self._statics, self._solids, self._ground, self._names = \
                 stage.probes, stage.statics, stage.solids, stage.ground, stage.names
+            self._add_actors()
             return
         self._probes = placement.Probes(self._cid)
         try:
@@ -85,6 +88,7 @@ class World:
             self._pristine = False
             self.close()
             raise
+        self._add_actors()
 
     def reset(self) -> None:
         """Back to the world as built, at step 0, with no robots: PyBullet's own reset, then the
@@ -98,11 +102,13 @@ class World:
         self._ramping = []
         self._sprung = []
         self._pushed = []
-        self._contacts = ContactCounter(name_of=self._hit_name)
+        self._contacts = ContactCounter(name_of=self._hit_name, person=self._is_person)
         self._sensing = None  # rebuilt with the first robot with sensors: its noise restarts too
+        self._stage = None  # the reset removed the movers' bodies: the world's actors come back
         self._clearance = {}
         self._health = Health(self._cid, self.physics.faults, self.physics.rate_hz)
         self._build(self.plan)
+        self._add_actors()
 
     def _build(self, world: WorldPlan) -> None:
         cid, physics = self._cid, self.physics
@@ -299,6 +305,8 @@ class World:
             self._sensing.forget(name)
         self._clearance.pop(name, None)
         self._health.forget(name)
+        if self._stage is not None:
+            self._stage.forget_robot(robot.body)
         if robot in self._ramping:
             self._ramping.remove(robot)
         if robot in self._sprung:
@@ -328,6 +336,8 @@ class World:
                 drive.push(self.physics.dt)
         p.stepSimulation(physicsClientId=self._cid)
         self._steps += 1
+        if self._stage is not None and self._steps % self._stage.every == 0:
+            self._stage.update(self._steps, self._robots_xy())
         if self._steps % self._odom_every == 0:
             for robot in self._robots.values():
                 if robot.drive is not None:
@@ -363,20 +373,29 @@ class World:
             from mobot_cli.sim.sensing.rig import Sensing  # worlds without sensors never load it
 
             self._sensing = Sensing(self._cid, self.plan, self.seed, self.physics.dt, self.physics.gravity,
-                                    self.label, lambda: [r.body for r in self._robots.values()])
+                                    self.label, lambda: [r.body for r in self._robots.values()],
+                                    lambda: self._stage.snapshot() if self._stage is not None else None)
         return self._sensing
 
     def _hit_name(self, other) -> str:
         """How records name what a robot collided with (a ContactCounter key): the other robot's
         name, or the world body's."""
         kind, what = other
+        if kind != "robot" and self._stage is not None and what in self._stage.names:
+            return self._stage.names[what]
         return what if kind == "robot" else self._names.get(what, f"body {what}")
+
+    def _is_person(self, other) -> bool:
+        """True when a ContactCounter key is a person mover's body."""
+        return self._stage is not None and other[0] == "body" and other[1] in self._stage.people
 
     def label(self, body: int) -> str:
         """What messages call a body: "robot 'NAME'" or the static body's label."""
         for name, robot in self._robots.items():
             if robot.body == body:
                 return f"robot '{name}'"
+        if self._stage is not None and body in self._stage.names:
+            return f"mover '{self._stage.names[body]}'"
         return self._statics.get(body, f"body {body}")
     def odom_origin(self, name: str) -> tuple[float, float, float]:
         """Where the robot's odometry started: its odom frame's x, y, yaw in the world."""
@@ -389,6 +408,8 @@ class World:
         if self._clearance and name in self._clearance:
             state.clearance, state.nearest = clearance.nearest(
                 self._cid, robot.body, self._clearance[name], [r.body for r in self._robots.values()], self.label)
+        if self._stage is not None:
+            self._stage.social(robot, state)
         return state
 
     def states(self, names) -> dict[str, RobotState]:
@@ -398,6 +419,41 @@ class World:
     def watch_clearance(self, name: str, reach: float) -> None:
         """Measure the robot's clearance (up to ``reach`` m) whenever its state is read."""
         self._clearance[name] = max(reach, self._clearance.get(name, 0.0))
+
+    # -- movers (sim/movers/): actors of the world and a scenario's movers ---------------------
+
+    def _add_actors(self) -> None:
+        for actor in self.plan.actors:
+            self.add_mover(actor)
+
+    def add_mover(self, plan: MoverPlan) -> None:
+        """A mover enters the world now (SpawnError: its name is taken)."""
+        if self._stage is None:
+            from mobot_cli.sim.movers.stage import Stage
+
+            self._stage = Stage(self._cid, self.physics.rate_hz, self.plan, self.seed)
+        self._pristine = False  # the movers' bodies are not the static world's
+        self._stage.add(plan, self._steps)
+
+    def remove_mover(self, name: str) -> None:
+        """Take a mover out (KeyError: none of that name)."""
+        if self._stage is None:
+            raise KeyError(f"no mover named '{name}'")
+        self._stage.remove(name)
+
+    def movers(self) -> dict[str, tuple[float, float, float]]:
+        """Each mover's x, y, yaw now, by name (in the order they came)."""
+        return self._stage.crowd.poses() if self._stage is not None else {}
+
+    def mover_plans(self) -> list[MoverPlan]:
+        """The plans of the movers in the world, in the order they came."""
+        return list(self._stage.crowd.plans) if self._stage is not None else []
+
+    def _robots_xy(self) -> list[tuple[int, float, float]]:
+        """Each robot's body and x, y now (what walkers keep away from)."""
+        cid = self._cid
+        return [(r.body, *p.getBasePositionAndOrientation(r.body, physicsClientId=cid)[0][:2])
+                for r in self._robots.values()]
 
     def _robot(self, name: str) -> SimRobot:
         try:

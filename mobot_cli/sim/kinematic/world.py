@@ -78,7 +78,7 @@ class KinematicWorld(World):
         sample_hz = physics.rate_hz / self._contact_every
         # A pair must be apart 0.1 s before touching again counts again, at any rate.
         self._contacts = ContactCounter(max(1, round(RELEASE_SAMPLES * sample_hz / CONTACT_RATE_HZ)),
-                                        name_of=self._hit_name)
+                                        name_of=self._hit_name, person=self._is_person)
         self._idle = 0  # samples without touches not yet told to _contacts
 
     def reset(self) -> None:
@@ -188,6 +188,8 @@ class KinematicWorld(World):
                     moved.append(mover)
             if moved and not self._flat:
                 self._lift(moved)
+        if self._stage is not None and self._steps % self._stage.every == 0:
+            self._stage.update(self._steps, self._robots_xy())
         if self._steps % self._contact_every == 0:
             self._count()
 
@@ -333,12 +335,30 @@ class KinematicWorld(World):
         heights = self._floor.heights(np.array(points), np.array(top))
         return heights.reshape(len(movers), -1).max(axis=1)
 
+    def _robots_xy(self) -> list[tuple[int, float, float]]:
+        return [(m.robot.body, m.x, m.y) for m in self._order]
+
+    def add_mover(self, plan) -> None:
+        """A mover enters the world now (World.add_mover); robots of this engine do not stop at it."""
+        super().add_mover(plan)
+        notice = ("kinematic engine: movers do not stop robots (robots drive through them); "
+                  "touching one counts as a collision")
+        if notice not in self.notices:
+            self.notices.append(notice)
+
     def _count(self) -> None:
-        """One contact sample from the touches the robots' last queries found."""
+        """One contact sample from the touches the robots' last queries found (and the movers' bodies)."""
+        met = self._mover_touches() if self._stage is not None else set()
         for mover in self._order:
             if mover.touches:
                 break
         else:
+            if met:
+                if self._idle:
+                    self._contacts.idle(self._idle)
+                    self._idle = 0
+                self._contacts.record(met)
+                return
             self._idle += 1  # told to the counter before the next sample with touches
             return
         if self._idle:
@@ -357,7 +377,22 @@ class KinematicWorld(World):
                 elif hit is not robot:
                     pairs.add((robot, ("robot", hit.name)))
                     pairs.add((hit, ("robot", robot.name)))
-        self._contacts.record(pairs)
+        self._contacts.record(pairs | met)
+
+    def _mover_touches(self) -> set:
+        """(robot, ("body", mover body)) of the robots touching a mover's body now."""
+        from mobot_cli.sim.pb import p
+
+        placed = self._stage.placed_bodies()
+        if not placed:
+            return set()
+        self._sync_all()
+        found = set()
+        for mover in self._order:
+            for uid in placed:
+                if p.getClosestPoints(mover.robot.body, uid, CONTACT_SLOP, physicsClientId=self._cid):
+                    found.add((mover.robot, ("body", uid)))
+        return found
 
     def _sync_all(self, full: bool = False) -> None:
         for mover in self._movers.values():
@@ -379,9 +414,13 @@ class KinematicWorld(World):
             return super().states(names)
         movers = self._movers
         try:
-            return {name: movers[name].state() for name in names}  # a log row: this is hot
+            states = {name: movers[name].state() for name in names}  # a log row: this is hot
         except KeyError:  # one of them is not a Mover (yet): read() it
             return super().states(names)
+        if self._stage is not None:
+            for name, state in states.items():
+                self._stage.social(movers[name].robot, state)
+        return states
 
     def read(self, name: str) -> RobotState:
         """The robot's command, odometry and ground truth now (and its clearance when watched)."""
@@ -391,6 +430,8 @@ class KinematicWorld(World):
             state.clearance, state.nearest = clearance_mod.nearest(
                 self._cid, self._robot(name).body, self._clearance[name],
                 [r.body for r in self._robots.values()], self.label)
+        if self._stage is not None:
+            self._stage.social(self._robot(name), state)
         return state
 
 

@@ -1,0 +1,58 @@
+"""``DIR/movers.csv``: every mover's pose on every log row (docs/movers.md), made at the first row
+that has movers (a run without movers has no such file).
+
+Columns ``t, name, x, y, yaw`` (s, m, rad; the ground truth in the world frame), one row per
+mover per log row, movers in the order they entered the world: ``pandas.read_csv`` and a
+``groupby("name")`` give each one's path.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from mobot_cli.record.sinks import named
+from mobot_cli.timeline.records import Sample, Sink
+
+COLUMNS = ("t", "name", "x", "y", "yaw")
+FLUSH_EVERY_ROWS = 500
+
+
+class MoversCsvSink(Sink):
+    """Writes movers.csv as the log rows come."""
+
+    def __init__(self, out_dir: Path, rate_hz: int):
+        self.path = out_dir / "movers.csv"
+        self.rate = rate_hz
+        self._file = None
+        self._rows: list[str] = []
+
+    def write(self, sample: Sample) -> None:
+        if not sample.movers:
+            return
+        if self._file is None:
+            try:
+                self._file = open(self.path, "w", encoding="utf-8", newline="")  # noqa: SIM115 - closed in close()
+                self._file.write(",".join(COLUMNS) + "\n")
+            except OSError as exc:
+                raise named(exc, self.path) from None
+        t = sample.step / self.rate
+        rows = self._rows
+        for name, (x, y, yaw) in sample.movers.items():
+            rows.append(("%.6f,%s,%.6f,%.6f,%.6f\n" % (t, name, x, y, yaw)).replace("-0.000000", "0.000000"))
+        if len(rows) >= FLUSH_EVERY_ROWS:
+            self._flush()
+
+    def _flush(self) -> None:
+        if self._rows:
+            try:
+                self._file.write("".join(self._rows))
+            except OSError as exc:
+                raise named(exc, self.path) from None
+            self._rows.clear()
+
+    def close(self) -> None:
+        if self._file is not None:
+            try:
+                self._flush()
+            finally:
+                self._file.close()
