@@ -56,7 +56,21 @@ def resolved_document(scenario: Scenario, plan: Plan, base_dir: Path) -> dict[st
         **_events(scenario, plan, base_dir),
         **expect_document(plan.expectations, rate),
         **_ros2(scenario, plan),
+        **_movers(scenario, rate),
     }
+
+
+def _movers(scenario: Scenario, rate: int) -> dict[str, Any]:
+    """``movers:`` as given (fleets stay fleets), each ``at`` the exact step time it was rounded to."""
+    if not scenario.movers:
+        return {}
+    out = []
+    for spec in scenario.movers:
+        entry = spec.model_dump(mode="json", exclude_defaults=True)
+        if spec.at:
+            entry["at"] = steps(spec.at, rate) / rate
+        out.append(entry)
+    return {"movers": out}
 
 
 def _ros2(scenario: Scenario, plan: Plan) -> dict[str, Any]:

@@ -131,7 +131,8 @@ class Crowd:
         fixed = ~self.walkers
         others = np.concatenate([self.pos[fixed], robots]) if len(robots) else self.pos[fixed]
         others_r = np.concatenate([self.radius[fixed], robot_radius]) if len(robots) else self.radius[fixed]
-        accel = social.forces(pos, vel, self.goal[w], self.speed[w], radius, others, others_r, gaps, self.wall_dir)
+        accel = social.forces(pos, vel, self.goal[w], self.speed[w], radius, others, others_r, gaps, self.wall_dir,
+                              robots=len(robots))
         social.integrate(pos, vel, accel, self.speed[w], self.every / self.rate_hz)
         self.pos[w], self.vel[w] = pos, vel
         moving = np.hypot(vel[:, 0], vel[:, 1]) > 0.05

@@ -12,6 +12,7 @@ import numpy as np
 
 TAU = 0.5  # s: how fast a walker takes up its preferred velocity
 A_PEOPLE, B_PEOPLE = 2.1, 0.3  # m/s^2, m: Helbing & Molnar's V0 and sigma
+A_ROBOT, B_ROBOT = 6.0, 0.4  # m/s^2, m: people keep further from robots than from each other
 A_WALL, B_WALL = 10.0, 0.2  # m/s^2, m: walls push harder and closer
 VIEW_COS = np.cos(np.radians(100.0))  # half the field of view (200 degrees, as the paper's)
 BEHIND = 0.5  # the weight of what is out of view
@@ -19,10 +20,12 @@ MAX_SPEED_FACTOR = 1.3  # a walker never goes faster than this times its preferr
 
 
 def forces(pos: np.ndarray, vel: np.ndarray, goal: np.ndarray, speed: np.ndarray, radius: np.ndarray,
-           others: np.ndarray, others_radius: np.ndarray, wall_gap: np.ndarray, wall_dir: np.ndarray) -> np.ndarray:
+           others: np.ndarray, others_radius: np.ndarray, wall_gap: np.ndarray, wall_dir: np.ndarray,
+           robots: int = 0) -> np.ndarray:
     """Acceleration (n, 2) of n walkers at ``pos`` with velocities ``vel``: their goal's pull, the push
-    of the other walkers and of ``others`` (robots: (k, 2) with radii), and of walls: ``wall_gap``
-    (n, m) distances along unit directions ``wall_dir`` (m, 2) to the nearest wall (+inf: none)."""
+    of the other walkers and of ``others`` ((k, 2) with radii: other movers, then ``robots`` robots
+    last), and of walls: ``wall_gap`` (n, m) distances along unit directions ``wall_dir`` (m, 2) to
+    the nearest wall (+inf: none)."""
     to_goal = goal - pos
     dist = np.hypot(to_goal[:, 0], to_goal[:, 1])
     heading = to_goal / np.maximum(dist, 1e-9)[:, None]
@@ -34,7 +37,11 @@ def forces(pos: np.ndarray, vel: np.ndarray, goal: np.ndarray, speed: np.ndarray
     n = len(pos)
     d[np.arange(n), np.arange(n)] = np.inf  # not itself
     unit = diff / np.maximum(d, 1e-9)[..., None]
-    push = A_PEOPLE * np.exp((radius[:, None] + radii[None, :] - d) / B_PEOPLE)
+    a = np.full(len(everyone), A_PEOPLE)
+    b = np.full(len(everyone), B_PEOPLE)
+    if robots:
+        a[-robots:], b[-robots:] = A_ROBOT, B_ROBOT
+    push = a[None, :] * np.exp((radius[:, None] + radii[None, :] - d) / b[None, :])
     moving = np.hypot(vel[:, 0], vel[:, 1])
     facing = np.where(moving[:, None] > 1e-6, vel / np.maximum(moving, 1e-9)[:, None], heading)
     # in view when the other one is ahead: the push (from it) points against the walker's heading
