@@ -14,7 +14,7 @@ from mobot_cli.record.sinks import named
 from mobot_cli.timeline.records import Sample, Sink
 
 COLUMNS = ("t", "name", "x", "y", "yaw")
-FLUSH_EVERY_ROWS = 500
+FLUSH_EVERY_ROWS = 50
 
 
 class MoversCsvSink(Sink):
@@ -24,7 +24,9 @@ class MoversCsvSink(Sink):
         self.path = out_dir / "movers.csv"
         self.rate = rate_hz
         self._file = None
-        self._rows: list[str] = []
+        self._rows: list[str] = []  # log rows waiting to be written, all movers of a row in one string
+        self._names: tuple[str, ...] = ()
+        self._format = ""
 
     def write(self, sample: Sample) -> None:
         if not sample.movers:
@@ -35,11 +37,15 @@ class MoversCsvSink(Sink):
                 self._file.write(",".join(COLUMNS) + "\n")
             except OSError as exc:
                 raise named(exc, self.path) from None
+        movers = sample.movers
+        names = tuple(movers)
+        if names != self._names:  # one format for a whole row of movers: this runs on every log row
+            self._names = names
+            self._format = "".join(f"%.6f,{name},%.6f,%.6f,%.6f\n" for name in names)
         t = sample.step / self.rate
-        rows = self._rows
-        for name, (x, y, yaw) in sample.movers.items():
-            rows.append(("%.6f,%s,%.6f,%.6f,%.6f\n" % (t, name, x, y, yaw)).replace("-0.000000", "0.000000"))
-        if len(rows) >= FLUSH_EVERY_ROWS:
+        values = [v for pose in movers.values() for v in (t, *pose)]
+        self._rows.append((self._format % tuple(values)).replace("-0.000000", "0.000000"))
+        if len(self._rows) >= FLUSH_EVERY_ROWS:
             self._flush()
 
     def _flush(self) -> None:

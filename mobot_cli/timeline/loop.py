@@ -91,6 +91,7 @@ class Timeline:
         for mover in plan.movers:
             self._movers[mover.spawn_step].append(mover)
         self._moving = bool(plan.world.actors or plan.movers)  # log rows carry the movers' poses
+        self._movers_logged = -1  # world.movers_moved() when they were last on a log row
         spawned = [event.spawn for event in plan.events if event.spawn is not None]
         for robot in (*plan.robots, *spawned):
             for cmd in robot.commands:
@@ -220,7 +221,10 @@ class Timeline:
     def _log(self, step: int) -> None:
         if self._logged != step:
             self._logged = step
-            movers = self.world.movers() if self._moving else None
+            movers = None
+            if self._moving and self.world.movers_moved() != self._movers_logged:
+                self._movers_logged = self.world.movers_moved()
+                movers = self.world.movers()
             self._consume(Sample(step, self.world.states(self.robots), True, movers))
 
     def _read(self, step: int, due: list[tuple[str, RobotPlan, SensorSpec]]) -> None:

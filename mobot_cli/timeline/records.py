@@ -23,7 +23,7 @@ class Sample(NamedTuple):
     step: int
     states: dict[str, RobotState]
     complete: bool = True
-    movers: dict | None = None  # on complete rows of a world with movers: name -> (x, y, yaw)
+    movers: dict | None = None  # name -> (x, y, yaw) of every mover, on complete rows after they moved
 
 
 @dataclass(frozen=True)

@@ -441,6 +441,10 @@ class World:
             raise KeyError(f"no mover named '{name}'")
         self._stage.remove(name)
 
+    def movers_moved(self) -> int:
+        """A count that changes whenever the movers move, come or go (log rows record them then)."""
+        return self._stage.crowd.updates if self._stage is not None else 0
+
     def movers(self) -> dict[str, tuple[float, float, float]]:
         """Each mover's x, y, yaw now, by name (in the order they came)."""
         return self._stage.crowd.poses() if self._stage is not None else {}

@@ -19,7 +19,12 @@ from mobot_cli.sim.movers import social
 from mobot_cli.sim.movers.script import Script
 from mobot_cli.sim.movers.shapes import BOX, KINDS, Snapshot
 
-MOVER_RATE_HZ = 60  # updates a second: 4 steps at 240 Hz, so 10 Hz scans see them where they are
+# Updates a second, as gazebo classic animates actors (at most 20 Hz, Actor.cc): 12 steps at
+# 240 Hz, so 10 Hz scans are taken where the movers were just put.
+MOVER_RATE_HZ = 20
+# Walkers move at every update but the social force is worked out at every FORCE_EVERY-th (10 Hz;
+# PySocialForce steps at 2.5 Hz): it changes slowly, and it is most of what fifty walkers cost.
+FORCE_EVERY = 2
 GOAL_REACHED = 0.3  # m: a walker this close to its goal draws the next
 PATIENCE = 5.0  # s more than the straight walk takes: a walker that cannot get there draws another goal
 WALL_RAYS = 8  # directions a walker looks for walls in
@@ -48,6 +53,7 @@ class Crowd:
         self.pos = np.zeros((0, 2))
         self.vel = np.zeros((0, 2))
         self.yaw = np.zeros(0)
+        self.updates = 0  # how many times they were moved: log rows record them when it changed
         angles = np.arange(WALL_RAYS) * (2.0 * math.pi / WALL_RAYS)
         self.wall_dir = np.column_stack([np.cos(angles), np.sin(angles)])
         self._shape_arrays()
@@ -76,6 +82,7 @@ class Crowd:
         self.yaw = np.append(self.yaw, yaw)
         self.goal = np.vstack([self.goal, [x, y]])
         self.deadline = np.append(self.deadline, -1.0)  # a walker draws its first goal at its first update
+        self.updates += 1
         self._shape_arrays()
 
     def remove(self, name: str) -> None:
@@ -85,6 +92,7 @@ class Crowd:
         self.pos, self.vel = np.delete(self.pos, i, axis=0), np.delete(self.vel, i, axis=0)
         self.goal, self.yaw, self.deadline = np.delete(self.goal, i, axis=0), np.delete(self.yaw, i), \
             np.delete(self.deadline, i)
+        self.updates += 1
         self._shape_arrays()
 
     def _shape_arrays(self) -> None:
@@ -98,6 +106,8 @@ class Crowd:
         self.z0 = np.array([p.z for p in plans])
         self.z1 = np.array([p.z + (p.size[2] if p.shape == "box" else p.size[1]) for p in plans])
         self.walkers = np.array([p.region is not None for p in plans], dtype=bool)
+        self.people = self.kind == KINDS["person"]
+        self.accel = np.zeros((len(plans), 2))  # the walkers' social force, as last worked out
         self.speed = np.array([p.speed for p in plans])
 
     def _random_point(self, plan: MoverPlan, rng: np.random.Generator) -> tuple[float, float]:
@@ -107,6 +117,7 @@ class Crowd:
     def update(self, step: int, robots: np.ndarray, robot_radius: np.ndarray) -> None:
         """Move every mover to ``step``; ``robots`` (k, 2) the robots' positions, their radii."""
         dt = 1.0 / self.rate_hz
+        self.updates += 1
         for i, script in enumerate(self.scripts):
             if script is not None:
                 x, y, yaw = script.pose((step - self.born[i]) * dt)
@@ -118,10 +129,22 @@ class Crowd:
     def _walk(self, now: float, robots: np.ndarray, robot_radius: np.ndarray) -> None:
         w = np.flatnonzero(self.walkers)
         pos, vel = self.pos[w], self.vel[w]
-        for j, i in enumerate(w.tolist()):
-            if now >= self.deadline[i] or math.dist(pos[j], self.goal[i]) < GOAL_REACHED:
-                self.goal[i] = self._random_point(self.plans[i], self.rngs[i])
-                self.deadline[i] = now + math.dist(pos[j], self.goal[i]) / self.speed[i] + PATIENCE
+        goal = self.goal[w]
+        due = (now >= self.deadline[w]) | (np.hypot(*(pos - goal).T) < GOAL_REACHED)
+        for j in np.flatnonzero(due).tolist():
+            i = int(w[j])
+            self.goal[i] = self._random_point(self.plans[i], self.rngs[i])
+            self.deadline[i] = now + math.dist(pos[j], self.goal[i]) / self.speed[i] + PATIENCE
+        if self.updates % FORCE_EVERY == 0 or not self.accel[w].any():
+            self.accel[w] = self._force(w, pos, vel, robots, robot_radius)
+        social.integrate(pos, vel, self.accel[w], self.speed[w], self.every / self.rate_hz)
+        self.pos[w], self.vel[w] = pos, vel
+        moving = np.hypot(vel[:, 0], vel[:, 1]) > 0.05
+        self.yaw[w[moving]] = np.arctan2(vel[moving, 1], vel[moving, 0])
+
+    def _force(self, w: np.ndarray, pos: np.ndarray, vel: np.ndarray, robots: np.ndarray,
+               robot_radius: np.ndarray) -> np.ndarray:
+        """The social force on walkers ``w`` now (sim/movers/social.py)."""
         radius = self.radius[w]
         # Walls: WALL_RAYS short rays from each walker, at its WALL_HEIGHT.
         origins = np.repeat(np.column_stack([pos, self.z0[w] + WALL_HEIGHT]), WALL_RAYS, axis=0)
@@ -131,12 +154,8 @@ class Crowd:
         fixed = ~self.walkers
         others = np.concatenate([self.pos[fixed], robots]) if len(robots) else self.pos[fixed]
         others_r = np.concatenate([self.radius[fixed], robot_radius]) if len(robots) else self.radius[fixed]
-        accel = social.forces(pos, vel, self.goal[w], self.speed[w], radius, others, others_r, gaps, self.wall_dir,
-                              robots=len(robots))
-        social.integrate(pos, vel, accel, self.speed[w], self.every / self.rate_hz)
-        self.pos[w], self.vel[w] = pos, vel
-        moving = np.hypot(vel[:, 0], vel[:, 1]) > 0.05
-        self.yaw[w[moving]] = np.arctan2(vel[moving, 1], vel[moving, 0])
+        return social.forces(pos, vel, self.goal[w], self.speed[w], radius, others, others_r, gaps, self.wall_dir,
+                             robots=len(robots))
 
     def snapshot(self) -> Snapshot:
         """The movers' shapes where they are now (copies: later updates leave it as it is)."""
@@ -150,7 +169,7 @@ class Crowd:
 
     def people_distance(self, x: float, y: float) -> float:
         """The smallest distance in the plane from (x, y) to a person's axis (+inf: no person)."""
-        people = self.kind == KINDS["person"]
+        people = self.people
         if not people.any():
             return math.inf
         return float(np.hypot(self.pos[people, 0] - x, self.pos[people, 1] - y).min())

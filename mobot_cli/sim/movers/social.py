@@ -25,32 +25,32 @@ def forces(pos: np.ndarray, vel: np.ndarray, goal: np.ndarray, speed: np.ndarray
     """Acceleration (n, 2) of n walkers at ``pos`` with velocities ``vel``: their goal's pull, the push
     of the other walkers and of ``others`` ((k, 2) with radii: other movers, then ``robots`` robots
     last), and of walls: ``wall_gap`` (n, m) distances along unit directions ``wall_dir`` (m, 2) to
-    the nearest wall (+inf: none)."""
-    to_goal = goal - pos
-    dist = np.hypot(to_goal[:, 0], to_goal[:, 1])
-    heading = to_goal / np.maximum(dist, 1e-9)[:, None]
-    force = (heading * speed[:, None] - vel) / TAU
-    everyone = np.concatenate([pos, others]) if len(others) else pos
+    the nearest wall (+inf: none). Points in the plane are complex numbers inside: every pair's
+    vector, distance and direction is one numpy call each."""
+    z = pos[:, 0] + 1j * pos[:, 1]
+    v = vel[:, 0] + 1j * vel[:, 1]
+    to_goal = (goal[:, 0] + 1j * goal[:, 1]) - z
+    heading = to_goal / np.maximum(np.abs(to_goal), 1e-9)
+    force = (heading * speed - v) / TAU
+    everyone = np.concatenate([z, others[:, 0] + 1j * others[:, 1]]) if len(others) else z
     radii = np.concatenate([radius, others_radius]) if len(others) else radius
-    diff = pos[:, None, :] - everyone[None, :, :]  # from each other one to the walker
-    d = np.hypot(diff[..., 0], diff[..., 1])
-    n = len(pos)
-    d[np.arange(n), np.arange(n)] = np.inf  # not itself
-    unit = diff / np.maximum(d, 1e-9)[..., None]
+    diff = z[:, None] - everyone  # (n, n + k): from each other one to the walker
+    d = np.abs(diff)
+    d.flat[:: len(everyone) + 1] = np.inf  # not itself (the first n columns are the walkers)
     a = np.full(len(everyone), A_PEOPLE)
     b = np.full(len(everyone), B_PEOPLE)
     if robots:
         a[-robots:], b[-robots:] = A_ROBOT, B_ROBOT
-    push = a[None, :] * np.exp((radius[:, None] + radii[None, :] - d) / b[None, :])
-    moving = np.hypot(vel[:, 0], vel[:, 1])
-    facing = np.where(moving[:, None] > 1e-6, vel / np.maximum(moving, 1e-9)[:, None], heading)
+    push = a * np.exp((radius[:, None] + radii - d) / b) / d  # over d: times diff is the unit vector
+    speed_now = np.abs(v)
+    facing = np.where(speed_now > 1e-6, v / np.maximum(speed_now, 1e-9), heading)
     # in view when the other one is ahead: the push (from it) points against the walker's heading
-    ahead = -np.einsum("nkj,nj->nk", unit, facing) >= VIEW_COS
-    push *= np.where(ahead, 1.0, BEHIND)
-    force += np.einsum("nk,nkj->nj", push, unit)
+    behind = (diff * np.conj(facing)[:, None]).real > -VIEW_COS * d
+    push[behind] *= BEHIND
+    force += (push * diff).sum(axis=1)
     wall = A_WALL * np.exp((radius[:, None] - wall_gap) / B_WALL)  # exp(-inf) = 0 where no wall
-    force -= wall @ wall_dir
-    return force
+    force -= wall @ (wall_dir[:, 0] + 1j * wall_dir[:, 1])
+    return np.column_stack([force.real, force.imag])
 
 
 def integrate(pos: np.ndarray, vel: np.ndarray, accel: np.ndarray, speed: np.ndarray, dt: float) -> None:

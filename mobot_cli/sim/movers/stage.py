@@ -3,14 +3,17 @@
 A mover's body is a mass-0 shape that robots collide with (collision group ``MOVER_GROUP``,
 meeting robots only: not the static world, not each other, not the floor rays of the kinematic
 engine, not PyBullet's ray tests of the lidar, which casts at movers itself: shapes.py). Only
-the bodies of movers near a robot are moved with them (``resetBasePositionAndOrientation``);
-the others wait out of the way (``PARK``), where no robot, clearance query or contact meets
-them, so that fifty walkers cost little more than their own maths.
+movers near a robot have a body, moved with them (``resetBasePositionAndOrientation``): it is
+given when the mover comes within ``NEAR`` of a robot and taken back when it is ``NEAR + AWAY``
+away. Every body in PyBullet costs each step (50 bodies parked out of the way added a fifth
+to a house step, measured) and making one costs milliseconds in a furnished world, so bodies
+taken back wait (``PARK``, meeting nothing) for the next mover of their shape to come near.
 """
 
 from __future__ import annotations
 
 import math
+
 import numpy as np
 
 from mobot_cli.errors import SpawnError
@@ -21,8 +24,11 @@ from mobot_cli.sim.pb import p
 
 MOVER_GROUP = 4  # PyBullet collision filter group (robots are 1, static bodies 2)
 ROBOT_MASK = 1
-PARK = (0.0, 0.0, -1000.0)  # where the bodies of movers far from every robot wait
-NEAR = 3.0  # m between a mover's and a robot's circles within which its body follows it
+PARK = (0.0, 0.0, -1000.0)  # where spare bodies wait
+# m between a mover's and a robot's circles within which it has a body: what clearance sees of
+# movers (timeline/metrics.py measures people's distance from their poses, at any distance)
+NEAR = 1.0
+AWAY = 0.5  # m further than NEAR before its body goes
 STATIC_GROUP = 2
 
 
@@ -33,36 +39,52 @@ class Stage:
         self.cid, self.world = cid, world
         self.crowd = Crowd(rate_hz, seed, self._walls)
         self.every = self.crowd.every
-        self.bodies: dict[str, int] = {}
+        self.bodies: dict[str, int] = {}  # mover name -> its body, of the movers near a robot
         self.names: dict[int, str] = {}  # body -> mover name (how collisions name it)
         self.people: set[int] = set()  # bodies of person movers
-        self._placed: np.ndarray = np.zeros(0, dtype=bool)  # whose body is out of PARK
+        self._shapes: dict[tuple, int] = {}  # (shape, size) -> PyBullet collision shape
+        self._spare: dict[tuple, list[int]] = {}  # (shape, size) -> parked bodies of that shape
+        self._keys: dict[int, tuple] = {}  # body -> its (shape, size)
         self._radius: dict[int, float] = {}  # robot body -> the radius of its circle
         self._scene = None
         self._scene_built = False
 
     def add(self, plan: MoverPlan, step: int) -> None:
         """A mover enters now; SpawnError when its name is taken."""
-        if plan.name in self.bodies:
+        if plan.name in self.crowd.names():
             raise SpawnError(f"a mover named '{plan.name}' already exists", hint="Mover names must be unique.")
         self.crowd.add(plan, step)
-        uid = _body(self.cid, plan)
-        self.bodies[plan.name], self.names[uid] = uid, plan.name
-        if plan.shape == "person":
-            self.people.add(uid)
-        self._placed = np.append(self._placed, False)
 
     def remove(self, name: str) -> None:
         """A mover leaves; KeyError when there is none of that name."""
-        if name not in self.bodies:
+        if name not in self.crowd.names():
             raise KeyError(f"no mover named '{name}'")
-        i = self.crowd.names().index(name)
+        if name in self.bodies:
+            self._unmake(name)
+        self.crowd.remove(name)
+
+    def _make(self, plan: MoverPlan) -> int:
+        key = (plan.shape, plan.size)
+        spare = self._spare.get(key)
+        if spare:
+            uid = spare.pop()
+        else:
+            if key not in self._shapes:
+                self._shapes[key] = _shape(self.cid, plan)
+            uid = p.createMultiBody(0.0, self._shapes[key], basePosition=PARK, physicsClientId=self.cid)
+            p.setCollisionFilterGroupMask(uid, -1, MOVER_GROUP, ROBOT_MASK, physicsClientId=self.cid)
+            self._keys[uid] = key
+        self.bodies[plan.name], self.names[uid] = uid, plan.name
+        if plan.shape == "person":
+            self.people.add(uid)
+        return uid
+
+    def _unmake(self, name: str) -> None:
         uid = self.bodies.pop(name)
-        p.removeBody(uid, physicsClientId=self.cid)
+        p.resetBasePositionAndOrientation(uid, PARK, (0.0, 0.0, 0.0, 1.0), physicsClientId=self.cid)
+        self._spare.setdefault(self._keys[uid], []).append(uid)
         del self.names[uid]
         self.people.discard(uid)
-        self.crowd.remove(name)
-        self._placed = np.delete(self._placed, i)
 
     def update(self, step: int, robots: list[tuple[int, float, float]]) -> None:
         """Move the movers to ``step`` and the bodies of those near a robot (body, x, y) with them."""
@@ -71,25 +93,30 @@ class Stage:
         crowd = self.crowd
         crowd.update(step, xy, radius)
         if not len(xy):
-            near = np.zeros(len(crowd), dtype=bool)
+            gap = np.full(len(crowd), np.inf)
         else:
-            gap = np.hypot(crowd.pos[:, None, 0] - xy[None, :, 0], crowd.pos[:, None, 1] - xy[None, :, 1])
-            near = (gap - crowd.radius[:, None] - radius[None, :] <= NEAR).any(axis=1)
+            apart = np.hypot(crowd.pos[:, None, 0] - xy[None, :, 0], crowd.pos[:, None, 1] - xy[None, :, 1])
+            gap = (apart - crowd.radius[:, None] - radius[None, :]).min(axis=1)
         cid, bodies = self.cid, self.bodies
-        for i in np.flatnonzero(near | self._placed).tolist():
-            uid = bodies[crowd.plans[i].name]
-            if near[i]:
-                z = (crowd.z0[i] + crowd.z1[i]) / 2.0
-                half = crowd.yaw[i] / 2.0
-                p.resetBasePositionAndOrientation(uid, (crowd.pos[i, 0], crowd.pos[i, 1], z),
-                                                  (0.0, 0.0, math.sin(half), math.cos(half)), physicsClientId=cid)
-            else:
-                p.resetBasePositionAndOrientation(uid, PARK, (0.0, 0.0, 0.0, 1.0), physicsClientId=cid)
-        self._placed = near
+        for i in np.flatnonzero(gap <= NEAR + AWAY).tolist():
+            plan = crowd.plans[i]
+            uid = bodies.get(plan.name)
+            if uid is None:
+                if gap[i] > NEAR:
+                    continue
+                uid = self._make(plan)
+            z = (crowd.z0[i] + crowd.z1[i]) / 2.0
+            half = crowd.yaw[i] / 2.0
+            p.resetBasePositionAndOrientation(uid, (crowd.pos[i, 0], crowd.pos[i, 1], z),
+                                              (0.0, 0.0, math.sin(half), math.cos(half)), physicsClientId=cid)
+        if len(bodies) > int((gap <= NEAR + AWAY).sum()):
+            keep = {crowd.plans[i].name for i in np.flatnonzero(gap <= NEAR + AWAY).tolist()}
+            for name in [n for n in bodies if n not in keep]:
+                self._unmake(name)
 
     def placed_bodies(self) -> list[int]:
-        """The bodies that are with their movers (near a robot), not parked."""
-        return [self.bodies[self.crowd.plans[i].name] for i in np.flatnonzero(self._placed).tolist()]
+        """The movers' bodies (of those near a robot)."""
+        return list(self.bodies.values())
 
     def snapshot(self) -> Snapshot | None:
         """The movers' shapes now, for a scan; None without movers."""
@@ -120,16 +147,17 @@ class Stage:
             scene = static_scene(self.world) if embree_available() else None
             self._scene = scene if scene is not None and scene.complete else None
             self._scene_built = True
-        if self._scene is not None:
-            return self._scene.cast(origins, dirs, lengths).astype(float)
+        if self._scene is not None:  # level rays: their heights are their starts'
+            z = origins[:, 2]
+            return self._scene.cast(origins, dirs, lengths, (float(z.min()), float(z.max()))).astype(float)
         ends = origins + dirs * lengths[:, None]
         hits = p.rayTestBatch(origins.tolist(), ends.tolist(), collisionFilterMask=STATIC_GROUP,
                               physicsClientId=self.cid)
         return np.array([h[2] * length if h[0] >= 0 else math.inf for h, length in zip(hits, lengths)])
 
 
-def _body(cid: int, plan: MoverPlan) -> int:
-    """A mass-0 body of the mover's shape, parked, meeting robots only."""
+def _shape(cid: int, plan: MoverPlan) -> int:
+    """A PyBullet collision shape of the mover's shape (upright, centred)."""
     if plan.shape == "box":
         shape = p.createCollisionShape(p.GEOM_BOX, halfExtents=[s / 2.0 for s in plan.size], physicsClientId=cid)
     elif plan.shape == "cylinder":
@@ -138,7 +166,5 @@ def _body(cid: int, plan: MoverPlan) -> int:
         radius = plan.size[0]
         shape = p.createCollisionShape(p.GEOM_CAPSULE, radius=radius, height=max(plan.size[1] - 2.0 * radius, 0.0),
                                        physicsClientId=cid)
-    uid = p.createMultiBody(0.0, shape, basePosition=PARK, physicsClientId=cid)
-    p.setCollisionFilterGroupMask(uid, -1, MOVER_GROUP, ROBOT_MASK, physicsClientId=cid)
-    return uid
+    return shape
 
