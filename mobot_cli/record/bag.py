@@ -9,6 +9,8 @@ directly (ros/mcap_records.py). Topics, per sample at the log rate unless noted:
 * ``/clock`` (rosgraph_msgs/Clock): the sim time;
 * ``/tf`` (tf2_msgs/TFMessage): per robot ``<prefix>odom -> <prefix><root link>`` from its
   odometry, and every moving joint from the joint positions, as robot_state_publisher does;
+  With movers (docs/movers.md), each mover as ``world -> movers/<name>`` (at its foot, facing
+  its heading) on the rows after they moved;
 * ``/tf_static`` (transient local), once per robot: ``world -> <prefix>odom`` at the pose the
   robot's odometry starts from, so every robot shows in one view, and every fixed joint;
 * ``<ns>/odom`` (nav_msgs/Odometry), ``<ns>/cmd_vel`` (geometry_msgs/Twist),
@@ -27,6 +29,7 @@ scanning it reads up to its last chunk (metadata.yaml is written only when the b
 from __future__ import annotations
 
 import contextlib
+import math
 import shutil
 from pathlib import Path
 from typing import Sequence
@@ -52,6 +55,7 @@ from mobot_cli.ros.messages import (
     tf_shape,
     tf_static,
 )
+from mobot_cli.ros.tf import Transform
 from mobot_cli.sim.state import RobotState
 from mobot_cli.timeline.records import Reading, Sample, Sink
 
@@ -152,6 +156,8 @@ class BagSink(Sink):
         for fill, state in zip(fills, sample.states.values()):
             fill(state, values)
         self.records.write_row(ns, row, values)
+        if sample.movers:
+            self.records.write(ns, [(self.tf, tf_static(stamp, mover_transforms(sample.movers)))])
 
     def _row(self, names: tuple[str, ...], clock: bool) -> tuple[Row, list]:
         """The row of a sample of these robots, and the functions that give its values."""
@@ -230,6 +236,12 @@ class _RobotTopics:
         """One sensor reading as its ROS message."""
         ns, stamp = stamp_of(reading.step, rate)
         records.write(ns, [(self.sensor_connections[reading.sensor.name], self.messages.reading(stamp, reading))])
+
+
+def mover_transforms(movers: dict) -> list[Transform]:
+    """``world -> movers/<name>`` of each mover (x, y, yaw), as TF takes them."""
+    return [Transform("world", f"movers/{name}", (x, y, 0.0), (0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0)))
+            for name, (x, y, yaw) in movers.items()]
 
 
 def log_row(clock, robots: Sequence[tuple[Sequence, RobotMessages]], tf) -> Row:
