@@ -29,7 +29,6 @@ scanning it reads up to its last chunk (metadata.yaml is written only when the b
 from __future__ import annotations
 
 import contextlib
-import math
 import shutil
 from pathlib import Path
 from typing import Sequence
@@ -55,7 +54,7 @@ from mobot_cli.ros.messages import (
     tf_shape,
     tf_static,
 )
-from mobot_cli.ros.tf import Transform
+from mobot_cli.ros.tf import mover_transforms
 from mobot_cli.sim.state import RobotState
 from mobot_cli.timeline.records import Reading, Sample, Sink
 
@@ -236,12 +235,6 @@ class _RobotTopics:
         """One sensor reading as its ROS message."""
         ns, stamp = stamp_of(reading.step, rate)
         records.write(ns, [(self.sensor_connections[reading.sensor.name], self.messages.reading(stamp, reading))])
-
-
-def mover_transforms(movers: dict) -> list[Transform]:
-    """``world -> movers/<name>`` of each mover (x, y, yaw), as TF takes them."""
-    return [Transform("world", f"movers/{name}", (x, y, 0.0), (0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0)))
-            for name, (x, y, yaw) in movers.items()]
 
 
 def log_row(clock, robots: Sequence[tuple[Sequence, RobotMessages]], tf) -> Row:
