@@ -16,6 +16,7 @@ from mobot_cli.record.sinks import named
 from mobot_cli.sim.state import RobotState
 from mobot_cli.timeline.records import Reading, Sample, Sink
 
+MOVER_SPACING = 0.1  # m (in x plus y) between two points of a mover's path in the picture
 SCAN_BAND = (0.05, 2.0)  # m above the floor: a 3D lidar's returns drawn on the floor plan
 MAX_SCAN_POINTS = 20000
 
@@ -58,7 +59,10 @@ class TrajectorySink(Sink):
             points.odom.append(to_world(state.odom_x, state.odom_y))
         if sample.movers:
             for name, (x, y, _) in sample.movers.items():
-                self.movers.setdefault(name, []).append((x, y))
+                path = self.movers.setdefault(name, [])
+                # a point every MOVER_SPACING: fifty walkers' paths drawn with no more points than needed
+                if not path or abs(x - path[-1][0]) + abs(y - path[-1][1]) >= MOVER_SPACING:
+                    path.append((x, y))
         self.last_step = sample.step
 
     def reading(self, key: str, reading: Reading) -> None:

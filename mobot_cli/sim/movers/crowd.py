@@ -83,6 +83,7 @@ class Crowd:
         self.goal = np.vstack([self.goal, [x, y]])
         self.deadline = np.append(self.deadline, -1.0)  # a walker draws its first goal at its first update
         self.updates += 1
+        self._people_xy = None
         self._shape_arrays()
 
     def remove(self, name: str) -> None:
@@ -93,6 +94,7 @@ class Crowd:
         self.goal, self.yaw, self.deadline = np.delete(self.goal, i, axis=0), np.delete(self.yaw, i), \
             np.delete(self.deadline, i)
         self.updates += 1
+        self._people_xy = None
         self._shape_arrays()
 
     def _shape_arrays(self) -> None:
@@ -108,6 +110,12 @@ class Crowd:
         self.walkers = np.array([p.region is not None for p in plans], dtype=bool)
         self.people = self.kind == KINDS["person"]
         self.accel = np.zeros((len(plans), 2))  # the walkers' social force, as last worked out
+        self._forced = False  # accel holds the walkers' force (a new walker: not yet)
+        # the walkers: a slice when every mover is one (numpy then hands out views, not copies)
+        self._w = slice(None) if self.walkers.all() else np.flatnonzero(self.walkers)
+        self._count = int(self.walkers.sum())
+        self._rays = np.tile(np.column_stack([self.wall_dir, np.zeros(WALL_RAYS)]), (self._count, 1))
+        self._people_xy = None  # the people's places as complex numbers, made when first asked after a move
         self.speed = np.array([p.speed for p in plans])
 
     def _random_point(self, plan: MoverPlan, rng: np.random.Generator) -> tuple[float, float]:
@@ -118,29 +126,33 @@ class Crowd:
         """Move every mover to ``step``; ``robots`` (k, 2) the robots' positions, their radii."""
         dt = 1.0 / self.rate_hz
         self.updates += 1
+        self._people_xy = None
         for i, script in enumerate(self.scripts):
             if script is not None:
                 x, y, yaw = script.pose((step - self.born[i]) * dt)
                 self.pos[i] = (x, y)
                 self.yaw[i] = yaw
-        if self.walkers.any():
+        if self._count:
             self._walk(step * dt, robots, robot_radius)
 
     def _walk(self, now: float, robots: np.ndarray, robot_radius: np.ndarray) -> None:
-        w = np.flatnonzero(self.walkers)
+        # Runs 20 times a simulated second: each line is a numpy call or two on all walkers.
+        w = self._w
+        index = np.arange(len(self.plans))[w]
         pos, vel = self.pos[w], self.vel[w]
-        goal = self.goal[w]
-        due = (now >= self.deadline[w]) | (np.hypot(*(pos - goal).T) < GOAL_REACHED)
+        to_goal = pos - self.goal[w]
+        due = (now >= self.deadline[w]) | (np.einsum("ij,ij->i", to_goal, to_goal) < GOAL_REACHED ** 2)
         for j in np.flatnonzero(due).tolist():
-            i = int(w[j])
+            i = int(index[j])
             self.goal[i] = self._random_point(self.plans[i], self.rngs[i])
             self.deadline[i] = now + math.dist(pos[j], self.goal[i]) / self.speed[i] + PATIENCE
-        if self.updates % FORCE_EVERY == 0 or not self.accel[w].any():
+        if self.updates % FORCE_EVERY == 0 or not self._forced:
             self.accel[w] = self._force(w, pos, vel, robots, robot_radius)
+            self._forced = True
         social.integrate(pos, vel, self.accel[w], self.speed[w], self.every / self.rate_hz)
         self.pos[w], self.vel[w] = pos, vel
-        moving = np.hypot(vel[:, 0], vel[:, 1]) > 0.05
-        self.yaw[w[moving]] = np.arctan2(vel[moving, 1], vel[moving, 0])
+        moving = np.einsum("ij,ij->i", vel, vel) > 0.05 ** 2
+        self.yaw[index[moving]] = np.arctan2(vel[moving, 1], vel[moving, 0])
 
     def _force(self, w: np.ndarray, pos: np.ndarray, vel: np.ndarray, robots: np.ndarray,
                robot_radius: np.ndarray) -> np.ndarray:
@@ -148,8 +160,7 @@ class Crowd:
         radius = self.radius[w]
         # Walls: WALL_RAYS short rays from each walker, at its WALL_HEIGHT.
         origins = np.repeat(np.column_stack([pos, self.z0[w] + WALL_HEIGHT]), WALL_RAYS, axis=0)
-        dirs = np.tile(np.column_stack([self.wall_dir, np.zeros(WALL_RAYS)]), (len(w), 1))
-        gaps = self.walls(origins, dirs, np.full(len(origins), WALL_REACH)).reshape(len(w), WALL_RAYS)
+        gaps = self.walls(origins, self._rays, np.full(len(origins), WALL_REACH)).reshape(self._count, WALL_RAYS)
         # the other movers push as walkers do; robots as others
         fixed = ~self.walkers
         others = np.concatenate([self.pos[fixed], robots]) if len(robots) else self.pos[fixed]
@@ -169,7 +180,9 @@ class Crowd:
 
     def people_distance(self, x: float, y: float) -> float:
         """The smallest distance in the plane from (x, y) to a person's axis (+inf: no person)."""
-        people = self.people
-        if not people.any():
+        if self._people_xy is None:
+            people = self.pos[self.people]
+            self._people_xy = people[:, 0] + 1j * people[:, 1]
+        if not len(self._people_xy):
             return math.inf
-        return float(np.hypot(self.pos[people, 0] - x, self.pos[people, 1] - y).min())
+        return float(np.abs(self._people_xy - complex(x, y)).min())
