@@ -11,6 +11,7 @@ from mobot_cli.scenario.limits import FLEET_NAME_RE, Coordinate, Float, Int, Sec
 MAX_MOVERS = 1000  # count, and movers in one scenario
 MAX_SIZE = 100.0  # m, any size of a mover's shape
 MAX_MOVER_SPEED = 10.0  # m/s
+MIN_MOVER_SPEED = 0.001  # m/s: slower paths would take longer than any run
 Point2 = tuple[Coordinate, Coordinate]
 Size = Annotated[Float, Field(gt=0, le=MAX_SIZE)]
 DEFAULT_SIZES = {"person": (0.3, 1.7), "cylinder": (0.3, 1.0), "box": (0.5, 0.5, 1.0)}
@@ -29,7 +30,7 @@ class MoverSpec(BaseModel):
     mode: Literal["loop", "pingpong", "once"] = "loop"
     region: Optional[tuple[Coordinate, Coordinate, Coordinate, Coordinate]] = None  # xmin, xmax, ymin, ymax
     start: Optional[Point2] = None
-    speed: Annotated[Float, Field(gt=0, le=MAX_MOVER_SPEED)] = 1.0
+    speed: Annotated[Float, Field(ge=MIN_MOVER_SPEED, le=MAX_MOVER_SPEED)] = 1.0
     at: Seconds = 0.0
     count: Optional[Annotated[Int, Field(ge=1, le=MAX_MOVERS)]] = None
 

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 from mobot_cli.common.streams import silenced
 from mobot_cli.errors import SimulationFault, SpawnError, WorldError, did_you_mean
-from mobot_cli.plan import MoverPlan, Physics, RobotPlan, SpawnPose, WorldPlan
+from mobot_cli.plan import Physics, RobotPlan, SpawnPose, WorldPlan
 from mobot_cli.sim import clearance, entity, parts, placement, static_shapes, surroundings
 from mobot_cli.sim.bullet import friction
 from mobot_cli.sim.bullet.clients import Stage, connect, release
@@ -24,11 +24,12 @@ from mobot_cli.sim.bullet.robot import SimRobot
 from mobot_cli.sim.bullet.steered import drive_class
 from mobot_cli.sim.bullet.urdf_file import links_with_friction, pybullet_file
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, ContactCounter
+from mobot_cli.sim.movers.door import MoversDoor
 from mobot_cli.sim.pb import p
 from mobot_cli.sim.state import RobotState
 
 if TYPE_CHECKING:
-    from mobot_cli.sim.movers.stage import Stage
+    from mobot_cli.sim.movers.stage import MoverStage
     from mobot_cli.sim.sensing.rig import Sensing
 
 __all__ = ["World", "RobotState"]
@@ -50,8 +51,8 @@ URDF_FLAGS = p.URDF_USE_INERTIA_FROM_FILE | p.URDF_USE_IMPLICIT_CYLINDER
 PART_REACH = 10.0  # m
 
 
-class World:
-    """A headless physics world built from a plan; robots come and go by name."""
+class World(MoversDoor):
+    """A headless physics world built from a plan; robots come and go by name (and movers: MoversDoor)."""
 
     def __init__(self, physics: Physics, world: WorldPlan, seed: int = 0):
         self.physics = physics
@@ -71,7 +72,7 @@ class World:
         self._contacts = ContactCounter(name_of=self._hit_name, person=self._is_person)
         self._contact_every = max(1, round(physics.rate_hz / CONTACT_RATE_HZ))
         self._sensing: Sensing | None = None  # made when the first robot with sensors arrives
-        self._stage: Stage | None = None  # the movers (sim/movers/stage.py), made with the first
+        self._stage: MoverStage | None = None  # the movers (sim/movers/stage.py), made with the first
         self._clearance: dict[str, float] = {}  # robot -> how far its clearance is measured (m)
         self._health = Health(self._cid, physics.faults, physics.rate_hz)
         # Said once during the run (a stalled robot, a clamped car turn); a Timeline hands them on to summary.json.
@@ -385,10 +386,6 @@ class World:
             return self._stage.names[what]
         return what if kind == "robot" else self._names.get(what, f"body {what}")
 
-    def _is_person(self, other) -> bool:
-        """True when a ContactCounter key is a person mover's body."""
-        return self._stage is not None and other[0] == "body" and other[1] in self._stage.people
-
     def label(self, body: int) -> str:
         """What messages call a body: "robot 'NAME'" or the static body's label."""
         for name, robot in self._robots.items():
@@ -419,39 +416,6 @@ class World:
     def watch_clearance(self, name: str, reach: float) -> None:
         """Measure the robot's clearance (up to ``reach`` m) whenever its state is read."""
         self._clearance[name] = max(reach, self._clearance.get(name, 0.0))
-
-    # -- movers (sim/movers/): actors of the world and a scenario's movers ---------------------
-
-    def _add_actors(self) -> None:
-        for actor in self.plan.actors:
-            self.add_mover(actor)
-
-    def add_mover(self, plan: MoverPlan) -> None:
-        """A mover enters the world now (SpawnError: its name is taken)."""
-        if self._stage is None:
-            from mobot_cli.sim.movers.stage import Stage
-
-            self._stage = Stage(self._cid, self.physics.rate_hz, self.plan, self.seed)
-        self._pristine = False  # the movers' bodies are not the static world's
-        self._stage.add(plan, self._steps)
-
-    def remove_mover(self, name: str) -> None:
-        """Take a mover out (KeyError: none of that name)."""
-        if self._stage is None:
-            raise KeyError(f"no mover named '{name}'")
-        self._stage.remove(name)
-
-    def movers_moved(self) -> int:
-        """A count that changes whenever the movers move, come or go (log rows record them then)."""
-        return self._stage.crowd.updates if self._stage is not None else 0
-
-    def movers(self) -> dict[str, tuple[float, float, float]]:
-        """Each mover's x, y, yaw now, by name (in the order they came)."""
-        return self._stage.crowd.poses() if self._stage is not None else {}
-
-    def mover_plans(self) -> list[MoverPlan]:
-        """The plans of the movers in the world, in the order they came."""
-        return list(self._stage.crowd.plans) if self._stage is not None else []
 
     def _robots_xy(self) -> list[tuple[int, float, float]]:
         """Each robot's body and x, y now (what walkers keep away from)."""

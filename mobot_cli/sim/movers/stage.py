@@ -34,7 +34,7 @@ AWAY = 0.3  # m further than NEAR before its body goes
 STATIC_GROUP = 2
 
 
-class Stage:
+class MoverStage:
     """The movers of one World."""
 
     def __init__(self, cid: int, rate_hz: int, world: WorldPlan, seed: int):

@@ -24,9 +24,9 @@ DATA = Path(__file__).resolve().parents[2] / "data"
 RADIUS, HEIGHT = 0.3, 1.7
 
 
-def scenario(tmp_path: Path, engine: str, **robot) -> Path:
+def scenario(tmp_path: Path, engine: str, expect=(), **robot) -> Path:
     doc = {"version": 1, "name": "actor", "world": str(DATA / "actor_crossing.sdf"), "duration": 5.0,
-           "physics": {"engine": engine},
+           "physics": {"engine": engine}, "expect": list(expect),
            "robots": [{"name": "r", "description": "mobot", "args": {"lidar": "true"},
                        "pose": {"x": 0.0, "y": 0.0, "yaw": 0.0},
                        "sensors": {"lidar": {"noise_stddev": 0.0}}, **robot}]}
@@ -80,9 +80,10 @@ def test_lidar_sees_the_actor_where_it_walks(tmp_path, engine):
 @pytest.mark.parametrize("engine", ["bullet", "kinematic"])
 def test_a_robot_in_the_actors_way_counts_a_collision_with_a_person(tmp_path, engine):
     path = scenario(tmp_path, engine, pose={"x": 2.0, "y": 0.6, "yaw": 0.0},
-                    commands=[{"at": 0.5, "goto": {"x": 2.1, "y": 0.6}, "timeout": 4.0}])
+                    commands=[{"at": 0.5, "goto": {"x": 2.1, "y": 0.6}, "timeout": 4.0}],
+                    expect=[{"robot": "r", "metric": {"name": "people_collisions", "max": 0}}])
     done = invoke(["run", str(path), "--out", str(tmp_path / engine), "--json"])
-    assert done.exit_code == 0, done.stderr
+    assert done.exit_code == 1, done.stderr  # the expectation of no collision with people failed
     import json
 
     summary = json.loads((tmp_path / engine / "summary.json").read_text())
