@@ -80,6 +80,7 @@ class KinematicWorld(World):
         self._contacts = ContactCounter(max(1, round(RELEASE_SAMPLES * sample_hz / CONTACT_RATE_HZ)),
                                         name_of=self._hit_name, person=self._is_person)
         self._idle = 0  # samples without touches not yet told to _contacts
+        self._mover_bodies: list[int] = []  # movers' bodies in the world this step (step() finds them)
 
     def reset(self) -> None:
         """Back to the world as built, at step 0, with no robots (see World.reset)."""
@@ -175,9 +176,12 @@ class KinematicWorld(World):
         if moves:
             near = self._robot_pairs(moves) if len(self._order) > 1 else {}
             steps, move, moved = self._steps, self._move, []
+            # movers' bodies near a robot (sim/movers/stage.py): in the way as robots are, never skipped
+            self._mover_bodies = self._stage.placed_bodies() if self._stage is not None else []
             for mover, motion in moves:
                 bound = mover.bound
-                if mover not in near and not mover.touches and mover.used + bound < mover.clear - CONTACT_SLOP:
+                if mover not in near and not mover.touches and not self._mover_bodies and \
+                        mover.used + bound < mover.clear - CONTACT_SLOP:
                     # Nothing static within reach of this step (the clearance last measured) and
                     # no robot near: the whole step, no query.
                     mover.used += bound
@@ -234,10 +238,10 @@ class KinematicWorld(World):
         distance, turn = (motion[0], motion[1]) if motion is not None else (0.0, 0.0)
         bound = mover.bound
         stuck = mover.stuck
-        if stuck is not None and motion == stuck[0] and _still(others, stuck[1]):
+        if stuck is not None and motion == stuck[0] and _still(others, stuck[1]) and not self._mover_bodies:
             mover.move(distance, turn, 0.0)  # blocked by the same things from the same pose
             return False
-        if motion is None and mover.moved <= mover.queried and _still(others, mover.queried):
+        if motion is None and mover.moved <= mover.queried and _still(others, mover.queried) and not self._mover_bodies:
             return False  # touching, and nothing moved since: the same touches
         for other in others:
             other.sync()
@@ -266,7 +270,7 @@ class KinematicWorld(World):
         near = self._near[mover.robot.name]
         near.around(mover.x, mover.y, mover.z, mover.reach, mover.height, mover.floor, mover.z + mover.above)
         body, z, reach = mover.robot.body, mover.z, mover.reach + QUERY_REACH
-        robots = [other.robot.body for other in others]
+        robots = [other.robot.body for other in others] + self._mover_bodies
 
         def at(fraction: float):
             x, y, yaw = mover.target(distance, turn, fraction)
@@ -337,14 +341,6 @@ class KinematicWorld(World):
 
     def _robots_xy(self) -> list[tuple[int, float, float]]:
         return [(m.robot.body, m.x, m.y) for m in self._order]
-
-    def add_mover(self, plan) -> None:
-        """A mover enters the world now (World.add_mover); robots of this engine do not stop at it."""
-        super().add_mover(plan)
-        notice = ("kinematic engine: movers do not stop robots (robots drive through them); "
-                  "touching one counts as a collision")
-        if notice not in self.notices:
-            self.notices.append(notice)
 
     def _count(self) -> None:
         """One contact sample from the touches the robots' last queries found (and the movers' bodies)."""
