@@ -7,6 +7,7 @@ walker is, within 2 cm, scan after scan as it moves.
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -14,6 +15,8 @@ import numpy as np
 import pytest
 import yaml
 
+from mobot_cli.assets.world.loaded import LoadedWorld
+from mobot_cli.assets.world.worldplan import _from_document, _to_document
 from mobot_cli.cli import invoke
 from mobot_cli.scenario.prepare import prepare
 from mobot_cli.sim.engine import open_world
@@ -84,7 +87,6 @@ def test_a_robot_in_the_actors_way_counts_a_collision_with_a_person(tmp_path, en
                     expect=[{"robot": "r", "metric": {"name": "people_collisions", "max": 0}}])
     done = invoke(["run", str(path), "--out", str(tmp_path / engine), "--json"])
     assert done.exit_code == 1, done.stderr  # the expectation of no collision with people failed
-    import json
 
     summary = json.loads((tmp_path / engine / "summary.json").read_text())
     robot = summary["robots"]["r"]
@@ -96,3 +98,14 @@ def test_a_robot_in_the_actors_way_counts_a_collision_with_a_person(tmp_path, en
     assert "walker" in metrics["collided_with"]
     rows = (tmp_path / engine / "movers.csv").read_text().splitlines()
     assert rows[0] == "t,name,x,y,yaw" and rows[1].startswith("0.000000,walker,2.000000,-2.000000,")
+
+
+def test_actors_survive_the_world_cache_round_trip(tmp_path):
+    """The world cache keeps JSON documents (common/cache.py): the actors come back the same."""
+    plan = prepare(scenario(tmp_path, "bullet")).plan
+    loaded = LoadedWorld(plan=plan.world, robots=(), static_models=(), summary={}, notices=())
+    again = _from_document(json.loads(json.dumps(_to_document(loaded, []))))
+    assert again is not None and again.plan == plan.world
+    assert again.plan.actors[0].keyframes == ((0.0, 2.0, -2.0, 1.5708), (4.0, 2.0, 2.0, 1.5708),
+                                              (8.0, 2.0, -2.0, 1.5708))
+    assert (again.plan.actors[0].delay, again.plan.actors[0].loop) == (0.5, True)
