@@ -54,3 +54,28 @@ def test_movers_are_drawn_where_they_are(page, tmp_path):
             assert "crate" not in live.mover_shapes.handles
     finally:
         live.close()
+
+
+def test_a_replay_shows_the_movers_of_the_run(page, tmp_path):
+    from mobot_cli.cli import invoke
+    from mobot_cli.view.replay import Replay
+    from mobot_cli.view.runfolder import read_run
+
+    scenario = tmp_path / "s.yaml"
+    scenario.write_text(f"version: 1\nworld: {DATA / 'actor_crossing.sdf'}\nduration: 3\n"
+                        "robots:\n  - {name: r, description: mobot}\n"
+                        "movers:\n  - {name: crate, shape: box, size: [0.5, 0.4, 0.6], "
+                        "path: [[-2, 0], [-2, 2]], at: 1}\n")
+    assert invoke(["run", str(scenario), "--out", str(tmp_path / "run"), "--quiet"]).exit_code == 0
+    view = read_run(tmp_path / "run")
+    assert set(view.movers) == {"walker", "crate"}
+    assert view.movers_at(0.5) == {"walker": (2.0, -2.0, 1.5708)}  # the crate comes at 1 s
+    assert view.movers_at(2.0)["crate"] == (-2.0, 1.0, 1.570796)
+    replay = Replay(page, [tmp_path / "run"], view)
+    try:
+        replay.slider.value = 2.0
+        replay._scrub(type("Event", (), {"client": object()})())  # a user's scrub, as the page sends it
+        assert tuple(replay.mover_shapes.handles["crate"][0].position) == pytest.approx((-2.0, 1.0, 0.3))
+        assert tuple(replay.mover_shapes.handles["walker"][0].position) == pytest.approx((2.0, -0.5, 0.85))
+    finally:
+        replay.close()
