@@ -56,7 +56,7 @@ def test_a_mover_spawned_in_front_is_seen_and_gone_once_deleted(endpoint):
     with Client(endpoint) as client:
         before = ahead(client)
         reply = client.spawn_mover("post", shape="cylinder", size=[0.2, 1.0], path=[[1.0, 0.0], [1.0, 0.001]],
-                                   speed=0.0001)
+                                   speed=0.001)
         assert reply["ok"] and reply["name"] == "post"
         assert abs(ahead(client) - 0.8) < 0.02  # its near side, 1 m ahead less its radius
         refused = client.call("spawn_mover", mover={"name": "post", "region": [0, 1, 0, 1]})
