@@ -34,6 +34,18 @@ class Snapshot:
         return len(self.x)
 
 
+def see(snap: Snapshot, range_min: float, beams, position, rotation, ranges: np.ndarray) -> None:
+    """A lidar scan's ``ranges`` (float32, cast at everything else, before noise) shortened in place
+    where its beams (sim/sensing/lidar.py Beams) from the sensor at ``position``, turned by
+    ``rotation`` (3 x 3), meet a mover first."""
+    dirs = beams.directions @ np.array(rotation).T
+    origins = np.array(position) + dirs * range_min
+    hit = cast(snap, origins, dirs, beams.lengths32.astype(float))
+    if hit is not None:
+        flat = ranges.reshape(-1)
+        np.minimum(flat, (hit + range_min).astype(np.float32), out=flat)
+
+
 def cast(snap: Snapshot, origins: np.ndarray, dirs: np.ndarray, lengths: np.ndarray) -> np.ndarray | None:
     """Distance along each ray (unit ``dirs``) to the nearest mover within its length (+inf: none);
     None when no mover is within reach of any ray (the usual case, cheaply)."""

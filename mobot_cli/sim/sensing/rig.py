@@ -349,17 +349,10 @@ class Sensing:
 
 def _see_movers(rig: _Rig, data: ScanData, ranges: np.ndarray) -> None:
     """The movers in the scan's way, where they were when it was taken (in place, before noise)."""
-    if data.movers is None:
-        return
-    from mobot_cli.sim.movers.shapes import cast as cast_movers
+    if data.movers is not None:
+        from mobot_cli.sim.movers.shapes import see
 
-    spec = rig.spec
-    dirs = rig.beams.directions @ np.array(quat_matrix(data.quat)).T
-    origins = np.array(data.position) + dirs * spec.range_min
-    hit = cast_movers(data.movers, origins, dirs, rig.beams.lengths32.astype(float))
-    if hit is not None:
-        flat = ranges.reshape(-1)
-        np.minimum(flat, (hit + spec.range_min).astype(np.float32), out=flat)
+        see(data.movers, rig.spec.range_min, rig.beams, data.position, quat_matrix(data.quat), ranges)
 
 
 def _aabb(cid: int, body: int) -> tuple[np.ndarray, np.ndarray]:
