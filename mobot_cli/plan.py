@@ -261,6 +261,29 @@ class StaticBody:
 
 
 @dataclass(frozen=True)
+class MoverPlan:
+    """Something that moves by itself (docs/movers.md): a Gazebo ``<actor>`` or a scenario's
+    ``movers:`` item. Upright shapes only: a box (turned by its yaw), a cylinder or a person
+    (a capsule). It follows ``keyframes`` as Gazebo plays an actor's trajectory, or, with a
+    ``region``, walks between random goals in it by the social-force model (sim/movers/social.py)."""
+
+    name: str
+    shape: str  # "box" | "cylinder" | "person"
+    size: tuple[float, ...]  # box: x, y, z sizes; cylinder and person: radius, height
+    # (t in seconds of its script, x, y, yaw): the pose is interpolated between them by time
+    keyframes: tuple[tuple[float, float, float, float], ...] = ()
+    loop: bool = True  # start again after the last keyframe (after ``delay`` again, as Gazebo's actors)
+    delay: float = 0.0  # s before the script starts (Gazebo's <delay_start>)
+    auto_start: bool = True  # False: it stays at its first keyframe (nothing in mobot starts it)
+    region: tuple[float, float, float, float] | None = None  # walker: xmin, xmax, ymin, ymax of its goals
+    speed: float = 1.0  # m/s: a walker's preferred speed
+    start: tuple[float, float] | None = None  # walker: where it starts (None: a random point of its region)
+    z: float = 0.0  # m: the bottom of its shape
+    source: str = ""  # "actor" (from the world file) or "scenario", for messages and records
+    spawn_step: int = 0  # scenario movers: when it enters the world
+
+
+@dataclass(frozen=True)
 class WorldPlan:
     """The static world: a ground plane and static bodies."""
 
@@ -269,6 +292,7 @@ class WorldPlan:
     bodies: tuple[StaticBody, ...] = ()
     source: str = ""  # the world file, for messages
     robot_models: tuple[str, ...] = ()  # its models with joints: robots when a scenario lists them
+    actors: tuple[MoverPlan, ...] = ()  # its <actor>s with a scripted trajectory (docs/movers.md)
 
 
 @dataclass(frozen=True)
@@ -331,3 +355,4 @@ class Plan:
     ros2: Ros2Settings | None = None  # None: the world does not join ROS 2 unless asked (--ros2)
     # a generated world (``world: {generate: ...}``) as an SDF world file: the run folder keeps it
     generated_world: str = ""
+    movers: tuple[MoverPlan, ...] = ()  # the scenario's movers: (docs/movers.md); the world's actors are in world

@@ -189,6 +189,34 @@ class Simulation:
         self._known(name)
         self._timeline.delete(name, "request")
 
+    # -- movers (docs/movers.md) ---------------------------------------------------------------
+
+    def add_mover(self, name: str, **fields) -> None:
+        """A mover enters the world now; ``fields`` as a scenario's ``movers:`` item (shape, size,
+        path, mode, speed, region, start): a path from where it is put, or a walker."""
+        from mobot_cli.scenario.mover_model import MoverSpec
+        from mobot_cli.scenario.movers import mover_plan
+
+        self._open()
+        try:
+            spec = MoverSpec(name=name, **fields)
+        except ValidationError as exc:
+            raise UsageError(f"mover '{name}': {exc.errors()[0]['msg']}",
+                             hint="Give the fields of a scenario's movers: item (docs/movers.md).") from None
+        if spec.count is not None or spec.at:
+            raise UsageError(f"mover '{name}': add one mover at a time, now (no count, no at)")
+        self._timeline.add_mover(mover_plan(spec, name, self.rate_hz, source="request"))
+
+    def remove_mover(self, name: str) -> None:
+        """Take a mover (or a world's actor) out of the world now."""
+        self._open()
+        self._timeline.remove_mover(name)
+
+    def movers(self) -> dict[str, tuple[float, float, float]]:
+        """Every mover's x, y, yaw now (m, rad, world frame), by name."""
+        self._open()
+        return self._timeline.world.movers()
+
     # -- sensors ----------------------------------------------------------------------------
 
     def sensors(self, name: str) -> dict[str, str]:

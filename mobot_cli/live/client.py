@@ -104,6 +104,14 @@ class Client:
         """Remove a robot."""
         return self.request("delete", name=name)
 
+    def spawn_mover(self, name: str, **fields: Any) -> dict[str, Any]:
+        """Add a mover now; ``fields`` as a scenario's movers: item (docs/movers.md)."""
+        return self.request("spawn_mover", mover={"name": name, **fields})
+
+    def delete_mover(self, name: str) -> dict[str, Any]:
+        """Remove a mover (or a world's actor)."""
+        return self.request("delete_mover", name=name)
+
     def list(self) -> list[dict[str, Any]]:
         """The robots in the world, in spawn order."""
         return self.request("list")["robots"]

@@ -27,7 +27,7 @@ HARD_LIMIT_BYTES = 64 * 1024 * 1024
 MAX_DEPTH = 32
 
 OPS = ("ping", "spawn", "delete", "list", "cmd", "odom", "scan", "stop", "goto",
-       "pause", "resume", "step", "reset", "get_state", "set_state", "features")
+       "pause", "resume", "step", "reset", "get_state", "set_state", "features", "spawn_mover", "delete_mover")
 
 
 class SimulationState(IntEnum):

@@ -22,6 +22,7 @@ from mobot_cli.scenario.limits import (
 )
 from mobot_cli.scenario.limits import Speed as LinearSpeed
 from mobot_cli.scenario.model import NAME_RE, NAMESPACE_RE, PoseSpec
+from mobot_cli.scenario.mover_model import MoverSpec
 
 MAX_NAME = 256
 # A step request advances at most this many physics steps (11.5 h at 240 Hz); the world keeps
@@ -170,8 +171,21 @@ class SetState(Request):
     reference_frame: Optional[str] = None
 
 
+class SpawnMover(Request):
+    """A mover enters now (docs/movers.md): ``mover`` as a scenario's ``movers:`` item, one mover, now."""
+
+    op: Literal["spawn_mover"]
+    mover: MoverSpec
+
+
+class DeleteMover(Request):
+    op: Literal["delete_mover"]
+    name: Name
+
+
 AnyRequest = Annotated[Union[Ping, ListRobots, Stop, Delete, Odom, Scan, Cmd, Goto, Spawn, Pause, Resume,
-                             Features, Reset, Step, GetState, SetState], Field(discriminator="op")]
+                             Features, Reset, Step, GetState, SetState, SpawnMover, DeleteMover],
+                       Field(discriminator="op")]
 _ADAPTER: TypeAdapter = TypeAdapter(AnyRequest)
 
 

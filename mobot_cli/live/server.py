@@ -82,6 +82,7 @@ class LiveServer:
         self._handlers: dict[str, Callable] = {
             "ping": self._ping, "list": self._list, "spawn": self._spawn, "delete": self._delete,
             "cmd": self._cmd, "odom": self._odom, "scan": self._scan, "stop": self._stop, "goto": self._goto,
+            "spawn_mover": self._spawn_mover, "delete_mover": self._delete_mover,
             **LockstepRequests(self).handlers()}
 
     def serve(self, ready: Callable[[str], None] | None = None) -> Served:
@@ -271,6 +272,14 @@ class LiveServer:
 
     def _delete(self, envelope, request) -> dict[str, Any]:
         self.session.remove(request.name)
+        return protocol.reply(request.id, name=request.name, step=self._step(), t=self._t())
+
+    def _spawn_mover(self, envelope, request: schema.SpawnMover) -> dict[str, Any]:
+        self.session.add_mover(request.mover)
+        return protocol.reply(request.id, name=request.mover.name, step=self._step(), t=self._t())
+
+    def _delete_mover(self, envelope, request: schema.DeleteMover) -> dict[str, Any]:
+        self.session.remove_mover(request.name)
         return protocol.reply(request.id, name=request.name, step=self._step(), t=self._t())
 
     def _cmd(self, envelope, request: schema.Cmd) -> dict[str, Any] | None:

@@ -12,7 +12,7 @@ import math
 from pathlib import Path
 from typing import Any, Callable
 
-from mobot_cli.errors import MobotError, SimulationFault, did_you_mean
+from mobot_cli.errors import MobotError, SimulationFault, SpawnError, did_you_mean
 from mobot_cli.live import entity_state, protocol, schema, spawning
 from mobot_cli.live.history import History
 from mobot_cli.live.protocol import Refusal, Result
@@ -22,12 +22,14 @@ from mobot_cli.record.recording import Recording
 from mobot_cli.record.summary import LiveInfo, RunRecord, Status
 from mobot_cli.scenario.goal_model import GoalFields, GotoSpec
 from mobot_cli.scenario.goals import goal_step
+from mobot_cli.scenario.mover_model import MAX_MOVERS
+from mobot_cli.scenario.movers import mover_plan
 from mobot_cli.scenario.units import spawn_pose, steps
 from mobot_cli.sim.bullet.faults import FLOOR_OF_THE_WORLD
 from mobot_cli.sim.bullet.world import World
 from mobot_cli.sim.holonomic import KINDS as HOLONOMIC
 from mobot_cli.timeline.goals import GoalEnded, GoalStarted
-from mobot_cli.timeline.loop import Timeline
+from mobot_cli.timeline.loop import NotInWorld, Timeline
 from mobot_cli.timeline.records import Deleted, Record, Spawned
 
 LIVE_GOAL = -1  # the command index of a goal a live request gave (not one of the scenario's)
@@ -110,6 +112,26 @@ class Session:
         """Delete a robot on request."""
         self.known(name)
         self.timeline.apply(Event(step=self.step, delete=name), "request")
+
+    def add_mover(self, spec) -> None:
+        """A mover enters now (a scenario's movers: item, one, now); refused when its name is taken."""
+        if spec.count is not None or spec.at:
+            raise Refusal(Result.INVALID_REQUEST, "spawn_mover adds one mover, now: no 'count', no 'at'")
+        if len(self.world.movers()) >= MAX_MOVERS:
+            raise Refusal(Result.LIMIT_EXCEEDED, f"the world holds {MAX_MOVERS} movers already")
+        try:
+            self.timeline.add_mover(mover_plan(spec, spec.name, self.rate_hz, source="request"))
+        except SpawnError as exc:
+            raise Refusal(Result.NAME_NOT_UNIQUE, exc.message) from None
+        self.history(op="spawn_mover", name=spec.name, result="OK")
+
+    def remove_mover(self, name: str) -> None:
+        """A mover leaves now; NOT_FOUND when there is none of that name."""
+        try:
+            self.timeline.remove_mover(name)
+        except NotInWorld as exc:
+            raise Refusal(Result.NOT_FOUND, exc.message) from None
+        self.history(op="delete_mover", name=name, result="OK")
 
     # -- commands ---------------------------------------------------------------------------
 

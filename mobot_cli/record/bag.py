@@ -9,6 +9,8 @@ directly (ros/mcap_records.py). Topics, per sample at the log rate unless noted:
 * ``/clock`` (rosgraph_msgs/Clock): the sim time;
 * ``/tf`` (tf2_msgs/TFMessage): per robot ``<prefix>odom -> <prefix><root link>`` from its
   odometry, and every moving joint from the joint positions, as robot_state_publisher does;
+  With movers (docs/movers.md), each mover as ``world -> movers/<name>`` (at its foot, facing
+  its heading) on the rows after they moved;
 * ``/tf_static`` (transient local), once per robot: ``world -> <prefix>odom`` at the pose the
   robot's odometry starts from, so every robot shows in one view, and every fixed joint;
 * ``<ns>/odom`` (nav_msgs/Odometry), ``<ns>/cmd_vel`` (geometry_msgs/Twist),
@@ -52,6 +54,7 @@ from mobot_cli.ros.messages import (
     tf_shape,
     tf_static,
 )
+from mobot_cli.ros.tf import mover_transforms
 from mobot_cli.sim.state import RobotState
 from mobot_cli.timeline.records import Reading, Sample, Sink
 
@@ -156,6 +159,8 @@ class BagSink(Sink):
         for fill, state in zip(fills, sample.states.values()):
             fill(state, values)
         self.records.write_row(ns, row, values)
+        if sample.movers:
+            self.records.write(ns, [(self.tf, tf_static(stamp, mover_transforms(sample.movers)))])
 
     def _row(self, names: tuple[str, ...], clock: bool) -> tuple[Row, list]:
         """The row of a sample of these robots, and the functions that give its values."""

@@ -133,7 +133,7 @@ class _Life:
             found = dict(collision_first=_opt(meter.first_collision), collided_with=list(meter.hits),
                          clearance_min=_opt(meter.least_clearance), clearance_mean=_opt(meter.clearance_mean),
                          danger_time=_r(meter.danger_time), jerk_linear=_r(meter.jerk_linear),
-                         jerk_angular=_r(meter.jerk_angular))
+                         jerk_angular=_r(meter.jerk_angular), **_social(meter))
         return GoalRecord(**fields, time=_r(g.get("ended_at", end) - g["started_at"]), path_length=path_length,
                           failure=metrics.failure(g["status"], collisions, g.get("fault")), success=success,
                           collisions=collisions, optimal_length=_opt(g["optimal"]),
@@ -154,7 +154,7 @@ class _Life:
             spl=_r(sum(spls) / len(spls)) if spls else None, clearance_min=_opt(meter.least_clearance),
             clearance_mean=_opt(meter.clearance_mean), danger_time=_r(meter.danger_time),
             jerk_linear=_r(meter.jerk_linear), jerk_angular=_r(meter.jerk_angular),
-            failure=next((g.failure for g in goals if g.failure is not None), None))
+            failure=next((g.failure for g in goals if g.failure is not None), None), **_social(meter))
 
     def _sensor(self, spec, rate_hz: int) -> SensorRecord:
         from mobot_cli.record.sensor_files import sensor_file
@@ -283,7 +283,8 @@ class Recording:
 
     def _sample(self, sample: Sample) -> None:
         if self._renamed:
-            sample = Sample(sample.step, {self._keys[n]: s for n, s in sample.states.items()}, sample.complete)
+            sample = Sample(sample.step, {self._keys[n]: s for n, s in sample.states.items()}, sample.complete,
+                            sample.movers)
         for sink in self.sinks:
             sink.write(sample)
         lives = self._lives
@@ -378,6 +379,10 @@ def make_sinks(plan: Plan, out_dir: Path, sweeps: dict | None = None, pictures: 
         from mobot_cli.record.bag import BagSink  # imports rosbags: only when a bag is asked for
 
         sinks.append(BagSink(plan, out_dir))
+    if "csv" in plan.formats:
+        from mobot_cli.record.movers_csv import MoversCsvSink
+
+        sinks.append(MoversCsvSink(out_dir, plan.physics.rate_hz))  # movers.csv, when there are movers
     if not pictures:
         return sinks
     from mobot_cli.record.trajectory import TrajectorySink
@@ -401,6 +406,11 @@ def _command(index: int) -> int | None:
 def preload() -> None:
     """Look up what every summary records, once (a sweep's fork server, for all its workers)."""
     version("pybullet")
+
+
+def _social(meter: Meter) -> dict:
+    """A meter's people_* figures, rounded as the record's numbers are."""
+    return {k: (_r(v) if isinstance(v, float) else v) for k, v in meter.social().items()}
 
 
 def _opt(value: float | None) -> float | None:

@@ -137,6 +137,15 @@ class GoalRecord(_Record):
     danger_time: Optional[float] = None  # s closer than the goal's danger_distance
     jerk_linear: Optional[float] = None  # m^2/s^5: the integral of the squared jerk of the forward speed
     jerk_angular: Optional[float] = None  # rad^2/s^5: ... of the yaw rate
+    # With people in the world (docs/movers.md); left out of summary.json without them
+    people_distance_min: Optional[float] = None  # m, robot to the nearest person's axis
+    people_intimate_time: Optional[float] = None  # s within 0.5 m of a person
+    people_personal_time: Optional[float] = None  # s within 1.2 m
+    people_collisions: Optional[int] = None  # collision events with people (also in collisions)
+
+    def to_dict(self) -> dict:
+        """As every record, without the people_* figures of a world without people."""
+        return _without_people(super().to_dict())
 
 
 @_record
@@ -156,6 +165,21 @@ class RobotMetrics(_Record):
     jerk_linear: float
     jerk_angular: float
     failure: Optional[str] = None  # its first failed goal's
+    people_distance_min: Optional[float] = None  # as GoalRecord's, over its life
+    people_intimate_time: Optional[float] = None
+    people_personal_time: Optional[float] = None
+    people_collisions: Optional[int] = None
+
+    def to_dict(self) -> dict:
+        """As every record, without the people_* figures of a world without people."""
+        return _without_people(super().to_dict())
+
+
+def _without_people(out: dict) -> dict:
+    for key in ("people_distance_min", "people_intimate_time", "people_personal_time", "people_collisions"):
+        if out.get(key) is None:
+            out.pop(key, None)
+    return out
 
 
 @_record

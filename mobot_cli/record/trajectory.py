@@ -16,6 +16,7 @@ from mobot_cli.record.sinks import named
 from mobot_cli.sim.state import RobotState
 from mobot_cli.timeline.records import Reading, Sample, Sink
 
+MOVER_SPACING = 0.1  # m (in x plus y) between two points of a mover's path in the picture
 SCAN_BAND = (0.05, 2.0)  # m above the floor: a 3D lidar's returns drawn on the floor plan
 MAX_SCAN_POINTS = 20000
 
@@ -41,6 +42,7 @@ class TrajectorySink(Sink):
         self.tracks: list = []  # plot.render.Track, created lazily to keep Pillow out of the run
         self.open: dict[str, tuple[object, Planar]] = {}
         self.last_step = 0
+        self.movers: dict[str, list[tuple[float, float]]] = {}  # mover name -> its path (docs/movers.md)
 
     def deleted(self, step: int, key: str) -> None:
         self.open.pop(key, None)
@@ -55,6 +57,12 @@ class TrajectorySink(Sink):
             points, to_world = entry
             points.true.append((state.true_x, state.true_y))
             points.odom.append(to_world(state.odom_x, state.odom_y))
+        if sample.movers:
+            for name, (x, y, _) in sample.movers.items():
+                path = self.movers.setdefault(name, [])
+                # a point every MOVER_SPACING: fifty walkers' paths drawn with no more points than needed
+                if not path or abs(x - path[-1][0]) + abs(y - path[-1][1]) >= MOVER_SPACING:
+                    path.append((x, y))
         self.last_step = sample.step
 
     def reading(self, key: str, reading: Reading) -> None:
@@ -69,8 +77,9 @@ class TrajectorySink(Sink):
             raise named(exc, self.path) from None
 
     def _tracks(self) -> list[Drawn]:
-        return [drawn(t.label, t.true, t.odom, t.start_z, t.scan,
-                      [s for (name, _), s in self.sweeps.items() if name == t.label]) for t in self.tracks]
+        robots = [drawn(t.label, t.true, t.odom, t.start_z, t.scan,
+                        [s for (name, _), s in self.sweeps.items() if name == t.label]) for t in self.tracks]
+        return robots + [drawn(f"mover {name}", path, [], None) for name, path in self.movers.items()]
 
     def _subtitle(self) -> str:
         return f"{self.last_step / self.rate:g} s simulated; {_robots(len(self.tracks))}"

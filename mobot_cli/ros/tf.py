@@ -63,6 +63,12 @@ class MovingJoint:
         return (x, y, z, *quat_mul(self.quat, (ax * s, ay * s, az * s, c)))
 
 
+def mover_transforms(movers: dict) -> list[Transform]:
+    """``world -> movers/<name>`` of each mover (name -> x, y, yaw; docs/movers.md), at its foot."""
+    return [Transform("world", f"movers/{name}", (x, y, 0.0), (0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0)))
+            for name, (x, y, yaw) in movers.items()]
+
+
 class RobotFrames:
     """The TF tree of one robot's URDF under a frame prefix, and its odometry settings."""
 

@@ -42,6 +42,7 @@ from mobot_cli.ros.messages import (
     tf_layout,
     tf_static,
 )
+from mobot_cli.ros.tf import mover_transforms
 from mobot_cli.ros2 import dds, graph, idl, names
 from mobot_cli.sim.state import RobotState
 from mobot_cli.timeline.records import Deleted, Reading, Record, Sample, Spawned
@@ -209,6 +210,8 @@ class RecordPublisher:
                 if packer is None:
                     packer = self.tf_packers[present] = tf_layout([robots[n].messages.frames for n in present])
                 write(self.tf, packer.pack(tf_values))
+        if sample.movers and tf_values is not None:  # the movers' frames, in a message of their own
+            write(self.tf, tf_static(stamp, mover_transforms(sample.movers)))
 
     def reading(self, reading: Reading) -> None:
         """A sensor reading on its bag topic, built only while someone reads it (a camera's image

@@ -56,6 +56,7 @@ def resolved_document(scenario: Scenario, plan: Plan, base_dir: Path) -> dict[st
         **_events(scenario, plan, base_dir),
         **expect_document(plan.expectations, rate),
         **_ros2(scenario, plan),
+        **_movers(scenario, rate),
     }
 
 
@@ -65,6 +66,19 @@ def _world(scenario: Scenario, base_dir: Path) -> Any:
         return scenario.world.document()
     local_world = base_dir / scenario.world
     return str(local_world.resolve()) if local_world.is_file() else scenario.world
+
+
+def _movers(scenario: Scenario, rate: int) -> dict[str, Any]:
+    """``movers:`` as given (fleets stay fleets), each ``at`` the exact step time it was rounded to."""
+    if not scenario.movers:
+        return {}
+    out = []
+    for spec in scenario.movers:
+        entry = spec.model_dump(mode="json", exclude_defaults=True)
+        if spec.at:
+            entry["at"] = steps(spec.at, rate) / rate
+        out.append(entry)
+    return {"movers": out}
 
 
 def _ros2(scenario: Scenario, plan: Plan) -> dict[str, Any]:

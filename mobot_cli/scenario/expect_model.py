@@ -21,7 +21,8 @@ KINDS = ("within", "collisions", "distance", "upright", "odom_error", "reaches",
          "clearance", "metric")
 # The metrics a ``metric`` check may bound (timeline/metrics.py NUMERIC; success is 0 or 1)
 METRICS = ("success", "collisions", "time", "path_length", "spl", "clearance_min", "clearance_mean",
-           "danger_time", "jerk_linear", "jerk_angular")
+           "danger_time", "jerk_linear", "jerk_angular", "people_distance_min", "people_intimate_time",
+           "people_personal_time", "people_collisions")
 OVER_TIME = ("reaches", "visits", "coverage")  # deadline: within: SECONDS
 GOAL_STATUSES = ("reached", "reached_by_odometry_only", "timed_out", "blocked", "stuck", "cancelled",
                  "unreachable", "unfinished", "failed")

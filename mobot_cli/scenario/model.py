@@ -45,6 +45,7 @@ from mobot_cli.scenario.limits import (
     check_name,
     gravity_length,
 )
+from mobot_cli.scenario.mover_model import MoverSpec
 from mobot_cli.scenario.sensor_model import SensorEntry, SensorKey
 from mobot_cli.scenario.world_model import GeneratedWorld
 
@@ -295,6 +296,7 @@ class Scenario(Strict):
     events: list[EventSpec] = []
     expect: list[ExpectSpec] = []
     ros2: Optional[Ros2Spec] = None
+    movers: list[MoverSpec] = []  # docs/movers.md
 
     @field_validator("name")
     @classmethod

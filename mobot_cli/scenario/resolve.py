@@ -13,6 +13,7 @@ from mobot_cli.plan import FaultLimits, Physics, Plan, Ros2Settings
 from mobot_cli.scenario.events import resolve_events
 from mobot_cli.scenario.expect_resolve import resolve_expectations
 from mobot_cli.scenario.model import Scenario
+from mobot_cli.scenario.movers import resolve_movers
 from mobot_cli.scenario.robots import RobotResolver, unlisted_robots
 from mobot_cli.scenario.source import Source
 from mobot_cli.scenario.units import steps
@@ -60,7 +61,8 @@ def resolve(scenario: Scenario, source: Source) -> Plan:
                 total_steps=total, settle_steps=ctx.settle, log_every=log_every, seed=scenario.seed,
                 formats=tuple(dict.fromkeys(scenario.log.formats)), events=events,
                 notices=tuple(dict.fromkeys(notices)), expectations=expectations, ros2=_ros2(scenario),
-                generated_world=generated)
+                generated_world=generated,
+                movers=resolve_movers(scenario, source, world.plan))
 
 
 def _ros2(scenario: Scenario) -> Ros2Settings | None:

@@ -39,8 +39,10 @@ class ContactCounter:
     """Counts collision events per robot; call ``sample`` at a fixed rate."""
 
     def __init__(self, release_samples: int = RELEASE_SAMPLES,
-                 name_of: Callable[[Hashable], str] | None = None) -> None:
+                 name_of: Callable[[Hashable], str] | None = None,
+                 person: Callable[[Hashable], bool] | None = None) -> None:
         self._name_of = name_of  # ("body", uid) or ("robot", name) -> how records name it
+        self._person = person  # True for what is a person (a mover): counted apart as well
         self._samples = 0
         self._release = release_samples
         self._last_touch: dict[tuple[str, Hashable], int] = {}
@@ -87,6 +89,8 @@ class ContactCounter:
             last = self._last_touch.get(key)
             if last is None or self._samples - last > self._release:
                 robot.collisions += 1
+                if self._person is not None and self._person(other):
+                    robot.people_collisions += 1
                 if self._name_of is not None:
                     robot.hit = self._name_of(other)
             self._last_touch[key] = self._samples

@@ -45,6 +45,11 @@ class RobotState:
     odom_vy: float = 0.0
     true_vy: float = 0.0
     hit: str = ""  # what its last collision was with, as messages name it ("static body 'box'"); not a column
+    # With people in the world (movers of shape person, actors: docs/movers.md): collision events
+    # with them (also counted in ``collisions``) and the distance in the plane from the root
+    # link's origin to the nearest person's axis (+inf: no person). Not columns.
+    people_collisions: int = 0
+    people_distance: float = math.inf
 
     # Column order of the odom CSV (DESIGN.md), without the leading time column.
     CSV_FIELDS = (

@@ -18,7 +18,7 @@ from collections import defaultdict
 from typing import Callable, Iterator, Protocol
 
 from mobot_cli.errors import MobotError, SpawnError
-from mobot_cli.plan import CommandStep, Event, GoalStep, Plan, RobotPlan, SensorSpec
+from mobot_cli.plan import CommandStep, Event, GoalStep, MoverPlan, Plan, RobotPlan, SensorSpec
 from mobot_cli.sim.bullet.world import World
 from mobot_cli.sim.clearance import REACH_MARGIN
 from mobot_cli.sim.engine import open_world
@@ -87,6 +87,11 @@ class Timeline:
                 self._clearance[exp.robot] = max(reach, self._clearance.get(exp.robot, 0.0))
         for event in plan.events:
             self._events[event.step].append(event)
+        self._movers: dict[int, list] = defaultdict(list)  # step -> the scenario's movers entering then
+        for mover in plan.movers:
+            self._movers[mover.spawn_step].append(mover)
+        self._moving = bool(plan.world.actors or plan.movers)  # log rows carry the movers' poses
+        self._movers_logged = -1  # world.movers_moved() when they were last on a log row
         spawned = [event.spawn for event in plan.events if event.spawn is not None]
         for robot in (*plan.robots, *spawned):
             for cmd in robot.commands:
@@ -149,6 +154,9 @@ class Timeline:
         if step in self._events:
             for event in self._events[step]:
                 self._scripted(event)
+        if step in self._movers:
+            for mover in self._movers[step]:
+                self.world.add_mover(mover)
         if step in self._commands:
             for name, linear, angular, linear_y in self._commands[step]:
                 if name in self.robots:  # a live world may have deleted it meanwhile
@@ -213,7 +221,11 @@ class Timeline:
     def _log(self, step: int) -> None:
         if self._logged != step:
             self._logged = step
-            self._consume(Sample(step, self.world.states(self.robots)))
+            movers = None
+            if self._moving and self.world.movers_moved() != self._movers_logged:
+                self._movers_logged = self.world.movers_moved()
+                movers = self.world.movers()
+            self._consume(Sample(step, self.world.states(self.robots), True, movers))
 
     def _read(self, step: int, due: list[tuple[str, RobotPlan, SensorSpec]]) -> None:
         """Take the readings due now (of robots still in the world) and schedule the next ones."""
@@ -302,6 +314,18 @@ class Timeline:
         driver = self._drivers.pop(name, None)
         if driver is not None:
             driver.cancel(self.step)
+
+    def add_mover(self, mover: MoverPlan) -> None:
+        """A mover enters the world now (SpawnError: its name is taken); log rows carry it from now on."""
+        self.world.add_mover(dataclasses.replace(mover, spawn_step=self.step))
+        self._moving = True
+
+    def remove_mover(self, name: str) -> None:
+        """A mover leaves the world now (NotInWorld: there is none of that name)."""
+        try:
+            self.world.remove_mover(name)
+        except KeyError:
+            raise NotInWorld(f"no mover named '{name}' is in the world") from None
 
     def apply(self, event: Event, by: str) -> None:
         """One spawn or delete event: the path scenario events and live requests share."""

@@ -15,6 +15,12 @@ is read at the end; it makes no new objects per sample but the running sums.
   the figure does not grow with the log rate; 0 at constant speed.
 - collisions: new collision events (sim/contacts.py) meanwhile, the time of the first and what
   each was with.
+- people_*: with people in the world (movers of shape person and actors, docs/movers.md), from
+  the distance in the plane between the robot's root link and each person's axis on each log
+  row: ``people_distance_min`` the least, ``people_intimate_time`` and ``people_personal_time``
+  the log periods closer than ``INTIMATE`` and ``PERSONAL`` (Hall's proxemic zones, as
+  hunav_evaluator's space intrusions), ``people_collisions`` the collision events with people
+  (also counted in ``collisions``: Francis et al. 2023's human collisions). None without people.
 """
 
 from __future__ import annotations
@@ -31,6 +37,9 @@ NUMERIC = ("collisions", "time", "path_length", "spl", "clearance_min", "clearan
 REACH = 2.0  # m: clearance is measured this far while a robot drives to goals
 JERK_PERIOD = 0.05  # s: 20 Hz, nav2's controller_frequency default (timeline/goals.py CONTROL_RATE_HZ)
 FAILURES = ("timeout", "collision", "stuck", "flipped", "unreachable")
+SOCIAL = ("people_distance_min", "people_intimate_time", "people_personal_time", "people_collisions")
+INTIMATE = 0.5  # m: intimate space around a person
+PERSONAL = 1.2  # m: personal space
 # How a goal's status (timeline/goals.py) reads as a failure; faults say their own kind.
 _BY_STATUS = {"timed_out": "timeout", "blocked": "stuck", "unreachable": "unreachable"}
 
@@ -85,6 +94,10 @@ class Meter:
         self.rows = 0
         self.danger_steps = 0
         self.jerk_linear = self.jerk_angular = 0.0
+        self.people_before = first.people_collisions
+        self.people_min = math.inf
+        self.people_seen = False  # a person was in the world on some row
+        self.intimate_steps = self.personal_steps = 0
         self._last = first
         self._step = step
         self._speeds: list[tuple[int, float, float]] = [(step, first.true_vx, first.true_wz)]  # last three rows
@@ -104,6 +117,7 @@ class Meter:
                 self.hits.append(state.hit)
         self.collisions = state.collisions - self.collisions_before
         self._clearance(state, period)
+        self._people(state, period)
         self._jerk(step, state)
         self._last, self._step = state, step
 
@@ -115,6 +129,27 @@ class Meter:
         self.rows += 1
         if c < self.danger:
             self.danger_steps += period
+
+    def _people(self, state: RobotState, period: int) -> None:
+        d = state.people_distance
+        if d == math.inf:
+            return
+        self.people_seen = True
+        if d < self.people_min:
+            self.people_min = d
+        if d < PERSONAL:
+            self.personal_steps += period
+            if d < INTIMATE:
+                self.intimate_steps += period
+
+    def social(self) -> dict[str, float | int | None]:
+        """The people_* figures (SOCIAL), all None when no person was ever in the world."""
+        collisions = self._last.people_collisions - self.people_before
+        if not self.people_seen and not collisions:
+            return dict.fromkeys(SOCIAL)
+        return {"people_distance_min": self.people_min if math.isfinite(self.people_min) else None,
+                "people_intimate_time": self.intimate_steps / self.rate,
+                "people_personal_time": self.personal_steps / self.rate, "people_collisions": collisions}
 
     def _jerk(self, step: int, state: RobotState) -> None:
         speeds = self._speeds

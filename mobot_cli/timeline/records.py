@@ -23,6 +23,7 @@ class Sample(NamedTuple):
     step: int
     states: dict[str, RobotState]
     complete: bool = True
+    movers: dict | None = None  # name -> (x, y, yaw) of every mover, on complete rows after they moved
 
 
 @dataclass(frozen=True)

@@ -23,6 +23,7 @@ from mobot_cli.timeline.loop import Timeline
 from mobot_cli.timeline.records import Deleted, Record, Sample, Spawned
 from mobot_cli.view import readings
 from mobot_cli.view.camera_panel import CAMERA_KINDS, CameraFeed
+from mobot_cli.view.movers import MoverShapes
 from mobot_cli.view.panel import RobotList, Row, aim_camera, color_of, follow
 from mobot_cli.view.paths import LivePath, lighter
 from mobot_cli.view.robot import Robots, template_of
@@ -69,6 +70,8 @@ class LiveView:
         self.frames = 0  # pages drawn: for tests and the benchmark
         self.on_frame: Callable[[], None] | None = None  # called in each watched frame (serve: the pause state)
         self._latest: dict[str, RobotState] = {}
+        self._movers: dict[str, tuple[float, float, float]] | None = None  # the movers' latest poses, when new
+        self.mover_shapes = MoverShapes(server, list)  # watch() hands it the world's movers
         self._events: deque[tuple[str, Any]] = deque()
         self._readings: dict[tuple[str, str], Any] = {}
         self._lock = threading.Lock()
@@ -80,6 +83,7 @@ class LiveView:
         """Attach to a timeline, taking in the robots already in its world."""
         for robot in timeline.robots.values():
             self._events.append(("spawned", robot))
+        self.mover_shapes.plans = timeline.world.mover_plans
         timeline.attach(self)
 
     def __call__(self, record: Record) -> None:
@@ -88,6 +92,8 @@ class LiveView:
             with self._lock:
                 self._latest.update(record.states)
                 self.step = record.step
+                if record.movers is not None:
+                    self._movers = record.movers
         elif isinstance(record, Spawned):
             self._events.append(("spawned", record.robot))
         elif isinstance(record, Deleted):
@@ -145,6 +151,7 @@ class LiveView:
             self.robot_list.names(list(self.robots))
         with self._lock:
             latest, step = dict(self._latest), self.step
+            movers, self._movers = self._movers, None
         watched = force or bool(self.server.get_clients())
         rows = [self._robot(name, state, watched) for name, state in latest.items() if name in self.robots]
         if watched:
@@ -156,6 +163,8 @@ class LiveView:
             self.robot_list.show(rows, force=force)
             self._draw_readings()
             self.camera.draw()
+            if movers is not None:
+                self.mover_shapes.show(movers)
 
     def _robot(self, name: str, state: RobotState, watched: bool) -> Row:
         robot = self.robots[name]

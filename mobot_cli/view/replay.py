@@ -14,6 +14,7 @@ from typing import Any, Callable
 import numpy as np
 
 from mobot_cli.view import readings
+from mobot_cli.view.movers import MoverShapes
 from mobot_cli.view.panel import RobotList, Row, aim_camera, color_of, follow
 from mobot_cli.view.paths import LIFT, draw_path, lighter, thin
 from mobot_cli.view.robot import Robots
@@ -32,6 +33,7 @@ class Replay:
         self.server, self.runs, self.on_notice = server, runs, on_notice
         self.view: RunView | None = None
         self.models = Robots(server)
+        self.mover_shapes = MoverShapes(server, list)
         self.t, self.playing = 0.0, False
         self._drawn: dict[tuple[str, str], int] = {}  # (robot, sensor) -> id of the cloud on the page
         self._lock = threading.Lock()
@@ -55,6 +57,8 @@ class Replay:
             else:
                 self._aim_at_paths()
             self._draw_robots(view)
+            plans = [*view.plan.world.actors, *view.plan.movers] if view.plan is not None else []
+            self.mover_shapes = MoverShapes(self.server, lambda: plans)
             self.slider.max = max(view.duration, 1e-3)
             self.slider.step = 1.0 / max(view.log_rate_hz, 1.0)
             self.t, self.playing = 0.0, False
@@ -129,7 +133,7 @@ class Replay:
         for name in list(self.models.member):
             self.models.remove(name)
         self.models.flush()
-        for node in ("/world", "/paths", "/readings"):
+        for node in ("/world", "/paths", "/readings", "/movers"):
             self.server.scene.remove_by_name(node)
         self._drawn = {}
 
@@ -168,6 +172,8 @@ class Replay:
             if track.index(t) is not None:
                 self._reading(track, t)
         self.robot_list.show(rows, force=not self.playing)
+        if self.view.movers:
+            self.mover_shapes.show(self.view.movers_at(t))
 
     def _reading(self, track: Any, t: float) -> None:
         if not track.readings:

@@ -8,6 +8,7 @@ notice: a folder that still has its CSV files can be viewed.
 
 from __future__ import annotations
 
+import csv
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -68,6 +69,23 @@ class RunView:
     duration: float
     log_rate_hz: float
     notices: list[str] = field(default_factory=list)
+    # movers.csv (docs/movers.md): name -> (times (n,), x, y, yaw (n, 3)), in the order they came
+    movers: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+
+    def movers_at(self, t: float) -> dict[str, tuple[float, float, float]]:
+        """Each mover's pose at time ``t``: its last row at or before it (none before its first
+        row, nor after its last row when it left before the end)."""
+        out = {}
+        for name, (times, poses) in self.movers.items():
+            if t < times[0] - 1e-9 or (t > times[-1] + 1e-9 and times[-1] < self.last_mover_row - 1e-9):
+                continue
+            i = max(0, int(np.searchsorted(times, t, side="right")) - 1)
+            out[name] = tuple(poses[i].tolist())
+        return out
+
+    @property
+    def last_mover_row(self) -> float:
+        return max((float(times[-1]) for times, _ in self.movers.values()), default=0.0)
 
 
 def runs_of(folder: Path) -> list[Path]:
@@ -100,10 +118,28 @@ def read_run(folder: Path, plan: Plan | None = None) -> RunView:
         _read_bag(bag, tracks, notices)
     elif bag is not None:
         notices.append(f"{bag} was not closed (no metadata.yaml): wheels are drawn without turning")
+    movers = _movers(folder / "movers.csv", notices)
     duration = max(float(t.t[-1]) for t in tracks)
     rate = record.log_rate_hz if record else 1.0 / max(float(np.median(np.diff(tracks[0].t))), 1e-3) \
         if len(tracks[0].t) > 1 else 1.0
-    return RunView(folder, plan, record, tracks, duration, rate, notices)
+    return RunView(folder, plan, record, tracks, duration, rate, notices, movers)
+
+
+def _movers(path: Path, notices: list[str]) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """movers.csv as arrays per mover; {} without the file, or with a notice when it is unreadable."""
+    if not path.is_file():
+        return {}
+    rows: dict[str, list[tuple[float, float, float, float]]] = {}
+    try:
+        with path.open(newline="", encoding="utf-8") as f:
+            for row in csv.DictReader(f):
+                rows.setdefault(str(row["name"]), []).append(
+                    (float(row["t"]), float(row["x"]), float(row["y"]), float(row["yaw"])))
+    except (OSError, KeyError, TypeError, ValueError, csv.Error, UnicodeDecodeError) as exc:
+        notices.append(f"{path} cannot be read ({exc}): movers are not shown")
+        return {}
+    return {name: (np.array([r[0] for r in got]), np.array([r[1:] for r in got]))
+            for name, got in rows.items()}
 
 
 def _robot_plans(plan: Plan | None) -> dict[str, RobotPlan]:

@@ -71,7 +71,7 @@ def test_unknown_op_is_feature_unsupported(live, raw):
     assert (reply["id"], reply["result"], reply["code"]) == ("t1", "FEATURE_UNSUPPORTED", 0)
     assert reply["message"] == ("unknown request op 'teleport': this server knows ping, spawn, delete, "
                                 "list, cmd, odom, scan, stop, goto, pause, resume, step, reset, get_state, "
-                                "set_state, features")
+                                "set_state, features, spawn_mover, delete_mover")
 
 
 def test_more_than_one_frame_or_no_delimiter(live, raw):

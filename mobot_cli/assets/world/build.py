@@ -195,7 +195,8 @@ def build_world(path: Path, resolver: ResourceResolver,
         "max_step_size": world.max_step_size, "bounds": bounds,
     }
     plan = WorldPlan(name=path.stem, ground_plane=builder.ground, bodies=tuple(builder.bodies),
-                     source=str(path), robot_models=tuple(r.name for r in builder.robots))
+                     source=str(path), robot_models=tuple(r.name for r in builder.robots),
+                     actors=tuple(world.actors))
     loaded = LoadedWorld(plan=plan, robots=tuple(builder.robots),
                          static_models=tuple(builder.static_models), summary=summary,
                          notices=tuple(dict.fromkeys(notices)))

@@ -76,3 +76,4 @@ class World:
     ignored: Counter
     max_step_size: float | None = None
     state_poses: int = 0
+    actors: list = field(default_factory=list)  # MoverPlans of its <actor>s (assets/world/actors.py)

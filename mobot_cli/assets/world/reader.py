@@ -57,6 +57,7 @@ class SdfReader:
         self._stack = [self.top]
         models: list[Model] = []
         names: set[str] = set()
+        actors: list = []
         for child in world:
             if not isinstance(child.tag, str):
                 continue
@@ -64,7 +65,9 @@ class SdfReader:
             if child.tag == "model":
                 model = self.model(child, self.top, world_level=True)
             elif child.tag == "include":
-                model = self._world_include(child)
+                model = self._world_include(child, actors)
+            elif child.tag == "actor":
+                self._actor(child, self.top, actors)
             elif child.tag != "state":
                 self.ignored[child.tag] += 1
             if model is None:
@@ -79,17 +82,31 @@ class SdfReader:
             models.append(model)
         step = world.findtext("physics/max_step_size")
         result = World(name=world.get("name", self.top.stem), models=models, ignored=self.ignored,
-                       max_step_size=float(step) if is_number(step) else None)
+                       max_step_size=float(step) if is_number(step) else None, actors=actors)
         result.state_poses = self._apply_state(world, models)
         self.notices[:0] = self.paths.notices  # xacro's, for a world written as xacro
         self.notices.extend(sdf_paths.left_out_notices(self.left_out, self.paths.roots, self.top))
         return result
 
-    def _world_include(self, include) -> Model | None:
+    def _actor(self, element, file: Path, actors: list) -> None:
+        """A world's <actor>: played as a mover (assets/world/actors.py), or counted as ignored."""
+        from mobot_cli.assets.world.actors import read_actor
+
+        actor, notice = read_actor(element, file, lambda pose: self.pose(pose, file))
+        if actor is None:
+            self.ignored["actor"] += 1
+        self.warn(notice, key_of(element, file))
+        if actor is not None:
+            actors.append(actor)
+
+    def _world_include(self, include, actors: list) -> Model | None:
         target = self.include_target(include, self.top)
         if target is None:
             return None
         kind, element, file = target
+        if kind == "actor":
+            self._actor(element, file, actors)
+            return None
         if kind != "model":
             self.ignored[kind] += 1
             return None

@@ -18,7 +18,7 @@ from mobot_cli.assets.resources import ResourceResolver, bundled_dir
 from mobot_cli.assets.world.loaded import LoadedWorld, WorldRobot
 from mobot_cli.common import cache
 from mobot_cli.errors import Location, WorldError, did_you_mean
-from mobot_cli.plan import StaticBody, StaticShape, WorldPlan
+from mobot_cli.plan import MoverPlan, StaticBody, StaticShape, WorldPlan
 
 WORLD_SUFFIXES = (".world", ".sdf")
 XACRO_WORLD_SUFFIXES = (".world.xacro", ".sdf.xacro")  # expanded as a robot description is
@@ -98,7 +98,9 @@ def _from_document(doc: dict[str, Any] | None) -> LoadedWorld | None:
             for body in plan["bodies"])
         robots = tuple(WorldRobot(**{**r, "xyz": tuple(r["xyz"]), "quat": tuple(r["quat"]),
                                      "notices": tuple(r["notices"])}) for r in doc["robots"])
-        plan = WorldPlan(**{**plan, "bodies": bodies, "robot_models": tuple(plan["robot_models"])})
+        actors = tuple(MoverPlan(**{**a, "size": tuple(a["size"]), "keyframes": tuple(tuple(k) for k in a["keyframes"]),
+                                    "region": None, "start": None}) for a in plan.get("actors", ()))
+        plan = WorldPlan(**{**plan, "bodies": bodies, "robot_models": tuple(plan["robot_models"]), "actors": actors})
         return LoadedWorld(plan=plan, robots=robots,
                            static_models=tuple(doc["static_models"]), summary=doc["summary"],
                            notices=tuple(doc["notices"]))

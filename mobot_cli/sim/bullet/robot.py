@@ -33,6 +33,7 @@ class SimRobot:
         self.cmd_y = 0.0  # the sideways part of the command (holonomic drives)
         self.collisions = 0  # collision events so far, counted by the World's ContactCounter
         self.hit = ""  # what the last of them was with
+        self.people_collisions = 0  # of those, the ones with people (movers: sim/movers/)
         self.joints: dict[str, int] = {}  # every non-fixed joint
         self.links: dict[str, int] = {p.getBodyInfo(body, physicsClientId=cid)[0].decode(): -1}
         for index in range(p.getNumJoints(body, physicsClientId=cid)):

@@ -25,10 +25,12 @@ from mobot_cli.sim.bullet.robot import SimRobot
 from mobot_cli.sim.bullet.steered import drive_class
 from mobot_cli.sim.bullet.urdf_file import links_with_friction, pybullet_file
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, ContactCounter
+from mobot_cli.sim.movers.door import MoversDoor
 from mobot_cli.sim.pb import p
 from mobot_cli.sim.state import RobotState
 
 if TYPE_CHECKING:
+    from mobot_cli.sim.movers.stage import MoverStage
     from mobot_cli.sim.sensing.rig import Sensing
 
 __all__ = ["World", "RobotState"]
@@ -50,8 +52,8 @@ URDF_FLAGS = p.URDF_USE_INERTIA_FROM_FILE | p.URDF_USE_IMPLICIT_CYLINDER
 PART_REACH = 10.0  # m
 
 
-class World:
-    """A headless physics world built from a plan; robots come and go by name."""
+class World(MoversDoor):
+    """A headless physics world built from a plan; robots come and go by name (and movers: MoversDoor)."""
 
     def __init__(self, physics: Physics, world: WorldPlan, seed: int = 0):
         self.physics = physics
@@ -68,9 +70,10 @@ class World:
         self._pushed: list[HolonomicDrive] = []  # holonomic drives: a base force every step
         self._odom_every = max(1, round(physics.rate_hz / ODOMETRY_RATE_HZ))
         self._check_every = max(1, round(physics.rate_hz / HEALTH_RATE_HZ))
-        self._contacts = ContactCounter(name_of=self._hit_name)
+        self._contacts = ContactCounter(name_of=self._hit_name, person=self._is_person)
         self._contact_every = max(1, round(physics.rate_hz / CONTACT_RATE_HZ))
         self._sensing: Sensing | None = None  # made when the first robot with sensors arrives
+        self._stage: MoverStage | None = None  # the movers (sim/movers/stage.py), made with the first
         self._clearance: dict[str, float] = {}  # robot -> how far its clearance is measured (m)
         self._health = Health(self._cid, physics.faults, physics.rate_hz)
         self._robot_boxes = RobotBoxes()  # the robots' boxes, for spawn checks (sim/broadphase.py)
@@ -87,6 +90,7 @@ class World:
                 self._pristine = False
                 self.close()
                 raise
+        self._add_actors()
         if physics.renderer != "tiny":  # EGL draws only the bodies made after its plugin loads: the robots
             from mobot_cli.sim.sensing.render import preload
 
@@ -104,12 +108,14 @@ class World:
         self._ramping = []
         self._sprung = []
         self._pushed = []
-        self._contacts = ContactCounter(name_of=self._hit_name)
+        self._contacts = ContactCounter(name_of=self._hit_name, person=self._is_person)
         self._sensing = None  # rebuilt with the first robot with sensors: its noise restarts too
+        self._stage = None  # the reset removed the movers' bodies: the world's actors come back
         self._clearance = {}
         self._health = Health(self._cid, self.physics.faults, self.physics.rate_hz)
         self._robot_boxes.forget()
         self._build(self.plan)
+        self._add_actors()
 
     def _build(self, world: WorldPlan) -> None:
         cid, physics = self._cid, self.physics
@@ -312,6 +318,8 @@ class World:
             self._sensing.forget(name)
         self._clearance.pop(name, None)
         self._health.forget(name)
+        if self._stage is not None:
+            self._stage.forget_robot(robot.body)
         if robot in self._ramping:
             self._ramping.remove(robot)
         if robot in self._sprung:
@@ -341,6 +349,8 @@ class World:
                 drive.push(self.physics.dt)
         p.stepSimulation(physicsClientId=self._cid)
         self._steps += 1
+        if self._stage is not None and self._steps % self._stage.every == 0:
+            self._stage.update(self._steps, self._robots_xy())
         if self._steps % self._odom_every == 0:
             for robot in self._robots.values():
                 if robot.drive is not None:
@@ -377,13 +387,16 @@ class World:
 
             self._sensing = Sensing(self._cid, self.plan, self.seed, self.physics.dt, self.physics.gravity,
                                     self.label, lambda: [r.body for r in self._robots.values()],
-                                    self.physics.renderer, self.notices, lambda: self._steps)
+                                    self.physics.renderer, self.notices, lambda: self._steps,
+                                    lambda: self._stage.snapshot() if self._stage is not None else None)
         return self._sensing
 
     def _hit_name(self, other) -> str:
         """How records name what a robot collided with (a ContactCounter key): the other robot's
         name, or the world body's."""
         kind, what = other
+        if kind != "robot" and self._stage is not None and what in self._stage.names:
+            return self._stage.names[what]
         return what if kind == "robot" else self._names.get(what, f"body {what}")
 
     def label(self, body: int) -> str:
@@ -391,6 +404,8 @@ class World:
         for name, robot in self._robots.items():
             if robot.body == body:
                 return f"robot '{name}'"
+        if self._stage is not None and body in self._stage.names:
+            return f"mover '{self._stage.names[body]}'"
         return self._statics.get(body, f"body {body}")
     def odom_origin(self, name: str) -> tuple[float, float, float]:
         """Where the robot's odometry started: its odom frame's x, y, yaw in the world."""
@@ -403,6 +418,8 @@ class World:
         if self._clearance and name in self._clearance:
             state.clearance, state.nearest = clearance.nearest(
                 self._cid, robot.body, self._clearance[name], [r.body for r in self._robots.values()], self.label)
+        if self._stage is not None:
+            self._stage.social(robot, state)
         return state
 
     def states(self, names) -> dict[str, RobotState]:
@@ -412,6 +429,12 @@ class World:
     def watch_clearance(self, name: str, reach: float) -> None:
         """Measure the robot's clearance (up to ``reach`` m) whenever its state is read."""
         self._clearance[name] = max(reach, self._clearance.get(name, 0.0))
+
+    def _robots_xy(self) -> list[tuple[int, float, float]]:
+        """Each robot's body and x, y now (what walkers keep away from)."""
+        cid = self._cid
+        return [(r.body, *p.getBasePositionAndOrientation(r.body, physicsClientId=cid)[0][:2])
+                for r in self._robots.values()]
 
     def _robot(self, name: str) -> SimRobot:
         try:

@@ -81,9 +81,10 @@ class KinematicWorld(World):
         sample_hz = physics.rate_hz / self._contact_every
         # A pair must be apart 0.1 s before touching again counts again, at any rate.
         self._contacts = ContactCounter(max(1, round(RELEASE_SAMPLES * sample_hz / CONTACT_RATE_HZ)),
-                                        name_of=self._hit_name)
+                                        name_of=self._hit_name, person=self._is_person)
         self._idle = 0  # samples without touches not yet told to _contacts
         self._all_synced = -1  # the step at which every body was last put where its robot is
+        self._mover_bodies: list[int] = []  # movers' bodies in the world this step (step() finds them)
 
     def reset(self) -> None:
         """Back to the world as built, at step 0, with no robots (see World.reset)."""
@@ -200,9 +201,12 @@ class KinematicWorld(World):
         if moves:
             near = self._robot_pairs(moves) if len(self._order) > 1 else {}
             steps, move, moved = self._steps, self._move, []
+            # movers' bodies near a robot (sim/movers/stage.py): in the way as robots are, never skipped
+            self._mover_bodies = self._stage.placed_bodies() if self._stage is not None else []
             for mover, motion in moves:
                 bound = mover.bound
-                if mover not in near and not mover.touches and mover.used + bound < mover.clear - CONTACT_SLOP:
+                if mover not in near and not mover.touches and not self._mover_bodies and \
+                        mover.used + bound < mover.clear - CONTACT_SLOP:
                     # Nothing static within reach of this step (the clearance last measured) and
                     # no robot near: the whole step, no query.
                     mover.used += bound
@@ -213,6 +217,8 @@ class KinematicWorld(World):
                     moved.append(mover)
             if moved and not self._flat:
                 self._lift(moved)
+        if self._stage is not None and self._steps % self._stage.every == 0:
+            self._stage.update(self._steps, self._robots_xy())
         if self._steps % self._contact_every == 0:
             self._count()
 
@@ -226,10 +232,10 @@ class KinematicWorld(World):
         distance, turn = (motion[0], motion[1]) if motion is not None else (0.0, 0.0)
         bound = mover.bound
         stuck = mover.stuck
-        if stuck is not None and motion == stuck[0] and _still(others, stuck[1]):
+        if stuck is not None and motion == stuck[0] and _still(others, stuck[1]) and not self._mover_bodies:
             mover.move(distance, turn, 0.0)  # blocked by the same things from the same pose
             return False
-        if motion is None and mover.moved <= mover.queried and _still(others, mover.queried):
+        if motion is None and mover.moved <= mover.queried and _still(others, mover.queried) and not self._mover_bodies:
             return False  # touching, and nothing moved since: the same touches
         for other in others:
             other.sync()
@@ -258,7 +264,7 @@ class KinematicWorld(World):
         near = self._near[mover.robot.name]
         near.around(mover.x, mover.y, mover.z, mover.reach, mover.height, mover.floor, mover.z + mover.above)
         body, z, reach = mover.robot.body, mover.z, mover.reach + QUERY_REACH
-        robots = [other.robot.body for other in others]
+        robots = [other.robot.body for other in others] + self._mover_bodies
 
         def at(fraction: float):
             x, y, yaw = mover.target(distance, turn, fraction)
@@ -327,12 +333,22 @@ class KinematicWorld(World):
         heights = self._floor.heights(np.array(points), np.array(top))
         return heights.reshape(len(movers), -1).max(axis=1)
 
+    def _robots_xy(self) -> list[tuple[int, float, float]]:
+        return [(m.robot.body, m.x, m.y) for m in self._order]
+
     def _count(self) -> None:
-        """One contact sample from the touches the robots' last queries found."""
+        """One contact sample from the touches the robots' last queries found (and the movers' bodies)."""
+        met = self._mover_touches() if self._stage is not None else set()
         for mover in self._order:
             if mover.touches:
                 break
         else:
+            if met:
+                if self._idle:
+                    self._contacts.idle(self._idle)
+                    self._idle = 0
+                self._contacts.record(met)
+                return
             self._idle += 1  # told to the counter before the next sample with touches
             return
         if self._idle:
@@ -351,7 +367,22 @@ class KinematicWorld(World):
                 elif hit is not robot:
                     pairs.add((robot, ("robot", hit.name)))
                     pairs.add((hit, ("robot", robot.name)))
-        self._contacts.record(pairs)
+        self._contacts.record(pairs | met)
+
+    def _mover_touches(self) -> set:
+        """(robot, ("body", mover body)) of the robots touching a mover's body now."""
+        from mobot_cli.sim.pb import p
+
+        placed = self._stage.placed_bodies()
+        if not placed:
+            return set()
+        self._sync_all()
+        found = set()
+        for mover in self._order:
+            for uid in placed:
+                if p.getClosestPoints(mover.robot.body, uid, CONTACT_SLOP, physicsClientId=self._cid):
+                    found.add((mover.robot, ("body", uid)))
+        return found
 
     def _sync_all(self, full: bool = False) -> None:
         # Every body was put where its robot is at this step already (a fleet's spawns): a spawn
@@ -379,9 +410,13 @@ class KinematicWorld(World):
             return super().states(names)
         movers = self._movers
         try:
-            return {name: movers[name].state() for name in names}  # a log row: this is hot
+            states = {name: movers[name].state() for name in names}  # a log row: this is hot
         except KeyError:  # one of them is not a Mover (yet): read() it
             return super().states(names)
+        if self._stage is not None:
+            for name, state in states.items():
+                self._stage.social(movers[name].robot, state)
+        return states
 
     def read(self, name: str) -> RobotState:
         """The robot's command, odometry and ground truth now (and its clearance when watched)."""
@@ -391,6 +426,8 @@ class KinematicWorld(World):
             state.clearance, state.nearest = clearance_mod.nearest(
                 self._cid, self._robot(name).body, self._clearance[name],
                 [r.body for r in self._robots.values()], self.label)
+        if self._stage is not None:
+            self._stage.social(self._robot(name), state)
         return state
 
 

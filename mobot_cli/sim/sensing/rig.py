@@ -52,7 +52,7 @@ class ScanData:
     same rays and noise, but cast and noised a few scans at once instead of between physics
     steps that leave the CPU caches cold."""
 
-    __slots__ = ("beams", "position", "quat", "_ranges", "_waiting")
+    __slots__ = ("beams", "position", "quat", "_ranges", "_waiting", "movers")
 
     def __init__(self, ranges: np.ndarray | None, beams: lidar.Beams, position: tuple[float, float, float],
                  quat: tuple[float, float, float, float]):
@@ -61,6 +61,7 @@ class ScanData:
         self.beams = beams
         self.position = position  # the sensor's origin in the world
         self.quat = quat  # the sensor frame's orientation in the world
+        self.movers = None  # the movers' shapes when it was taken (sim/movers/shapes.py), if any
 
     @property
     def ranges(self) -> np.ndarray:
@@ -165,7 +166,10 @@ class _Waiting:
                 positions = np.array([data.position for _, data in scans], dtype=np.float32)
                 rotations = np.array([p.getMatrixFromQuaternion(data.quat) for _, data in scans],
                                      dtype=np.float32).reshape(-1, 3, 3)
-                ranges = _lidar_noise(rig, lidar.cast_scans(self.scene, rig.spec, rig.beams, positions, rotations))
+                ranges = lidar.cast_scans(self.scene, rig.spec, rig.beams, positions, rotations)
+                for (_, data), values in zip(scans, ranges):
+                    _see_movers(rig, data, values)
+                ranges = _lidar_noise(rig, ranges)
                 for (_, data), values in zip(scans, ranges):
                     data._ranges = values  # noqa: SLF001 - behind ScanData.ranges, filled by this module
 
@@ -181,11 +185,13 @@ class Sensing:
 
     def __init__(self, cid: int, world: WorldPlan, seed: int, dt: float, gravity: tuple[float, float, float],
                  label: Callable[[int], str], robot_bodies: Callable[[], list[int]],
-                 renderer: str = "auto", notices: list[str] | None = None, step_now: Callable[[], int] | None = None):
+                 renderer: str = "auto", notices: list[str] | None = None, step_now: Callable[[], int] | None = None,
+                 movers: Callable[[], object] = lambda: None):
         self.cid, self.world, self.seed, self.dt = cid, world, seed, dt
         self.gravity = np.array(gravity, dtype=float)
         self.label = label  # body id -> what messages call it
         self.robot_bodies = robot_bodies  # the bodies of every robot in the world, sensors or not
+        self.movers = movers  # the movers' shapes now (sim/movers/shapes.py Snapshot), None without movers
         self.rigs: dict[str, dict[str, _Rig]] = {}  # robot name -> sensor name -> rig
         self._scene = None
         self._scene_built = False
@@ -251,14 +257,17 @@ class Sensing:
         scans: list[tuple[_Rig, ScanData]] = []
         ranges: list[tuple[int, _Rig, ScanData]] = []
         rigs = self.rigs
+        movers = self.movers()
         for robot, sensor in due:
             rig = rigs[robot][sensor]
             position, quat = self._pose(rig)
             if rig.reading_rng is not None:  # a range sensor: cast below
                 data = ScanData(None, rig.beams, position, quat)
+                data.movers = movers
                 ranges.append((len(out), rig, data))
             elif rig.beams is not None:  # a lidar
                 data = ScanData(None, rig.beams, position, quat)
+                data.movers = movers
                 scans.append((rig, data))
             elif rig.spec.kind == "imu":
                 data = self._imu(step, rig, position, quat)
@@ -302,6 +311,7 @@ class Sensing:
         boxes = {body: _aabb(self.cid, body) for body in bodies} if len(bodies) > 1 else {}
         ranges = lidar.cast(self.cid, self.scene, jobs, boxes)
         for (rig, data), values in zip(scans, ranges):
+            _see_movers(rig, data, values)
             data._ranges = _lidar_noise(rig, values)  # noqa: SLF001 - behind ScanData.ranges, filled here
 
     def _pose(self, rig: _Rig) -> tuple[tuple[float, ...], tuple[float, ...]]:
@@ -355,6 +365,15 @@ class Sensing:
                 continue  # what it stands on
             found.append(Contact(self.label(other), tuple(c[5]), tuple(normal), max(0.0, -c[8]), float(c[9])))
         return ContactData(tuple(found))
+
+
+
+def _see_movers(rig: _Rig, data: ScanData, ranges: np.ndarray) -> None:
+    """The movers in the scan's way, where they were when it was taken (in place, before noise)."""
+    if data.movers is not None:
+        from mobot_cli.sim.movers.shapes import see
+
+        see(data.movers, rig.spec.range_min, rig.beams, data.position, quat_matrix(data.quat), ranges)
 
 
 def _aabb(cid: int, body: int) -> tuple[np.ndarray, np.ndarray]:
