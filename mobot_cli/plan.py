@@ -9,6 +9,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+CAMERA_KINDS = ("camera", "depth", "rgbd")  # SensorSpec.kind of a camera (docs/cameras.md)
+
 
 @dataclass(frozen=True)
 class FaultLimits:
@@ -356,3 +358,8 @@ class Plan:
     # a generated world (``world: {generate: ...}``) as an SDF world file: the run folder keeps it
     generated_world: str = ""
     movers: tuple[MoverPlan, ...] = ()  # the scenario's movers: (docs/movers.md); the world's actors are in world
+
+
+def renders(plan: Plan) -> bool:
+    """Whether any robot of the plan has a camera (its World then takes a PyBullet client of its own)."""
+    return any(sensor.kind in CAMERA_KINDS for robot in plan.robots for sensor in robot.sensors)

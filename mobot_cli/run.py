@@ -10,7 +10,7 @@ from mobot_cli.errors import MobotError, OutputError, SimulationFault
 from mobot_cli.plan import Plan
 from mobot_cli.record.outcome import Status
 from mobot_cli.record.recording import Recording
-from mobot_cli.sim.engine import open_world
+from mobot_cli.sim.engine import world_for
 from mobot_cli.timeline.expect import Result
 from mobot_cli.timeline.loop import Attachment, Timeline
 
@@ -39,7 +39,7 @@ def execute(plan: Plan, resolved_yaml: str, out_dir: Path, progress: Progress | 
     ``watch`` is called with the timeline once its robots are spawned, to attach more consumers
     (a live view). ``durable=False`` leaves flushing summary.json to disk to the caller (a sweep
     does it off the worker's clock); ``pictures=False`` draws no trajectory.png (a sweep's runs)."""
-    with open_world(plan.physics, plan.world, seed=plan.seed) as world:
+    with world_for(plan) as world:
         # The robots are spawned and checked before the folder is made: a spawn refused
         # (inside furniture, below the floor) leaves no run folder behind.
         timeline = Timeline(plan, world)

@@ -13,11 +13,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mobot_cli.errors import UsageError
-from mobot_cli.plan import SensorSpec
+from mobot_cli.plan import CAMERA_KINDS, SensorSpec
 from mobot_cli.sim.sensing.render import intrinsics
 from mobot_cli.timeline.records import Reading
-
-CAMERA_KINDS = ("camera", "depth", "rgbd")
 
 
 @dataclass(frozen=True)

@@ -27,7 +27,7 @@ from mobot_cli.scenario.goals import goal_step
 from mobot_cli.scenario.limits import MAX_ANGULAR_SPEED, MAX_SECONDS, MAX_SPEED
 from mobot_cli.scenario.prepare import Prepared, prepare_target
 from mobot_cli.scenario.units import steps
-from mobot_cli.sim.engine import open_world
+from mobot_cli.sim.engine import world_for
 from mobot_cli.sim.state import RobotState
 from mobot_cli.timeline.goals import GoalEnded, GoalStarted
 from mobot_cli.timeline.loop import Timeline
@@ -39,7 +39,7 @@ class Simulation:
 
     def __init__(self, prepared: Prepared, out: Path | str | None = None):
         self.plan: Plan = prepared.plan
-        self._world = open_world(self.plan.physics, self.plan.world, seed=self.plan.seed)
+        self._world = world_for(self.plan)
         try:
             self._timeline = Timeline(self.plan, self._world)
             self._timeline.start()  # the robots are placed and checked before any file is written

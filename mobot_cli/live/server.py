@@ -33,7 +33,7 @@ from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.live.session import Session
 from mobot_cli.plan import Plan
 from mobot_cli.record.summary import LiveInfo, Status
-from mobot_cli.sim.engine import open_world
+from mobot_cli.sim.engine import world_for
 from mobot_cli.timeline.loop import Attachment, Timeline
 
 # In --fast mode requests get at most as much wall time between two steps as the last step
@@ -89,7 +89,7 @@ class LiveServer:
         """Run until `stop`, SIGINT/SIGTERM or ``stop_after`` steps; returns status and counts."""
         restore = _catch_signals(self)
         try:
-            with open_world(self.plan.physics, self.plan.world, seed=self.plan.seed) as world:
+            with world_for(self.plan) as world:
                 self._bind()
                 self._loader.start()
                 self.session = Session(self.plan, world, self.out_dir, self.resolved_yaml)

@@ -28,13 +28,12 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 from mobot_cli.common.transforms import quat_mul
-from mobot_cli.plan import RobotPlan, SensorSpec
+from mobot_cli.plan import CAMERA_KINDS, RobotPlan, SensorSpec
 from mobot_cli.ros.definitions import CONTACTS_STATE, IMAGE, IMU, LASER_SCAN, POINT_CLOUD2, RANGE
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9_]")
 IDENTITY = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
 OPTICAL = (-0.5, 0.5, -0.5, 0.5)  # rpy (-pi/2, 0, -pi/2): the sensor frame (x forward, z up) to the optical frame
-CAMERA_KINDS = ("camera", "depth", "rgbd")
 
 
 def is_3d(spec: SensorSpec) -> bool:

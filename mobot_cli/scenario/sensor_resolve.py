@@ -22,7 +22,7 @@ from mobot_cli.assets.description.sensors import (
     with_gazebo_collision,
 )
 from mobot_cli.errors import Location, ScenarioError, did_you_mean
-from mobot_cli.plan import SensorSpec
+from mobot_cli.plan import CAMERA_KINDS, SensorSpec
 from mobot_cli.scenario.model import RobotSpec
 from mobot_cli.scenario.sensor_model import CAMERA_FIELDS, LIDAR_FIELDS, TOPIC_RE, SensorOverride
 from mobot_cli.scenario.units import steps
@@ -43,7 +43,6 @@ PARTNER = {"max_angle": "min_angle", "vertical_max_angle": "vertical_min_angle",
            "range_max": "range_min", "samples": "vertical_samples", "clip_far": "clip_near"}
 ONLY = {**{f: "lidar" for f in LIDAR_FIELDS}, "accel_noise_stddev": "imu", "collision": "contact",
         **{f: "camera" for f in CAMERA_FIELDS}}
-CAMERA_KINDS = ("camera", "depth", "rgbd")
 
 
 def find_sensors(key: str, sensors: tuple[DescribedSensor, ...]) -> list[DescribedSensor]:

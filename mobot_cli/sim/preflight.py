@@ -5,7 +5,7 @@ from __future__ import annotations
 from mobot_cli.errors import Location, SpawnError
 from mobot_cli.plan import Physics, Plan, RobotPlan, SpawnPose, WorldPlan
 from mobot_cli.sim.bullet.world import World
-from mobot_cli.sim.engine import open_world
+from mobot_cli.sim.engine import world_for
 
 
 def check_world(world: WorldPlan) -> None:
@@ -16,7 +16,7 @@ def check_world(world: WorldPlan) -> None:
 
 def check_spawns(plan: Plan) -> None:
     """Build the plan's world and spawn its robots as a run would; SpawnError when one is refused."""
-    with open_world(plan.physics, plan.world, seed=plan.seed) as world:
+    with world_for(plan) as world:
         for robot in plan.robots:
             world.spawn(robot)
 

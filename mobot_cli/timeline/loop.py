@@ -21,7 +21,7 @@ from mobot_cli.errors import MobotError, SpawnError
 from mobot_cli.plan import CommandStep, Event, GoalStep, MoverPlan, Plan, RobotPlan, SensorSpec
 from mobot_cli.sim.bullet.world import World
 from mobot_cli.sim.clearance import REACH_MARGIN
-from mobot_cli.sim.engine import open_world
+from mobot_cli.sim.engine import world_for
 from mobot_cli.timeline.goals import Driver
 from mobot_cli.timeline.metrics import REACH as METRICS_REACH
 from mobot_cli.timeline.records import Consumer, Deleted, Reading, Record, Sample, Spawned
@@ -348,7 +348,7 @@ class Timeline:
 
 def simulate(plan: Plan) -> Iterator[Record]:
     """Play ``plan`` in a world of its own from start to end, yielding its records as they come."""
-    with open_world(plan.physics, plan.world, seed=plan.seed) as world:
+    with world_for(plan) as world:
         records: list[Record] = []
         timeline = Timeline(plan, world)
         timeline.attach(records.append)

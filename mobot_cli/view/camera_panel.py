@@ -14,8 +14,6 @@ from typing import Any
 
 import numpy as np
 
-CAMERA_KINDS = ("camera", "depth", "rgbd")
-
 
 def picture(data, far: float) -> np.ndarray | None:
     """A frame as RGB uint8 for the page."""

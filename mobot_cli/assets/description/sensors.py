@@ -25,11 +25,10 @@ from mobot_cli.assets.description.plugin_sensors import plugin_sensors
 from mobot_cli.assets.description.sensor_xml import SensorXml
 from mobot_cli.common.transforms import quat_from_rpy, quat_mul
 from mobot_cli.errors import DescriptionError, Location, Notice, did_you_mean
-from mobot_cli.plan import RayAxis, SensorSpec
+from mobot_cli.plan import CAMERA_KINDS, RayAxis, SensorSpec
 
 LIDAR_TYPES = ("ray", "gpu_ray", "lidar", "gpu_lidar")
 CAMERA_TYPES = {"camera": "camera", "depth_camera": "depth", "depth": "rgbd", "rgbd_camera": "rgbd", "rgbd": "rgbd"}
-CAMERA_KINDS = ("camera", "depth", "rgbd")
 KINDS = {**{t: "lidar" for t in LIDAR_TYPES}, "sonar": "range", "imu": "imu", "contact": "contact",
          **CAMERA_TYPES}
 RAY_KINDS = ("lidar", "range")  # sensors that cast rays: scan axes and a range

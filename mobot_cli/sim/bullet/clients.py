@@ -59,9 +59,13 @@ def keep_at_least(count: int) -> None:
         keep_clients(count)
 
 
-def connect(key: Any = None) -> tuple[int, Optional[Stage]]:
+def connect(key: Any = None, fresh: bool = False) -> tuple[int, Optional[Stage]]:
     """A PyBullet client (DIRECT, headless) and, when a kept one holds the static world for
-    ``key``, that stage (else None: an empty client, new or reset)."""
+    ``key``, that stage (else None: an empty client, new or reset). ``fresh``: a new client, never
+    a kept one (a world with cameras: TinyRenderer was seen to leave a robot out of the images in a
+    client another world had used, in a process that keeps clients)."""
+    if fresh:
+        return p.connect(p.DIRECT), None
     with _idle_lock:
         same = next((i for i, (_, stage) in enumerate(_idle) if stage is not None and stage.key == key), None)
         if same is not None:

@@ -55,11 +55,11 @@ PART_REACH = 10.0  # m
 class World(MoversDoor):
     """A headless physics world built from a plan; robots come and go by name (and movers: MoversDoor)."""
 
-    def __init__(self, physics: Physics, world: WorldPlan, seed: int = 0):
+    def __init__(self, physics: Physics, world: WorldPlan, seed: int = 0, fresh: bool = False):
         self.physics = physics
         self.plan = world
         self.seed = seed  # handed in like every source of randomness; PyBullet itself draws none
-        self._cid, stage = connect((physics, world))
+        self._cid, stage = connect((physics, world), fresh)
         # The static world stays for the next World only when nothing but this run's robots
         # came and went: a body removed on the way, or a fault, and the client is reset instead.
         self._pristine = True

@@ -57,8 +57,8 @@ FLOOR_TOLERANCE = 1e-6  # m
 class KinematicWorld(World):
     """A World whose robots move kinematically (see the module's docstring)."""
 
-    def __init__(self, physics: Physics, world: WorldPlan, seed: int = 0):
-        super().__init__(physics, world, seed)
+    def __init__(self, physics: Physics, world: WorldPlan, seed: int = 0, fresh: bool = False):
+        super().__init__(physics, world, seed, fresh)
         self._start_kinematics()
 
     def _start_kinematics(self) -> None:

@@ -19,8 +19,6 @@ import numpy as np
 from mobot_cli.plan import SensorSpec
 from mobot_cli.sim.sensing import render
 
-CAMERA_KINDS = ("camera", "depth", "rgbd")
-
 
 class Cameras:
     """The renderer of one world and what renders a camera's image."""
