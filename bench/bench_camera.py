@@ -11,6 +11,11 @@
    the bundled house for ``--seconds`` simulated seconds with the physics engine, recorded (the
    PNG frames written), against the same run without the camera: real-time factors, interleaved.
 3. The same pair on the kinematic engine: the cost of one camera on a kinematic run.
+4. Where a TinyRenderer frame goes in the bundled house: the frame's CPU time with each static body
+   left out of the drawing in turn (made transparent), and with all of them left out.
+
+Times are wall and CPU (``time.process_time``: the whole process, the EGL plugin's llvmpipe threads
+included): on a shared machine CPU time is the steadier of the two.
 """
 
 from __future__ import annotations
@@ -24,9 +29,10 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from bench.common import REPO  # noqa: E402
+from bench.common import REPO, timed  # noqa: E402
 from mobot_cli.api.simulation import Simulation  # noqa: E402
 from mobot_cli.cli import invoke  # noqa: E402
+from mobot_cli.sim.pb import p  # noqa: E402
 from mobot_cli.sim.sensing import render  # noqa: E402
 
 SMALL_HOUSE = "aws-robomaker-small-house-world/worlds/small_house.world"
@@ -44,14 +50,17 @@ def scenario(folder: Path, world: str, pose, kind: str, size: tuple[int, int], r
     return path
 
 
-def fps(sim: Simulation, frames: int) -> float:
-    """Frames a second, each taken and read as a run reads it."""
+def fps(sim: Simulation, frames: int) -> tuple[float, float]:
+    """Frames a second (by wall time, by CPU time), each taken and read as a run reads it."""
     world = sim._world  # noqa: SLF001 - the world's sensing, without the timeline's bookkeeping
-    started = time.perf_counter()
-    for _ in range(frames):
-        data = world.sense([("r", "cam")])[0]
-        data.rgb, data.depth  # noqa: B018 - reading renders
-    return frames / (time.perf_counter() - started)
+
+    def take() -> None:
+        for _ in range(frames):
+            data = world.sense([("r", "cam")])[0]
+            data.rgb, data.depth  # noqa: B018 - reading renders
+
+    wall, cpu = timed(take)
+    return frames / wall, frames / max(cpu, 1e-9)
 
 
 def renderers() -> list[str]:
@@ -74,47 +83,84 @@ def rendering(worlds: dict[str, str], frames: int, repeat: int, tmp: Path) -> No
         sim.step(10)
         fps(sim, 2)  # warm: the renderer is made, meshes are loaded
         sims[(label, kind, size, renderer)] = sim
-    best = dict.fromkeys(sims, 0.0)
+    best = {key: (0.0, 0.0) for key in sims}
     for _ in range(repeat):
         for key, sim in sims.items():
-            best[key] = max(best[key], fps(sim, frames))
-    print("| world | renderer | size | RGB fps | depth fps |\n|---|---|---|---|---|")
+            best[key] = tuple(map(max, best[key], fps(sim, frames)))
+    print("| world | renderer | size | RGB fps (wall / CPU) | depth fps (wall / CPU) |\n|---|---|---|---|---|")
     for label in worlds:
         for renderer in renderers():
             for size in ((320, 240), (640, 480)):
                 rgb, depth = best[(label, "camera", size, renderer)], best[(label, "depth_camera", size, renderer)]
-                print(f"| {label} | {renderer} | {size[0]}x{size[1]} | {rgb:.1f} | {depth:.1f} |")
+                print(f"| {label} | {renderer} | {size[0]}x{size[1]} | {rgb[0]:.1f} / {rgb[1]:.1f} "
+                      f"| {depth[0]:.1f} / {depth[1]:.1f} |")
     for sim in sims.values():
         sim.close()
 
 
-def run_factor(tmp: Path, engine: str, camera: bool, seconds: float, renderer: str) -> float:
-    """Real-time factor of a recorded run of the bundled mobot driving in the bundled house."""
+def run_factor(tmp: Path, engine: str, camera: bool, seconds: float, renderer: str) -> tuple[float, float]:
+    """Real-time factors (by wall time, by CPU time) of a recorded run of the bundled mobot driving
+    in the bundled house."""
     path = tmp / f"run_{engine}_{camera}_{renderer}.yaml"
     path.write_text(f"version: 1\nname: run\nworld: house\nduration: {seconds}\nsettle: 0.5\n"
                     f"physics: {{engine: {engine}, renderer: {renderer}}}\n"
                     "robots:\n  - name: r\n    description: mobot\n"
                     f"    args: {{camera: '{str(camera).lower()}'}}\n    pose: {{x: -3.0, y: -2.5}}\n"
                     "    commands:\n      - {at: 0.5, linear: 0.2, angular: 0.1}\n")
-    started = time.perf_counter()
+    wall, cpu = time.perf_counter(), time.process_time()
     done = invoke(["run", str(path), "--out", str(tmp / f"out_{engine}_{camera}_{renderer}"), "--quiet"])
     assert done.exit_code == 0, done.stderr
-    return seconds / (time.perf_counter() - started)
+    return seconds / (time.perf_counter() - wall), seconds / (time.process_time() - cpu)
 
 
 def runs(tmp: Path, seconds: float, repeat: int, renderers: list[str]) -> None:
     for engine in ("bullet", "kinematic"):
         cases = [(False, "tiny")] + [(True, r) for r in renderers]
-        best = dict.fromkeys(cases, 0.0)
+        best = {case: (0.0, 0.0) for case in cases}
         for _ in range(repeat):
             for camera, renderer in cases:
-                best[(camera, renderer)] = max(best[(camera, renderer)],
-                                               run_factor(tmp, engine, camera, seconds, renderer))
+                best[(camera, renderer)] = tuple(map(max, best[(camera, renderer)],
+                                                     run_factor(tmp, engine, camera, seconds, renderer)))
         without = best[(False, "tiny")]
-        withs = ", ".join(f"{best[(True, r)]:.1f}x with it on {r} ({without / best[(True, r)]:.2f}x the time)"
-                          for r in renderers)
-        print(f"{engine}: {seconds:g} s in the bundled house, recorded, a 320x240 RGB-D camera at 15 Hz: "
-              f"{without:.1f}x real time without the camera, {withs}; best of {repeat}")
+        withs = ", ".join(f"{best[(True, r)][0]:.2f}x / {best[(True, r)][1]:.2f}x with it on {r}" for r in renderers)
+        print(f"{engine}: {seconds:g} s in the bundled house, recorded, a 320x240 RGB-D camera at 15 Hz, "
+              f"real-time factor by wall / CPU time: {without[0]:.1f}x / {without[1]:.1f}x without the camera, "
+              f"{withs}; best of {repeat}")
+
+
+def breakdown(tmp: Path, frames: int, repeat: int) -> None:
+    """A TinyRenderer frame's CPU time in the bundled house, with each static body left out in turn."""
+    with Simulation.open(scenario(tmp, "house", POSES["house"], "camera", (320, 240), "tiny")) as sim:
+        sim.step(10)
+        fps(sim, 2)
+        cid = sim._world._cid  # noqa: SLF001 - the bench hides bodies from the renderer only
+        statics = [u for u in (p.getBodyUniqueId(i, physicsClientId=cid)
+                               for i in range(p.getNumBodies(physicsClientId=cid)))
+                   if p.getBodyInfo(u, physicsClientId=cid)[1] != b"mobot"]
+        shapes = {u: p.getVisualShapeData(u, physicsClientId=cid) for u in statics}
+
+        def show(uids, visible: bool) -> None:
+            for uid in uids:
+                for shape in shapes[uid]:
+                    p.changeVisualShape(uid, shape[1], rgbaColor=shape[7] if visible else (0, 0, 0, 0),
+                                        physicsClientId=cid)
+
+        def ms() -> float:
+            return min(1000.0 / fps(sim, frames)[1] for _ in range(repeat))
+
+        full = ms()
+        costs = []
+        for uid in statics:
+            show([uid], False)
+            costs.append((full - ms(), uid))
+            show([uid], True)
+        show(statics, False)
+        bare = ms()
+        top = ", ".join(f"body {uid} ({len(shapes[uid])} shapes) {cost:.1f} ms"
+                        for cost, uid in sorted(costs, reverse=True)[:3])
+        print(f"house, TinyRenderer, 320x240 RGB: {full:.1f} ms CPU a frame; without its {len(statics)} static "
+              f"bodies ({sum(len(s) for s in shapes.values())} shapes) {bare:.1f} ms; the costliest left out "
+              f"alone: {top}")
 
 
 def main() -> None:
@@ -131,6 +177,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         rendering(worlds, args.frames, args.repeat, Path(tmp))
         runs(Path(tmp), args.seconds, args.repeat, renderers())
+        breakdown(Path(tmp), args.frames, args.repeat)
 
 
 if __name__ == "__main__":
