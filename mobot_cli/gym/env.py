@@ -22,8 +22,9 @@ within the far clip as the far clip (divided by it when normalized); the camera 
 at its own rate (docs/cameras.md). Every ``reset`` builds the world afresh, so ``reset(seed=s)``
 always starts the same episode, the lidar's noise included; without ``out`` it does so from
 what the first reset made and kept: the scenario prepared (only its seed changes), the robot
-resolved, and the PyBullet client with the world's static bodies (sim/bullet/clients.py), so
-an episode is byte for byte the one a build from nothing gives (tests/run/test_scale_golden.py).
+resolved, and the PyBullet client with the world's static bodies (sim/bullet/clients.py) and
+the robot's body, restored as just loaded (sim/bullet/kept_body.py), so an episode is byte for
+byte the one a build from nothing gives (tests/run/test_scale_golden.py, tests/gym/test_resets.py).
 """
 
 from __future__ import annotations
@@ -52,6 +53,7 @@ from mobot_cli.scenario.limits import (
 )
 from mobot_cli.scenario.prepare import Prepared, prepare_target
 from mobot_cli.sim.bullet.clients import keep_at_least
+from mobot_cli.sim.bullet.kept_body import keep_robot_bodies
 from mobot_cli.sim.holonomic import KINDS as HOLONOMIC
 
 
@@ -183,6 +185,7 @@ class MobotEnv(gym.Env):
         if self._kept.get("world") != key:
             self._kept.update(world=key, prepared=prepare_target(self.world, [f"seed={world_seed}"]))
             keep_at_least(1)
+            keep_robot_bodies(True)  # and the robot's body: sim/bullet/kept_body.py
         prepared: Prepared = self._kept["prepared"]
         return Simulation(Prepared(prepared.scenario, replace(prepared.plan, seed=world_seed), prepared.resolved_yaml))
 
