@@ -10,7 +10,6 @@ import pytest
 
 from mobot_cli.gym.env import MobotEnv
 from mobot_cli.sim.bullet.clients import keep_clients
-from mobot_cli.sim.bullet.kept_body import keep_robot_bodies
 
 
 def episode(env: MobotEnv, seed: int, steps: int = 15) -> str:
@@ -30,7 +29,6 @@ def fresh_clients():
     keep_clients(0)  # no client kept from an earlier test
     yield
     keep_clients(0)
-    keep_robot_bodies(False)  # an env turns it on for the process
 
 
 @pytest.mark.parametrize("engine", ["bullet", "kinematic"])
@@ -70,9 +68,10 @@ def drive(sim, steps: int = 60) -> str:
 
 @pytest.mark.parametrize("engine", ["bullet", "kinematic"])
 def test_a_kept_robot_body_is_taken_back_or_taken_out(engine, tmp_path, fresh_clients, monkeypatch):
-    """The robot's body stays in the kept client (sim/bullet/kept_body.py): the same spawn takes it
-    back, with the same body id; another robot, another pose, or a world stepped before its first
-    spawn takes it out first. Each gives what a new client gives."""
+    """The robot's body stays in the kept client between an env's resets (sim/bullet/kept_body.py):
+    the same spawn takes it back, with the same body id. Outside a reset nothing is kept: after
+    env.close(), a World with the same robot, another pose, or stepped before its first spawn gives
+    what a new client gives."""
     from mobot_cli.api import Simulation
 
     monkeypatch.chdir(tmp_path)
@@ -97,7 +96,7 @@ def test_a_kept_robot_body_is_taken_back_or_taken_out(engine, tmp_path, fresh_cl
             sim.spawn("robot", "mobot", x=pose[0], y=pose[1])
             return drive(sim)
 
-    # The kept client holds the body spawned at (-3, -2.5): every case below meets it first.
+    # Each case after an env used the kept client and closed.
     kept = []
     for pose, step_first in [((-3.0, -2.5), False), ((-2.5, -2.5), False), ((-3.0, -2.5), True)]:
         env = MobotEnv(world=world, pose=(-3.0, -2.5, 0.0), scan=False)

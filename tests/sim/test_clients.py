@@ -12,7 +12,6 @@ import pytest
 from mobot_cli.run import execute
 from mobot_cli.scenario.prepare import prepare
 from mobot_cli.sim.bullet import clients
-from mobot_cli.sim.bullet.kept_body import keep_robot_bodies
 from mobot_cli.sim.bullet.world import World
 from mobot_cli.sim.pb import p
 
@@ -34,7 +33,6 @@ def _folder(out: Path) -> dict[str, bytes]:
 @pytest.fixture
 def kept():
     clients.keep_clients(1)
-    keep_robot_bodies(False)  # the static world only (a Gymnasium env earlier in the process turns it on)
     yield
     clients.keep_clients(0)
 

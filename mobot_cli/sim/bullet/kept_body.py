@@ -2,7 +2,8 @@
 
 A Gymnasium env spawns the same robot at the same pose in every reset; loading its URDF is
 most of what the kept static world (sim/bullet/clients.py) leaves of a reset. With
-``keep_robot_bodies(True)`` (the env turns it on), the first robot a World spawns at step 0 is
+``keeping_robot_bodies()`` (the env's ``reset`` holds it: no other World in the process keeps or
+takes a body, and one closed outside it is removed as usual), the first robot a World spawns at step 0 is
 saved as PyBullet loaded it (``saveState``, in memory), and when its World closes clean the body
 stays in the kept client with that saved state. The next World's first spawn of the same URDF
 text at the same pose takes it back: ``restoreState`` puts every body where it was just after the
@@ -14,6 +15,7 @@ Episodes are byte for byte those of a build from nothing (tests/gym/test_resets.
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 from typing import Any, Optional
 
@@ -32,10 +34,15 @@ class KeptBody:
     state: int  # a p.saveState id
 
 
-def keep_robot_bodies(on: bool) -> None:
-    """Keep the first robot's body of each World in its kept client (off by default)."""
+@contextlib.contextmanager
+def keeping_robot_bodies(on: bool = True):
+    """Within the block, keep the first robot's body of each World in its kept client."""
     global _keep
-    _keep = bool(on)
+    before, _keep = _keep, bool(on)
+    try:
+        yield
+    finally:
+        _keep = before
 
 
 def body_key(urdf: str, xyz, quat) -> tuple:
@@ -60,10 +67,13 @@ def forget(cid: int, kept: KeptBody) -> None:
     p.removeState(kept.state, physicsClientId=cid)
 
 
-def leave(stage, kept: Optional[KeptBody], waits: bool, bodies: list[int]) -> tuple[Any, list[int]]:
+def leave(cid: int, stage, kept: Optional[KeptBody], waits: bool, bodies: list[int]) -> tuple[Any, list[int]]:
     """A closing World's stage (clients.Stage or None), with the kept body on it when the body is
-    still in the world, and the robot bodies release() removes: every other one."""
-    if stage is None or kept is None or not (waits or kept.body in bodies):
+    still in the world and bodies are being kept, and the robot bodies release() removes: every
+    other one (all of them, the kept one too, when it is not kept)."""
+    if kept is not None and (stage is None or not _keep):
+        p.removeState(kept.state, physicsClientId=cid)
+    if stage is None or kept is None or not _keep or not (waits or kept.body in bodies):
         return stage, bodies
     if not waits:
         park(stage.probes.cid, kept.body)
@@ -80,5 +90,5 @@ def park(cid: int, body: int) -> None:
 
 
 def save(cid: int, key: tuple, body: int) -> Optional[KeptBody]:
-    """The body just loaded, saved to be kept (None unless keep_robot_bodies is on)."""
+    """The body just loaded, saved to be kept (None outside keeping_robot_bodies)."""
     return KeptBody(key, body, p.saveState(physicsClientId=cid)) if _keep else None

@@ -475,7 +475,7 @@ class World(MoversDoor):
                 self._pristine = not discard(self._cid) and self._pristine
             stage = Stage((self.physics, self.plan), self._statics, self._solids, self._ground, self._probes,
                           self._names) if self._pristine else None
-            release(self._cid, *kept_body.leave(stage, self._kept, self._kept_waits,
+            release(self._cid, *kept_body.leave(self._cid, stage, self._kept, self._kept_waits,
                                                 [robot.body for robot in self._robots.values()]))
             self._cid = -1
 
