@@ -14,9 +14,10 @@ best of ``--repeat`` taken (the machine may be shared: the best is the least dis
   (bench_kinematic.py's fleet): the loop's real-time factor, spawns excluded. Goals >= 20x for
   1,000, >= 300x for 100. PyBulletFleet's figures (1,000 at 9.6x, 100 at 187x, its own robots
   among boxes) are quoted from issue 32, not measured here.
-- ``reset``: ``MobotEnv.reset()`` (the empty world, the bundled robot, settle 0.5 s at 240 Hz):
-  ms a reset, kept (the same env) against built from nothing (a new env and PyBullet client
-  each time). Goal <= 2 ms; IR-SIM's 0.1-0.5 ms quoted from issue 32.
+- ``reset``: ``MobotEnv.reset()`` (the empty world, the bundled robot, settle 0.5 s at 240 Hz), on
+  each engine: ms a reset (wall and CPU), kept (the same env) against built from nothing (a new
+  env and PyBullet client each time), and env steps/s stepping alone and in 200-step episodes
+  (resets included). Goal <= 2 ms; IR-SIM's 0.1-0.5 ms quoted from issue 32.
 - ``vector``: aggregate env steps/s (10 Hz control, empty world) of ``gymnasium.make_vec``
   with 1 and 8 envs in one process (``vectorization_mode="sync"``) and of 8 envs in 2
   processes (``"async"``).
@@ -114,27 +115,42 @@ def measure_raw_loads(count: int) -> dict:
     return {"spawn": seconds}
 
 
-def measure_reset(resets: int) -> dict:
-    """ms a reset: the same env (kept), and a new env and client each time (built from nothing)."""
+def measure_reset(resets: int, engine: str, episode_steps: int = 200) -> dict:
+    """ms a reset (wall and CPU): the same env (kept), and a new env and client each time (built
+    from nothing); and env steps/s of whole episodes (a reset, then ``episode_steps`` steps)."""
     from mobot_cli.gym.env import MobotEnv
     from mobot_cli.sim.bullet import clients
 
-    env = MobotEnv(scan=False)
+    world = Path(tempfile.mkdtemp(prefix="mobot-bench-reset-")) / "empty.yaml"
+    world.write_text(f"version: 1\nname: e\nworld: empty\nduration: 600\nphysics: {{engine: {engine}}}\n")
+    env = MobotEnv(world, scan=False)
     env.reset(seed=0)
-    started = time.perf_counter()
+    wall, cpu = time.perf_counter(), time.process_time()
     for seed in range(resets):
         env.reset(seed=seed)
-    kept = (time.perf_counter() - started) / resets
+    kept, kept_cpu = (time.perf_counter() - wall) / resets, (time.process_time() - cpu) / resets
+    action = [0.5, 0.2]
+    started = time.perf_counter()
+    for _ in range(episode_steps):
+        env.step(action)
+    steps_only = episode_steps / (time.perf_counter() - started)
+    started = time.perf_counter()
+    for seed in range(3):
+        env.reset(seed=seed)
+        for _ in range(episode_steps):
+            env.step(action)
+    episodes = 3 * episode_steps / (time.perf_counter() - started)
     env.close()
     total = 0.0
     for seed in range(resets):
         clients.keep_clients(0)  # this code keeps a client between resets: drop it
-        env = MobotEnv(scan=False)
+        env = MobotEnv(world, scan=False)
         started = time.perf_counter()
         env.reset(seed=seed)
         total += time.perf_counter() - started
         env.close()
-    return {"kept_ms": kept * 1000, "fresh_ms": total / resets * 1000}
+    return {"kept_ms": kept * 1000, "kept_cpu_ms": kept_cpu * 1000, "fresh_ms": total / resets * 1000,
+            "steps_per_s": steps_only, "episode_steps_per_s": episodes}
 
 
 def measure_vector(envs: int, mode: str, steps: int) -> dict:
@@ -162,7 +178,7 @@ def child(args) -> None:
     elif what == "raw":
         print(json.dumps(measure_raw_loads(args.robots)))
     elif what == "reset":
-        print(json.dumps(measure_reset(args.resets)))
+        print(json.dumps(measure_reset(args.resets, args.engine)))
     elif what == "vector":
         print(json.dumps(measure_vector(args.envs, args.mode, args.steps)))
     elif what == "poses":
@@ -189,6 +205,7 @@ def main() -> None:
     parser.add_argument("--path", help=argparse.SUPPRESS)
     parser.add_argument("--envs", type=int, default=8, help=argparse.SUPPRESS)
     parser.add_argument("--mode", default="sync", help=argparse.SUPPRESS)
+    parser.add_argument("--engine", default="bullet", help=argparse.SUPPRESS)
     parser.add_argument("--steps", type=int, default=100, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
@@ -196,7 +213,7 @@ def main() -> None:
     trees = [Path(t).resolve() for t in args.trees.split(",")]
     rows = set(args.rows.split(","))
     work = Path(tempfile.mkdtemp(prefix="mobot-bench-scale-"))
-    poses = run_child(REPO, "poses", "--robots", str(args.robots))
+    poses = run_child(REPO, "poses", "--robots", str(args.robots)) if rows & {"spawn", "fleet"} else []
     big = work / "fleet_big.yaml"
     big.write_text(fleet_text(poses, args.seconds))
     sys.path.insert(0, str(REPO / "bench"))
@@ -222,8 +239,11 @@ def main() -> None:
             if "fleet" in rows:
                 keep("small", tree, run_child(tree, "fleet", "--path", str(small)), lambda a, b: a["rtf"] > b["rtf"])
             if "reset" in rows:
-                keep("reset", tree, run_child(tree, "reset", "--resets", str(args.resets)),
-                     lambda a, b: a["kept_ms"] < b["kept_ms"])
+                for engine in ("bullet", "kinematic"):
+                    got = run_child(tree, "reset", "--resets", str(args.resets), "--engine", engine)
+                    old = best.get((f"reset-{engine}", str(tree)), got)
+                    best[(f"reset-{engine}", str(tree))] = {  # each figure its own best
+                        k: (max if k.endswith("per_s") else min)(v, old[k]) for k, v in got.items()}
             if "vector" in rows:
                 for envs, mode in ((1, "sync"), (8, "sync"), (8, "async")):
                     keep(f"vec{envs}{mode}", tree, run_child(tree, "vector", "--envs", str(envs), "--mode", mode),
@@ -242,11 +262,14 @@ def main() -> None:
         if "small" in got:
             print(f"100 bundled robots in the house, kinematic 10 Hz: {got['small']['rtf']:.0f}x real time "
                   f"({got['small']['hits']} collisions) | goal >= 300x; PyBulletFleet 187x (quoted)")
-        if "reset" in got:
-            r = got["reset"]
-            print(f"gym reset (empty world, settle 0.5 s at 240 Hz): {r['kept_ms']:.1f} ms kept, "
-                  f"{r['fresh_ms']:.1f} ms built from nothing ({r['fresh_ms'] / r['kept_ms']:.1f}x) | goal <= 2 ms; "
-                  f"IR-SIM 0.1-0.5 ms (quoted)")
+        for engine in ("bullet", "kinematic"):
+            r = got.get(f"reset-{engine}")
+            if r is not None:
+                print(f"gym reset, {engine} (empty world, settle 0.5 s at 240 Hz): {r['kept_ms']:.1f} ms kept "
+                      f"({r['kept_cpu_ms']:.1f} ms CPU), {r['fresh_ms']:.1f} ms built from nothing "
+                      f"({r['fresh_ms'] / r['kept_ms']:.1f}x) | goal <= 2 ms; IR-SIM 0.1-0.5 ms (quoted)")
+                print(f"  env steps/s: {r['steps_per_s']:.0f} stepping, {r['episode_steps_per_s']:.0f} "
+                      f"in 200-step episodes, resets included")
         if "vec1sync" in got:
             one = got["vec1sync"]["steps_per_s"]
             print(f"make_vec steps/s: 1 env {one:.0f}; 8 envs sync (one process) "

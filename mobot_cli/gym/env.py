@@ -22,8 +22,9 @@ within the far clip as the far clip (divided by it when normalized); the camera 
 at its own rate (docs/cameras.md). Every ``reset`` builds the world afresh, so ``reset(seed=s)``
 always starts the same episode, the lidar's noise included; without ``out`` it does so from
 what the first reset made and kept: the scenario prepared (only its seed changes), the robot
-resolved, and the PyBullet client with the world's static bodies (sim/bullet/clients.py), so
-an episode is byte for byte the one a build from nothing gives (tests/run/test_scale_golden.py).
+resolved, and the PyBullet client with the world's static bodies (sim/bullet/clients.py) and
+the robot's body, restored as just loaded (sim/bullet/kept_body.py), so an episode is byte for
+byte the one a build from nothing gives (tests/run/test_scale_golden.py, tests/gym/test_resets.py).
 """
 
 from __future__ import annotations
@@ -52,6 +53,7 @@ from mobot_cli.scenario.limits import (
 )
 from mobot_cli.scenario.prepare import Prepared, prepare_target
 from mobot_cli.sim.bullet.clients import keep_at_least
+from mobot_cli.sim.bullet.kept_body import keeping_robot_bodies
 from mobot_cli.sim.holonomic import KINDS as HOLONOMIC
 
 
@@ -148,11 +150,22 @@ class MobotEnv(gym.Env):
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         """A fresh world at t = 0 with the robot at its pose, settled; ``seed`` seeds the world."""
         super().reset(seed=seed)
-        self._close_sim()
         world_seed = int(self.np_random.integers(0, 2**31 - 1))
         out = None if self.out is None else self.out / f"episode_{self._episodes:04d}"
         self._episodes += 1
-        self._sim = self._open(world_seed, out)
+        # The robot's body stays in the kept client from one reset to the next (sim/bullet/kept_body.py);
+        # only here: a world closed anywhere else (env.close()) takes its body out.
+        with keeping_robot_bodies(out is None):
+            self._close_sim()
+            self._sim = self._open(world_seed, out)
+            self._start()
+        self._count = 0
+        self._goal = self._goal_in_odom()
+        scan = self._scan()
+        return self._observation(self._sim.state(self.robot), scan), self._info(scan)
+
+    def _start(self) -> None:
+        """The robot spawned in the new world and settled."""
         rate = self._sim.rate_hz
         steps = rate / self.control_hz
         if abs(steps - round(steps)) > 1e-9 or round(steps) < 1:
@@ -161,10 +174,6 @@ class MobotEnv(gym.Env):
         self._steps_per_action = round(steps)
         self._sim.spawn_plan(self._robot_plan(rate))
         self._sim.run_for(self.settle)
-        self._count = 0
-        self._goal = self._goal_in_odom()
-        scan = self._scan()
-        return self._observation(self._sim.state(self.robot), scan), self._info(scan)
 
     def _observation(self, s: RobotState, scan: Scan | None):
         obs = self._base_observation(s, scan)

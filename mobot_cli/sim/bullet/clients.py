@@ -29,6 +29,7 @@ class Stage:
     ground: Optional[int]
     probes: Any  # placement.Probes: shapes made once per client
     names: dict[int, str] = field(default_factory=dict)  # static body id -> its name in the world
+    body: Any = None  # kept_body.KeptBody: a robot's body left in the client for the same spawn
 
 
 _idle: list[tuple[int, Optional[Stage]]] = []  # kept clients, each empty or holding a stage
@@ -88,7 +89,7 @@ def release(cid: int, stage: Optional[Stage] = None, robots: Iterable[int] = ())
         if stage is not None:
             for body in sorted(robots, reverse=True):  # newest first: the ids come back in order
                 p.removeBody(body, physicsClientId=cid)
-            if p.getNumBodies(physicsClientId=cid) != len(stage.statics):
+            if p.getNumBodies(physicsClientId=cid) != len(stage.statics) + (stage.body is not None):
                 stage = None
         if stage is None:
             p.resetSimulation(physicsClientId=cid)

@@ -16,7 +16,7 @@ from mobot_cli.errors import SimulationFault, SpawnError, WorldError, did_you_me
 from mobot_cli.plan import Physics, RobotPlan, SpawnPose, WorldPlan
 from mobot_cli.sim import clearance, entity, parts, placement, static_shapes, surroundings
 from mobot_cli.sim.broadphase import RobotBoxes
-from mobot_cli.sim.bullet import friction
+from mobot_cli.sim.bullet import friction, kept_body
 from mobot_cli.sim.bullet.clients import Stage, connect, release
 from mobot_cli.sim.bullet.faults import Health
 from mobot_cli.sim.bullet.holonomic import ROLLER_FRICTION, HolonomicDrive
@@ -79,6 +79,8 @@ class World(MoversDoor):
         self._robot_boxes = RobotBoxes()  # the robots' boxes, for spawn checks (sim/broadphase.py)
         # Said once during the run (a stalled robot, a clamped car turn); a Timeline hands them on to summary.json.
         self.notices: list[str] = []
+        # A robot's body kept for the same first spawn (sim/bullet/kept_body.py); until it is taken it waits.
+        self._kept, self._kept_waits = (stage.body, stage.body is not None) if stage is not None else (None, False)
         if stage is not None:
             self._probes, self._statics, self._solids, self._ground, self._names = \
                 stage.probes, stage.statics, stage.solids, stage.ground, stage.names
@@ -114,6 +116,7 @@ class World(MoversDoor):
         self._clearance = {}
         self._health = Health(self._cid, self.physics.faults, self.physics.rate_hz)
         self._robot_boxes.forget()
+        self._kept, self._kept_waits = None, False
         self._build(self.plan)
         self._add_actors()
 
@@ -161,6 +164,22 @@ class World(MoversDoor):
         except p.error:
             return -1
 
+    def _load_robot(self, urdf: str, pose: SpawnPose) -> int:
+        """The first robot at step 0: the kept body (kept_body.py) or loaded and saved; else loaded."""
+        key, first, self._kept_waits = kept_body.body_key(urdf, pose.xyz, pose.quat), self._kept_waits, False
+        first = first or (not self._robots and self._steps == 0 and self._kept is None)
+        uid = kept_body.take(self._cid, self._kept, key) if first else None
+        if uid is None:
+            self._kept = None
+            uid = self._load(urdf, pose.xyz, pose.quat)
+            self._kept = kept_body.save(self._cid, key, uid) if first and uid >= 0 else None
+        return uid
+
+    def _drop_kept(self) -> None:
+        """A kept body no first spawn took leaves before the world moves."""
+        kept_body.forget(self._cid, self._kept)
+        self._kept, self._kept_waits = None, False
+
     def _plane(self, z: float) -> int:
         cid = self._cid
         shape = p.createCollisionShape(p.GEOM_PLANE, physicsClientId=cid)
@@ -202,7 +221,7 @@ class World(MoversDoor):
                              hint="Give the pose a unit quaternion (x, y, z, w) or rpy angles.")
         pose = replace(pose, quat=tuple(q / norm for q in pose.quat))
         robot = replace(robot, pose=pose)
-        uid = self._load(robot.urdf, pose.xyz, pose.quat)
+        uid = self._load_robot(robot.urdf, pose)
         if uid < 0:
             raise SpawnError(f"PyBullet could not load robot '{robot.name}' "
                              f"({robot.source or 'URDF text'})",
@@ -338,6 +357,8 @@ class World(MoversDoor):
 
     def step(self) -> None:
         """Advance one physics step; SimulationFault when a robot's state goes bad."""
+        if self._kept_waits:
+            self._drop_kept()
         if self._ramping:
             for robot in self._ramping:
                 robot.drive.ramp_step()
@@ -454,7 +475,8 @@ class World(MoversDoor):
                 self._pristine = not discard(self._cid) and self._pristine
             stage = Stage((self.physics, self.plan), self._statics, self._solids, self._ground, self._probes,
                           self._names) if self._pristine else None
-            release(self._cid, stage, [robot.body for robot in self._robots.values()])
+            release(self._cid, *kept_body.leave(self._cid, stage, self._kept, self._kept_waits,
+                                                [robot.body for robot in self._robots.values()]))
             self._cid = -1
 
     def __enter__(self) -> World:

@@ -192,6 +192,8 @@ class KinematicWorld(World):
     def step(self) -> None:
         """Move every robot one step along its twist, as far as nothing is in the way."""
         # Runs every step for every robot: a robot in open space costs one motion() and one move().
+        if self._kept_waits:
+            self._drop_kept()
         self._steps += 1
         moves = []
         for mover in self._order:
