@@ -51,7 +51,7 @@ def _stores():
 
 def test_every_definition_and_hash_is_rosbags_own():
     stores = _stores()
-    assert len(MESSAGES) == 13
+    assert len(MESSAGES) == 14
     jazzy_only = (PARTICIPANT_ENTITIES_INFO, RANGE)  # Humble's gid is 24 bytes; its Range has no variance
     for msgtype, (definition, rihs01) in MESSAGES.items():
         for name, store in stores.items():
