@@ -131,8 +131,8 @@ class Topics:
     def subscribe(self, name: str, msgtype: str, on_data: Callable[[bytes], None]) -> None:
         """Take ROS topic ``name`` of type ``msgtype`` (reliable, volatile, keep last 10); ``on_data``
         runs on Cyclone's thread. One topic may be read as several types: each matches its writers."""
-        self.readers[(name, msgtype)] = self.participant.reader(names.topic(name), idl.TYPES[msgtype], dds.DEFAULT, on_data,
-                                                     dds.ros_topic_userdata(type_hash(msgtype)))
+        self.readers[(name, msgtype)] = self.participant.reader(
+            names.topic(name), idl.TYPES[msgtype], dds.DEFAULT, on_data, dds.ros_topic_userdata(type_hash(msgtype)))
         self.announce()
 
     def drop(self, *topics: str) -> None:
@@ -268,7 +268,8 @@ class RecordPublisher:
             # The bytes go to the bridge as they came: it checks them (ros2/inputs.py) and counts what it drops.
             self.topics.subscribe(topic, TWIST, lambda data: self.on_cmd_vel(name, topic, data))
             # nav2 sends TwistStamped from Kilted on (enable_stamped_cmd_vel): both drive the robot alike.
-            self.topics.subscribe(topic, TWIST_STAMPED, lambda data: self.on_cmd_vel(name, topic, unstamped(data)))
+            self.topics.subscribe(topic, TWIST_STAMPED,
+                                  lambda data: self.on_cmd_vel(name, topic, unstamped(data)))
 
     def leave(self, name: str) -> None:
         """A robot left: its topics leave the graph, its frames leave /tf_static."""

@@ -36,9 +36,11 @@ SCOPE_DEFAULT, SCOPE_ALL = 0, 255
 CATEGORY_ROBOT = 1
 BOUNDS_EMPTY = 0
 MAX_FILTER = 256  # characters of a GetEntities name filter
-# A quantified group that holds a quantifier ((a+)+, (a|aa)*): the patterns whose matching can take
-# exponential time; a name filter comes from anyone on the domain, so these are refused.
-_NESTED = re.compile(r"\((?:[^()\\]|\\.)*[*+?}](?:[^()\\]|\\.)*\)\s*[*+?{]")
+# Matching can take exponential time when a quantified group holds a quantifier or an alternation
+# ((a+)+, (a|aa)*, ((a+))+); a name filter comes from anyone on the domain, so a pattern with a
+# quantified group and any other quantifier or '|' is refused.
+_QUANTIFIED_GROUP = re.compile(r"\)[*+?{]")
+_QUANTIFIER = re.compile(r"(?<!\\)[*+?{|]")
 DEFAULT_NAME = "entity"  # SpawnEntity with no name and allow_renaming: entity, entity_0, ...
 
 
@@ -50,6 +52,8 @@ def result_code(reply: dict[str, Any], service: str) -> tuple[int, str]:
     if code <= OPERATION_FAILED:
         return code, message
     if service == "spawn_entity" and code in SPAWN_CODES:
+        return code, message
+    if service == "set_simulation_state" and code == ALREADY_IN_TARGET_STATE:  # made here, not by the world
         return code, message
     if service == "set_entity_state" and code == int(Result.INVALID_POSE):
         return SET_STATE_INVALID_POSE, message
@@ -129,7 +133,7 @@ def entity_filter(filters: Any):
     pattern = filters.filter
     if len(pattern) > MAX_FILTER:
         raise Refusal(Result.OPERATION_FAILED, f"the name filter has {len(pattern)} characters; at most {MAX_FILTER}")
-    if _NESTED.search(pattern):
+    if _QUANTIFIED_GROUP.search(pattern) and len(_QUANTIFIER.findall(pattern)) > 1:
         raise Refusal(Result.OPERATION_FAILED, f"the name filter '{pattern}' nests quantifiers, which can take "
                       "exponential time to match: write it without a quantified group that holds a quantifier")
     try:

@@ -91,7 +91,8 @@ def build(python: str) -> str | None:
                      ["cmake", "--install", str(build_dir)]):
             run = subprocess.run(step, capture_output=True, text=True, env=env, timeout=1800)
             if run.returncode != 0:
-                return f"building simulation_interfaces failed ({' '.join(step[:2])}): {run.stdout[-1500:]}{run.stderr[-1500:]}"
+                output = run.stdout[-1500:] + run.stderr[-1500:]
+                return f"building simulation_interfaces failed ({' '.join(step[:2])}): {output}"
     if _run(python, "import simulation_interfaces.srv").returncode != 0:
         return f"simulation_interfaces was built into {prefix} but does not import"
     return None

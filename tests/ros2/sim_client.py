@@ -75,9 +75,34 @@ def simulate_steps(node, steps: int) -> dict:
         return {"error": "goal not accepted"}
     result = handle.get_result_async()
     rclpy.spin_until_future_complete(node, result, timeout_sec=WAIT)
-    time.sleep(0.2)  # feedback that raced the result
-    rclpy.spin_once(node, timeout_sec=0.1)
+    deadline = time.monotonic() + 10.0  # feedback comes on a topic of its own: it may trail the result
+    while len(feedback) < steps and time.monotonic() < deadline and result.result().status == 4:
+        rclpy.spin_once(node, timeout_sec=0.1)
     return {"status": result.result().status, "result": _plain(result.result().result), "feedback": feedback}
+
+
+def publish(node, topic: str, stamped: bool, linear: float, angular: float, seconds: float) -> dict:
+    """Publish cmd_vel as Twist (Jazzy's nav2) or TwistStamped (Kilted's) at 20 Hz for ``seconds``."""
+    from geometry_msgs.msg import Twist, TwistStamped
+
+    publisher = node.create_publisher(TwistStamped if stamped else Twist, topic, 10)
+    deadline = time.monotonic() + 30.0
+    while publisher.get_subscription_count() == 0 and time.monotonic() < deadline:
+        rclpy.spin_once(node, timeout_sec=0.05)
+    matched = publisher.get_subscription_count()
+    end, sent = time.monotonic() + seconds, 0
+    while time.monotonic() < end:
+        twist = Twist()
+        twist.linear.x, twist.angular.z = linear, angular
+        if stamped:
+            message = TwistStamped()
+            message.header.frame_id, message.twist = "base_link", twist
+        else:
+            message = twist
+        publisher.publish(message)
+        sent += 1
+        time.sleep(0.05)
+    return {"matched": matched, "sent": sent}
 
 
 def main() -> None:
@@ -88,7 +113,9 @@ def main() -> None:
     clients: dict = {}
     out = {}
     for label, service, fields in plan:
-        if service == "simulate_steps":
+        if service == "publish":
+            out[label] = publish(node, **fields)
+        elif service == "simulate_steps":
             out[label] = simulate_steps(node, fields["steps"])
         else:
             out[label] = call(node, clients, service, fields)

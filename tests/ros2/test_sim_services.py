@@ -214,4 +214,32 @@ def test_a_real_rclpy_client_calls_every_service(ros_py, tmp_path, tmp_path_fact
 
     history = [json.loads(line) for line in (tmp_path / "run" / "history.jsonl").read_text().splitlines()]
     spawned = [h["name"] for h in history if h.get("op") == "spawn" and h.get("result") == "OK"]
-    assert spawned[:3] == ["crate", "crate_0", "xbox"]  # the same records as `mobot spawn`
+    assert spawned[:4] == ["r1", "crate", "crate_0", "xbox"]  # the same records as `mobot spawn`
+
+
+def test_kilted_twist_stamped_drives_a_robot_as_jazzy_twist_does(ros_py, tmp_path, tmp_path_factory):
+    """nav2 sends TwistStamped on cmd_vel from Kilted on, Twist before: an rclpy node (Fast DDS) sends
+    each to one of two robots; both take the same command and move alike."""
+    scenario = tmp_path / "world.yaml"
+    scenario.write_text(WORLD + "  - {name: r2, description: mobot, pose: {x: 0.0, y: 3.0}}\n")
+    live = LiveProcess(str(scenario), "--ros2", cache_dir=tmp_path_factory.mktemp("cache"), python=ros_py)
+    try:
+        with live.client() as client:
+            start = {name: client.odom(name)["truth"] for name in ("r1", "r2")}
+        out = run_client(ros_py, [
+            ["twist", "publish", {"topic": "/r1/cmd_vel", "stamped": False, "linear": 0.3, "angular": 0.2,
+                                  "seconds": 1.5}],
+            ["stamped", "publish", {"topic": "/r2/cmd_vel", "stamped": True, "linear": 0.3, "angular": 0.2,
+                                    "seconds": 1.5}]], tmp_path)
+        with live.client() as client:
+            end = {name: client.odom(name) for name in ("r1", "r2")}
+    finally:
+        live.signal()
+        live.kill()
+    assert out["twist"]["matched"] == 1 and out["stamped"]["matched"] == 1
+    for name in ("r1", "r2"):
+        assert end[name]["cmd"] == {"linear": 0.3, "angular": 0.2}  # held, as a `mobot cmd` is
+        moved = math.dist((end[name]["truth"]["x"], end[name]["truth"]["y"]), (start[name]["x"], start[name]["y"]))
+        assert moved > 0.3, name
+        assert end[name]["truth"]["vx"] == pytest.approx(0.3, abs=0.05)
+        assert end[name]["truth"]["wz"] == pytest.approx(0.2, abs=0.05)
