@@ -189,6 +189,40 @@ def test_ground_truth_odometry_is_where_the_robot_really_is(tmp_path, cache):
     assert math.hypot(odom["x"], odom["y"]) < 0.01  # the wheels never saw the teleport: odom stays put
 
 
+def test_after_a_step_returns_every_message_of_that_step_is_out(tmp_path, cache):
+    """serve --ros2 --paused: /clock reaches the step the world stopped at, not one batch behind
+    (records held for batching are sent before a step's reply and before the world waits)."""
+    import struct
+
+    from mobot_cli.ros2 import dds, idl
+    from mobot_cli.ros2.names import discovery_config
+
+    live = serve(tmp_path, cache, "", "--paused")
+    participant = dds.Participant(int(os.environ["ROS_DOMAIN_ID"]), discovery_config(os.environ, True))
+    clocks: list[tuple[int, int]] = []
+    try:
+        reader = participant.reader("rt/clock", idl.Clock, dds.DEFAULT, lambda data: clocks.append(
+            struct.unpack_from("<iI", data, 4)))
+        deadline = time.monotonic() + 60  # discovery; only catches a peer never found
+        while not reader.dds.get_matched_publications() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        seen = []
+        with live.client() as client:
+            rate = client.ping()["rate_hz"]
+            for _ in range(4):
+                step = client.step(steps=rate // 48 * 5, states=False)["step"]  # ends on a logged step
+                expected = divmod(step * 1_000_000_000 // rate, 1_000_000_000)
+                deadline = time.monotonic() + 30  # delivery on a busy machine; never reached when it works
+                while (not clocks or clocks[-1] != expected) and time.monotonic() < deadline:
+                    time.sleep(0.01)
+                seen.append((clocks[-1] if clocks else None, expected))
+    finally:
+        participant.close()
+        live.signal()
+        live.kill()
+    assert all(last == expected for last, expected in seen), seen
+
+
 def test_cmd_vel_timeout_stops_a_robot_whose_commands_stop(tmp_path, cache):
     live = serve(tmp_path, cache, "ros2: {cmd_vel_timeout: 0.25}")
     try:
