@@ -142,9 +142,11 @@ def test_a_real_rclpy_client_calls_every_service(ros_py, tmp_path, tmp_path_fact
         with live.client() as client:
             alive = client.ping()
     finally:
-        live.signal()
+        exit_code = live.signal()
         log = live.output()
         live.kill()
+    assert exit_code == 0, log  # SIGTERM ends the world cleanly, rclpy's node and all
+    assert json.loads((tmp_path / "run" / "summary.json").read_text())["status"] == "ok"
     assert out["rmw"] == "rmw_fastrtps_cpp"  # the ROS default, the client this is about
     assert "no simulation_interfaces services" not in log
 
