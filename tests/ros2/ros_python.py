@@ -4,7 +4,7 @@ rclpy comes from a sourced ROS 2 Jazzy or the community wheels (``pip install
 'mobot-cli[ros2-rclpy]'``, or a venv made with ``--system-site-packages`` beside mobot's own
 packages, named by ``MOBOT_ROS_PYTHON``). simulation_interfaces is not on PyPI: when that Python
 cannot import it, it is built here from the official definitions (tests/data/simulation_interfaces,
-ros-simulation/simulation_interfaces 1.5.1, branch jazzy, Apache-2.0) with the rosidl and ament
+ros-simulation/simulation_interfaces 1.5.1, branch jazzy at a3c60ff, Apache-2.0: unchanged) with the rosidl and ament
 CMake tools the wheels ship, and installed into that Python's prefix (a venv's lib/ is where the
 wheels' bootstrapper points LD_LIBRARY_PATH). It takes about three minutes on two cores, once.
 
