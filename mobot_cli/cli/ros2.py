@@ -58,7 +58,7 @@ def services(env: Environment, bridges: list, endpoint: str, rate_hz: int, quiet
     bridge = bridges[0]
     if why is None:
         try:
-            return [sim_services.SimulationServices(endpoint, bridge.settings.node + "_interfaces",
+            return [sim_services.SimulationServices(endpoint, bridge.settings.node,
                                                     bridge.settings.namespace, bridge.domain_id, rate_hz)]
         except Exception as exc:  # noqa: BLE001 - rclpy's own errors (RMW, domain): the world goes on
             why = f"rclpy could not start them ({type(exc).__name__}: {exc})"

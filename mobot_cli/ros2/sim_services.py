@@ -5,8 +5,10 @@ request by the related-sample-identity that the replier writes as inline QoS; Cy
 Python API cannot write it, so a service served over cyclonedds answers Cyclone clients only.
 When rclpy and the simulation_interfaces package import (a sourced ROS 2 Jazzy, or the
 community ``ros-jazzy-*`` wheels with a simulation_interfaces built from its .srv files:
-docs/ros2.md), the world serves these on a node of its own, ``<node>_interfaces``, in whatever
-RMW rclpy uses. The topics stay on the Cyclone bridge (ros2/bridge.py).
+docs/ros2.md), the world serves these on an rclpy node named as the bridge's node (``/mobot``),
+in whatever RMW rclpy uses; that node also answers the parameter services every ROS 2 node has
+(``ros2 param get /mobot use_sim_time``: true, every stamp mobot sends is sim time). The topics
+stay on the Cyclone bridge (ros2/bridge.py).
 
 Every service is a client of the world's own live endpoint (live/client.py), so what ROS 2 asks
 is checked, sandboxed, limited and recorded exactly as `mobot spawn`, `mobot step`, ... are, and
@@ -42,6 +44,14 @@ def available() -> str | None:
     return None
 
 
+def _refuse_changes(parameters):
+    """`ros2 param set`: refused; mobot's parameters describe it, they do not configure it."""
+    from rcl_interfaces.msg import SetParametersResult
+
+    return SetParametersResult(successful=False, reason="mobot's stamps are always sim time; "
+                               "its settings are `mobot serve` options")
+
+
 class SimulationServices:
     """An rclpy node serving simulation_interfaces for the live world at ``endpoint``."""
 
@@ -57,7 +67,13 @@ class SimulationServices:
         self.msg, self.srv, self.action = msg, srv, action
         self.context = Context()
         rclpy.init(context=self.context, domain_id=domain_id)
-        self.node = rclpy.create_node(node, namespace=namespace, context=self.context)
+        from rclpy.parameter import Parameter
+
+        # use_sim_time (every node declares it): true, as mobot's stamps are sim time; rclpy's
+        # parameter services answer `ros2 param get/list/set` on this node.
+        self.node = rclpy.create_node(node, namespace=namespace, context=self.context,
+                                      parameter_overrides=[Parameter("use_sim_time", value=True)])
+        self.node.add_on_set_parameters_callback(_refuse_changes)
         group = ReentrantCallbackGroup()
         for name, handler in self._handlers().items():
             kind = getattr(srv, "".join(part.title() for part in name.split("_")))

@@ -105,6 +105,25 @@ def publish(node, topic: str, stamped: bool, linear: float, angular: float, seco
     return {"matched": matched, "sent": sent}
 
 
+def parameters(node, target: str) -> dict:
+    """rclpy's own parameter client on ``target``: list, get use_sim_time, and a set it may refuse."""
+    from rclpy.parameter import Parameter
+    from rclpy.parameter_client import AsyncParameterClient
+
+    client = AsyncParameterClient(node, target)
+    if not client.wait_for_services(timeout_sec=WAIT):
+        return {"error": f"{target}'s parameter services did not appear"}
+    calls = {"list": lambda: client.list_parameters(), "get": lambda: client.get_parameters(["use_sim_time"]),
+             "set": lambda: client.set_parameters([Parameter("use_sim_time", value=False)]),
+             "after_set": lambda: client.get_parameters(["use_sim_time"])}
+    out = {}
+    for label, send in calls.items():
+        future = send()
+        rclpy.spin_until_future_complete(node, future, timeout_sec=WAIT)
+        out[label] = _plain(future.result()) if future.done() else {"error": "no reply"}
+    return out
+
+
 def main() -> None:
     with open(sys.argv[1]) as file:
         plan = json.load(file)
@@ -115,6 +134,8 @@ def main() -> None:
     for label, service, fields in plan:
         if service == "publish":
             out[label] = publish(node, **fields)
+        elif service == "parameters":
+            out[label] = parameters(node, fields["node"])
         elif service == "simulate_steps":
             out[label] = simulate_steps(node, fields["steps"])
         else:
