@@ -9,18 +9,31 @@ CMake tools the wheels ship, and installed into that Python's prefix (a venv's l
 wheels' bootstrapper points LD_LIBRARY_PATH). It takes about three minutes on two cores, once.
 
     python3 tests/ros2/ros_python.py [PYTHON]    # build it now; prints what is missing otherwise
+
+Without MOBOT_ROS_PYTHON, and when this Python has no rclpy, the tests make one themselves
+(``provide()``): a venv with ``--system-site-packages`` in ~/.cache/mobot-tests (or
+``$XDG_CACHE_HOME``, or ``MOBOT_TEST_CACHE``) named by a hash of the wheel list and the
+definitions, the ros-jazzy wheels pip-installed into it, simulation_interfaces built into it, and
+a marker written last; later runs reuse it (a venv without the marker is rebuilt). A ``.pth`` file
+lets it import this Python's packages (mobot's dependencies), rewritten on every use.
 """
 
 from __future__ import annotations
 
+import fcntl
+import hashlib
 import os
+import re
 import shutil
 import subprocess
 import sys
+import sysconfig
 import tempfile
 from pathlib import Path
 
-SOURCE = Path(__file__).resolve().parents[1] / "data" / "simulation_interfaces"
+REPO = Path(__file__).resolve().parents[2]
+SOURCE = REPO / "tests" / "data" / "simulation_interfaces"
+READY = ".mobot-ready"  # written last: a venv without it is half-built and made again
 # The wheels' exported CMake targets name include folders of the machine that built them
 # (/opt/python/cp311-cp311/...); point them at this Python's before CMake generates.
 FIX_PATHS = """
@@ -96,6 +109,92 @@ def build(python: str) -> str | None:
     if _run(python, "import simulation_interfaces.srv").returncode != 0:
         return f"simulation_interfaces was built into {prefix} but does not import"
     return None
+
+
+def wheels() -> list[str]:
+    """What the test venv gets: the ros2-rclpy extra (pyproject.toml) and the build tools."""
+    # (tomllib is Python 3.11's; the extra is one flat list of quoted requirements)
+    extra = re.search(r"^ros2-rclpy = \[(.*?)\]", (REPO / "pyproject.toml").read_text(), re.M | re.S)
+    return [*re.findall(r'"([^"]+)"', extra.group(1)), *BUILD_WHEELS]
+
+
+def cache_root() -> Path:
+    if os.environ.get("MOBOT_TEST_CACHE"):
+        return Path(os.environ["MOBOT_TEST_CACHE"])
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "mobot-tests"
+
+
+def venv_path() -> Path:
+    """rosvenv-<hash of this Python's version, the wheel list, the definitions and the build>."""
+    digest = hashlib.sha256(f"{sys.version}\n{wheels()}\n{FIX_PATHS}".encode())
+    for path in sorted(p for p in SOURCE.rglob("*") if p.is_file()):
+        digest.update(str(path.relative_to(SOURCE)).encode() + b"\0" + path.read_bytes())
+    return cache_root() / f"rosvenv-{digest.hexdigest()[:16]}"
+
+
+class BuildFailed(RuntimeError):
+    """The wheels installed but the venv could not be made: a defect to report, never a skip."""
+
+
+# pip's words when there is no package index to install from (no network, no such wheels here)
+NO_REGISTRY = ("No matching distribution found", "Could not find a version that satisfies",
+               "Failed to establish a new connection", "Temporary failure in name resolution",
+               "Network is unreachable", "ProxyError", "Max retries exceeded")
+
+
+def provide() -> tuple[str | None, str]:
+    """(a Python for the rclpy tests, '') or (None, why they skip); raises BuildFailed.
+
+    MOBOT_ROS_PYTHON, or this Python when it has rclpy, are used as they are (find()); otherwise
+    the cached test venv, made first when it is missing or half-built."""
+    if os.environ.get("MOBOT_ROS_PYTHON") or _run(sys.executable, "import rclpy").returncode == 0:
+        return find()
+    for tool in ("cmake", "cc", "c++"):
+        if shutil.which(tool) is None:
+            return None, f"the rclpy tests build simulation_interfaces, and '{tool}' is not on PATH"
+    venv = venv_path()
+    venv.parent.mkdir(parents=True, exist_ok=True)
+    with open(venv.parent / (venv.name + ".lock"), "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # another test session may be making the same venv
+        if not (venv / READY).is_file():
+            why = _make(venv)
+            if why is not None:
+                return None, why
+    python = str(venv / "bin" / "python")
+    _share_packages(venv)
+    probe = _run(python, "import rclpy, simulation_interfaces.srv, pybullet, zmq, pydantic, cyclonedds")
+    if probe.returncode != 0:
+        raise BuildFailed(f"the test venv {venv} does not import what the tests need: {probe.stderr[-1500:]}")
+    return python, ""
+
+
+def _make(venv: Path) -> str | None:
+    """Make the venv from scratch; None when ready, a skip reason when the wheels are not to be had."""
+    shutil.rmtree(venv, ignore_errors=True)
+    subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", str(venv)], check=True, timeout=300)
+    python = str(venv / "bin" / "python")
+    _share_packages(venv)
+    pip = subprocess.run([python, "-m", "pip", "install", "-q", *wheels()], capture_output=True, text=True,
+                         timeout=1800)
+    if pip.returncode != 0:
+        output = pip.stdout[-2000:] + pip.stderr[-2000:]
+        if any(words in output for words in NO_REGISTRY):
+            shutil.rmtree(venv, ignore_errors=True)
+            return f"the ros-jazzy wheels for the rclpy tests cannot be installed here: {output.strip()[-600:]}"
+        raise BuildFailed(f"pip install of the ros-jazzy wheels into {venv} failed: {output}")
+    why = build(python)
+    if why is not None:
+        raise BuildFailed(why)
+    (venv / READY).write_text("\n".join(wheels()) + "\n")
+    return None
+
+
+def _share_packages(venv: Path) -> None:
+    """The venv imports this Python's packages too (mobot's dependencies, installed where the tests run)."""
+    site = Path(_run(str(venv / "bin" / "python"), "import sysconfig; print(sysconfig.get_path('purelib'))")
+                .stdout.strip())
+    paths = dict.fromkeys([sysconfig.get_path("purelib"), sysconfig.get_path("platlib")])
+    (site / "mobot-tests-host.pth").write_text("".join(f"{path}\n" for path in paths))
 
 
 if __name__ == "__main__":
