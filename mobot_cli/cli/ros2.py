@@ -45,3 +45,29 @@ def report(env: Environment, bridges: list, quiet: bool) -> None:
             dropped += f", {refused} cmd_vel sample(s) refused (see summary.json's notices)" if refused else ""
             env.stderr.write(f"mobot: ROS 2: {stats.messages} message(s) sent, {stats.commands} cmd_vel "
                              f"taken{dropped}\n")
+
+
+def services(env: Environment, bridges: list, endpoint: str, rate_hz: int, quiet: bool) -> list:
+    """`serve --ros2`: the simulation_interfaces services on rclpy, when rclpy and the
+    simulation_interfaces package import; otherwise one line says why there are none."""
+    if not bridges:
+        return []
+    from mobot_cli.ros2 import sim_services
+
+    why = sim_services.available()
+    bridge = bridges[0]
+    if why is None:
+        try:
+            return [sim_services.SimulationServices(endpoint, bridge.settings.node,
+                                                    bridge.settings.namespace, bridge.domain_id, rate_hz)]
+        except Exception as exc:  # noqa: BLE001 - rclpy's own errors (RMW, domain): the world goes on
+            why = f"rclpy could not start them ({type(exc).__name__}: {exc})"
+    if not quiet:
+        env.stderr.write(f"mobot: ROS 2: topics only, no simulation_interfaces services: {why}\n")
+    return []
+
+
+def close_services(started: list) -> None:
+    """Leave the ROS graph (the services node)."""
+    for node in started:
+        node.close()

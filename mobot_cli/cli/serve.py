@@ -81,8 +81,10 @@ def serve(
                                                     faces=max_faces, links=max_links, robots=max_robots))
     if page:
         page.connect(server)
+    started: list = []  # the simulation_interfaces services (rclpy), once the world listens
 
     def ready(where: str) -> None:
+        started.extend(ros2.services(env, bridges, where, plan.physics.rate_hz, quiet))
         if not quiet:
             common.status(env, f"serving '{plan.name}' (world {plan.world.name}, {len(plan.robots)} robot(s)) "
                                f"at {where}, {pace_text(pace)}, {plan.physics.rate_hz} Hz"
@@ -95,6 +97,7 @@ def serve(
     try:
         result = server.serve(ready)
     finally:
+        ros2.close_services(started)
         ros2.report(env, bridges, quiet)
         if page:
             page.close()

@@ -79,9 +79,12 @@ class LiveServer:
         self._loaders_due = 0.0
         self._waits: list[Owed] = []
         self._loader = LoaderPool(limits)
+        self._opened: list[Attachment] = []  # open on the timeline; flushed before the world waits
         self._handlers: dict[str, Callable] = {
-            "ping": self._ping, "list": self._list, "spawn": self._spawn, "delete": self._delete,
-            "cmd": self._cmd, "odom": self._odom, "scan": self._scan, "stop": self._stop, "goto": self._goto,
+            "ping": self._ping, "spawn": self._spawn, "delete": self._delete, "cmd": self._cmd, "stop": self._stop,
+            "goto": self._goto, "list": lambda envelope, request: self.session.listing(request.id),
+            "odom": lambda envelope, request: self.session.odometry(request.id, request.name),
+            "scan": lambda envelope, request: self.session.scan(request.id, request.name, request.sensor),
             "spawn_mover": self._spawn_mover, "delete_mover": self._delete_mover,
             **LockstepRequests(self).handlers()}
 
@@ -95,7 +98,7 @@ class LiveServer:
                 self.session = Session(self.plan, world, self.out_dir, self.resolved_yaml)
                 if self.watch is not None:
                     self.watch(self.session.timeline)
-                opened: list[Attachment] = []
+                opened = self._opened
                 try:
                     for attachment in self.attachments:
                         attachment.open(self.session.timeline)
@@ -153,8 +156,14 @@ class LiveServer:
             if lockstep_step:  # real time goes on from here once the world plays again
                 clock.restart()
 
+    def _flush(self) -> None:
+        for attachment in self._opened:
+            attachment.flush()
+
     def _held(self) -> None:
-        """Paused: answer requests (spawns too) until a step is asked for or the world plays."""
+        """Paused: answer requests (spawns too) until a step is asked for or the world plays; what the
+        attachments hold back goes out first (ROS nodes see every step taken)."""
+        self._flush()
         while not self.stopping and self.control.hold():
             self._finish_spawns()
             if self._wait(HOLD_POLL):
@@ -261,15 +270,6 @@ class LiveServer:
                               pid=os.getpid(),
                               endpoint=self.endpoint, protocol=protocol.PROTOCOL_VERSION, version=__version__)
 
-    def _list(self, envelope, request) -> dict[str, Any]:
-        return self.session.listing(request.id)
-
-    def _odom(self, envelope, request) -> dict[str, Any]:
-        return self.session.odometry(request.id, request.name)
-
-    def _scan(self, envelope, request) -> dict[str, Any]:
-        return self.session.scan(request.id, request.name, request.sensor)
-
     def _delete(self, envelope, request) -> dict[str, Any]:
         self.session.remove(request.name)
         return protocol.reply(request.id, name=request.name, step=self._step(), t=self._t())
@@ -340,7 +340,10 @@ class LiveServer:
             self._send(job.owner, answer)
 
     def _answer_waits(self, step: int) -> None:
-        for wait in [w for w in self._waits if step >= w.until]:
+        due = [w for w in self._waits if step >= w.until]
+        if due:
+            self._flush()  # a step's reply comes after every message of that step is out
+        for wait in due:
             self._waits.remove(wait)
             try:
                 answer = wait.answer()

@@ -11,7 +11,9 @@ directly (ros/mcap_records.py). Topics, per sample at the log rate unless noted:
   odometry, and every moving joint from the joint positions, as robot_state_publisher does;
   With movers (docs/movers.md), each mover as ``world -> movers/<name>`` (at its foot, facing
   its heading) on the rows after they moved;
-* ``/tf_static`` (transient local), once per robot: ``world -> <prefix>odom`` at the pose the
+* ``/tf_static`` (transient local): every robot's static frames in one message, written again
+  when robots arrive (once for those arriving in one sample) or one leaves, so the latest
+  message holds them all, as the live topic does: ``world -> <prefix>odom`` at the pose the
   robot's odometry starts from, so every robot shows in one view, and every fixed joint;
 * ``<ns>/odom`` (nav_msgs/Odometry), ``<ns>/cmd_vel`` (geometry_msgs/Twist),
   ``<ns>/joint_states`` (sensor_msgs/JointState) and, once, ``<ns>/robot_description``
@@ -30,6 +32,7 @@ from __future__ import annotations
 
 import contextlib
 import shutil
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
 
@@ -95,6 +98,7 @@ class BagSink(Sink):
         self.waiting_bytes = 0  # sensor data in ``pending``
         self.sensor_topics: dict[str, object] = {}  # topic name -> connection, added once
         self.clock_step = -1  # the step of the last /clock message
+        self.statics: dict[str, list] = {}  # each present robot's static transforms, in order of arrival
 
     def topic(self, name: str, msgtype: str, latched: bool = False):
         """Add a connection, with its message definition and type hash embedded."""
@@ -104,6 +108,9 @@ class BagSink(Sink):
 
     def spawned(self, step: int, key: str, robot: RobotPlan) -> None:
         self.pending.append((key, robot))
+
+    def deleted(self, step: int, key: str) -> None:
+        self.pending.append(_Left(step, key))
 
     def write(self, sample: Sample) -> None:
         # Samples wait and are recorded a chunk at a time: the same work runs ~2x faster in a
@@ -129,6 +136,8 @@ class BagSink(Sink):
             for item in self.pending:
                 if isinstance(item, Sample):
                     self._record_one(item)
+                elif isinstance(item, _Left):
+                    self._leave(item)
                 elif isinstance(item[1], Reading):
                     key, reading = item
                     self.robots[key].write_reading(self.records, reading, self.rate)
@@ -154,6 +163,7 @@ class BagSink(Sink):
             for name in names:
                 if name in self.arriving:
                     self.records.write(ns, self._arrive(name, self.arriving.pop(name), sample.states[name], stamp))
+            self.records.write(ns, [self._statics_message(stamp)])
         row, fills = self.rows.get((names, clock)) or self._row(names, clock)
         values = [ns, *stamp]
         for fill, state in zip(fills, sample.states.values()):
@@ -177,8 +187,19 @@ class BagSink(Sink):
         same_ns = [r for r in self.robots.values() if r.plan.namespace == plan.namespace]
         self.rows = {key: row for key, row in self.rows.items() if name not in key[0]}  # a name seen before
         robot = self.robots[name] = _RobotTopics(self, plan, state, reuse=same_ns[0] if same_ns else None)
-        return [(robot.description, robot.messages.description()),
-                (self.tf_static, tf_static(stamp, robot.messages.statics(state)))]
+        self.statics[name] = robot.messages.statics(state)
+        return [(robot.description, robot.messages.description())]
+
+    def _statics_message(self, stamp: tuple[int, int]) -> tuple[object, bytes]:
+        """/tf_static with every present robot's static frames (a late-joining player gets them all)."""
+        return self.tf_static, tf_static(stamp, [t for transforms in self.statics.values() for t in transforms])
+
+    def _leave(self, left: "_Left") -> None:
+        """A robot left: its frames leave /tf_static (nothing to write if it never had a sample)."""
+        self.arriving.pop(left.key, None)
+        if self.statics.pop(left.key, None) is not None:
+            ns, stamp = stamp_of(left.step, self.rate)
+            self.records.write(ns, [self._statics_message(stamp)])
 
     def _flush(self) -> None:
         """Close the open MCAP chunk and push it to the OS, so a killed run keeps it."""
@@ -216,6 +237,14 @@ class BagSink(Sink):
             storage.bio.close()  # may still add pending bytes: they continue the file, in order
         except (OSError, ValueError):
             pass
+
+
+@dataclass(frozen=True)
+class _Left:
+    """A robot's delete, waiting in order with the samples."""
+
+    step: int
+    key: str
 
 
 class _RobotTopics:

@@ -121,6 +121,27 @@ MESSAGES: dict[str, tuple[str, str]] = {
         "float64 y\n"
         "float64 z\n",
         "RIHS01_9c45bf16fe0983d80e3cfe750d6835843d265a9a6c46bd2e609fcddde6fb8d2a"),
+    "geometry_msgs/msg/TwistStamped": (  # cmd_vel as nav2 sends it from Kilted on
+        "std_msgs/Header header\n"
+        "geometry_msgs/Twist twist\n"
+        "================================================================================\n"
+        "MSG: std_msgs/Header\n"
+        "builtin_interfaces/Time stamp\n"
+        "string frame_id\n"
+        "================================================================================\n"
+        "MSG: builtin_interfaces/Time\n"
+        "int32 sec\n"
+        "uint32 nanosec\n"
+        "================================================================================\n"
+        "MSG: geometry_msgs/Twist\n"
+        "geometry_msgs/Vector3 linear\n"
+        "geometry_msgs/Vector3 angular\n"
+        "================================================================================\n"
+        "MSG: geometry_msgs/Vector3\n"
+        "float64 x\n"
+        "float64 y\n"
+        "float64 z\n",
+        "RIHS01_5f0fcd4f81d5d06ad9b4c4c63e3ea51b82d6ae4d0558f1d475229b1121db6f64"),
     "sensor_msgs/msg/JointState": (
         "std_msgs/Header header\n"
         "string[] name\n"

@@ -27,6 +27,7 @@ from mobot_cli.timeline.records import Reading
 WORLD_FRAME = "world"  # Gazebo's name for the frame all robots' odom frames hang from
 CLOCK, TF = "rosgraph_msgs/msg/Clock", "tf2_msgs/msg/TFMessage"
 ODOMETRY, TWIST = "nav_msgs/msg/Odometry", "geometry_msgs/msg/Twist"
+TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"  # cmd_vel from nav2 in Kilted and later
 JOINT_STATE, STRING = "sensor_msgs/msg/JointState", "std_msgs/msg/String"
 LASER_SCAN = "sensor_msgs/msg/LaserScan"
 _MESH_PATH = re.compile(r'(<mesh\b[^>]*?\bfilename\s*=\s*")(/)')

@@ -149,6 +149,12 @@ class Bridge:
         self._published = now
         self._busy += time.thread_time() - started
 
+    def flush(self) -> None:
+        """Publish the records waiting for the next batch now: a paused world is about to wait, and
+        ROS nodes must see every message of the steps taken (not the world one batch behind)."""
+        if self._pending:
+            self._publish_pending(time.monotonic())
+
     def _drain(self) -> None:
         """Apply the /cmd_vel messages that arrived since the last tick."""
         twists, timeline = self._twists, self._timeline

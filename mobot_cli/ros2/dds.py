@@ -70,7 +70,7 @@ class Participant:
         self.dp = DomainParticipant(domain_id, qos=Qos(Policy.Userdata(data=f"enclave={enclave};".encode())))
         self.publisher = Publisher(self.dp)
         self.subscriber = Subscriber(self.dp)
-        self._topics: dict[str, Topic] = {}
+        self._topics: dict[tuple[str, type], Topic] = {}
 
     @property
     def gid(self) -> bytes:
@@ -78,10 +78,11 @@ class Participant:
         return self.dp.guid.bytes
 
     def topic(self, dds_topic: str, struct: type) -> Topic:
-        """The DDS topic of that name and IDL struct, made once."""
-        if dds_topic not in self._topics:
-            self._topics[dds_topic] = Topic(self.dp, dds_topic, struct)
-        return self._topics[dds_topic]
+        """The DDS topic of that name and IDL struct, made once (one name may carry several types)."""
+        key = (dds_topic, struct)
+        if key not in self._topics:
+            self._topics[key] = Topic(self.dp, dds_topic, struct)
+        return self._topics[key]
 
     def writer(self, dds_topic: str, struct: type, profile: QosProfile, userdata: bytes = b"") -> "Writer":
         """A writer of CDR bytes."""

@@ -3,7 +3,8 @@
 The same bytes as the bag (ros/messages.py): ``/clock`` and ``/tf`` every sample,
 ``/tf_static`` (every robot's fixed frames in one message, re-sent when a robot arrives or
 leaves, as tf2's static broadcaster does), per robot ``<ns>/odom`` and ``<ns>/joint_states``
-every sample and ``<ns>/robot_description`` once. Each robot's ``<ns>/cmd_vel`` reader is made
+every sample, ``<ns>/odom/ground_truth`` (ros2/ground_truth.py) every sample while read, and
+``<ns>/robot_description`` once. Each robot's ``<ns>/cmd_vel`` reader is made
 here too, so that the node's endpoints in the graph are always the ones that exist.
 
 Every sensor's readings go out on its bag topic (``<ns>/scan``, ``<ns>/points``, ``<ns>/range``, ``<ns>/imu``,
@@ -37,13 +38,14 @@ from mobot_cli.ros.messages import (
     STRING,
     TF,
     TWIST,
+    TWIST_STAMPED,
     RobotMessages,
     stamp_of,
     tf_layout,
     tf_static,
 )
 from mobot_cli.ros.tf import mover_transforms
-from mobot_cli.ros2 import dds, graph, idl, names
+from mobot_cli.ros2 import dds, graph, ground_truth, idl, names
 from mobot_cli.sim.state import RobotState
 from mobot_cli.timeline.records import Deleted, Reading, Record, Sample, Spawned
 
@@ -71,6 +73,19 @@ def twist(data: bytes) -> tuple[float, float]:
     return lx, az
 
 
+def unstamped(data: bytes) -> bytes:
+    """The geometry_msgs/Twist (CDR) inside a TwistStamped (CDR); b'' when it is not one (the
+    bridge then drops it as malformed). The header (stamp, frame) is not used: a command holds
+    from when it arrives, as a Twist's does."""
+    if len(data) < 16 or data[1] != 1:
+        return b""
+    (length,) = struct.unpack_from("<I", data, 12)  # after the header's stamp: the frame_id's length
+    start = 16 + length
+    start += -(start - 4) % 8  # the twist's doubles align to 8 from the end of the encapsulation header
+    body = data[start:start + 48]
+    return data[:4] + body if len(body) == 48 and len(data) <= start + 52 else b""
+
+
 def planar_twist(data: bytes) -> tuple[float, float, float]:
     """(linear.x, linear.y, angular.z) of a geometry_msgs/Twist in CDR; ValueError if it is not one."""
     linear, angular = twist(data)
@@ -84,7 +99,7 @@ class Topics:
         self.participant = participant
         self.node, self.namespace, self.gid_size = node, namespace, gid_size
         self.writers: dict[str, dds.Writer] = {}
-        self.readers: dict[str, dds.Reader] = {}
+        self.readers: dict[tuple[str, str], dds.Reader] = {}  # (topic, type): cmd_vel takes two types
         self.sent = 0  # messages written
         self.unsent = 0  # messages a stalled reliable reader kept from being written
         self._announcer = participant.writer(graph.TOPIC, idl.ParticipantEntitiesInfo if gid_size == 16
@@ -116,17 +131,19 @@ class Topics:
         return self.writer(name, msgtype).readers > 0
 
     def subscribe(self, name: str, msgtype: str, on_data: Callable[[bytes], None]) -> None:
-        """Take ROS topic ``name`` (reliable, volatile, keep last 10); ``on_data`` runs on Cyclone's thread."""
-        self.readers[name] = self.participant.reader(names.topic(name), idl.TYPES[msgtype], dds.DEFAULT, on_data,
-                                                     dds.ros_topic_userdata(type_hash(msgtype)))
+        """Take ROS topic ``name`` of type ``msgtype`` (reliable, volatile, keep last 10); ``on_data``
+        runs on Cyclone's thread. One topic may be read as several types: each matches its writers."""
+        self.readers[(name, msgtype)] = self.participant.reader(
+            names.topic(name), idl.TYPES[msgtype], dds.DEFAULT, on_data, dds.ros_topic_userdata(type_hash(msgtype)))
         self.announce()
 
     def drop(self, *topics: str) -> None:
         """Remove these topics' writers and readers from the graph."""
         for name in topics:
-            for table in (self.writers, self.readers):
-                if name in table:
-                    table.pop(name).delete()
+            if name in self.writers:
+                self.writers.pop(name).delete()
+            for key in [key for key in self.readers if key[0] == name]:
+                self.readers.pop(key).delete()
         self.announce()
 
     def announce(self) -> None:
@@ -146,6 +163,8 @@ class _Robot:
     joint_states: dds.Writer
     sensors: dict[str, dds.Writer]  # sensor name -> the writer of its topic
     cameras: dict[str, dict[str, dds.Writer]] = field(default_factory=dict)  # camera -> role -> writer
+    truth: dds.Writer | None = None  # <ns>/odom/ground_truth (ros2/ground_truth.py)
+    truth_packer: object = None
 
 
 class RecordPublisher:
@@ -201,6 +220,8 @@ class RecordPublisher:
                 write(robot.odom, messages.odom(stamp, state))
             if robot.joint_states.readers:
                 write(robot.joint_states, messages.joint_states(stamp, state))
+            if robot.truth.readers:
+                write(robot.truth, ground_truth.message(robot.truth_packer, stamp, state))
             if tf_values is not None:
                 messages.tf_values(stamp, state, tf_values)
         if tf_values is not None:
@@ -272,7 +293,9 @@ class RecordPublisher:
         self.robots[plan.name] = _Robot(messages, namespace,
                                         self.topics.writer(names.join(namespace, "odom"), ODOMETRY),
                                         self.topics.writer(names.join(namespace, "joint_states"), JOINT_STATE), sensors,
-                                        cameras)
+                                        cameras,
+                                        self.topics.writer(names.join(namespace, ground_truth.TOPIC), ODOMETRY),
+                                        ground_truth.packer(messages.frames.base_frame))
         self.topics.publish(names.join(namespace, "robot_description"), STRING, messages.description(), dds.LATCHED)
         statics = messages.statics(state)
         self.statics[plan.name] = statics if self.world_frame else statics[1:]
@@ -281,6 +304,9 @@ class RecordPublisher:
             name, topic = plan.name, names.join(namespace, "cmd_vel")
             # The bytes go to the bridge as they came: it checks them (ros2/inputs.py) and counts what it drops.
             self.topics.subscribe(topic, TWIST, lambda data: self.on_cmd_vel(name, topic, data))
+            # nav2 sends TwistStamped from Kilted on (enable_stamped_cmd_vel): both drive the robot alike.
+            self.topics.subscribe(topic, TWIST_STAMPED,
+                                  lambda data: self.on_cmd_vel(name, topic, unstamped(data)))
 
     def leave(self, name: str) -> None:
         """A robot left: its topics leave the graph, its frames leave /tf_static."""
@@ -295,7 +321,8 @@ class RecordPublisher:
         sensors = {sensor_topics.topic(plan, spec) for spec in plan.sensors if spec.kind not in cameras}
         sensors |= {name for spec in plan.sensors if spec.kind in cameras
                     for name in sensor_topics.camera_topics(plan, spec).values()}
-        self.topics.drop(*(names.join(namespace, t) for t in ("odom", "joint_states", "robot_description", "cmd_vel")),
+        self.topics.drop(*(names.join(namespace, t) for t in ("odom", "joint_states", "robot_description", "cmd_vel",
+                                                              ground_truth.TOPIC)),
                          *sensors)
         self.publish_statics(stamp_of(self.clock_step if self.clock_step >= 0 else 0, self.rate)[1])
 

@@ -35,6 +35,9 @@ class Attachment(Protocol):
 
     def close(self) -> None: ...
 
+    def flush(self) -> None:
+        """Send what it holds back now: the world is about to wait (a paused live world)."""
+
 
 class NameTaken(SpawnError):
     """A robot's name or namespace is already in the world."""

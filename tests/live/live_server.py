@@ -23,12 +23,12 @@ class LiveProcess:
     """`python -m mobot_cli serve ARGS --endpoint ipc://<short tmp path>` in a subprocess."""
 
     def __init__(self, *args: str, cache_dir: Path, out: Path | None = None, ready: bool = True,
-                 endpoint: str | None = None):
+                 endpoint: str | None = None, python: str | None = None):
         # Unix socket paths must stay short: pytest's tmp_path is often too long for one.
         self.folder = Path(tempfile.mkdtemp(prefix="mobot-t-"))
         self.endpoint = endpoint or f"ipc://{self.folder / 's.sock'}"
         self.out = out
-        command = [sys.executable, "-m", "mobot_cli", "serve", *args, "--endpoint", self.endpoint]
+        command = [python or sys.executable, "-m", "mobot_cli", "serve", *args, "--endpoint", self.endpoint]
         if out is not None:
             command += ["--out", str(out)]
         env = {k: v for k, v in os.environ.items()

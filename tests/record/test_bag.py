@@ -88,7 +88,7 @@ def test_rosbag2_folder_topics_types_and_counts(bag_run):
     assert sorted(p.name for p in (out / "bag").iterdir()) == ["bag.mcap", "metadata.yaml"]
     assert {(m[0], m[1]) for m in msgs} == set(TOPICS.items())
     counts = {topic: len(by_topic(msgs, topic)) for topic in TOPICS}
-    once = {"/tf_static": 2, "/alpha/robot_description": 1, "/team/beta/robot_description": 1}
+    once = {"/tf_static": 1, "/alpha/robot_description": 1, "/team/beta/robot_description": 1}
     assert counts == {topic: once.get(topic, SAMPLES) for topic in TOPICS}
     meta = yaml.safe_load((out / "bag" / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
     assert meta["storage_identifier"] == "mcap" and meta["relative_file_paths"] == ["bag.mcap"]
@@ -228,8 +228,12 @@ def test_robots_that_come_and_go_get_their_topics_from_their_first_sample(tmp_pa
     assert first["/late/odom"] == first["/late/robot_description"] == pytest.approx(3.5)
     assert counts["/late/odom"] == len(rows(out / "odom" / "late.csv")) == 121  # 3.5 .. 6.0 s at 48 Hz
     assert counts["/mobot_1/odom"] == len(rows(out / "odom" / "mobot_1.csv")) == 145  # 0 .. 3.0 s, its delete
-    statics = [(m[2] / 1e9, m[3].transforms[0].child_frame_id) for m in by_topic(msgs, "/tf_static")]
-    assert statics == [(0.0, "mobot_0/odom"), (0.0, "mobot_1/odom"), (3.5, "late/odom")]
+    # every /tf_static message holds every present robot's frames: one at the start, one at the
+    # delete (mobot_1's frames gone), one when 'late' arrives
+    statics = [(m[2] / 1e9, sorted({t.child_frame_id for t in m[3].transforms if t.header.frame_id == "world"}))
+               for m in by_topic(msgs, "/tf_static")]
+    assert statics == [(0.0, ["mobot_0/odom", "mobot_1/odom"]), (3.0, ["mobot_0/odom"]),
+                       (3.5, ["late/odom", "mobot_0/odom"])]
     children = [{t.child_frame_id for t in m[3].transforms} for m in by_topic(msgs, "/tf")]
     assert "mobot_1/base_footprint" in children[0] and "late/base_footprint" not in children[0]
     assert "mobot_1/base_footprint" not in children[-1] and "late/base_footprint" in children[-1]
@@ -422,3 +426,31 @@ def test_tf_transforms_match_yourdfpy_forward_kinematics(corpus, monkeypatch, ro
                         [2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)]])
         assert np.allclose(rot, expected[:3, :3], atol=1e-9), child
         assert np.allclose((x, y, z), expected[:3, 3], atol=1e-9), child
+
+
+def test_the_latest_tf_static_holds_every_robots_static_frames(tmp_path):
+    """Five robots, two of them spawned later: a player that joins late reads only the latest
+    /tf_static message (transient local, depth 1), and it holds all five robots' frames."""
+    robots = "".join(f"  - {{name: r{i}, description: mobot, pose: {{x: {i}.0, y: 0.0}}}}\n" for i in range(3))
+    scenario = tmp_path / "five.yaml"
+    scenario.write_text(f"""version: 1
+name: five
+duration: 1.0
+log: {{rate_hz: 20, formats: [csv, mcap]}}
+robots:
+{robots}events:
+  - {{at: 0.5, spawn: {{name: r3, description: mobot, pose: {{x: 3.0, y: 2.0}}}}}}
+  - {{at: 0.7, spawn: {{name: r4, description: mobot, pose: {{x: 4.0, y: 2.0}}}}}}
+""")
+    out = tmp_path / "run"
+    assert invoke(["run", scenario, "--out", out, "--quiet"]) == CommandResult(0, "", "")
+    statics = by_topic(messages(out / "bag"), "/tf_static")
+    assert [round(m[2] / 1e9, 3) for m in statics] == [0.0, 0.5, 0.7]
+    worlds = [{t.child_frame_id: t.transform.translation.x for t in m[3].transforms if t.header.frame_id == "world"}
+              for m in statics]
+    assert worlds[-1] == pytest.approx({f"r{i}/odom": float(i) for i in range(5)}, abs=1e-3)
+    assert list(worlds[0]) == ["r0/odom", "r1/odom", "r2/odom"]
+    last = {(t.header.frame_id, t.child_frame_id) for t in statics[-1][3].transforms}
+    for i in range(5):  # each robot's fixed joints, not only its odom frame
+        assert (f"r{i}/base_footprint", f"r{i}/base_link") in last, i
+    assert len(statics[-1][3].transforms) == 5 * len(statics[0][3].transforms) // 3

@@ -7,7 +7,8 @@ one JSON document:
 
     python3 tests/ros2/dds_peer.py graph SECONDS          every endpoint and participant seen
     python3 tests/ros2/dds_peer.py take TOPIC TYPE SECONDS  the samples of one topic, as dicts
-    python3 tests/ros2/dds_peer.py drive TOPIC LINEAR ANGULAR SECONDS  publish a Twist at 20 Hz
+    python3 tests/ros2/dds_peer.py drive TOPIC LINEAR ANGULAR SECONDS [stamped]  publish a Twist (or a
+                                                         TwistStamped, as nav2 from Kilted on) at 20 Hz
     python3 tests/ros2/dds_peer.py send TOPIC HEX...     publish each payload's bytes as they are
                                                          (a hostile or broken participant)
 """
@@ -129,8 +130,8 @@ def take(topic: str, type_name: str, seconds: float, transient_local: bool = Fal
     return got
 
 
-def drive(topic: str, linear: float, angular: float, seconds: float) -> dict:
-    """Publish geometry_msgs/Twist on ``topic`` at 20 Hz for ``seconds``, then stop."""
+def drive(topic: str, linear: float, angular: float, seconds: float, stamped: bool = False) -> dict:
+    """Publish geometry_msgs/Twist (or TwistStamped) on ``topic`` at 20 Hz for ``seconds``, then stop."""
     from cyclonedds.domain import DomainParticipant
     from cyclonedds.pub import DataWriter
     from cyclonedds.topic import Topic
@@ -138,10 +139,12 @@ def drive(topic: str, linear: float, angular: float, seconds: float) -> dict:
     from mobot_cli.ros2 import idl
 
     dp = DomainParticipant(int(os.environ.get("ROS_DOMAIN_ID", "0")))
-    writer = DataWriter(dp, Topic(dp, topic, idl.Twist))
+    writer = DataWriter(dp, Topic(dp, topic, idl.TwistStamped if stamped else idl.Twist))
     end, sent = time.monotonic() + seconds, 0
     while time.monotonic() < end:
-        writer.write(idl.Twist(idl.Vector3(linear, 0.0, 0.0), idl.Vector3(0.0, 0.0, angular)))
+        twist = idl.Twist(idl.Vector3(linear, 0.0, 0.0), idl.Vector3(0.0, 0.0, angular))
+        # a frame name of odd length: the twist's alignment after it is what the bridge must get right
+        writer.write(idl.TwistStamped(idl.Header(idl.Time(sent, 5), "base_link_x"), twist) if stamped else twist)
         sent += 1
         time.sleep(0.05)
     return {"sent": sent, "matched": len(writer.get_matched_subscriptions())}
@@ -180,5 +183,5 @@ if __name__ == "__main__":
     elif verb == "send":
         result = send(args[0], [bytes.fromhex(h) for h in args[1:]])
     else:
-        result = drive(args[0], float(args[1]), float(args[2]), float(args[3]))
+        result = drive(args[0], float(args[1]), float(args[2]), float(args[3]), args[4:] == ["stamped"])
     print(json.dumps(result, default=lambda o: list(o) if isinstance(o, (bytes, bytearray)) else str(o)))

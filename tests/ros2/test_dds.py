@@ -66,21 +66,25 @@ def test_topics_types_qos_and_the_node_as_another_participant_sees_them(tmp_path
     assert len(mine) == 1
     (participant,) = mine
     pubs = {p["topic"]: p for p in seen["publications"] if p["participant"] == participant}
-    subs = {p["topic"]: p for p in seen["subscriptions"] if p["participant"] == participant}
+    subs = {p["type"]: p for p in seen["subscriptions"] if p["participant"] == participant}
     assert {t: (p["type"], p["durability"], p["reliability"], p["depth"]) for t, p in pubs.items()} == {
         "ros_discovery_info": ("rmw_dds_common::msg::dds_::ParticipantEntitiesInfo_", "transient_local", "reliable", 1),
         "rt/clock": ("rosgraph_msgs::msg::dds_::Clock_", "volatile", "reliable", 10),
         "rt/tf": ("tf2_msgs::msg::dds_::TFMessage_", "volatile", "reliable", 10),
         "rt/tf_static": ("tf2_msgs::msg::dds_::TFMessage_", "transient_local", "reliable", 1),
         "rt/r1/odom": ("nav_msgs::msg::dds_::Odometry_", "volatile", "reliable", 10),
+        "rt/r1/odom/ground_truth": ("nav_msgs::msg::dds_::Odometry_", "volatile", "reliable", 10),
         "rt/r1/joint_states": ("sensor_msgs::msg::dds_::JointState_", "volatile", "reliable", 10),
         "rt/r1/robot_description": ("std_msgs::msg::dds_::String_", "transient_local", "reliable", 1),
     }
-    assert {t: (s["type"], s["reliability"]) for t, s in subs.items()} == {
-        "rt/r1/cmd_vel": ("geometry_msgs::msg::dds_::Twist_", "reliable")}
+    assert {(s["topic"], s["type"], s["reliability"]) for s in seen["subscriptions"]
+            if s["participant"] == participant} == {  # Twist (Jazzy's nav2) and TwistStamped (Kilted's)
+        ("rt/r1/cmd_vel", "geometry_msgs::msg::dds_::Twist_", "reliable"),
+        ("rt/r1/cmd_vel", "geometry_msgs::msg::dds_::TwistStamped_", "reliable")}
     assert pubs["rt/r1/odom"]["userdata"] == ("typehash=RIHS01_3cc97dc7fb7502f8714462c526d369e35b603cfc34d946e3f2"
                                               "eda2766dfec6e0;")
-    assert subs["rt/r1/cmd_vel"]["userdata"].startswith("typehash=RIHS01_9c45bf16fe0983d8")
+    assert subs["geometry_msgs::msg::dds_::Twist_"]["userdata"].startswith("typehash=RIHS01_9c45bf16fe0983d8")
+    assert subs["geometry_msgs::msg::dds_::TwistStamped_"]["userdata"].startswith("typehash=RIHS01_5f0fcd4f81d5d06a")
     assert {p["guid"]: p["userdata"] for p in seen["participants"]}[participant] == "enclave=/;"
 
 
@@ -102,7 +106,7 @@ def test_discovery_info_names_the_node_and_every_endpoint(tmp_path, cache):
     readers = {s["guid"] for s in seen["subscriptions"] if s["participant"] == participant}
     assert {bytes(g["data"]).hex() for g in node["writer_gid_seq"]} == writers
     assert {bytes(g["data"]).hex() for g in node["reader_gid_seq"]} == readers
-    assert len(writers) == 6 and len(readers) == 1
+    assert len(writers) == 7 and len(readers) == 2  # cmd_vel as Twist and as TwistStamped
     # world_frame: false leaves r1/odom's parent to a localizer (slam_toolbox, AMCL: map -> odom)
     frames = {(t["header"]["frame_id"], t["child_frame_id"]) for t in statics[-1]["transforms"]}
     assert frames and all(parent != "world" for parent, _ in frames)
@@ -146,6 +150,77 @@ def test_cmd_vel_from_another_process_drives_the_robot(tmp_path, cache):
     assert moving["cmd"] == {"linear": 0.3, "angular": 0.0}
     assert held["cmd"] == {"linear": 0.3, "angular": 0.0}  # no timeout: it holds, as `mobot cmd` does
     assert math.hypot(moving["truth"]["x"] - start["x"], moving["truth"]["y"] - start["y"]) > 0.3
+
+
+def test_twist_stamped_on_cmd_vel_drives_the_robot_as_a_twist_does(tmp_path, cache):
+    """nav2 from Kilted on sends geometry_msgs/TwistStamped; no setting: the node reads both types."""
+    live = serve(tmp_path, cache)
+    try:
+        sent = peer("drive", "rt/r1/cmd_vel", "0.25", "0.4", "1.5", "stamped")
+        with live.client() as client:
+            moving = client.odom("r1")
+    finally:
+        live.signal()
+        live.kill()
+    assert sent["matched"] == 1
+    assert moving["cmd"] == {"linear": 0.25, "angular": 0.4}
+    assert moving["truth"]["vx"] > 0.1 and moving["truth"]["wz"] > 0.1
+
+
+def test_ground_truth_odometry_is_where_the_robot_really_is(tmp_path, cache):
+    """<ns>/odom/ground_truth: the base link in the world frame, from the simulator, not the wheels."""
+    live = serve(tmp_path, cache)
+    try:
+        with live.client() as client:
+            client.set_state("r1", {"x": 1.5, "y": -2.0, "yaw": 0.5})
+        truth = peer("take", "rt/r1/odom/ground_truth", "nav_msgs/msg/Odometry", "1")
+        with live.client() as client:
+            state = client.get_state("r1")["pose"]
+            odom = client.odom("r1")["odom"]
+    finally:
+        live.signal()
+        live.kill()
+    last = truth[-1]
+    assert (last["header"]["frame_id"], last["child_frame_id"]) == ("world", "r1/base_footprint")
+    position, q = last["pose"]["pose"]["position"], last["pose"]["pose"]["orientation"]
+    assert math.dist((position["x"], position["y"]), (state["x"], state["y"])) < 1e-3
+    assert math.dist((position["x"], position["y"]), (1.5, -2.0)) < 0.01
+    assert 2 * math.atan2(q["z"], q["w"]) == pytest.approx(0.5, abs=0.01)
+    assert math.hypot(odom["x"], odom["y"]) < 0.01  # the wheels never saw the teleport: odom stays put
+
+
+def test_after_a_step_returns_every_message_of_that_step_is_out(tmp_path, cache):
+    """serve --ros2 --paused: /clock reaches the step the world stopped at, not one batch behind
+    (records held for batching are sent before a step's reply and before the world waits)."""
+    import struct
+
+    from mobot_cli.ros2 import dds, idl
+    from mobot_cli.ros2.names import discovery_config
+
+    live = serve(tmp_path, cache, "", "--paused")
+    participant = dds.Participant(int(os.environ["ROS_DOMAIN_ID"]), discovery_config(os.environ, True))
+    clocks: list[tuple[int, int]] = []
+    try:
+        reader = participant.reader("rt/clock", idl.Clock, dds.DEFAULT, lambda data: clocks.append(
+            struct.unpack_from("<iI", data, 4)))
+        deadline = time.monotonic() + 60  # discovery; only catches a peer never found
+        while not reader.dds.get_matched_publications() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        seen = []
+        with live.client() as client:
+            rate = client.ping()["rate_hz"]
+            for _ in range(4):
+                step = client.step(steps=rate // 48 * 5, states=False)["step"]  # ends on a logged step
+                expected = divmod(step * 1_000_000_000 // rate, 1_000_000_000)
+                deadline = time.monotonic() + 30  # delivery on a busy machine; never reached when it works
+                while (not clocks or clocks[-1] != expected) and time.monotonic() < deadline:
+                    time.sleep(0.01)
+                seen.append((clocks[-1] if clocks else None, expected))
+    finally:
+        participant.close()
+        live.signal()
+        live.kill()
+    assert all(last == expected for last, expected in seen), seen
 
 
 def test_cmd_vel_timeout_stops_a_robot_whose_commands_stop(tmp_path, cache):
@@ -226,9 +301,9 @@ def test_robots_spawned_and_deleted_live_join_and_leave_the_graph(tmp_path, cach
     def topics(seen):
         return {p["topic"] for p in seen["publications"] + seen["subscriptions"] if p["topic"].startswith("rt/r")}
 
-    assert topics(spawned) == {f"rt/{r}/{t}" for r in ("r1", "r2")
-                               for t in ("odom", "joint_states", "robot_description", "cmd_vel")}
-    assert topics(deleted) == {f"rt/r2/{t}" for t in ("odom", "joint_states", "robot_description", "cmd_vel")}
+    kinds = ("odom", "joint_states", "robot_description", "cmd_vel", "odom/ground_truth")
+    assert topics(spawned) == {f"rt/{r}/{t}" for r in ("r1", "r2") for t in kinds}
+    assert topics(deleted) == {f"rt/r2/{t}" for t in kinds}
     frames = {t["child_frame_id"] for t in statics[-1]["transforms"]}
     assert "r2/odom" in frames and "r1/odom" not in frames
 

@@ -188,8 +188,12 @@ def _near_robots(origins: np.ndarray, dirs: np.ndarray, reach: np.ndarray, owner
         inverse = 1.0 / dirs
         for body, (lo, hi) in boxes.items():
             a, b = (lo - BOX_MARGIN - origins) * inverse, (hi + BOX_MARGIN - origins) * inverse
-            enter = np.nanmax(np.minimum(a, b), axis=1)
-            leave = np.nanmin(np.maximum(a, b), axis=1)
+            # nanmax/nanmin over the three axes, column by column: fmax/fmin skip a NaN (0 * inf, a ray
+            # parallel to a face through its plane) as they do, and this is ~3x faster than the
+            # reductions along a 3-long axis, which a crowd of robots pays for every ray and box.
+            low, high = np.minimum(a, b), np.maximum(a, b)
+            enter = np.fmax(np.fmax(low[:, 0], low[:, 1]), low[:, 2])
+            leave = np.fmin(np.fmin(high[:, 0], high[:, 1]), high[:, 2])
             near |= (enter <= leave) & (leave >= 0.0) & (enter <= reach) & (owners != body)
     return np.flatnonzero(near)
 
