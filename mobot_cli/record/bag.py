@@ -36,7 +36,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
 
-from mobot_cli.plan import Plan, RobotPlan
+from mobot_cli.plan import CAMERA_KINDS, Plan, RobotPlan
 from mobot_cli.record.sinks import named
 from mobot_cli.ros import bag_metadata, sensor_topics
 from mobot_cli.ros.definitions import MESSAGES
@@ -122,7 +122,7 @@ class BagSink(Sink):
 
     def reading(self, key: str, reading: Reading) -> None:
         self.pending.append((key, reading))
-        if reading.sensor.kind in sensor_topics.CAMERA_KINDS:  # rendered now, while the world is where it was
+        if reading.sensor.kind in CAMERA_KINDS:  # rendered now, while the world is where it was
             images = (reading.data.rgb, reading.data.depth)
             self.waiting_bytes += sum(a.nbytes for a in images if a is not None)
         else:
@@ -263,9 +263,9 @@ class _RobotTopics:
             self.joint_states = sink.topic(f"{ns}/joint_states", JOINT_STATE)
             self.description = sink.topic(f"{ns}/robot_description", STRING, latched=True)
         self.sensor_connections = {spec.name: _sensor_topic(sink, plan, spec) for spec in plan.sensors
-                                   if spec.kind not in sensor_topics.CAMERA_KINDS}
+                                   if spec.kind not in CAMERA_KINDS}
         self.cameras = {spec.name: _camera_topics(sink, plan, spec) for spec in plan.sensors
-                        if spec.kind in sensor_topics.CAMERA_KINDS}
+                        if spec.kind in CAMERA_KINDS}
 
     def write_reading(self, records: Records, reading: Reading, rate: int) -> None:
         """One sensor reading as its ROS message (a camera's: image, depth image, camera info)."""

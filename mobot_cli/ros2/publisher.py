@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 from mobot_cli.errors import MobotError
-from mobot_cli.plan import RobotPlan
+from mobot_cli.plan import CAMERA_KINDS, RobotPlan
 from mobot_cli.ros import sensor_topics
 from mobot_cli.ros.cdr import Packer
 from mobot_cli.ros.definitions import CAMERA_INFO, IMAGE, MESSAGES
@@ -286,10 +286,10 @@ class RecordPublisher:
             return
         messages = RobotMessages(plan, state)
         sensors = {spec.name: self.topics.writer(sensor_topics.topic(plan, spec), sensor_topics.message_type(spec))
-                   for spec in plan.sensors if spec.kind not in sensor_topics.CAMERA_KINDS}
+                   for spec in plan.sensors if spec.kind not in CAMERA_KINDS}
         cameras = {spec.name: {role: self.topics.writer(name, CAMERA_INFO if role == "camera_info" else IMAGE)
                                for role, name in sensor_topics.camera_topics(plan, spec).items()}
-                   for spec in plan.sensors if spec.kind in sensor_topics.CAMERA_KINDS}
+                   for spec in plan.sensors if spec.kind in CAMERA_KINDS}
         self.robots[plan.name] = _Robot(messages, namespace,
                                         self.topics.writer(names.join(namespace, "odom"), ODOMETRY),
                                         self.topics.writer(names.join(namespace, "joint_states"), JOINT_STATE), sensors,
@@ -317,7 +317,7 @@ class RecordPublisher:
         namespace = robot.namespace
         self.statics.pop(name, None)
         plan = robot.messages.plan
-        cameras = sensor_topics.CAMERA_KINDS
+        cameras = CAMERA_KINDS
         sensors = {sensor_topics.topic(plan, spec) for spec in plan.sensors if spec.kind not in cameras}
         sensors |= {name for spec in plan.sensors if spec.kind in cameras
                     for name in sensor_topics.camera_topics(plan, spec).values()}

@@ -16,13 +16,13 @@ from collections import deque
 from typing import Any, Callable
 
 from mobot_cli.common.transforms import Planar
-from mobot_cli.plan import Plan, RobotPlan
+from mobot_cli.plan import CAMERA_KINDS, Plan, RobotPlan
 from mobot_cli.record.trajectory import odom_to_world
 from mobot_cli.sim.state import RobotState
 from mobot_cli.timeline.loop import Timeline
 from mobot_cli.timeline.records import Deleted, Record, Sample, Spawned
 from mobot_cli.view import readings
-from mobot_cli.view.camera_panel import CAMERA_KINDS, CameraFeed
+from mobot_cli.view.camera_panel import CameraFeed
 from mobot_cli.view.movers import MoverShapes
 from mobot_cli.view.panel import RobotList, Row, aim_camera, color_of, follow
 from mobot_cli.view.paths import LivePath, lighter
