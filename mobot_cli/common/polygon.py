@@ -3,6 +3,8 @@ checks use these at load time, before anything heavy is imported."""
 
 from __future__ import annotations
 
+import math
+
 Point = tuple[float, float]
 
 
@@ -28,3 +30,12 @@ def area(polygon) -> float:
 def box_polygon(xmin: float, xmax: float, ymin: float, ymax: float) -> list[Point]:
     """A box as a counter-clockwise polygon."""
     return [(xmin, ymin), (xmax, ymin), (xmax, ymax), (xmin, ymax)]
+
+
+DEFAULT_FOOTPRINT = (-0.2, 0.2, -0.2, 0.2)  # (xmin, xmax, ymin, ymax), m: a robot whose extent is not known
+
+
+def footprint_radius(footprint: tuple[float, float, float, float]) -> float:
+    """The footprint's circumscribed radius about the robot's origin (it can turn in place within it)."""
+    xmin, xmax, ymin, ymax = footprint
+    return max(math.hypot(x, y) for x in (xmin, xmax) for y in (ymin, ymax))

@@ -7,10 +7,9 @@ static geometry, so the plan (and the resolved scenario) says exactly where the 
 
 from __future__ import annotations
 
-import math
 from typing import Callable
 
-from mobot_cli.common.polygon import box_polygon
+from mobot_cli.common.polygon import DEFAULT_FOOTPRINT, box_polygon, footprint_radius
 from mobot_cli.errors import Location, ScenarioError
 from mobot_cli.plan import GoalControl, GoalStep, WorldPlan
 from mobot_cli.scenario.goal_model import GoalFields
@@ -21,7 +20,6 @@ PLAN_CELL = 0.05  # m: the grid coverage lanes are planned on (finer for spacing
 PLAN_CELLS = 2000  # ... but never more cells than this along the area's longer side
 PLAN_MARGIN = 1.0  # m around the area where the route between lane pieces may run
 # A robot whose footprint is unknown (a description without collision geometry) is taken as this.
-DEFAULT_FOOTPRINT = (-0.2, 0.2, -0.2, 0.2)
 HINT = "Goals must lie in free space: trajectory.png of any run in this world shows its floor plan."
 
 Locate = Callable[[tuple], "Location | None"]
@@ -73,12 +71,6 @@ def _control(cmd: GoalFields, rate: int, footprint) -> GoalControl:
         local=cmd.local or "",
         stuck_time=DEFAULT.stuck_time if cmd.stuck_time is None else float(cmd.stuck_time),
         danger_distance=DEFAULT.danger_distance if cmd.danger_distance is None else float(cmd.danger_distance))
-
-
-def footprint_radius(footprint: tuple[float, float, float, float]) -> float:
-    """The footprint's circumscribed radius about the robot's origin (it can turn in place within it)."""
-    xmin, xmax, ymin, ymax = footprint
-    return max(math.hypot(x, y) for x in (xmin, xmax) for y in (ymin, ymax))
 
 
 def _free(world: WorldPlan | None, point: tuple[float, float], what: str, where: Location | None) -> None:

@@ -16,13 +16,13 @@ import numpy as np
 
 from mobot_cli.assets.world.floorplan import convex_hull
 from mobot_cli.assets.world.freespace import obstacle_mask
+from mobot_cli.common.polygon import DEFAULT_FOOTPRINT
 from mobot_cli.common.raster import Grid, fill_polygon
 from mobot_cli.plan import WorldPlan
 
 CELL = 0.02  # m, or coarser for large areas:
 MAX_CELLS = 1000  # cells along the area's longer side at most
 TURN_STEP = 0.05  # rad
-DEFAULT_FOOTPRINT = (-0.2, 0.2, -0.2, 0.2)  # a robot whose extent is not known
 
 
 class Sweep:

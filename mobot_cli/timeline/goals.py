@@ -26,6 +26,7 @@ import math
 from dataclasses import dataclass
 from typing import Callable
 
+from mobot_cli.common.polygon import DEFAULT_FOOTPRINT, footprint_radius
 from mobot_cli.common.transforms import Planar
 from mobot_cli.plan import GoalStep, TwistStep, WorldPlan
 from mobot_cli.sim.bullet.world import World
@@ -184,9 +185,9 @@ class Driver:
             self.lap_ends = [len(self.pursuit.route) - 1]
         self.local = None
         if goal.control.local:
-            from mobot_cli.timeline.local import Dwb, radius_of  # numpy: only for goals that use it
+            from mobot_cli.timeline.local import Dwb  # numpy: only for goals that use it
 
-            self.local = Dwb(goal.control, self.dt, radius_of(self.footprint))
+            self.local = Dwb(goal.control, self.dt, footprint_radius(self.footprint or DEFAULT_FOOTPRINT))
             self.progress = (step, state.true_x, state.true_y)
         if goal.kind == "patrol" and goal.laps != 1:
             self._add_lap(goal)  # the route holds two laps ahead: one more each time one begins

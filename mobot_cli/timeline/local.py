@@ -390,12 +390,6 @@ def _to_polyline(px: np.ndarray, py: np.ndarray, path: list) -> np.ndarray:
     return np.sqrt((rx * rx + ry * ry).min(axis=0))
 
 
-def radius_of(footprint: tuple[float, float, float, float] | None) -> float:
-    """The circumscribed radius of a footprint box about the robot's origin (m)."""
-    xmin, xmax, ymin, ymax = footprint or (-0.2, 0.2, -0.2, 0.2)
-    return max(math.hypot(x, y) for x in (xmin, xmax) for y in (ymin, ymax))
-
-
 def level_points(scan) -> np.ndarray:
     """A lidar scan's returns as world (x, y) points (n, 2): a 3D lidar gives its beam row
     nearest the horizontal (its floor and ceiling returns are not obstacles)."""

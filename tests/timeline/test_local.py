@@ -17,8 +17,9 @@ import pytest
 import yaml
 
 from mobot_cli.cli import invoke
+from mobot_cli.common.polygon import footprint_radius
 from mobot_cli.plan import GoalControl
-from mobot_cli.timeline.local import Dwb, radius_of
+from mobot_cli.timeline.local import Dwb
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 GOAL = (4.0, 0.0)
@@ -145,7 +146,7 @@ def test_a_point_on_the_path_steers_aside_the_same_way_each_time():
 
 
 def test_radius_of_a_footprint():
-    assert radius_of((-0.2, 0.1, -0.17, 0.17)) == pytest.approx(math.hypot(0.2, 0.17))
+    assert footprint_radius((-0.2, 0.1, -0.17, 0.17)) == pytest.approx(math.hypot(0.2, 0.17))
 
 
 # -- the bundled house: a patrol of the four rooms' centres, straight segments past furniture ------
