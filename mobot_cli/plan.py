@@ -283,6 +283,9 @@ class MoverPlan:
     z: float = 0.0  # m: the bottom of its shape
     source: str = ""  # "actor" (from the world file) or "scenario", for messages and records
     spawn_step: int = 0  # scenario movers: when it enters the world
+    # Gazebo actors: (first, last keyframe index, tension) of each <trajectory>, played on
+    # Gazebo's splines between those keyframes (sim/movers/spline.py); elsewhere straight lines
+    curves: tuple[tuple[int, int, float], ...] = ()
 
 
 @dataclass(frozen=True)

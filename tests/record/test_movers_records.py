@@ -61,5 +61,6 @@ def test_movers_csv_bag_and_same_bytes_with_the_same_seed(tmp_path):
                         frames[tf.child_frame_id] = (t, tf.transform.translation.x, tf.transform.translation.y)
     assert set(frames) == {"movers/walker", "movers/w_0", "movers/w_1", "movers/w_2", "movers/w_3", "movers/cart"}
     t, x, y = frames["movers/walker"]
-    assert t == 3_000_000_000 and (x, y) == (2.0, 0.5)  # 2.5 s of walking north at 1 m/s from (2, -2)
+    # 2.5 s of the 4 s north from (2, -2) to (2, 2), on Gazebo's spline: 4 (3 s^2 - 2 s^3) m, s = 0.625
+    assert t == 3_000_000_000 and (x, y) == (2.0, 0.734375)
     assert (a / "trajectory.png").stat().st_size > 0

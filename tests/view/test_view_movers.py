@@ -43,7 +43,7 @@ def test_movers_are_drawn_where_they_are(page, tmp_path):
             timeline.tick()
             live.draw(force=True)
             walker, crate = live.mover_shapes.handles["walker"][0], live.mover_shapes.handles["crate"][0]
-            assert tuple(walker.position) == pytest.approx((2.0, -0.5, 0.85))  # 1.5 s north of (2, -2)
+            assert tuple(walker.position) == pytest.approx((2.0, -0.734375, 0.85))  # 1.5 s north of (2, -2), on the spline
             assert tuple(crate.position) == pytest.approx((-2.0, 2.0, 0.3))
             timeline.remove_mover("crate")
             for _ in range(24):
@@ -76,6 +76,6 @@ def test_a_replay_shows_the_movers_of_the_run(page, tmp_path):
         replay.slider.value = 2.0
         replay._scrub(type("Event", (), {"client": object()})())  # a user's scrub, as the page sends it
         assert tuple(replay.mover_shapes.handles["crate"][0].position) == pytest.approx((-2.0, 1.0, 0.3))
-        assert tuple(replay.mover_shapes.handles["walker"][0].position) == pytest.approx((2.0, -0.5, 0.85))
+        assert tuple(replay.mover_shapes.handles["walker"][0].position) == pytest.approx((2.0, -0.734375, 0.85))
     finally:
         replay.close()

@@ -99,7 +99,8 @@ def _from_document(doc: dict[str, Any] | None) -> LoadedWorld | None:
         robots = tuple(WorldRobot(**{**r, "xyz": tuple(r["xyz"]), "quat": tuple(r["quat"]),
                                      "notices": tuple(r["notices"])}) for r in doc["robots"])
         actors = tuple(MoverPlan(**{**a, "size": tuple(a["size"]), "keyframes": tuple(tuple(k) for k in a["keyframes"]),
-                                    "region": None, "start": None}) for a in plan.get("actors", ()))
+                                    "curves": tuple(tuple(c) for c in a["curves"]), "region": None, "start": None})
+                       for a in plan.get("actors", ()))
         plan = WorldPlan(**{**plan, "bodies": bodies, "robot_models": tuple(plan["robot_models"]), "actors": actors})
         return LoadedWorld(plan=plan, robots=robots,
                            static_models=tuple(doc["static_models"]), summary=doc["summary"],

@@ -1,7 +1,10 @@
 """Keyframes played by time, as Gazebo plays an actor's ``<script>`` (gazebo classic's Actor.cc,
-common's PoseAnimation): position linear between two keyframes, heading by the shorter turn
-(slerp about z); ``delay`` s at the first keyframe before it starts, and again before every
-round when it loops; without ``loop`` it stays at the last keyframe."""
+gz-common's PoseAnimation): ``delay`` s at the first keyframe before it starts, and again before
+every round when it loops; without ``loop`` it stays at the last keyframe.
+
+Between two keyframes of a Gazebo actor's trajectory (``MoverPlan.curves``) the pose follows
+Gazebo's splines (spline.py); a scenario's path mover goes in straight lines at its speed,
+heading by the shorter turn."""
 
 from __future__ import annotations
 
@@ -9,39 +12,53 @@ import bisect
 import math
 
 from mobot_cli.plan import MoverPlan
+from mobot_cli.sim.movers.spline import Curve
 
 
 class Script:
     """One mover's keyframes, ready to be asked for its pose at a time."""
 
-    __slots__ = ("times", "frames", "length", "loop", "delay", "auto_start")
+    __slots__ = ("times", "frames", "length", "loop", "delay", "auto_start", "curves")
 
     def __init__(self, plan: MoverPlan):
         self.frames = plan.keyframes
         self.times = [frame[0] for frame in plan.keyframes]
         self.length = self.times[-1]
         self.loop, self.delay, self.auto_start = plan.loop, plan.delay, plan.auto_start
+        # keyframe index -> (its trajectory's curve, its index there), for all but a curve's last
+        self.curves: dict[int, tuple[Curve, int]] = {}
+        for first, last, tension in plan.curves:
+            start = self.frames[first][0]
+            curve = Curve([(t - start, x, y, yaw) for t, x, y, yaw in self.frames[first:last + 1]], tension)
+            self.curves.update((first + k, (curve, k)) for k in range(last - first))
 
     def pose(self, t: float) -> tuple[float, float, float]:
         """(x, y, yaw) ``t`` s after the mover entered the world."""
         first = self.frames[0]
         if not self.auto_start or self.length <= 0.0:
-            return first[1], first[2], first[3]
+            return _at(first)
         u = t - self.delay
         if u < 0.0:
-            return first[1], first[2], first[3]
+            return _at(first)
         if self.loop:
             u = math.fmod(u, self.length + self.delay)
             if u >= self.length:  # the delay again, at the first keyframe
-                return first[1], first[2], first[3]
+                return _at(first)
         elif u >= self.length:
-            last = self.frames[-1]
-            return last[1], last[2], last[3]
+            return _at(self.frames[-1])
         i = bisect.bisect_right(self.times, u)  # frames[i - 1] <= u < frames[i]
         (t0, x0, y0, a0), (t1, x1, y1, a1) = self.frames[i - 1], self.frames[i]
         f = (u - t0) / (t1 - t0) if t1 > t0 else 1.0
+        if i - 1 in self.curves:
+            curve, k = self.curves[i - 1]
+            return curve.at(k, f)
         turn = math.remainder(a1 - a0, 2.0 * math.pi)
         return x0 + (x1 - x0) * f, y0 + (y1 - y0) * f, math.remainder(a0 + turn * f, 2.0 * math.pi)
+
+
+def _at(frame) -> tuple[float, float, float]:
+    """A keyframe's pose, its heading in [-pi, pi] (an actor's keyframe keeps the file's yaw)."""
+    return frame[1], frame[2], math.remainder(frame[3], 2.0 * math.pi)
 
 
 def path_keyframes(points: list[tuple[float, float]], speed: float, mode: str) -> tuple[tuple, ...]:
