@@ -7,7 +7,9 @@ an XML parser sees it. Strict XML refuses two things those parsers read without 
 - ``--`` inside a comment (and a comment ending in ``--->``): the hyphens are spaced apart;
 - a namespace prefix used without its ``xmlns:`` declaration (``gz:expressed_in``,
   ``ignition:``, ``xacro:``): the declaration is added to the root element, with the URI the
-  files that declare it use, so a declared and an undeclared ``gz:`` read the same.
+  files that declare it use, so a declared and an undeclared ``gz:`` read the same;
+- an element or attribute name with ``::`` in it (gz-sim's own example worlds give a plugin
+  ``<gz::system_priority>``): each ``::`` becomes ``__``, a name no reader of mobot's asks for.
 
 ``sdf_integer`` reads a whole number as sdformat does (its leading digits: 666.519 is 666).
 """
@@ -32,12 +34,16 @@ _PREFIXED_ATTRIBUTE = re.compile(r"\s([A-Za-z_][\w.-]*):[A-Za-z_][\w.-]*\s*=\s*[
 _DECLARED = re.compile(r"\bxmlns:([A-Za-z_][\w.-]*)\s*=")
 _ROOT_TAG = re.compile(r"<([A-Za-z_][\w.:-]*)")
 _LEADING_INTEGER = re.compile(r"\s*([+-]?\d+)")
+# A tag's or an attribute's name with "::" in it (tinyxml2 takes any name characters).
+_DOUBLE_COLON_NAME = re.compile(r"(</?|\s)([A-Za-z_][\w.:-]*::[\w.:-]*)(?=[\s/>=])")
 
 
 def gazebo_xml(text: str) -> str:
     """``text`` with what Gazebo's parsers accept and strict XML refuses made strict, lines kept."""
     if "<!--" in text:
         text = _HIDDEN.sub(_comment, text)
+    if "::" in text:
+        text = _double_colons(text)
     if ":" in text:
         text = _declare_prefixes(text)
     return text
@@ -58,6 +64,28 @@ def _comment(match: re.Match) -> str:
         return match.group(0)
     body = re.sub(r"-(?=-)", "- ", body)
     return f"<!--{body}{' ' if body.endswith('-') else ''}-->"
+
+
+def _double_colons(text: str) -> str:
+    """Names with "::" outside comments, CDATA and attribute values, "::" made "__" (same length)."""
+    hidden = [m.span() for m in _HIDDEN.finditer(text)]
+    out, last = [], 0
+    for match in _DOUBLE_COLON_NAME.finditer(text):
+        start = match.start(2)
+        if any(a <= start < b for a, b in hidden) or _in_value(text, start):
+            continue
+        out += [text[last:start], match.group(2).replace("::", "__")]
+        last = match.end(2)
+    return "".join(out) + text[last:] if out else text
+
+
+def _in_value(text: str, at: int) -> bool:
+    """Whether ``at`` is inside a quoted attribute value of the tag it is in (or in text, not a tag)."""
+    tag = text.rfind("<", 0, at)
+    if tag < 0 or text.rfind(">", 0, at) > tag:
+        return True  # element text, not a name
+    quotes = text[tag:at]
+    return quotes.count('"') % 2 == 1 or quotes.count("'") % 2 == 1
 
 
 def _declare_prefixes(text: str) -> str:

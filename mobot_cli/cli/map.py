@@ -27,6 +27,8 @@ def map_(
                                          help="World x, y of the map's lower-left corner, m."),
     robot_radius: float = typer.Option(0.0, "--robot-radius", help="Inflate obstacles by this radius, m."),
     out: Path = typer.Option(Path("."), "--out", help="Folder for map.yaml and map.pgm."),
+    skip_missing: bool = typer.Option(False, "--skip-missing", help="Leave out world models whose files are "
+                                      "missing (Fuel includes, meshes), with a warning, instead of stopping."),
 ) -> None:
     """Write the world's occupancy grid for nav2's map_server: map.yaml and a trinary map.pgm."""
     from mobot_cli.assets.world import occupancy
@@ -41,7 +43,7 @@ def map_(
     if extent and min(extent) <= 0:
         raise UsageError(f"--size {size}: width and height must be positive", hint="e.g. --size 12,10")
     corner = _pair("--origin", origin, "X,Y") if origin else None
-    loaded = _world(world)
+    loaded = _world(world, skip_missing)
     floor = occupancy.floor_under(loaded.plan, [])
     try:
         grid = occupancy.grid_for(loaded.plan, resolution, (floor + low, floor + high), corner, extent)
@@ -60,7 +62,7 @@ def map_(
                          + (f", inflated by {robot_radius:g} m" if robot_radius else "") + ")\n")
 
 
-def _world(world: str):
+def _world(world: str, skip_missing: bool):
     """The world to map: a world (name or file) loaded, or a scenario's world (its ``world:``,
     generated ones included) with the notices loading it gave."""
     from mobot_cli.assets.world.loaded import LoadedWorld
@@ -68,9 +70,9 @@ def _world(world: str):
     from mobot_cli.scenario.prepare import SCENARIO_SUFFIXES, prepare
 
     if world.endswith(SCENARIO_SUFFIXES):
-        plan = prepare(world).plan
+        plan = prepare(world, ["skip_missing=true"] if skip_missing else []).plan
         return LoadedWorld(plan=plan.world, notices=plan.notices)
-    return load_world(world, Path.cwd())
+    return load_world(world, Path.cwd(), skip_missing=skip_missing)
 
 
 def _pair(option: str, text: str, form: str) -> tuple[float, float]:

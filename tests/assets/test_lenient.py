@@ -47,6 +47,18 @@ def test_gazebo_xml_keeps_every_line_and_reads_declared_and_undeclared_gz_alike(
     assert gazebo_xml("<r><foo:bar/></r>") == '<r xmlns:foo="urn:mobot:undeclared:foo"><foo:bar/></r>'
 
 
+def test_names_with_double_colons_read_as_tinyxml2_reads_them():
+    # gz-sim's examples/worlds/sensors.sdf gives a plugin <gz::system_priority>: strict XML refuses it
+    text = ('<sdf>\n<plugin filename="f" name="gz::sim::systems::ForceTorque">\n'
+            '  <gz::system_priority>10</gz::system_priority>\n<x a::b="1" c="std::map"/>\n'
+            '<!-- <c::d/> --><e>std::vector</e></plugin>\n</sdf>')
+    fixed = gazebo_xml(text)
+    assert fixed.count("\n") == text.count("\n") and len(fixed) == len(text)
+    assert fixed.splitlines()[2] == "  <gz__system_priority>10</gz__system_priority>"
+    assert fixed.splitlines()[3] == '<x a__b="1" c="std::map"/>'  # names only: values and text stay
+    assert 'name="gz::sim::systems::ForceTorque"' in fixed and "<!-- <c::d/> --><e>std::vector</e>" in fixed
+
+
 @pytest.mark.parametrize("text, read", [("666.519", (666, True)), ("640", (640, False)), (" 12 ", (12, False)),
                                         ("1e3", (1, True)), ("many", None), (".5", None)])
 def test_sdf_integer_reads_leading_digits_as_sdformat_does(text, read):
@@ -93,11 +105,14 @@ POST = ('<model name="post"><static>true</static><pose>{x} 0 0.5 0 0 0</pose><li
 
 def test_a_world_with_comment_hyphens_a_prefix_and_duplicate_names_loads_with_a_rename(tmp_path):
     path = tmp_path / "posts.world"
-    path.write_text(WORLD.format(posts=POST.format(x=2) + "\n    " + POST.format(x=-2)))
+    path.write_text(WORLD.format(posts=POST.format(x=2) + "\n    " + POST.format(x=-2)).replace(
+        "</world>", '<plugin filename="p" name="gz::sim::systems::Imu"><gz::system_priority>1</gz::system_priority>'
+        '</plugin></world>'))
     done = invoke(["check", str(path)])
     assert done.exit_code == 0, done.stderr
     assert done.stderr == (f"mobot: warning: {path}:8, key 'model[post]': two models are named 'post': this one "
-                           "is renamed 'post_1' (Gazebo classic loads both under one name)\n")
+                           "is renamed 'post_1' (Gazebo classic loads both under one name)\n"
+                           f"mobot: warning: {path.name}: ignored 1 plugin (mobot simulates collision geometry)\n")
     summary = checked(path)
     assert (summary["models"], summary["static_models"]) == (3, 3)
     # Both posts stand in the world: a robot driving at either one stops against it.

@@ -210,3 +210,16 @@ def test_a_xacro_world_is_expanded_and_mapped(tmp_path):
     # corners lie on cell edges, and the cells holding a corner count as occupied too.
     assert sorted(x for x, n in columns.items() if 40 <= n <= 42) == [-1.55, -1.45, 1.45, 1.55]
     assert all(n <= 2 for x, n in columns.items() if n < 40)
+
+
+def test_a_world_with_a_fuel_include_maps_with_skip_missing(tmp_path, boxes, monkeypatch):
+    monkeypatch.setenv("GZ_FUEL_CACHE_PATH", str(tmp_path / "no-fuel"))
+    world = tmp_path / "fuel.sdf"
+    world.write_text(BOXES.replace("</world>", "<include><uri>https://fuel.gazebosim.org/1.0/OpenRobotics/models/"
+                                               "Construction Cone</uri><pose>3 3 0 0 0 0</pose></include></world>"))
+    done = invoke(["map", str(world), "--out", tmp_path / "refused"])
+    assert done.exit_code == 2 and "--skip-missing" in done.stderr and not (tmp_path / "refused").exists()
+    data, res, origin = mapped(str(world), tmp_path / "m", "--skip-missing")
+    assert "include left out" in invoke(["map", str(world), "--out", tmp_path / "m2", "--skip-missing"]).stderr
+    plain, *_ = mapped(str(boxes), tmp_path / "plain")
+    assert np.array_equal(data, plain)  # the boxes' map, the cone left out
