@@ -361,6 +361,8 @@ class Plan:
     # a generated world (``world: {generate: ...}``) as an SDF world file: the run folder keeps it
     generated_world: str = ""
     movers: tuple[MoverPlan, ...] = ()  # the scenario's movers: (docs/movers.md); the world's actors are in world
+    # the bag's camera images: "raw" sensor_msgs/Image, or "png"/"jpeg" CompressedImage (docs/cameras.md)
+    images: str = "raw"
 
 
 def renders(plan: Plan) -> bool:

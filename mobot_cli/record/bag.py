@@ -75,6 +75,7 @@ class BagSink(Sink):
         from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 
         self.rate = plan.physics.rate_hz
+        self.images = plan.images  # cameras' images: raw, png or jpeg (CompressedImage)
         self.path = out_dir / "bag"
         if self.path.exists():  # a rerun into the same folder; rosbags never overwrites
             shutil.rmtree(self.path)
@@ -266,6 +267,7 @@ class _RobotTopics:
                                    if spec.kind not in CAMERA_KINDS}
         self.cameras = {spec.name: _camera_topics(sink, plan, spec) for spec in plan.sensors
                         if spec.kind in CAMERA_KINDS}
+        self.images = sink.images
 
     def write_reading(self, records: Records, reading: Reading, rate: int) -> None:
         """One sensor reading as its ROS message (a camera's: image, depth image, camera info)."""
@@ -276,7 +278,7 @@ class _RobotTopics:
             spec, connections = reading.sensor, self.cameras[reading.sensor.name]
             frame = self.messages.sensor_frames[spec.name].frame
             records.write(ns, [(connections[topic], data) for topic, data in camera_cdr.messages(
-                stamp, frame, spec, reading.data, {role: role for role in connections})])
+                stamp, frame, spec, reading.data, {role: role for role in connections}, self.images)])
             return
         records.write(ns, [(self.sensor_connections[reading.sensor.name], self.messages.reading(stamp, reading))])
 
@@ -306,12 +308,16 @@ def _sensor_topic(sink: BagSink, plan: RobotPlan, spec):
 
 
 def _camera_topics(sink: BagSink, plan: RobotPlan, spec) -> dict:
-    """A camera's connections by role (image, depth, camera_info), each added once per topic name."""
-    from mobot_cli.ros.definitions import CAMERA_INFO, IMAGE
+    """A camera's connections by role (image, depth, camera_info), each added once per topic name;
+    the image on image_raw/compressed when the bag compresses images (image_transport's name)."""
+    from mobot_cli.ros.definitions import CAMERA_INFO, COMPRESSED_IMAGE, IMAGE
 
     out = {}
     for role, name in sensor_topics.camera_topics(plan, spec).items():
+        kind = CAMERA_INFO if role == "camera_info" else IMAGE
+        if role == "image" and sink.images != "raw":
+            name, kind = f"{name}/compressed", COMPRESSED_IMAGE
         if name not in sink.sensor_topics:
-            sink.sensor_topics[name] = sink.topic(name, CAMERA_INFO if role == "camera_info" else IMAGE)
+            sink.sensor_topics[name] = sink.topic(name, kind)
         out[role] = sink.sensor_topics[name]
     return out

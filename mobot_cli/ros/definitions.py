@@ -22,6 +22,7 @@ LASER_SCAN, POINT_CLOUD2 = "sensor_msgs/msg/LaserScan", "sensor_msgs/msg/PointCl
 IMU, CONTACTS_STATE = "sensor_msgs/msg/Imu", "gazebo_msgs/msg/ContactsState"
 RANGE = "sensor_msgs/msg/Range"
 IMAGE, CAMERA_INFO = "sensor_msgs/msg/Image", "sensor_msgs/msg/CameraInfo"  # cameras (docs/cameras.md)
+COMPRESSED_IMAGE = "sensor_msgs/msg/CompressedImage"  # the bag's images with log.images png or jpeg
 OCCUPANCY_GRID = "nav_msgs/msg/OccupancyGrid"  # /map (ros2/map_topic.py)
 PARTICIPANT_ENTITIES_INFO = "rmw_dds_common/msg/ParticipantEntitiesInfo"
 SEPARATOR = "=" * 80 + "\n"
@@ -326,6 +327,19 @@ MESSAGES: dict[str, tuple[str, str]] = {
         "float64 z\n"
         "float64 w\n",
         "RIHS01_8d348150c12913a31ee0ec170fbf25089e4745d17035792a1ba94d6f0bc0cfc7"),
+    "sensor_msgs/msg/CompressedImage": (
+        'std_msgs/Header header\n'
+        'string format\n'
+        'uint8[] data\n'
+        '================================================================================\n'
+        'MSG: std_msgs/Header\n'
+        'builtin_interfaces/Time stamp\n'
+        'string frame_id\n'
+        '================================================================================\n'
+        'MSG: builtin_interfaces/Time\n'
+        'int32 sec\n'
+        'uint32 nanosec\n',
+        "RIHS01_15640771531571185e2efc8a100baf923961a4d15d5569652e6cb6691e8e371a"),
     "sensor_msgs/msg/Image": (
         'std_msgs/Header header\n'
         'uint32 height\n'

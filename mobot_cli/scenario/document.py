@@ -49,7 +49,8 @@ def resolved_document(scenario: Scenario, plan: Plan, base_dir: Path) -> dict[st
         "duration": plan.total_steps / rate,
         "seed": plan.seed,
         "settle": plan.settle_steps / rate,
-        "log": {"rate_hz": scenario.log.rate_hz or rate / plan.log_every, "formats": list(scenario.log.formats)},
+        "log": {"rate_hz": scenario.log.rate_hz or rate / plan.log_every, "formats": list(scenario.log.formats),
+                **({"images": scenario.log.images} if scenario.log.images != "raw" else {})},
         "robots": robots,
         **({"faults": scenario.faults.model_dump(exclude_defaults=True)}
            if scenario.faults.model_dump(exclude_defaults=True) else {}),

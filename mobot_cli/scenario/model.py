@@ -92,6 +92,8 @@ class LogSpec(Strict):
     # None: about 50 Hz, rounded down to a whole number of physics steps (48 Hz at 240 Hz).
     rate_hz: Optional[Annotated[Float, Field(ge=MIN_LOG_RATE_HZ, le=MAX_RATE_HZ)]] = None
     formats: list[Literal["csv", "mcap"]] = ["csv"]  # mcap: DIR/bag/
+    # the bag's camera images: raw (sensor_msgs/Image), or compressed on image_raw/compressed
+    images: Literal["raw", "png", "jpeg"] = "raw"
 
 
 class PoseSpec(Strict):

@@ -62,7 +62,7 @@ def resolve(scenario: Scenario, source: Source) -> Plan:
                 formats=tuple(dict.fromkeys(scenario.log.formats)), events=events,
                 notices=tuple(dict.fromkeys(notices)), expectations=expectations, ros2=_ros2(scenario),
                 generated_world=generated,
-                movers=resolve_movers(scenario, source, world.plan))
+                movers=resolve_movers(scenario, source, world.plan), images=scenario.log.images)
 
 
 def _ros2(scenario: Scenario) -> Ros2Settings | None:

@@ -15,7 +15,7 @@ from PIL import Image
 
 from mobot_cli.cli import invoke
 from mobot_cli.ros import camera_cdr
-from mobot_cli.ros.definitions import CAMERA_INFO, IMAGE
+from mobot_cli.ros.definitions import CAMERA_INFO, COMPRESSED_IMAGE, IMAGE
 from tests.sim.sensing.test_camera import scenario
 
 REPO = Path(__file__).resolve().parents[2]
@@ -108,6 +108,54 @@ def test_the_cdr_packers_match_rosbags_serializer():
         assert store.serialize_cdr(msg, IMAGE) == camera_cdr.image((7, 9), "f", data, encoding)
     info = camera_cdr.camera_info((7, 9), "f", spec)
     assert store.serialize_cdr(store.deserialize_cdr(info, CAMERA_INFO), CAMERA_INFO) == info
+
+
+@pytest.mark.parametrize("compression", ["png", "jpeg"])
+def test_log_images_compressed_puts_image_transports_compressed_images_in_the_bag(camera_run, tmp_path, compression):
+    import io
+
+    from rosbags.rosbag2 import Reader
+    from rosbags.typesys import Stores, get_typestore
+
+    path, raw_out = camera_run
+    text = path.read_text().replace("formats: [csv, mcap]}", f"formats: [csv, mcap], images: {compression}}}")
+    assert text != path.read_text()
+    (path.parent / f"{compression}.yaml").write_text(text)  # beside the world file it names
+    out = tmp_path / "out"
+    done = invoke(["run", str(path.parent / f"{compression}.yaml"), "--out", str(out), "--quiet"])
+    assert done.exit_code == 0, done.stderr
+    assert f"images: {compression}" in (out / "scenario.yaml").read_text()  # the run folder says how to run it again
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    with Reader(out / "bag") as reader:
+        types = {c.topic: c.msgtype for c in reader.connections}
+        images = [store.deserialize_cdr(raw, c.msgtype) for c, _, raw in reader.messages()
+                  if c.topic == "/r/front/image_raw/compressed"]
+    assert types["/r/front/image_raw/compressed"] == COMPRESSED_IMAGE and "/r/front/image_raw" not in types
+    assert types["/r/front/depth/image_raw"] == IMAGE and types["/r/front/camera_info"] == CAMERA_INFO
+    assert len(images) == 11 and images[-1].format == f"rgb8; {compression} compressed bgr8"
+    picture = Image.open(io.BytesIO(bytes(images[-1].data)))
+    assert picture.format == compression.upper() and picture.size == (160, 120)
+    frame = np.asarray(Image.open(raw_out / "sensors/r/front/rgb/000010.png")).astype(int)
+    error = np.abs(np.asarray(picture.convert("RGB")).astype(int) - frame)
+    assert error.max() == 0 if compression == "png" else error.mean() < 3.0  # JPEG at quality 95
+    if compression == "jpeg":  # smaller than the raw images even after the bag's zstd (noisy PNGs are not)
+        assert (out / "bag/bag.mcap").stat().st_size < 0.8 * (raw_out / "bag/bag.mcap").stat().st_size
+
+
+def test_compressed_images_in_every_encoding_serialize_as_rosbags_does():
+    import io
+
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    rgb = np.arange(36, dtype=np.uint8).reshape(3, 4, 3)
+    for pixels, encoding in ((rgb, "rgb8"), (rgb[:, :, ::-1], "bgr8"), (rgb[:, :, 0], "mono8")):
+        data = camera_cdr.compressed((7, 9), "f", pixels, encoding, "png")
+        msg = store.deserialize_cdr(data, COMPRESSED_IMAGE)
+        assert store.serialize_cdr(msg, COMPRESSED_IMAGE) == data
+        decoded = np.asarray(Image.open(io.BytesIO(bytes(msg.data))))
+        assert np.array_equal(decoded, rgb[:, :, 0] if encoding == "mono8" else rgb)  # bgr8 stored as a colour PNG
+        assert msg.format == f"{encoding}; png compressed {'mono8' if encoding == 'mono8' else 'bgr8'}"
 
 
 def test_a_rerun_writes_the_same_bytes(camera_run, tmp_path):
