@@ -121,7 +121,8 @@ def floor_height(cid: int, box: Bounds, floors: set[int], top: float, name: str)
         x, y = (x0 + x1) / 2, (y0 + y1) / 2
         raise SpawnError(
             f"robot '{name}' has nothing to rest on below ({x:.3f}, {y:.3f})",
-            hint="Give the pose an explicit z, or enable the ground plane.")
+            hint="Spawn it over the world's floor, or give the world one (<include><uri>model://ground_plane"
+                 "</uri></include>; a Fuel model that was left out may have been its floor).")
     return max(hits)
 
 

@@ -100,8 +100,12 @@ class SdfPaths:
         if path in self._trees:
             return self._trees[path]
         parser = etree.XMLParser(remove_comments=True, remove_pis=True, resolve_entities=False)
+        expanded = path.name.endswith(".xacro")
         try:
-            data = self._expanded(path) if path.name.endswith(".xacro") else path.read_bytes()
+            data = path.read_bytes()
+            # nav2's depot.sdf is xacro by its content, not its name (nav2 runs xacro on it first)
+            expanded = expanded or b"<xacro:" in data
+            data = self._expanded(path) if expanded else data
             root = etree.fromstring(gazebo_xml_bytes(declaration_first(data)), parser, base_url=str(path))
         except OSError as exc:
             raise WorldError(f"cannot read {path}: {exc}", location=Location(file=path),
@@ -109,7 +113,7 @@ class SdfPaths:
         except etree.XMLSyntaxError as exc:
             raise WorldError(f"malformed XML: {exc.msg}", location=Location(file=path, line=exc.lineno),
                              hint="Fix the XML (an unclosed tag or a stray '<' is typical).") from None
-        if path.name.endswith(".xacro"):  # lines of the expansion are not the file's: name none
+        if expanded:  # lines of the expansion are not the file's: name none
             for element in root.iter():
                 element.sourceline = 0
         if root.tag != "sdf":
@@ -122,7 +126,8 @@ class SdfPaths:
         return root
 
     def _expanded(self, path: Path) -> bytes:
-        """An SDF file written as xacro (nav2's sandbox world is), expanded as a robot description is."""
+        """An SDF file written as xacro (nav2's sandbox and depot worlds are), expanded as a robot
+        description is."""
         from mobot_cli.assets.description.xacro import expand_file
 
         expansion = expand_file(path, self.xacro_args if not self.files else {}, self.resolver)
