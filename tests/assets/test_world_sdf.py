@@ -157,7 +157,7 @@ def test_unsupported_geometry_is_left_out_with_a_warning(tmp_path):
     assert [b.name for b in world.plan.bodies] == ["crate"]
     text = "\n".join(world.notices)
     assert "<heightmap> geometry, which mobot does not simulate" in text
-    assert "<polyline> geometry, which mobot does not simulate" in text
+    assert "<polyline> without three distinct points: it is left out" in text  # a line has no area
 
 
 def test_lights_gui_physics_plugins_are_one_summary_line(tmp_path):

@@ -6,12 +6,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from mobot_cli.assets.world import paths as sdf_paths
-from mobot_cli.assets.world.frames import key_of
+from mobot_cli.assets.world.frames import is_number, key_of
 from mobot_cli.assets.world.pose import IDENTITY, Matrix
 from mobot_cli.errors import Location, MobotError, WorldError
 
 # Geometry mobot cannot collide with: warned about and left out (collisions only).
-UNSUPPORTED = ("heightmap", "polyline", "image", "ellipsoid")
+UNSUPPORTED = ("heightmap", "image")
+# Shapes PyBullet has no primitive for: made meshes (world/solids.py)
+SOLIDS = ("cone", "ellipsoid", "polyline")
 
 
 @dataclass
@@ -43,6 +45,8 @@ def parse_shape(reader, element, file: Path, collision: bool) -> Shape | None:
         return None
     kind = kind_el.tag
     what = f"{element.tag} '{element.get('name', '')}'"
+    if kind in SOLIDS:
+        return _solid(reader, element, geometry, kind_el, file, collision, what)
     if kind in UNSUPPORTED or kind not in ("box", "cylinder", "capsule", "sphere", "plane", "mesh"):
         if collision:
             reader.warn(f"{what} uses <{kind}> geometry, which mobot does not simulate: it is "
@@ -74,6 +78,58 @@ def parse_shape(reader, element, file: Path, collision: bool) -> Shape | None:
     shape.friction = _friction(reader, element, file)
     shape.anisotropic = _anisotropic(reader, element, file)
     return shape
+
+
+def _solid(reader, element, geometry, kind_el, file: Path, collision: bool, what: str) -> Shape | None:
+    """A cone, ellipsoid or polyline as a mesh shape (its OBJ in the cache)."""
+    from mobot_cli.assets.world import solids
+    from mobot_cli.common import cache
+
+    kind = kind_el.tag
+    where = key_of(kind_el, file)
+    if kind == "cone":
+        size = (reader.number(kind_el, "radius", file, 0.5), reader.number(kind_el, "length", file, 1.0))
+    elif kind == "ellipsoid":
+        size = reader.vector(kind_el, "radii", file, (1.0, 1.0, 1.0))
+    else:
+        outlines = [[_point(point, file) for point in line.findall("point")] for line in geometry.findall("polyline")]
+        size = (reader.number(kind_el, "height", file, 1.0),)
+    if any(v <= 0.0 for v in size):
+        raise WorldError(f"{what} has a <{kind}> with a size of zero or less: {size}", location=where,
+                         hint="Sizes must be positive.")
+    if kind == "cone":
+        vertices, faces = solids.cone(*size)
+    elif kind == "ellipsoid":
+        vertices, faces = solids.ellipsoid(size)
+    else:
+        vertices, faces, nested = solids.polyline(outlines, size[0])
+        if not len(faces):
+            if collision:
+                reader.warn(f"{what} has a <polyline> without three distinct points: it is left out", where)
+            return None
+        if nested and collision:
+            reader.warn(f"{what}: a <polyline> outline lies inside another; Gazebo makes it a hole, "
+                        "mobot a solid of its own", where)
+    text = solids.obj_text(vertices, faces, f"SDF <{kind}> {size}").encode("utf-8")
+    try:
+        path = cache.store_file("meshes", f"{cache.digest(kind, text)}.obj", text)
+    except OSError as exc:
+        raise WorldError(f"cannot write the mesh of {what}'s <{kind}>: {exc.strerror}", location=where,
+                         hint="Free some disk space or set TMPDIR.") from None
+    shape = Shape(kind="mesh", size=(1.0, 1.0, 1.0), name=element.get("name", ""), location=key_of(element, file),
+                  mesh=path, uri=f"<{kind}>")
+    shape.friction = _friction(reader, element, file)
+    shape.anisotropic = _anisotropic(reader, element, file)
+    return shape
+
+
+def _point(element, file: Path) -> tuple[float, float]:
+    """A polyline's <point>: x y."""
+    parts = (element.text or "").split()
+    if len(parts) != 2 or not all(is_number(v) for v in parts):
+        raise WorldError(f"<point> '{(element.text or '').strip()}' is not 2 numbers", location=key_of(element, file),
+                         hint="Write x and y in metres, separated by a space.")
+    return float(parts[0]), float(parts[1])
 
 
 def _mesh(reader, shape: Shape, mesh, file: Path, collision: bool, what: str) -> bool:
