@@ -14,6 +14,7 @@ import logging
 from dataclasses import dataclass
 from pathlib import Path
 
+from mobot_cli.assets.world.solids import obj_text
 from mobot_cli.common import cache
 from mobot_cli.errors import Location, WorldError
 
@@ -52,7 +53,7 @@ def collision_mesh(source: Path, where: Location) -> MeshFile:
             "bounds": [[float(v) for v in vertices.min(axis=0)],
                        [float(v) for v in vertices.max(axis=0)]]}
     if collada:
-        text = _obj_text(vertices, faces, source).encode("utf-8")
+        text = obj_text(vertices, faces, f"collision mesh from {source.name}").encode("utf-8")
         meta["obj_sha256"] = hashlib.sha256(text).hexdigest()
         try:
             obj = cache.store_file("meshes", f"{key}.obj", text)
@@ -118,11 +119,3 @@ def _collada_unit(data: bytes) -> float:
     except ValueError:
         return 1.0
     return meter if meter > 0 else 1.0
-
-
-def _obj_text(vertices, faces, source: Path) -> str:
-    """A minimal OBJ: vertices and triangles only."""
-    lines = [f"# mobot: collision mesh from {source.name}, in metres\n"]
-    lines.extend(f"v {x:.9g} {y:.9g} {z:.9g}\n" for x, y, z in vertices.tolist())
-    lines.extend(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces.tolist())
-    return "".join(lines)
