@@ -30,7 +30,7 @@ own drawing is made transparent (which TinyRenderer skips):
   each body's shapes 16 to a PyBullet body) and checked (no joints, no mass, the plan's pose): at
   the first doubt the rest stay drawn as they are. Bodies with a plane, or of URDF text, stay too.
 
-In the bundled house this drew a 320 x 240 frame in ~19 % less CPU time, the same pixels (RGB
+In the bundled house this drew a 320 x 240 frame in 15-20 % less CPU time, the same pixels (RGB
 byte for byte, depth within 0.2 mm) at every pose tried; in the AWS small house, whose meshes
 are mostly small triangles already, ~2 % (bench/README.md).
 """
