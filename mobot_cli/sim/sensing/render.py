@@ -2,7 +2,9 @@
 
 * ``tiny``: PyBullet's TinyRenderer, a software rasteriser in the C module: always there, no
   display, no GPU. It draws the visual shapes of URDF bodies and, for bodies built from collision
-  shapes only (the ground plane, SDF worlds' static models), those shapes.
+  shapes only (the ground plane, SDF worlds' static models), those shapes. The static models are
+  drawn by visual-only copies, smallest shapes first and large faces cut into tiles, which it
+  draws faster (tiles.py).
 * ``egl``: PyBullet's eglRendererPlugin (OpenGL through EGL: a GPU's driver, or Mesa's llvmpipe
   without one). It draws visual shapes only, so the world's collision-only bodies get visual twins
   without collision (``_visual_twins``) when it is chosen.
@@ -10,7 +12,8 @@
 TinyRenderer draws the ground as a visual-only grid of FLOOR_CELLS x FLOOR_CELLS squares,
 FLOOR_SIZE m across, centred near the world's origin, in place of the ground plane (whose own
 drawing is made transparent): it draws PyBullet's infinite plane in ~40 ms a 320 x 240 frame (its
-triangles reach behind the camera), the grid in ~5 ms (measured here). EGL draws a flat box
+triangles reach behind the camera), the grid in ~5 ms (measured here); it is made after the
+static world's copies, so that it is drawn last, under everything. EGL draws a flat box
 there (a mesh body made after its plugin loaded crashes PyBullet 3.2.7). The rendering bodies have
 no collision shape, so rays, contacts and physics never meet them.
 * ``auto``: egl when a GPU's render node is there (/dev/dri/renderD*) and the plugin loads, else
@@ -45,6 +48,7 @@ from mobot_cli.common.streams import silenced
 from mobot_cli.common.transforms import quat_matrix
 from mobot_cli.plan import SensorSpec, WorldPlan
 from mobot_cli.sim.pb import p
+from mobot_cli.sim.sensing import tiles
 
 RENDERERS = ("auto", "tiny", "egl")
 FLOOR_CELLS, FLOOR_SIZE = 16, 512.0  # m: the ground as cameras see it ends 256 m from the origin
@@ -123,7 +127,7 @@ def _load_egl(cid: int) -> int:
 class Renderer:
     """The renderer of one PyBullet client, chosen at its first image (``notice`` says which)."""
 
-    def __init__(self, cid: int, wanted: str, world: WorldPlan):
+    def __init__(self, cid: int, wanted: str, world: WorldPlan, tile: float | None = tiles.TILE):
         self.cid, self.world = cid, world
         self.name = "tiny"
         self.plugin = -1
@@ -137,7 +141,9 @@ class Renderer:
             _visual_twins(cid, world)
             self.notice = "cameras render with PyBullet's EGL plugin (OpenGL)"
         else:
-            _floor(cid)
+            if tile is not None:
+                tiles.retile(cid, world, tile)
+            _floor(cid)  # after the copies: the ground is drawn last, under everything
             self.notice = f"cameras render with PyBullet's TinyRenderer (software; {why})"
 
     def close(self) -> None:
