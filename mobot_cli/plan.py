@@ -196,6 +196,9 @@ class SensorSpec:
     width: int = 0
     height: int = 0
     encoding: str = ""
+    # m: a depth image's own near and far (gz's <depth_camera><clip>): depths beyond it +inf,
+    # nearer -inf, as gz-sensors gives them; None: the camera's clip planes bound the depth too
+    depth_clip: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)

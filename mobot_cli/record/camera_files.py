@@ -44,7 +44,8 @@ def describe(key: str, robot: RobotPlan, spec: SensorSpec, physics_rate_hz: int)
             "frame_id": sensor_topics.sensor_frame(robot, spec).frame,
             "rate_hz": sensor_topics.rate_hz(spec, physics_rate_hz), "width": spec.width, "height": spec.height,
             "encoding": spec.encoding, "horizontal_fov": spec.field_of_view, "clip_near": spec.range_min,
-            "clip_far": spec.range_max, "fx": fx, "fy": fy, "cx": cx, "cy": cy, "topics": topics,
+            "clip_far": spec.range_max, **({"depth_clip": list(spec.depth_clip)} if spec.depth_clip else {}),
+            "fx": fx, "fy": fy, "cx": cx, "cy": cy, "topics": topics,
             "rgb": "rgb/NNNNNN.png" if spec.kind != "depth" else None,
             "depth": "depth/NNNNNN.png (uint16 mm, 0: none)" if spec.kind != "camera" else None}
 

@@ -165,3 +165,58 @@ def test_bundled_mobot_camera_is_opt_in():
     assert (camera.kind, camera.topic, camera.frame_id, camera.rate_hz) == ("rgbd", "camera", "camera_optical_frame",
                                                                             15.0)
     assert os.path.basename(str(camera)) != ""
+
+
+DEPTH_URDF = """<?xml version="1.0"?>
+<robot name="deep">
+  <link name="base_link"><inertial><mass value="5"/><inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0"
+    iyz="0"/></inertial><collision><geometry><box size="0.3 0.3 0.1"/></geometry></collision></link>
+  <gazebo reference="base_link">
+    <sensor type="depth" name="gz_depth"><update_rate>10</update_rate><pose>0 0 0.4 0 0 0</pose>
+      <camera><image><width>160</width><height>120</height></image><horizontal_fov>1.2</horizontal_fov>
+        <clip><near>0.05</near><far>20</far></clip>
+        <depth_camera><clip><near>0.5</near><far>FAR</far></clip></depth_camera></camera></sensor>
+    <sensor type="depth" name="classic_depth"><pose>0 0 0.4 0 0 0</pose>
+      <camera><depth_camera><clip><near>0.5</near><far>1.0</far></clip></depth_camera></camera>
+      <plugin name="kinect" filename="libgazebo_ros_openni_kinect.so"/></sensor>
+  </gazebo>
+</robot>
+"""
+
+
+def test_a_depth_sensor_is_what_its_gazebo_makes_of_it(tmp_path):
+    path = tmp_path / "deep.urdf"
+    path.write_text(DEPTH_URDF.replace("FAR", "2.5"))
+    gz, classic = load_robot(str(path)).sensors
+    # gz-sim reads type depth as a depth camera with its own depth clip; Gazebo classic's ROS
+    # plugins publish the image and the depth, cut off by their own parameters
+    assert (gz.kind, gz.depth_near, gz.depth_far, gz.spec(24).depth_clip) == ("depth", 0.5, 2.5, (0.5, 2.5))
+    assert (gz.spec(24).range_min, gz.spec(24).range_max) == (0.05, 20.0)  # the camera's clip renders it
+    assert (classic.kind, classic.depth_far, classic.spec(24).depth_clip) == ("rgbd", 0.0, None)
+
+
+@pytest.mark.parametrize("far, box_seen", [(2.5, False), (5.0, True)])
+def test_the_depth_clip_cuts_the_depth_image_as_gz_does(tmp_path, far, box_seen):
+    import numpy as np
+
+    from mobot_cli.api import Simulation
+    from tests.sim.sensing.test_camera import BOX_SDF, FACE_X
+
+    (tmp_path / "box.sdf").write_text(BOX_SDF)
+    (tmp_path / "deep.urdf").write_text(DEPTH_URDF.replace("FAR", str(far)))
+    path = tmp_path / "s.yaml"
+    path.write_text("version: 1\nworld: box.sdf\nduration: 1\nsettle: 0.0\nrobots:\n  - name: r\n"
+                    "    description: deep.urdf\n    pose: {x: 0.0, y: 0.0}\n"
+                    "    sensors: {classic_depth: false}\n")
+    with Simulation.open(path) as sim:
+        sim.step(24)
+        image = sim.image("r", "gz_depth")
+    assert image.rgb is None
+    depth = image.depth
+    centre = depth[40:55, 55:80]  # the box's face, 2.8 m ahead, above and left of the centre
+    if box_seen:
+        assert np.allclose(centre, FACE_X, atol=0.05)
+    else:
+        assert np.isposinf(centre).all()  # beyond the depth clip's 2.5 m: +inf, as gz-sensors gives
+    finite = depth[np.isfinite(depth)]
+    assert finite.size and finite.min() >= 0.5 and finite.max() <= far

@@ -182,6 +182,9 @@ class SensorXml:
                       horizontal_fov=self.number("camera/horizontal_fov", 1.047),
                       clip_near=self.number("camera/clip/near", 0.1), clip_far=self.number("camera/clip/far", 100.0),
                       noise_mean=mean, noise_stddev=stddev)
+        if self.text("camera/depth_camera/clip/far"):  # gz-sensors: a depth image's own clip, when given
+            values.update(depth_near=self.number("camera/depth_camera/clip/near", 0.0),
+                          depth_far=self.number("camera/depth_camera/clip/far", 0.0))
         name = ""
         if self.plugin is not None:
             name = (self.plugin.findtext("camera_name") or self.plugin.findtext("cameraName") or "").strip()

@@ -5,7 +5,8 @@ plugin reads them (gazebo_ros's ray sensor with output_type sensor_msgs/Range, g
 hector's sonar): then they are range sensors, as Gazebo classic's sonar is. imu and contact (a
 bumper) are the others mobot simulates, with IMUs that are model plugins (plugin_sensors.py).
 Cameras (docs/cameras.md): camera is RGB, depth_camera (gz) depth only, depth (Gazebo classic:
-gazebo_ros_camera publishes its image and its depth) and rgbd_camera/rgbd both. GPS and the rest
+gazebo_ros_camera publishes its image and its depth; without a gazebo_ros plugin, gz-sim reads it
+as a depth_camera and so does mobot) and rgbd_camera/rgbd both. GPS and the rest
 of SDFormat's types are left out with one notice. SDF models reach
 this module as URDF: model_to_urdf copies each link's sensors into such blocks, posed in the
 URDF link frame. Absent elements take
@@ -91,6 +92,8 @@ class DescribedSensor:
     horizontal_fov: float = 0.0  # rad, cameras
     clip_near: float = 0.0  # m, cameras
     clip_far: float = 0.0
+    depth_near: float = 0.0  # m, depth cameras' <depth_camera><clip> (0 and 0: none)
+    depth_far: float = 0.0
 
     @property
     def kind(self) -> str:
@@ -106,7 +109,9 @@ class DescribedSensor:
                 topic=self.topic, frame_id=self.frame_id or self.link, range_min=self.clip_near,
                 range_max=self.clip_far, noise_mean=self.noise_mean, noise_stddev=self.noise_stddev, source=source,
                 field_of_view=self.horizontal_fov, width=self.width, height=self.height,
-                encoding=IMAGE_FORMATS.get(self.image_format, "rgb8"))
+                encoding=IMAGE_FORMATS.get(self.image_format, "rgb8"),
+                depth_clip=(self.depth_near, self.depth_far) if self.depth_far > 0.0 and self.kind != "camera"
+                else None)
         return SensorSpec(
             name=self.name, kind=self.kind, link=self.link, every=every, xyz=self.xyz,
             quat=self.quat, topic=self.topic, frame_id=self.frame_id or self.link,
@@ -237,6 +242,13 @@ def _check_placement(xml: SensorXml, links: dict[str, ET.Element],
                                hint="Give every sensor of a robot its own name.")
 
 
+def _gazebo_ros_plugin(plugin) -> bool:
+    """Whether a sensor's plugin is Gazebo classic's ROS camera plugin family (gazebo_ros_camera,
+    gazebo_ros_openni_kinect, ...), which publishes a depth sensor's image as well as its depth."""
+    name = (plugin.get("filename", "") if plugin is not None else "").lower()
+    return "gazebo_ros" in name or "kinect" in name or "realsense" in name
+
+
 def _read(xml: SensorXml) -> DescribedSensor:
     values = dict(name=xml.name, type=xml.type, link=xml.link,
                   rate_hz=xml.number("update_rate", 0.0), topic=xml.topic(), frame_id=xml.frame())
@@ -252,6 +264,10 @@ def _read(xml: SensorXml) -> DescribedSensor:
         values.update(xml.imu())
     elif kind in CAMERA_KINDS:
         values.update(xml.camera())
+        if _gazebo_ros_plugin(xml.plugin):  # Gazebo classic: the plugin's own cut-offs, not gz's depth clip
+            values.pop("depth_near", None), values.pop("depth_far", None)
+        elif xml.type == "depth":
+            values["type"] = "depth_camera"  # gz-sim's reading of it: a depth image only
         if values["image_format"] not in IMAGE_FORMATS:
             xml.notices.append(Notice(f"sensor '{xml.name}' has <format> '{values['image_format'][:40]}': "
                                       "mobot renders it as rgb8", xml.location("camera/image/format")))

@@ -176,6 +176,9 @@ class Renderer:
         with np.errstate(divide="ignore"):
             depth = far * near / (far - (far - near) * buffer)
         depth[(buffer >= CLEARED) | (depth > far)] = np.inf
+        if spec.depth_clip is not None:  # the depth image's own clip (gz's <depth_camera><clip>)
+            depth[depth > spec.depth_clip[1]] = np.inf
+            depth[depth < spec.depth_clip[0]] = -np.inf
         return np.ascontiguousarray(rgb), depth.astype(np.float32)
 
 
