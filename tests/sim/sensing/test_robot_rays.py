@@ -202,3 +202,42 @@ def test_a_shape_without_triangles_is_left_to_pybullet(crowd):
     hit = p.rayTestBatch(origins[:1].astype(float), ends.astype(float), physicsClientId=cid)[0]
     assert hit[0] == body and float(ranges[0, 0]) == pytest.approx(0.1 + 7.9 * hit[2], abs=1e-5)
     assert float(ranges[0, 0]) == pytest.approx(0.9, abs=0.002)
+
+
+def test_corpus_robots_agree_with_pybullets_ray_test(corpus, monkeypatch, tmp_path):
+    """turtlebot3 burger, husky (a mesh) and jackal, as mobot loads them, around a 3D lidar."""
+    from mobot_cli.assets import load_robot
+    from mobot_cli.plan import Physics, RobotPlan, SpawnPose
+
+    monkeypatch.setenv("MOBOT_RESOURCE_PATH", ":".join(str(corpus / pkg) for pkg in
+                                                        ("turtlebot3", "husky", "jackal", "velodyne_simulator")))
+    monkeypatch.setenv("MOBOT_CACHE_DIR", str(tmp_path / "cache"))
+    cases = {"burger": ("turtlebot3/turtlebot3_description/urdf/turtlebot3_burger.urdf.xacro", {}),
+             "husky": ("husky/husky_description/urdf/husky.urdf.xacro", {"gazebo_controllers": "/dev/null"}),
+             "jackal": ("jackal/jackal_description/urdf/jackal.urdf.xacro", {"gazebo_controllers": "/dev/null"})}
+    world = WorldPlan(ground_plane=True)
+    with World(Physics(), world) as sim:
+        cid, bodies = sim.client_id, []
+        for i, (name, (path, args)) in enumerate(cases.items()):
+            desc = load_robot(str(corpus / path), args)
+            angle = 2 * math.pi * i / len(cases)
+            pose = SpawnPose(xyz=(2.0 * math.cos(angle), 2.0 * math.sin(angle), 0.0),
+                             quat=p.getQuaternionFromEuler([0, 0, 1.7 * angle]), z_auto=True)
+            sim.spawn(RobotPlan(name=name, namespace=f"/{name}", frame_prefix=f"{name}/", urdf=desc.urdf,
+                                root_link=desc.root_link, pose=pose, drive=desc.drive))
+            bodies.append(sim.body_id(name))
+        shapes = RobotShapes(cid)
+        assert all(shapes.links(body) is not None for body in bodies)
+        assert any(shape[2] == p.GEOM_MESH for link in range(-1, p.getNumJoints(bodies[1], physicsClientId=cid))
+                   for shape in p.getCollisionShapeData(bodies[1], link, physicsClientId=cid))  # husky's mesh
+        spec = lidar_spec(samples=900, vertical=RayAxis(16, -0.4, 0.2), range_min=0.1, range_max=8.0)
+        for z in (0.1, 0.25):
+            job = lidar.ScanJob(spec, lidar.Beams.of(spec), np.array([0.0, 0.0, z]), np.eye(3, dtype=np.float32), -2)
+            ranges = lidar.cast(cid, StaticScene(world), [job], {}, shapes.rays(bodies))[0].reshape(-1)
+            origins, dirs = lidar._rays(job)
+            hits = p.rayTestBatch(origins.astype(float), (origins + dirs * 7.9).astype(float), physicsClientId=cid)
+            diff, robot, incidence = _compare(ranges, hits, dirs, bodies)
+            steep = robot & (incidence >= 0.5)
+            assert steep.sum() > 300
+            assert np.mean(diff[steep] < 0.002) > 0.985  # measured 0.991-0.996
+            assert np.mean(diff[robot] < 0.003) > 0.95 and np.mean(diff[~robot] < 1e-5) > 0.995
