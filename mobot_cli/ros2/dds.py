@@ -16,6 +16,7 @@ a stalled reader can never stop the world's clock.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Callable
 
 from cyclonedds._clayer import ddspy_take, ddspy_write
@@ -112,8 +113,10 @@ class Writer:
     def _matched(self, writer: DataWriter, status) -> None:
         self.readers = status.current_count
 
-    @property
+    @cached_property
     def gid(self) -> bytes:
+        # Asked for every endpoint at every announcement (ros2/publisher.py): a fleet's node has
+        # hundreds, and cyclonedds makes a UUID each time; an endpoint's GUID never changes.
         return self.dds.guid.bytes
 
     def write(self, data: bytes) -> bool:
@@ -135,7 +138,7 @@ class Reader:
         self._on_data = on_data
         self.dds = DataReader(subscriber, topic, qos=dds_qos, listener=Listener(on_data_available=self._take))
 
-    @property
+    @cached_property
     def gid(self) -> bytes:
         return self.dds.guid.bytes
 

@@ -102,6 +102,7 @@ class Topics:
         self.readers: dict[tuple[str, str], dds.Reader] = {}  # (topic, type): cmd_vel takes two types
         self.sent = 0  # messages written
         self.unsent = 0  # messages a stalled reliable reader kept from being written
+        self.held = self.changed = False  # announcements wait while held (a fleet's arrivals: one, not N)
         self._announcer = participant.writer(graph.TOPIC, idl.ParticipantEntitiesInfo if gid_size == 16
                                              else idl.ParticipantEntitiesInfo24, dds.DISCOVERY,
                                              dds.ros_topic_userdata(graph.RIHS01))
@@ -147,7 +148,11 @@ class Topics:
         self.announce()
 
     def announce(self) -> None:
-        """Tell the ROS graph this node's name and endpoints (ros_discovery_info)."""
+        """Tell the ROS graph this node's name and endpoints (ros_discovery_info); while ``held``,
+        once when it ends."""
+        if self.held:
+            self.changed = True
+            return
         self._announcer.write(graph.participant_entities_info(
             self.participant.gid, self.namespace, self.node, [r.gid for r in self.readers.values()],
             [w.gid for w in self.writers.values()], self.gid_size))
@@ -208,10 +213,11 @@ class RecordPublisher:
             if self.clock.readers:
                 write(self.clock, CLOCK_PACKER.pack(stamp))
         tf_values: list[float] | None = [] if self.tf.readers else None
+        arriving = [name for name in sample.states if name in self.arriving]
+        if arriving:
+            self._arrive_all(arriving, sample, stamp)
         robots = self.robots
         for name, state in sample.states.items():
-            if name in self.arriving:
-                self.arrive(self.arriving.pop(name), state, stamp)
             robot = robots.get(name)
             if robot is None:  # a robot that was in the world before the bridge opened
                 continue
@@ -233,6 +239,21 @@ class RecordPublisher:
                 write(self.tf, packer.pack(tf_values))
         if sample.movers and tf_values is not None:  # the movers' frames, in a message of their own
             write(self.tf, tf_static(stamp, mover_transforms(sample.movers)))
+
+    def _arrive_all(self, arriving: list[str], sample: Sample, stamp: tuple[int, int]) -> None:
+        """The robots new in this sample, the node announced and /tf_static sent once for all of
+        them (a fleet's first sample: once, not once per robot with every robot so far)."""
+        topics = self.topics
+        topics.held = True
+        try:
+            for name in arriving:
+                self.arrive(self.arriving.pop(name), sample.states[name], stamp, statics=False)
+        finally:
+            topics.held = False
+            if topics.changed:
+                topics.changed = False
+                topics.announce()
+        self.publish_statics(stamp)
 
     def reading(self, reading: Reading) -> None:
         """A sensor reading on its bag topic, built only while someone reads it (a camera's image
@@ -275,9 +296,10 @@ class RecordPublisher:
         else:
             self.topics.unsent += 1
 
-    def arrive(self, plan: RobotPlan, state: RobotState, stamp: tuple[int, int]) -> None:
-        """A robot's topics, description and fixed frames, and its /cmd_vel reader if it drives;
-        a robot whose namespace ROS 2 cannot take (a live spawn's) is left out, and said so."""
+    def arrive(self, plan: RobotPlan, state: RobotState, stamp: tuple[int, int], statics: bool = True) -> None:
+        """A robot's topics, description and fixed frames (sent now unless ``statics`` is False),
+        and its /cmd_vel reader if it drives; a robot whose namespace ROS 2 cannot take (a live
+        spawn's) is left out, and said so."""
         namespace = plan.namespace
         try:
             names.check_namespace(namespace)
@@ -297,9 +319,10 @@ class RecordPublisher:
                                         self.topics.writer(names.join(namespace, ground_truth.TOPIC), ODOMETRY),
                                         ground_truth.packer(messages.frames.base_frame))
         self.topics.publish(names.join(namespace, "robot_description"), STRING, messages.description(), dds.LATCHED)
-        statics = messages.statics(state)
-        self.statics[plan.name] = statics if self.world_frame else statics[1:]
-        self.publish_statics(stamp)
+        frames = messages.statics(state)
+        self.statics[plan.name] = frames if self.world_frame else frames[1:]
+        if statics:
+            self.publish_statics(stamp)
         if plan.drive is not None:
             name, topic = plan.name, names.join(namespace, "cmd_vel")
             # The bytes go to the bridge as they came: it checks them (ros2/inputs.py) and counts what it drops.

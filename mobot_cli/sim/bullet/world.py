@@ -334,7 +334,7 @@ class World(MoversDoor):
         del self._robots[name]
         self._contacts.forget(name)
         if self._sensing is not None:
-            self._sensing.forget(name)
+            self._sensing.forget(name, robot.body)
         self._clearance.pop(name, None)
         self._health.forget(name)
         if self._stage is not None:

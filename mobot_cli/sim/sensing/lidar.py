@@ -1,11 +1,14 @@
 """Lidar rays: beam directions as Gazebo lays them out, and one batched cast for every scan due.
 
 Every scan due at a step is cast together: all their rays against the static world in one
-Embree call (sim/sensing/raycast.py), then only the rays that pass through another robot's bounding
-box (in front of the static hit) go to PyBullet's ``rayTestBatch``, in batches as large as it
-allows, with its worker threads on. A robot never sees itself: a ray that meets its own
-links is cast on from just beyond the hit, so links in front of the sensor are transparent,
-as they are to a real sensor mounted clear of its robot.
+Embree call (sim/sensing/raycast.py), then, up to their static hits, at the other robots' collision
+triangles where they are now, a second Embree scene made for the cast (sim/sensing/robot_scene.py).
+A robot whose shapes cannot be made into triangles (and every robot when the static world has
+no Embree scene) is left to PyBullet's ``rayTestBatch``: the rays that pass through its bounding
+box (in front of the hits so far) go to it, in batches as large as it allows, with its worker
+threads on. A robot never sees itself: a ray that meets its own links is cast on from just
+beyond the hit, so links in front of the sensor are transparent, as they are to a real sensor
+mounted clear of its robot.
 
 Scans that only the static world can be in the way of (one robot in the world) may also be
 cast later, many at once (``cast_scans``): the same numbers as one by one.
@@ -23,6 +26,7 @@ import numpy as np
 from mobot_cli.plan import RayAxis, SensorSpec
 from mobot_cli.sim.pb import p
 from mobot_cli.sim.sensing.raycast import StaticScene
+from mobot_cli.sim.sensing.robot_scene import RobotRays
 
 # PyBullet refuses larger batches ("Number of rays exceed the maximum batch size"): measured,
 # 16383 rays come back and 16384 give an empty answer.
@@ -91,8 +95,9 @@ class ScanJob:
 
 
 def cast(cid: int, scene: StaticScene | None, jobs: list[ScanJob],
-         robot_boxes: dict[int, tuple[np.ndarray, np.ndarray]]) -> list[np.ndarray]:
-    """Ranges (float32, (V, H), +inf for no return) of every job, cast in one batch."""
+         robot_boxes: dict[int, tuple[np.ndarray, np.ndarray]], robots: RobotRays | None = None) -> list[np.ndarray]:
+    """Ranges (float32, (V, H), +inf for no return) of every job, cast in one batch: ``robots``
+    (with the static scene) are cast at with Embree, the robots of ``robot_boxes`` by PyBullet."""
     # float32 throughout, as the ray engine and LaserScan take them (10 um at 100 m): a 360-beam
     # scan must cost far less than the physics between two scans, so a lone scan (the usual
     # case) goes through without joining or splitting arrays.
@@ -104,6 +109,10 @@ def cast(cid: int, scene: StaticScene | None, jobs: list[ScanJob],
         lengths = np.concatenate([job.beams.lengths32 for job in jobs])
     if scene is not None and scene.complete:
         t = scene.cast(origins, dirs, lengths)
+        if robots is not None and robots.bodies:
+            sensors = np.array([job.position for job in jobs], dtype=float)
+            ranges = np.array([job.spec.range_max for job in jobs], dtype=float)
+            np.minimum(t, robots.cast(origins, dirs, np.minimum(t, lengths), _owners(jobs), sensors, ranges), out=t)
         boxes = _within_reach(robot_boxes, jobs)
         candidates = _near_robots(origins, dirs, np.minimum(t, lengths), _owners(jobs), boxes) if boxes else ()
         mask = ROBOT_GROUP

@@ -4,8 +4,8 @@ A lidar's rays meet two kinds of things: the static world, which never moves, an
 which do. PyBullet's ``rayTestBatch`` answers both but spends 3-8 us a ray in the bundled
 house (its broadphase walk and the Python tuples it returns), so a 360-beam scan at 10 Hz
 would cost more than the physics. Embree traces the same static triangles at about 9 M
-rays/s (bench/bench_sensors.py), so the static world is cast here and only rays that can
-reach a robot go to PyBullet (sim/sensing/lidar.py).
+rays/s (bench/bench_sensors.py), so the static world is cast here, and the robots as a small
+scene of their own made at each cast (sim/sensing/robot_scene.py, from ``shape_triangles`` too).
 
 Shapes become triangles as PyBullet collides with them: boxes exactly, cylinders, capsules
 and spheres as polygons whose faces lie within ``ROUND_TOLERANCE`` of the true surface,

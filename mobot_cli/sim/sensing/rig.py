@@ -198,6 +198,7 @@ class Sensing:
         self._waiting: _Waiting | None | bool = None  # False: no scene to wait for (PyBullet casts)
         self.renderer, self.notices, self.step_now = renderer, notices if notices is not None else [], step_now
         self._cameras = None  # sim/sensing/camera.py's Cameras, made for the first camera
+        self._robot_shapes = None  # sim/sensing/robot_scene.py's RobotShapes, made for the first cast among robots
 
     def release(self) -> bool:
         """Let go of the renderer (the world is closing); True when it added bodies to the world."""
@@ -237,9 +238,20 @@ class Sensing:
             rigs[spec.name] = rig
         self.rigs[name] = rigs
 
-    def forget(self, name: str) -> None:
-        """A robot left the world."""
+    def forget(self, name: str, body: int | None = None) -> None:
+        """A robot (its PyBullet body) left the world."""
         self.rigs.pop(name, None)
+        if body is not None and self._robot_shapes is not None:
+            self._robot_shapes.forget(body)
+
+    @property
+    def robot_shapes(self):
+        """The robots' collision triangles (sim/sensing/robot_scene.py), made at the first cast among robots."""
+        if self._robot_shapes is None:
+            from mobot_cli.sim.sensing.robot_scene import RobotShapes
+
+            self._robot_shapes = RobotShapes(self.cid)
+        return self._robot_shapes
 
     @property
     def scene(self):
@@ -308,8 +320,14 @@ class Sensing:
         for rig, data in scans:
             rotation = np.array(p.getMatrixFromQuaternion(data.quat), dtype=np.float32).reshape(3, 3)
             jobs.append(lidar.ScanJob(rig.spec, rig.beams, np.array(data.position), rotation, rig.body))
-        boxes = {body: _aabb(self.cid, body) for body in bodies} if len(bodies) > 1 else {}
-        ranges = lidar.cast(self.cid, self.scene, jobs, boxes)
+        boxes, robots = {}, None
+        if len(bodies) > 1:
+            if self.scene is not None and self.scene.complete:  # Embree casts at the robots it can
+                robots = self.robot_shapes.rays(bodies)
+                meshed = set(robots.bodies)
+                bodies = [body for body in bodies if body not in meshed]
+            boxes = {body: _aabb(self.cid, body) for body in bodies}
+        ranges = lidar.cast(self.cid, self.scene, jobs, boxes, robots)
         for (rig, data), values in zip(scans, ranges):
             _see_movers(rig, data, values)
             data._ranges = _lidar_noise(rig, values)  # noqa: SLF001 - behind ScanData.ranges, filled here
