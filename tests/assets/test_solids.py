@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -117,3 +118,15 @@ def test_mobot_map_fills_the_polyline_and_the_cone(world, tmp_path):
     assert cell(0.0, 0.0) == 0
     summary = json.loads(invoke(["check", str(world), "--json"]).stdout)
     assert summary["models"] == 4
+
+
+def test_a_cached_world_whose_made_mesh_was_deleted_is_read_again(world, tmp_path):
+    from mobot_cli.assets.world.worldplan import load_world
+
+    first = load_world(str(world), tmp_path)
+    made = [Path(s.mesh) for b in first.plan.bodies for s in b.shapes if s.kind == "mesh"]
+    assert len(made) == 3 and all(path.exists() for path in made)
+    for path in made:
+        path.unlink()  # someone cleared the cache's meshes/, not its world/
+    again = load_world(str(world), tmp_path)
+    assert all(Path(s.mesh).exists() for b in again.plan.bodies for s in b.shapes if s.kind == "mesh")
