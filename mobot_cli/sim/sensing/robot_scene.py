@@ -1,6 +1,6 @@
 """The robots as a ray-casting scene: their collision shapes as triangles, moved to where they are.
 
-A lidar among other robots must see them, and PyBullet's ``rayTestBatch`` costs 3-8 us a ray;
+A lidar among other robots must see them, and PyBullet's ``rayTestBatch`` answers ray by ray (bench/README.md);
 with a hundred robots within range of each other most rays pass near one. So each robot's
 collision shapes are turned into triangles once, per link, in the link's frame (PyBullet's
 inertial frame, the one ``getLinkState`` poses), as PyBullet collides with them:

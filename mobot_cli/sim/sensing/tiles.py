@@ -2,8 +2,8 @@
 faces cut into tiles (docs/cameras.md).
 
 TinyRenderer draws the bodies in the order they were made and each triangle by testing every
-pixel of its bounding box on the screen (clamped to the image, ~35 ns a pixel here); a pixel
-that passes the depth test is shaded (~75 ns more), again each time a nearer surface reaches it.
+pixel of its bounding box on the screen (clamped to the image); a pixel that passes the depth
+test is shaded, at about twice the test's cost, again each time a nearer surface reaches it.
 So its cost is what the faces cover, shaded as often as surfaces drawn later hide earlier ones,
 plus the bounding boxes' waste. For TinyRenderer the static bodies built from collision shapes
 (SDF worlds' models) are therefore drawn by visual-only copies made at the first image, and their
@@ -21,8 +21,8 @@ own drawing is made transparent (which TinyRenderer skips):
   are): whether an edge is cut depends on the edge alone, so two triangles sharing an edge cut it
   at the same points and the surface stays closed (no cracks); pieces keep their triangle's
   winding (TinyRenderer culls back faces) and carry its face normal at each vertex, as
-  TinyRenderer gives a box's faces and a mesh file without normals. Cutting finer adds a few us
-  per visible triangle: in the bundled house 3 m cost least (1.5 m and 6 m a little more).
+  TinyRenderer gives a box's faces and a mesh file without normals. Cutting finer adds a cost
+  per visible triangle: in the bundled house 3 m cost least (bench/README.md).
 * The copies have no collision shape: rays, contacts and physics never meet them; the collision
   shapes stay as they are. Meshes are read with trimesh (a dependency already) from the file
   PyBullet loaded, scaled and posed as their shapes.
@@ -30,9 +30,8 @@ own drawing is made transparent (which TinyRenderer skips):
   each body's shapes 16 to a PyBullet body) and checked (no joints, no mass, the plan's pose): at
   the first doubt the rest stay drawn as they are. Bodies with a plane, or of URDF text, stay too.
 
-In the bundled house this drew a 320 x 240 frame in 15-20 % less CPU time, the same pixels (RGB
-byte for byte, depth within 0.2 mm) at every pose tried; in the AWS small house, whose meshes
-are mostly small triangles already, ~2 % (bench/README.md).
+The pixels are the same as the collision shapes' drawing (RGB byte for byte, depth within
+0.2 mm, tests/sim/sensing/test_tiles.py); what it saves per world is in bench/README.md.
 """
 
 from __future__ import annotations
