@@ -19,12 +19,29 @@ def contains(polygon, x: float, y: float) -> bool:
     return inside
 
 
-def area(polygon) -> float:
-    """The area enclosed by a simple polygon (shoelace formula), whatever its winding."""
+def signed_area(polygon) -> float:
+    """The shoelace area of a simple polygon: positive when its points go counter-clockwise."""
     n = len(polygon)
     twice = sum(polygon[i][0] * polygon[(i + 1) % n][1] - polygon[(i + 1) % n][0] * polygon[i][1]
                 for i in range(n))
-    return abs(twice) / 2.0
+    return twice / 2.0
+
+
+def area(polygon) -> float:
+    """The area enclosed by a simple polygon (shoelace formula), whatever its winding."""
+    return abs(signed_area(polygon))
+
+
+ROUND_TOLERANCE = 0.0005  # m: largest gap between a round surface and the polygons standing for it
+MIN_SIDES, MAX_SIDES = 16, 512
+
+
+def circle_sides(radius: float, most: int = MAX_SIDES) -> int:
+    """Polygon sides for a circle of ``radius`` (at least MIN_SIDES, at most ``most``) so that no
+    side lies further than ROUND_TOLERANCE inside the circle."""
+    if radius <= ROUND_TOLERANCE:
+        return MIN_SIDES
+    return int(min(most, max(MIN_SIDES, math.ceil(math.pi / math.acos(1.0 - ROUND_TOLERANCE / radius)))))
 
 
 def box_polygon(xmin: float, xmax: float, ymin: float, ymax: float) -> list[Point]:

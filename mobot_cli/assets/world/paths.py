@@ -100,11 +100,13 @@ class SdfPaths:
         if path in self._trees:
             return self._trees[path]
         parser = etree.XMLParser(remove_comments=True, remove_pis=True, resolve_entities=False)
-        expanded = path.name.endswith(".xacro")
+        from mobot_cli.assets.description.xacro import is_xacro
+
+        expanded = False
         try:
             data = path.read_bytes()
-            # nav2's depot.sdf is xacro by its content, not its name (nav2 runs xacro on it first)
-            expanded = expanded or b"<xacro:" in data
+            # by its name or its content, as a robot description: nav2's depot.sdf is xacro inside
+            expanded = is_xacro(path, data.decode("utf-8", errors="replace"))
             data = self._expanded(path) if expanded else data
             root = etree.fromstring(gazebo_xml_bytes(declaration_first(data)), parser, base_url=str(path))
         except OSError as exc:

@@ -6,7 +6,7 @@ Each becomes an OBJ file in the cache (keyed by its numbers) and from there a me
 Gazebo's (gz-common's MeshManager): a cone along z with its base at -length/2 and its apex at
 +length/2; an ellipsoid of three radii about its centre; a polyline's closed outline extruded
 from z = 0 to ``height``. Round surfaces are polygons within ``ROUND_TOLERANCE`` of the true
-one, as the lidar's triangles of round primitives are (sim/sensing/raycast.py).
+one, as the lidar's triangles of round primitives are (common/polygon.py's circle_sides).
 
 A polyline's caps are triangulated by ear clipping, one outline at a time: an outline inside
 another is a second prism, not a hole (Gazebo triangulates all of them together and leaves
@@ -19,21 +19,16 @@ import math
 
 import numpy as np
 
-ROUND_TOLERANCE = 0.0005  # m
-MIN_SEGMENTS, MAX_SEGMENTS = 16, 256
+from mobot_cli.common.polygon import circle_sides, contains, signed_area
 
-
-def segments(radius: float) -> int:
-    """Polygon sides for a circle of ``radius`` within ROUND_TOLERANCE."""
-    if radius <= ROUND_TOLERANCE:
-        return MIN_SEGMENTS
-    n = math.ceil(math.pi / math.acos(1.0 - ROUND_TOLERANCE / radius))
-    return int(min(max(n, MIN_SEGMENTS), MAX_SEGMENTS))
+# Sides of a circle at most: an ellipsoid has half as many rings, and PyBullet refuses a mesh of
+# about 130,000 vertices (256 x 128 stays well below)
+MAX_SIDES = 256
 
 
 def cone(radius: float, length: float) -> tuple[np.ndarray, np.ndarray]:
     """Vertices and triangles of a cone: base circle at z = -length/2, apex at +length/2."""
-    n = segments(radius)
+    n = circle_sides(radius, MAX_SIDES)
     angles = np.arange(n) * (2.0 * math.pi / n)
     rim = np.stack([radius * np.cos(angles), radius * np.sin(angles), np.full(n, -length / 2.0)], axis=1)
     vertices = np.vstack([rim, [[0.0, 0.0, length / 2.0], [0.0, 0.0, -length / 2.0]]])
@@ -47,7 +42,7 @@ def cone(radius: float, length: float) -> tuple[np.ndarray, np.ndarray]:
 
 def ellipsoid(radii: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
     """Vertices and triangles of an ellipsoid: a latitude-longitude sphere scaled by the radii."""
-    n = segments(max(radii))
+    n = circle_sides(max(radii), MAX_SIDES)
     rings = max(n // 2, 8)
     vertices = [(0.0, 0.0, radii[2])]
     for k in range(1, rings):
@@ -80,7 +75,7 @@ def polyline(outlines: list[list[tuple[float, float]]], height: float) -> tuple[
     rings = [_ring(points) for points in outlines]
     rings = [ring for ring in rings if len(ring) >= 3]
     for ring in rings:
-        if _area(ring) < 0.0:
+        if signed_area(ring) < 0.0:
             ring.reverse()  # counter-clockwise: caps face out
         base, n = len(vertices), len(ring)
         vertices += [(x, y, 0.0) for x, y in ring] + [(x, y, height) for x, y in ring]
@@ -89,7 +84,7 @@ def polyline(outlines: list[list[tuple[float, float]]], height: float) -> tuple[
         for i in range(n):
             j = (i + 1) % n
             faces += [(base + i, base + j, base + n + j), (base + i, base + n + j, base + n + i)]
-    nested = any(i != j and _inside(rings[i][0], rings[j]) for i in range(len(rings)) for j in range(len(rings)))
+    nested = any(i != j and contains(rings[j], *rings[i][0]) for i in range(len(rings)) for j in range(len(rings)))
     return np.array(vertices, dtype=float).reshape(-1, 3), np.array(faces, dtype=np.int64).reshape(-1, 3), nested
 
 
@@ -103,10 +98,6 @@ def _ring(points: list[tuple[float, float]]) -> list[tuple[float, float]]:
     while len(ring) > 1 and math.dist(ring[0], ring[-1]) <= 1e-4:
         ring.pop()
     return ring
-
-
-def _area(ring: list[tuple[float, float]]) -> float:
-    return 0.5 * sum(x0 * y1 - x1 * y0 for (x0, y0), (x1, y1) in zip(ring, ring[1:] + ring[:1]))
 
 
 def _ears(ring: list[tuple[float, float]]) -> list[tuple[int, int, int]]:
@@ -138,16 +129,6 @@ def _cross(a, b, c) -> float:
 
 def _in_triangle(p, a, b, c) -> bool:
     return _cross(a, b, p) >= 0.0 and _cross(b, c, p) >= 0.0 and _cross(c, a, p) >= 0.0
-
-
-def _inside(point, ring) -> bool:
-    """Whether ``point`` is inside the polygon ``ring`` (even-odd)."""
-    x, y = point
-    inside = False
-    for (x0, y0), (x1, y1) in zip(ring, ring[1:] + ring[:1]):
-        if (y0 > y) != (y1 > y) and x < x0 + (y - y0) * (x1 - x0) / (y1 - y0):
-            inside = not inside
-    return inside
 
 
 def obj_text(vertices: np.ndarray, faces: np.ndarray, what: str) -> str:

@@ -34,16 +34,15 @@ import threading
 
 import numpy as np
 
+from mobot_cli.common.polygon import circle_sides
 from mobot_cli.common.transforms import compose_poses, quat_matrix
 from mobot_cli.plan import StaticShape, WorldPlan
 
-ROUND_TOLERANCE = 0.0005  # m: largest gap between a round surface and its polygon
 SLICE_BAND = 0.5  # m: rays spanning more height than this are cast at the whole scene
 SLICE_MARGIN = 0.05  # m added below and above the rays' heights when a slice is cut
 SLICE_SHARE = 0.8  # a slice holding more of the triangles than this is not worth its BVH
 MAX_SLICES = 4  # slices kept per scene (a robot on a ramp cuts new ones as it climbs)
 FLOAT_SLACK = 0.001  # m: a slice also keeps triangles this close to its band (Embree rounds in float32)
-MIN_SEGMENTS, MAX_SEGMENTS = 16, 512
 _BOX = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
                  [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
 
@@ -229,17 +228,10 @@ def shape_triangles(shape: StaticShape) -> np.ndarray:
     return np.zeros((0, 3, 3))
 
 
-def _segments(radius: float) -> int:
-    """Polygon sides so that no face is further than ROUND_TOLERANCE inside the circle."""
-    if radius <= ROUND_TOLERANCE:
-        return MIN_SEGMENTS
-    return int(min(MAX_SEGMENTS, max(MIN_SEGMENTS, math.ceil(math.pi / math.acos(1.0 - ROUND_TOLERANCE / radius)))))
-
-
 def _arc(radius: float, z0: float, side: float) -> list[tuple[float, float]]:
     """A quarter circle of (z, r) from the pole (side -1: bottom, +1: top) to the equator at z0,
     ordered bottom to top."""
-    n = max(2, _segments(radius) // 4)
+    n = max(2, circle_sides(radius) // 4)
     angles = [math.pi / 2.0 * k / n for k in range(n + 1)]  # 0 at the equator
     points = [(z0 + side * radius * math.sin(a), radius * math.cos(a)) for a in angles]
     return points[::-1] if side < 0 else points
@@ -247,7 +239,7 @@ def _arc(radius: float, z0: float, side: float) -> list[tuple[float, float]]:
 
 def _lathe(radius: float, profile: list[tuple[float, float]], caps: bool) -> np.ndarray:
     """A surface of revolution about z from a (z, r) profile, bottom to top."""
-    n = _segments(radius)
+    n = circle_sides(radius)
     a = np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)
     ring = np.stack([np.cos(a), np.sin(a)], axis=1)
     rings = [np.column_stack([ring * r, np.full(n, z)]) for z, r in profile]

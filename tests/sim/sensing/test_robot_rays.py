@@ -14,11 +14,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from mobot_cli.common.polygon import ROUND_TOLERANCE
 from mobot_cli.plan import RayAxis, StaticBody, StaticShape, WorldPlan
 from mobot_cli.sim.bullet.world import World
 from mobot_cli.sim.pb import p
 from mobot_cli.sim.sensing import lidar
-from mobot_cli.sim.sensing.raycast import ROUND_TOLERANCE, StaticScene
+from mobot_cli.sim.sensing.raycast import StaticScene
 from mobot_cli.sim.sensing.rig import _aabb
 from mobot_cli.sim.sensing.robot_scene import RobotShapes, robot_links
 from tests.sim.sensor_world import lidar as lidar_spec
