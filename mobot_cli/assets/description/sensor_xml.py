@@ -175,16 +175,21 @@ class SensorXml:
         clip 0.1 .. 100 m); the topic is its plugin's ``<camera_name>`` (gazebo_ros publishes
         ``CAMERA_NAME/image_raw``), gz's ``<topic>`` (without a last ``/image_raw``: the images
         go there), else the sensor's name. Without ``<update_rate>``, a ROS 1 plugin's
-        ``<updateRate>`` sets the rate, as gazebo_ros_openni_kinect and gazebo_ros_camera do."""
+        ``<updateRate>`` sets the rate, as gazebo_ros_openni_kinect and gazebo_ros_camera do.
+        Without a Gazebo classic ROS plugin the sensor is read as gz-sim reads it: a ``depth``
+        sensor is a depth camera, and ``<depth_camera><clip>`` bounds its depth image."""
         mean, stddev = self.noise("camera/noise", "gaussian")
         values = dict(width=self.integer("camera/image/width", 320), height=self.integer("camera/image/height", 240),
                       image_format=self.text("camera/image/format") or "R8G8B8",
                       horizontal_fov=self.number("camera/horizontal_fov", 1.047),
                       clip_near=self.number("camera/clip/near", 0.1), clip_far=self.number("camera/clip/far", 100.0),
                       noise_mean=mean, noise_stddev=stddev)
-        if self.text("camera/depth_camera/clip/far"):  # gz-sensors: a depth image's own clip, when given
-            values.update(depth_near=self.number("camera/depth_camera/clip/near", 0.0),
-                          depth_far=self.number("camera/depth_camera/clip/far", 0.0))
+        if self.plugin is None or not _gazebo_ros_plugin(self.plugin):  # gz-sim reads the sensor
+            if self.type == "depth":
+                values["type"] = "depth_camera"  # as gz-sim does: a depth image only
+            if self.text("camera/depth_camera/clip/far"):  # gz-sensors: a depth image's own clip, when given
+                values.update(depth_near=self.number("camera/depth_camera/clip/near", 0.0),
+                              depth_far=self.number("camera/depth_camera/clip/far", 0.0))
         name = ""
         if self.plugin is not None:
             name = (self.plugin.findtext("camera_name") or self.plugin.findtext("cameraName") or "").strip()
@@ -285,6 +290,13 @@ def _range_plugin(plugin: ET.Element) -> bool:
     ROS 1 gazebo_ros_range) or hector's sonar."""
     filename = plugin.get("filename", "").lower()
     return _range_output(plugin) or "gazebo_ros_range" in filename or "sonar" in filename
+
+
+def _gazebo_ros_plugin(plugin: ET.Element) -> bool:
+    """Gazebo classic's ROS camera plugin family (gazebo_ros_camera, gazebo_ros_openni_kinect, ...),
+    which publishes a depth sensor's image as well as its depth, cut off by its own parameters."""
+    name = plugin.get("filename", "").lower()
+    return "gazebo_ros" in name or "kinect" in name or "realsense" in name
 
 
 def _plugin_number(plugin: ET.Element, tag: str) -> float | None:

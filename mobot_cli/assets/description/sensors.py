@@ -242,13 +242,6 @@ def _check_placement(xml: SensorXml, links: dict[str, ET.Element],
                                hint="Give every sensor of a robot its own name.")
 
 
-def _gazebo_ros_plugin(plugin) -> bool:
-    """Whether a sensor's plugin is Gazebo classic's ROS camera plugin family (gazebo_ros_camera,
-    gazebo_ros_openni_kinect, ...), which publishes a depth sensor's image as well as its depth."""
-    name = (plugin.get("filename", "") if plugin is not None else "").lower()
-    return "gazebo_ros" in name or "kinect" in name or "realsense" in name
-
-
 def _read(xml: SensorXml) -> DescribedSensor:
     values = dict(name=xml.name, type=xml.type, link=xml.link,
                   rate_hz=xml.number("update_rate", 0.0), topic=xml.topic(), frame_id=xml.frame())
@@ -264,10 +257,6 @@ def _read(xml: SensorXml) -> DescribedSensor:
         values.update(xml.imu())
     elif kind in CAMERA_KINDS:
         values.update(xml.camera())
-        if _gazebo_ros_plugin(xml.plugin):  # Gazebo classic: the plugin's own cut-offs, not gz's depth clip
-            values.pop("depth_near", None), values.pop("depth_far", None)
-        elif xml.type == "depth":
-            values["type"] = "depth_camera"  # gz-sim's reading of it: a depth image only
         if values["image_format"] not in IMAGE_FORMATS:
             xml.notices.append(Notice(f"sensor '{xml.name}' has <format> '{values['image_format'][:40]}': "
                                       "mobot renders it as rgb8", xml.location("camera/image/format")))
