@@ -11,6 +11,12 @@ Holonomic bases (holonomic.py) are found first: a gz-sim MecanumDrive plugin (ki
 a gazebo_ros planar_move or omni-drive plugin (kind "omni", ground-truth odometry, as the plugin
 publishes the model's pose), or, without any drive plugin, two or more wheels a side whose
 Gazebo friction is that of mecanum rollers (process.roller_links).
+
+Without a Gazebo drive plugin, a ros2_control plugin's drive controller (ros2_control.py) comes
+before the geometry (source "ros2_control"): diff_drive_controller drives its named wheels as a
+diff or skid drive with its radius, separation and multipliers, mecanum_drive_controller as a
+mecanum base; steering controllers need the car the geometry finds, and tricycle, bicycle and
+omni-wheel controllers are refused, as their plugins are.
 """
 
 from __future__ import annotations
@@ -19,7 +25,7 @@ import dataclasses
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from mobot_cli.assets.description import holonomic, steering
+from mobot_cli.assets.description import holonomic, ros2_control, steering
 from mobot_cli.assets.description.frames import LinkTree, movable_joint
 from mobot_cli.assets.description.plugin_values import disagreement as _disagreement
 from mobot_cli.assets.description.plugin_values import number as _number
@@ -41,23 +47,26 @@ def detect_drive(urdf: ET.Element | str, *, notices: list[Notice] | None = None,
 
 
 def detect(urdf: ET.Element | str, *, notices: list[Notice] | None = None,
-           source: Path | None = None) -> Detected:
+           source: Path | None = None, controllers: tuple[ros2_control.Controller, ...] = ()) -> Detected:
     """The robot's drive (diff, skid, mecanum, omni or Ackermann) with its wheel torque limit
     (torque.py), or the name of one mobot refuses.
 
     Plugins first, as Gazebo drives by them: Ackermann, then the ones mobot refuses (tracks,
-    tricycles), then mecanum and planar-move, then diff-drive and skid-steer, then other drive
-    plugins (refused); without one, steering joints make a car (steering.py), wheels with roller
-    friction a mecanum base (holonomic.py), and wheels fixed to the body a diff or skid drive.
+    tricycles), then mecanum and planar-move, then diff-drive and skid-steer, then a drive
+    controller of ``controllers`` (what the robot's ros2_control plugin loads:
+    ros2_control.read), then other drive plugins (refused); without one, steering joints make a
+    car (steering.py), wheels with roller friction a mecanum base (holonomic.py), and wheels
+    fixed to the body a diff or skid drive.
     """
     robot = ET.fromstring(urdf) if isinstance(urdf, str) else urdf
-    found = _detect(robot, notices if notices is not None else [], source)
+    found = _detect(robot, notices if notices is not None else [], source, controllers)
     if found.spec is None:
         return found
     return dataclasses.replace(found, spec=with_torque(robot, found.spec))
 
 
-def _detect(robot: ET.Element, notices: list[Notice], source: Path | None) -> Detected:
+def _detect(robot: ET.Element, notices: list[Notice], source: Path | None,
+            controllers: tuple[ros2_control.Controller, ...]) -> Detected:
     tree = LinkTree(robot)
     if tree.root is None:
         return Detected(None)
@@ -73,10 +82,13 @@ def _detect(robot: ET.Element, notices: list[Notice], source: Path | None) -> De
     if plugin is not None:
         spec = _from_plugin(plugin, tree, notices, source)
         if spec is not None:
-            holonomic.note_rollers(spec, robot, tree, plugin, notices, source)
+            label = plugin.get("filename") or plugin.get("name") or "diff-drive"
+            holonomic.note_rollers(spec, robot, tree, f"the {label} plugin", notices, source)
             return Detected(spec)
     else:
-        found = steering.unknown_drive(robot, notices, source)
+        found = _from_controllers(controllers, robot, tree, notices, source)
+        if found is None:
+            found = steering.unknown_drive(robot, notices, source)
         if found is not None:
             return found
     found = steering.from_geometry(tree, robot, notices, source)
@@ -133,17 +145,8 @@ def _from_plugin(plugin: ET.Element, tree: LinkTree, notices: list[Notice],
         notices.append(Notice(f"the {label} plugin names no left or right joints; "
                               "detecting the wheels from the URDF instead", Location(file=file)))
         return None
-    wheels: list[tuple[str, Wheel]] = []
-    for side, names in (("left", left), ("right", right)):
-        for name in dict.fromkeys(names):
-            movable_joint(tree, name, f"the {label} plugin names {side} wheel joint",
-                          Location(file=file, key=f"gazebo.plugin.{side}_joint"), "Name a continuous wheel joint.")
-            wheels.append((side, wheel(tree, name, strict=False)))  # type: ignore[arg-type]
-    for side, found in wheels:
-        if (side == "left") != (found.y > 0):
-            notices.append(Notice(f"the {label} plugin drives '{found.joint}' as a {side} wheel "
-                                  f"but it sits at y = {found.y:+.3f} m in the root frame",
-                                  Location(file=file)))
+    wheels = _named_wheels(f"the {label} plugin", {"left": left, "right": right}, tree, notices, file,
+                           lambda side: Location(file=file, key=f"gazebo.plugin.{side}_joint"))
     radius = _number(plugin, "wheel_radius")
     diameter = _number(plugin, "wheelDiameter", "wheel_diameter")
     if radius is None and diameter is not None:
@@ -151,10 +154,119 @@ def _from_plugin(plugin: ET.Element, tree: LinkTree, notices: list[Notice],
     torque = _number(plugin, "wheelTorque", "max_wheel_torque", "torque")
     accel = _number(plugin, "wheelAcceleration", "max_wheel_acceleration")
     separation = _number(plugin, "wheelSeparation", "wheel_separation")
-    _disagreement(label, wheels, radius, separation, notices, file)
+    _disagreement(f"the {label} plugin", wheels, radius, separation, notices, file)
     return _spec([w for _, w in wheels], source="plugin", notices=notices, file=file,
                  sides={w.joint: s for s, w in wheels}, radius=radius,
                  separation=separation, torque=torque, rim_accel=accel)
+
+
+def _named_wheels(who: str, named: dict[str, list[str]], tree: LinkTree, notices: list[Notice],
+                  file: Path | None, where) -> list[tuple[str, Wheel]]:
+    """(side, wheel) for each joint a plugin or controller names on a side ("left", "right"):
+    a located error for a name that is no movable joint, a notice for one on the other side."""
+    wheels: list[tuple[str, Wheel]] = []
+    for side, names in named.items():
+        for name in dict.fromkeys(names):
+            movable_joint(tree, name, f"{who} names {side} wheel joint", where(side), "Name a continuous wheel joint.")
+            wheels.append((side, wheel(tree, name, strict=False)))  # type: ignore[arg-type]
+    for side, found in wheels:
+        if side in ("left", "right") and (side == "left") != (found.y > 0):
+            notices.append(Notice(f"{who} drives '{found.joint}' as a {side} wheel "
+                                  f"but it sits at y = {found.y:+.3f} m in the root frame",
+                                  Location(file=file)))
+    return wheels
+
+
+# ros2_control drive controllers (the type's package) mobot refuses, with the drive they make.
+REFUSED_CONTROLLERS = {"tricycle_controller": "tricycle drive", "tricycle_steering_controller": "tricycle drive",
+                       "bicycle_steering_controller": "bicycle drive",
+                       "omni_wheel_drive_controller": "omni-wheel drive"}
+# mecanum_drive_controller's wheel joints (upstream names, then the older *_wheel_name ones).
+_MECANUM_JOINTS = (("left", "front_left"), ("right", "front_right"), ("left", "rear_left"), ("right", "rear_right"))
+
+
+def _from_controllers(controllers: tuple[ros2_control.Controller, ...], robot: ET.Element, tree: LinkTree,
+                      notices: list[Notice], source: Path | None) -> Detected | None:
+    """The drive of the first drive controller the robot's ros2_control plugin loads; None
+    without one (or when it names no wheels: the geometry decides, with a notice)."""
+    for controller in controllers:
+        package, label = controller.package, f"the {controller.package} controller '{controller.name}'"
+        if package in REFUSED_CONTROLLERS:
+            return steering.refusal(REFUSED_CONTROLLERS[package], f"{controller.type}, {controller.file}",
+                                    notices, source)
+        if package == "ackermann_steering_controller":
+            found = steering.from_geometry(tree, robot, notices, source)
+            if found is not None and found.spec is not None and found.spec.kind == "ackermann":
+                return Detected(dataclasses.replace(found.spec, source="ros2_control"))
+            return steering.refusal("Ackermann steering whose steered wheels mobot cannot find",
+                                    f"{controller.type}, {controller.file}", notices, source)
+        if package == "diff_drive_controller":
+            spec = _from_diff_controller(controller, label, tree, notices)
+        elif package == "mecanum_drive_controller":
+            spec = _from_mecanum_controller(controller, label, tree, notices)
+        else:
+            continue
+        if spec is not None:
+            if spec.kind != "mecanum":
+                holonomic.note_rollers(spec, robot, tree, label, notices, source)
+            return Detected(spec)
+        return None
+    return None
+
+
+def _from_diff_controller(controller: ros2_control.Controller, label: str, tree: LinkTree,
+                          notices: list[Notice]) -> DriveSpec | None:
+    """diff_drive_controller: its wheels, radius, separation and multipliers, as it drives them."""
+    named = {side: ros2_control.names(controller, f"{side}_wheel_names") for side in ("left", "right")}
+    if not named["left"] or not named["right"]:
+        notices.append(Notice(f"{label} names no left or right wheels; detecting the wheels from the "
+                              "URDF instead", controller.location()))
+        return None
+    wheels = _named_wheels(label, named, tree, notices, controller.file,
+                           lambda side: controller.location(f"{side}_wheel_names"))
+    radius = ros2_control.number(controller, "wheel_radius")
+    separation = ros2_control.number(controller, "wheel_separation")
+    _disagreement(f"the parameters of {label.removeprefix('the ')}", wheels, radius, separation, notices,
+                  controller.file, says="say", whose="the controller's")
+    spec = _spec([w for _, w in wheels], source="ros2_control", notices=notices, file=controller.file,
+                 sides={w.joint: s for s, w in wheels}, radius=radius, separation=separation)
+    if spec is None:
+        return None
+    multipliers = {}
+    given = ros2_control.number(controller, "wheel_separation_multiplier")
+    if given is not None:  # as the controller turns; else mobot's skid-steer default
+        multipliers["wheel_separation_multiplier"] = given
+    left = ros2_control.number(controller, "left_wheel_radius_multiplier") or 1.0
+    right = ros2_control.number(controller, "right_wheel_radius_multiplier") or 1.0
+    if left != right:
+        notices.append(Notice(f"{label} has left and right wheel radius multipliers {left:g} and {right:g}: "
+                              f"mobot uses one for both, their mean {(left + right) / 2:g}", controller.location()))
+    if left != 1.0 or right != 1.0:
+        multipliers["wheel_radius_multiplier"] = (left + right) / 2
+    return dataclasses.replace(spec, **multipliers)
+
+
+def _from_mecanum_controller(controller: ros2_control.Controller, label: str, tree: LinkTree,
+                             notices: list[Notice]) -> DriveSpec | None:
+    """mecanum_drive_controller: its four wheels; radius and spacing from it where it gives them."""
+    named: dict[str, list[str]] = {"left": [], "right": []}
+    for side, corner in _MECANUM_JOINTS:
+        named[side] += ros2_control.names(controller, f"{corner}_wheel_command_joint_name", f"{corner}_wheel_name")
+    if len(named["left"]) != 2 or len(named["right"]) != 2:
+        notices.append(Notice(f"{label} does not name its four wheels; detecting the wheels from the URDF "
+                              "instead", controller.location()))
+        return None
+    front = {"left": "front_left", "right": "front_right"}
+    wheels = _named_wheels(label, named, tree, notices, controller.file,
+                           lambda side: controller.location(f"{front[side]}_wheel_command_joint_name"))
+    radius = ros2_control.number(controller, "kinematics.wheels_radius", "wheel_radius")
+    separation = ros2_control.number(controller, "wheel_separation_y")
+    _disagreement(f"the parameters of {label.removeprefix('the ')}", wheels, radius, separation, notices,
+                  controller.file, says="say", whose="the controller's")
+    return holonomic.holonomic_spec("mecanum", [w for _, w in wheels], {w.joint: s for s, w in wheels},
+                                    odometry="encoder", source="ros2_control", notices=notices,
+                                    file=controller.file, radius=radius, separation=separation,
+                                    wheelbase=ros2_control.number(controller, "wheel_separation_x"))
 
 
 def _spec(wheels: list[Wheel], *, source: str, notices: list[Notice], file: Path | None,

@@ -77,7 +77,7 @@ def from_plugin(element: ET.Element, robot: ET.Element, tree: LinkTree, notices:
     radius = number(element, "wheel_radius")
     separation = number(element, "wheel_separation")
     wheelbase = number(element, "wheelbase", "wheel_base")
-    disagreement(label, [(sides[w.joint], w) for w in found], radius, separation, notices, file)
+    disagreement(f"the {label} plugin", [(sides[w.joint], w) for w in found], radius, separation, notices, file)
     return holonomic_spec("mecanum", found, sides, odometry="encoder", source="plugin", notices=notices,
                           file=file, radius=radius, separation=separation, wheelbase=wheelbase)
 
@@ -96,16 +96,16 @@ def from_rollers(found: list[Wheel], robot: ET.Element, tree: LinkTree, notices:
                           file=file)
 
 
-def note_rollers(spec: DriveSpec, robot: ET.Element, tree: LinkTree, element: ET.Element,
+def note_rollers(spec: DriveSpec, robot: ET.Element, tree: LinkTree, who: str,
                  notices: list[Notice], file: Path | None) -> None:
-    """One notice when a diff or skid plugin drives wheels that have roller friction."""
+    """One notice when a diff or skid plugin or controller (``who``: "the X plugin") drives
+    wheels that have roller friction."""
     rollers = roller_links(robot)
     children = {j.name: j.child for j in tree.joints}
     rolling = [j for j in spec.left_joints + spec.right_joints if children.get(j) in rollers]
     if rolling:
-        label = element.get("filename") or element.get("name") or "diff-drive"
-        notices.append(Notice(f"wheels {', '.join(rolling)} have roller friction (mecanum), but the "
-                              f"{label} plugin drives them as a diff drive: so does mobot, with their "
+        notices.append(Notice(f"wheels {', '.join(rolling)} have roller friction (mecanum), but "
+                              f"{who} drives them as a diff drive: so does mobot, with their "
                               "larger mu along the rolling direction", Location(file=file)))
 
 

@@ -33,9 +33,11 @@ def number(plugin: ET.Element, *tags: str) -> float | None:
     return None
 
 
-def disagreement(label: str, wheels: list[tuple[str, Wheel]], radius: float | None,
-                  separation: float | None, notices: list[Notice], file: Path | None) -> None:
-    """One warning when the plugin's radius or separation is > 2 % off the wheel geometry."""
+def disagreement(who: str, wheels: list[tuple[str, Wheel]], radius: float | None,
+                 separation: float | None, notices: list[Notice], file: Path | None, *,
+                 says: str = "says", whose: str = "the plugin's") -> None:
+    """One warning when a plugin's (``who``: "the X plugin") or a controller's radius or
+    separation is > 2 % off the wheel geometry."""
     parts, effects = [], []
     left = [w.y for side, w in wheels if side == "left"]
     right = [w.y for side, w in wheels if side == "right"]
@@ -54,7 +56,7 @@ def disagreement(label: str, wheels: list[tuple[str, Wheel]], radius: float | No
             effects.append(f"drives {_percent(measured / radius)} than commanded")
     if parts:
         notices.append(Notice(
-            f"the {label} plugin says {'; and '.join(parts)}: mobot uses the plugin's values, "
+            f"{who} {says} {'; and '.join(parts)}: mobot uses {whose} values, "
             f"as Gazebo does, so the robot {' and '.join(effects)} (set drive: wheel_radius / "
             "wheel_separation to use the geometry)", Location(file=file)))
 

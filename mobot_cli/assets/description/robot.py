@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from mobot_cli.assets import sandbox
+from mobot_cli.assets.description import ros2_control
 from mobot_cli.assets.description.check import check_geometry, check_tree, check_with_yourdfpy, parse_urdf
 from mobot_cli.assets.description.drive import detect
 from mobot_cli.assets.description.frames import LinkTree, floats
@@ -159,7 +160,9 @@ def _build(source: Path, expansion: Expansion, resolver: ResourceResolver,
     sensors = read_sensors(robot, source, notices)
     apply_friction(robot)
     bounds = collision_bounds(LinkTree(robot), source, notices)
-    detected = detect(robot, notices=notices, source=source)
+    controllers, parameter_files = ros2_control.read(robot, resolver, source, notices)
+    found.update(parameter_files)  # an edited parameters file makes the cached entry stale, as a mesh does
+    detected = detect(robot, notices=notices, source=source, controllers=controllers)
     drive = detected.spec
     if drive is None and not detected.refused:  # a refused drive was named in its own notice
         notices.append(Notice(NO_DRIVE, Location(file=source)))
