@@ -159,3 +159,15 @@ def test_a_sonar_takes_its_plugins_noise_and_field_of_view(tmp_path):
     (us,) = _robot(tmp_path, sonar).sensors
     assert (us.kind, us.reading_noise_stddev, us.field_of_view, us.topic) == ("range", 0.15, 0.5, "achilles/sonarLeft")
     assert us.max_angle == pytest.approx(math.atan2(0.5, 2.99))
+
+
+@pytest.mark.parametrize("filename, name", [("libignition-gazebo-imu-system.so", "ignition::gazebo::systems::Imu"),
+                                            ("gz-sim-imu-system", "gz::sim::systems::Imu")])
+def test_gz_sim_imu_system_is_not_a_sensor_of_its_own(tmp_path, filename, name):
+    """Leo rover's way: the gz-sim Imu system beside the imu <sensor> it serves; nothing left out."""
+    system = f'<gazebo><plugin filename="{filename}" name="{name}"/></gazebo>'
+    sensor = ('<gazebo reference="base_link"><sensor name="leo_imu" type="imu"><update_rate>100</update_rate>'
+              '</sensor></gazebo>')
+    robot = _robot(tmp_path, system + sensor)
+    assert [(s.name, s.kind, s.rate_hz) for s in robot.sensors] == [("leo_imu", "imu", 100.0)]
+    assert not any("left out" in n.message for n in robot.notices)

@@ -9,7 +9,8 @@ and not 0; gazebo_ros_imu's ``gaussianNoise`` on both). Their drift, bias, scale
 offsets are not modelled. A plugin on the link of an imu <sensor>, or on its topic, is that
 same IMU (turtlebot3's descriptions carry both): the <sensor> is read, the plugin not again.
 GPS, magnetometer, altimeter and similar plugins mobot does not simulate are named with the
-left-out sensors.
+left-out sensors. gz-sim's systems (``gz-sim-imu-system``, ``ignition::gazebo::systems::Imu``)
+are not sensors: they serve the model's <sensor> elements, which are read as such.
 """
 
 from __future__ import annotations
@@ -34,6 +35,8 @@ def plugin_sensors(robot: ET.Element, source: Path, skipped: list[str]) -> list[
             filename = plugin.get("filename", "").strip()
             stem = Path(filename).name.lower()
             name = plugin.get("name", "").strip() or Path(filename).stem.removeprefix("lib")
+            if _gz_system(filename, name):  # gz-sim's Imu, NavSat ... systems serve <sensor> elements
+                continue
             if "imu" in stem and "imu_sensor" not in stem:  # imu_sensor is a <sensor> plugin
                 imu = _imu(plugin, stem, name, robot, source)
                 if imu is None:
@@ -45,6 +48,14 @@ def plugin_sensors(robot: ET.Element, source: Path, skipped: list[str]) -> list[
             if what is not None and "ros" in stem:
                 skipped.append(f"{what} plugin '{name}' ({Path(filename).name})")
     return out
+
+
+def _gz_system(filename: str, name: str) -> bool:
+    """Whether a plugin is a gz-sim (ignition-gazebo) system: ``gz-sim-imu-system``,
+    ``libignition-gazebo-imu-system.so``, ``gz::sim::systems::Imu``. Such a system makes the
+    model's <sensor> elements of its kind work; it is no sensor of its own."""
+    stem = Path(filename).name.lower().removesuffix(".so")
+    return stem.endswith("-system") or "::systems::" in name
 
 
 def _imu(plugin: ET.Element, stem: str, name: str, robot: ET.Element, source: Path) -> dict | None:
