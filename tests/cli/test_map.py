@@ -223,3 +223,27 @@ def test_a_world_with_a_fuel_include_maps_with_skip_missing(tmp_path, boxes, mon
     assert "include left out" in invoke(["map", str(world), "--out", tmp_path / "m2", "--skip-missing"]).stderr
     plain, *_ = mapped(str(boxes), tmp_path / "plain")
     assert np.array_equal(data, plain)  # the boxes' map, the cone left out
+
+
+SLAB = """<?xml version='1.0'?>
+<sdf version='1.6'><world name='slab'>
+  <model name='ground'><static>true</static><pose>0 0 -0.37 0 0 0</pose><link name='l'>
+    <collision name='c'><geometry><box><size>20 20 0.86</size></box></geometry></collision></link></model>
+  <model name='wall'><static>true</static><pose>2 0 {wall_z} 0 0 0</pose><link name='l'>
+    <collision name='c'><geometry><box><size>0.2 4 1</size></box></geometry></collision></link></model>
+</world></sdf>
+"""
+
+
+@pytest.mark.parametrize("top", [0.06, 0.2])
+def test_a_ground_slab_just_above_zero_is_the_floor_not_its_underside(tmp_path, top):
+    """AWS's racetrack: no ground plane, a thick ground whose top is 0.06 m up and whose underside is
+    0.8 m down. Mapped without robots, the floor is its top: the ground is free, the wall on it not."""
+    world = tmp_path / "slab.sdf"
+    world.write_text(SLAB.replace("-0.37", f"{top - 0.43:g}").format(wall_z=top + 0.5))
+    done = invoke(["map", str(world), "--out", tmp_path / "m", "--origin", "-6,-6", "--size", "12,12"])
+    assert done.exit_code == 0 and f"above the floor at z = {top:g} m" in done.stdout
+    data, res, origin = load_map(tmp_path / "m" / "map.yaml")
+    assert cell(data, res, origin, 0.0, 0.0) == 0 and cell(data, res, origin, -5.0, 5.0) == 0
+    assert cell(data, res, origin, 2.0, 0.0) == 100 and cell(data, res, origin, 2.0, 1.9) == 100
+    assert (data == 100).sum() == pytest.approx(4 * 80, rel=0.1)  # the wall's 0.2 x 4 m, nothing of the ground

@@ -17,16 +17,24 @@ from mobot_cli.plan import StaticShape, WorldPlan
 # A surface this far above a robot's root link may still be its floor (the root's own height
 # above the floor is what the robot's wheels and chassis add; base_footprint adds none).
 ABOVE_ROOT = 0.05  # m
+# Probing a world without robots (at the origin, z = 0): a ground slab whose top is a little
+# above z = 0 (AWS's racetrack: 0.06 m) is the floor, not its underside far below.
+RAISED = 0.25  # m: how far above z = 0 such a top may be
+FAR_BELOW = 0.1  # m: a floor found this far below z = 0 gives way to it
 Start = tuple[float, float, float]  # x, y, z of a robot's root link when it started
 
 
-def floor_level(world: WorldPlan, starts: list[Start], shapes_of) -> float:
+def floor_level(world: WorldPlan, starts: list[Start], shapes_of, probe: bool = False) -> float:
     """The lowest of the floors under ``starts`` (0 without starts or without a floor found).
 
     ``shapes_of(body)`` gives a body's StaticShapes (floorplan reads URDF bodies for it).
+    ``probe``: the starts are no robots but points to look down from (the origin of a world
+    mapped without robots), so a surface up to RAISED above one counts as its floor when the
+    floor below it lies more than FAR_BELOW down.
     """
     if not starts:
         return 0.0
+    reach = ABOVE_ROOT + (RAISED if probe else 0.0)
     found: list[list[float]] = [[0.0] if world.ground_plane and z + ABOVE_ROOT >= 0.0 else []
                                 for _, _, z in starts]
     for body in world.bodies:
@@ -34,9 +42,18 @@ def floor_level(world: WorldPlan, starts: list[Start], shapes_of) -> float:
             xyz, quat = compose_poses((body.xyz, body.quat), (shape.xyz, shape.quat))
             surfaces = _surfaces(shape, xyz, quat)  # one mesh read per shape, for every start
             for heights, (x, y, z) in zip(found, starts):
-                heights.extend(h for h in surfaces(x, y) if h <= z + ABOVE_ROOT)
-    floors = [max(heights) for heights in found if heights]
+                heights.extend(h for h in surfaces(x, y) if h <= z + reach)
+    floors = [_floor(heights, z) for heights, (_, _, z) in zip(found, starts) if heights]
     return min(floors) if floors else 0.0
+
+
+def _floor(heights: list[float], z: float) -> float:
+    """The floor among surfaces met looking down from ``z`` (and, probing, a little above it)."""
+    below = [h for h in heights if h <= z + ABOVE_ROOT]
+    if below and max(below) >= z - FAR_BELOW:
+        return max(below)
+    above = [h for h in heights if h > z + ABOVE_ROOT]
+    return min(above) if above else max(below)
 
 
 def _surfaces(shape: StaticShape, xyz, quat):

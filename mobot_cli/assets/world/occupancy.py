@@ -43,10 +43,13 @@ class Occupancy:
 
 def floor_under(world: WorldPlan, starts: list[tuple[float, float, float]]) -> float:
     """The floor the band is measured from: under ``starts`` (robots' root links), or under the
-    origin at z = 0 without them (a floor at or a little above z = 0, or z = 0 itself)."""
+    origin at z = 0 without them (a floor at or a little above z = 0, or a ground's top up to
+    floorlevel.RAISED above it when the floor below lies far down, or z = 0 itself)."""
     from mobot_cli.assets.world.floorlevel import floor_level
 
-    return floor_level(world, list(starts) or [(0.0, 0.0, 0.0)], body_shapes)
+    if starts:
+        return floor_level(world, list(starts), body_shapes)
+    return floor_level(world, [(0.0, 0.0, 0.0)], body_shapes, probe=True)
 
 
 def world_bounds(world: WorldPlan, band: tuple[float, float]) -> tuple[float, float, float, float] | None:
