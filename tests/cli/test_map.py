@@ -247,3 +247,25 @@ def test_a_ground_slab_just_above_zero_is_the_floor_not_its_underside(tmp_path, 
     assert cell(data, res, origin, 0.0, 0.0) == 0 and cell(data, res, origin, -5.0, 5.0) == 0
     assert cell(data, res, origin, 2.0, 0.0) == 100 and cell(data, res, origin, 2.0, 1.9) == 100
     assert (data == 100).sum() == pytest.approx(4 * 80, rel=0.1)  # the wall's 0.2 x 4 m, nothing of the ground
+
+
+def test_goals_and_coverage_on_a_raised_ground_see_its_walls_not_the_ground(tmp_path):
+    """The same slab world in a scenario: a goal on the ground is free (it was 'inside' the ground,
+    its top in the band above z = 0), one in the wall is refused naming it, and coverage lanes fill
+    the ground around the wall."""
+    from mobot_cli.errors import ScenarioError
+    from mobot_cli.scenario.prepare import prepare
+
+    (tmp_path / "slab.sdf").write_text(SLAB.format(wall_z=0.56))
+    scenario = tmp_path / "s.yaml"
+    body = ("version: 1\nworld: slab.sdf\nduration: 5\nrobots:\n  - name: r\n    description: mobot\n"
+            "    pose: {{x: 0, y: 0, z: 0.07}}\n    commands:\n      - {{at: 0.5, {goal}}}\n")
+    scenario.write_text(body.format(goal="goto: {x: 1.0, y: 0.5}"))
+    assert prepare(scenario).plan.robots[0].commands[0].points == ((1.0, 0.5),)
+    scenario.write_text(body.format(goal="goto: {x: 2.0, y: 0.5}"))
+    with pytest.raises(ScenarioError, match="goto \\(2, 0.5\\) is inside world model 'wall'"):
+        prepare(scenario)
+    scenario.write_text(body.format(goal="coverage: {area: [0.5, 3.5, -1, 1], spacing: 0.5}"))
+    lanes = prepare(scenario).plan.robots[0].commands[0].points
+    assert min(x for x, _ in lanes) < 1.0 and max(x for x, _ in lanes) > 3.0  # both sides of the wall
+    assert not any(abs(x - 2.0) < 0.2 and abs(y) < 2.1 for x, y in lanes)  # none in it (around its end)

@@ -7,6 +7,8 @@ plan in trajectory.png: static geometry reaching into the band above the floor.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from mobot_cli.assets.world.floorplan import BAND, body_shadows, body_shapes, shape_shadow
@@ -17,16 +19,43 @@ from mobot_cli.plan import WorldPlan
 from mobot_cli.sim.parts import describe
 
 
+def probed_floor(world: WorldPlan) -> float:
+    """The floor under the world's origin, looked for from z = 0 (floorlevel's probe): where the
+    band is measured from when no robot stands in the world yet. Kept for the last few worlds
+    (a mesh world takes tens of ms, and every goal point asks)."""
+    try:
+        hash(world)
+    except TypeError:  # a world holding a list somewhere: not kept
+        return _probe(world)
+    return _kept_probe(world)
+
+
+def _probe(world: WorldPlan) -> float:
+    from mobot_cli.assets.world.floorlevel import floor_level
+
+    return floor_level(world, [(0.0, 0.0, 0.0)], body_shapes, probe=True)
+
+
+_kept_probe = functools.lru_cache(maxsize=8)(_probe)
+
+
+def ground_band(world: WorldPlan) -> tuple[float, float]:
+    """BAND above the world's probed floor, in absolute heights."""
+    floor = probed_floor(world)
+    return (floor + BAND[0], floor + BAND[1])
+
+
 def obstacle_at(world: WorldPlan, x: float, y: float) -> str | None:
     """How messages name the static body whose shadow holds (x, y), and which of its collisions
-    (see sim/parts.py), or None in free space."""
-    for label, polygons in body_shadows(world):
+    (see sim/parts.py), or None in free space; the band above the probed floor."""
+    band = ground_band(world)
+    for label, polygons in body_shadows(world, band):
         if any(_holds(polygon, x, y) for polygon in polygons):
-            return label + _part(world, label, x, y)
+            return label + _part(world, label, x, y, band)
     return None
 
 
-def _part(world: WorldPlan, label: str, x: float, y: float) -> str:
+def _part(world: WorldPlan, label: str, x: float, y: float, band: tuple[float, float]) -> str:
     """", its collision 'model::link::collision', a ... box centred at (...)", or "": found again
     shape by shape, for the message only."""
     for body in world.bodies:
@@ -34,7 +63,7 @@ def _part(world: WorldPlan, label: str, x: float, y: float) -> str:
             continue
         for shape in body_shapes(body):
             xyz, quat = compose_poses((body.xyz, body.quat), (shape.xyz, shape.quat))
-            if any(_holds(polygon, x, y) for polygon in shape_shadow(shape, xyz, quat, BAND)):
+            if any(_holds(polygon, x, y) for polygon in shape_shadow(shape, xyz, quat, band)):
                 text = describe(body, shape)
                 return f", {text}" if text else ""
     return ""
@@ -44,8 +73,10 @@ def _holds(polygon, x: float, y: float) -> bool:
     return len(polygon) >= 3 and _near_box(polygon, x, y) and contains(polygon, x, y)
 
 
-def obstacle_mask(world: WorldPlan, grid: Grid, band: tuple[float, float] = BAND) -> np.ndarray:
-    """The cells of ``grid`` that some static body's shadow (in ``band``, absolute heights) covers."""
+def obstacle_mask(world: WorldPlan, grid: Grid, band: tuple[float, float] | None = None) -> np.ndarray:
+    """The cells of ``grid`` that some static body's shadow (in ``band``, absolute heights; BAND
+    above the probed floor when not given) covers."""
+    band = band or ground_band(world)
     mask = grid.empty()
     xmax, ymax = grid.x0 + grid.nx * grid.cell, grid.y0 + grid.ny * grid.cell
     for _, polygons in body_shadows(world, band):

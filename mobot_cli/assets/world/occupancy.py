@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mobot_cli.assets.world.floorplan import BAND, body_shadows, body_shapes
-from mobot_cli.assets.world.freespace import obstacle_mask
+from mobot_cli.assets.world.freespace import obstacle_mask, probed_floor
 from mobot_cli.common.raster import Grid, dilate
 from mobot_cli.plan import WorldPlan
 
@@ -49,7 +49,7 @@ def floor_under(world: WorldPlan, starts: list[tuple[float, float, float]]) -> f
 
     if starts:
         return floor_level(world, list(starts), body_shapes)
-    return floor_level(world, [(0.0, 0.0, 0.0)], body_shapes, probe=True)
+    return probed_floor(world)
 
 
 def world_bounds(world: WorldPlan, band: tuple[float, float]) -> tuple[float, float, float, float] | None:
