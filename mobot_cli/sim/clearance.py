@@ -3,8 +3,13 @@
 Measured from the collision shapes (PyBullet's closest points), not from any sensor, so it
 works for robots without sensors. What the robot stands on does not count: a closest point
 whose normal points steeply up into the robot (as sim/contacts.py tells support from
-collision) is a floor, a ramp or a mesh floor. Bodies further than ``reach`` are not looked
-at: the answer is then +inf ("further than reach").
+collision) is a floor, a ramp or a mesh floor. Nor do the edges of a mesh floor's own
+triangles: beside the triangle a wheel or caster stands on, PyBullet reports the neighbours'
+edges and corners millimetres away, their normals anywhere from vertical to horizontal (AWS's
+hospital floor gave a clearance of 0.011 m in an open corridor). So a point on a body the robot
+stands on, at the floor's height (within SEAM of its support in the same query), is floor too.
+(A wall of the same mesh as the floor still counts above that height.) Bodies further than
+``reach`` are not looked at: the answer is then +inf ("further than reach").
 """
 
 from __future__ import annotations
@@ -17,6 +22,9 @@ from mobot_cli.sim.pb import p
 
 # How much further than the tightest clearance asked for the distances are measured.
 REACH_MARGIN = 0.5  # m
+# A closest point on the robot's floor this close to its height is an edge of the floor's own
+# triangles (below the 0.02 m where maps start to count obstacles).
+SEAM = 0.01  # m
 
 
 def nearest(cid: int, body: int, reach: float, robots: Iterable[int], label: Callable[[int], str]) -> tuple[float, str]:
@@ -28,12 +36,19 @@ def nearest(cid: int, body: int, reach: float, robots: Iterable[int], label: Cal
     hi = [max(b[1][i] for b in boxes) + reach for i in range(3)]
     near = {uid for uid, _ in p.getOverlappingObjects(lo, hi, physicsClientId=cid) or ()} - {body}
     robots = set(robots)
-    best, what = math.inf, ""
+    floors: dict[int, float] = {}  # body it stands on -> the height of its support
+    found = []
     for other in sorted(near):
         for point in p.getClosestPoints(body, other, reach, physicsClientId=cid):
-            distance, normal_up = point[8], point[7][2]  # contactNormalOnB: from the other body into ours
+            distance, normal_up, height = point[8], point[7][2], point[6][2]  # normal on B: into ours
             if other not in robots and normal_up > SUPPORT_NORMAL_Z:
-                continue  # what it stands on
-            if distance < best:
-                best, what = distance, label(other)
+                floors[other] = max(floors.get(other, -math.inf), height)  # what it stands on
+            else:
+                found.append((distance, other, height))
+    best, what = math.inf, ""
+    for distance, other, height in found:
+        if height <= floors.get(other, -math.inf) + SEAM:
+            continue  # an edge of the floor's own triangles
+        if distance < best:
+            best, what = distance, label(other)
     return best, what

@@ -76,3 +76,36 @@ def test_bad_clearance_items_are_located_errors(tmp_path, item, message):
     path.write_text(path.read_text() + f"expect:\n  - {item}\n")
     code, out, err = astuple(invoke(["check", path]))
     assert code == 2 and message in err and "scenario.yaml:" in err and "Traceback" not in err
+
+
+def _tiles(cell: float = 0.25, half: float = 3.0) -> str:
+    """A flat floor of triangles (OBJ), ``cell`` m squares from -half to +half, as a mesh floor is."""
+    n = int(round(2 * half / cell))
+    vertices = [f"v {-half + i * cell:g} {-half + j * cell:g} 0" for j in range(n + 1) for i in range(n + 1)]
+    faces = []
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i + 1
+            faces += [f"f {a} {a + 1} {a + n + 2}", f"f {a} {a + n + 2} {a + n + 1}"]
+    return "\n".join(vertices + faces) + "\n"
+
+
+@pytest.mark.parametrize("engine", ["bullet", "kinematic"])
+def test_the_edges_of_a_mesh_floors_triangles_are_no_obstacle(tmp_path, engine):
+    """AWS's hospital floor is a mesh: beside the triangle the caster stands on, PyBullet reports
+    the neighbours' edges 1-2 cm away, normals tilted up to 50 deg. They are floor, not obstacles."""
+    (tmp_path / "tiles.obj").write_text(_tiles())
+    (tmp_path / "tiles.sdf").write_text(
+        "<?xml version='1.0'?><sdf version='1.6'><world name='tiles'><model name='floor'><static>true</static>"
+        "<link name='l'><collision name='c'><geometry><mesh><uri>tiles.obj</uri></mesh></geometry></collision>"
+        "</link></model></world></sdf>")
+    scenario = tmp_path / "s.yaml"
+    scenario.write_text(f"version: 1\nworld: tiles.sdf\nduration: 4\nphysics: {{engine: {engine}}}\nrobots:\n"
+                        "  - name: mobot\n    description: mobot\n    pose: {x: -1.0, y: 0.1, yaw: 0.3}\n"
+                        "    commands:\n      - {at: 0.5, linear: 0.3, angular: 0.2, for: 3.0}\n"
+                        "expect:\n  - {robot: mobot, clearance: {min: 0.5}}\n  - {robot: mobot, collisions: 0}\n")
+    done = invoke(["run", scenario, "--out", tmp_path / "out", "--quiet"])
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert done.exit_code == 0, summary["expectations"]["results"]
+    assert summary["robots"]["mobot"]["distance"] > 0.8  # it drove across many triangles' edges
+    assert summary["expectations"]["results"][0]["happened"] == "stayed more than 1 m from everything"
