@@ -8,6 +8,7 @@ movers' shapes where they were when it was taken (``Snapshot``), the nearer hit 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -56,14 +57,15 @@ def cast(snap: Snapshot, origins: np.ndarray, dirs: np.ndarray, lengths: np.ndar
     ray's line goes through (a lidar's centre, its rays starting ``range_min`` out), when there is one."""
     if not len(snap):
         return None
-    centre = origins.mean(axis=0)
-    spread = float(np.abs(origins - centre).max()) + float(lengths.max())
+    centre = origins.mean(axis=0) if apex is None else apex
+    longest = float(lengths.max())
+    spread = float(np.abs(origins - centre).max()) + longest
     near = np.hypot(snap.x - centre[0], snap.y - centre[1]) <= spread + snap.r
     if not near.any():
         return None
     o, d = np.asarray(origins, dtype=float), np.asarray(dirs, dtype=float)
     round_ = near & (snap.kind != BOX)
-    best = _round(o, d, snap, np.flatnonzero(round_), seen, apex) if round_.any() else np.full(len(o), np.inf)
+    best = _round(o, d, snap, np.flatnonzero(round_), seen, apex, longest) if round_.any() else np.full(len(o), np.inf)
     for i in np.flatnonzero(near & (snap.kind == BOX)).tolist():
         np.minimum(best, _box(o, d, snap, i), out=best)
     best[best > lengths] = np.inf
@@ -72,10 +74,11 @@ def cast(snap: Snapshot, origins: np.ndarray, dirs: np.ndarray, lengths: np.ndar
 
 SEEN_SLACK = 1e-3  # m: a pair is skipped only when its mover is this much beyond what the ray saw
 APEX_SLACK = 1e-6  # m added to a mover's radius for the angle it spans from the rays' apex
+Z_SLACK = 1e-6  # m around the heights rays pass through, for the parts of a shape they may meet
 
 
 def _round(o: np.ndarray, d: np.ndarray, snap: Snapshot, index: np.ndarray,
-           seen: np.ndarray | None = None, apex: np.ndarray | None = None) -> np.ndarray:
+           seen: np.ndarray | None = None, apex: np.ndarray | None = None, reach_along: float = np.inf) -> np.ndarray:
     """Rays (n) against upright cylinders (with caps) and capsules (m of them): the nearest hit of
     each ray. First the (ray, mover) pairs: the rays whose heading lies within the angle a mover
     spans seen from the rays' starts (sorted headings, one search for every mover and every 2 pi
@@ -101,7 +104,7 @@ def _round(o: np.ndarray, d: np.ndarray, snap: Snapshot, index: np.ndarray,
     start = np.searchsorted(ordered, (bearing - half + shift).ravel())
     count = np.searchsorted(ordered, (bearing + half + shift).ravel(), side="right") - start
     total = int(count.sum())
-    owner = np.repeat(np.tile(np.arange(len(index)), 3), count)
+    owner = np.repeat(np.arange(3 * len(index)) % len(index), count)
     ray = order[np.repeat(start - (np.cumsum(count) - count), count) + np.arange(total)]
     if not flat.all():  # rays straight up or down: every mover over their start
         up = np.flatnonzero(~flat)
@@ -113,13 +116,16 @@ def _round(o: np.ndarray, d: np.ndarray, snap: Snapshot, index: np.ndarray,
         ray, owner = ray[keep], owner[keep]
     if not len(ray):
         return out
-    hits = _round_pairs(o[ray], d[ray], snap, index[owner])
+    hits = _round_pairs(o[ray], d[ray], snap, index[owner], reach_along)
     np.minimum.at(out, ray, hits)
     return out
 
 
-def _round_pairs(o: np.ndarray, d: np.ndarray, snap: Snapshot, i: np.ndarray) -> np.ndarray:
-    """The distance along each ray to its own cylinder or capsule (``i``: one mover a ray)."""
+def _round_pairs(o: np.ndarray, d: np.ndarray, snap: Snapshot, i: np.ndarray, reach: float = np.inf) -> np.ndarray:
+    """The distance along each ray to its own cylinder or capsule (``i``: one mover a ray). Hits
+    further than ``reach`` along a ray may be left out (+inf): the parts of the shapes (side, end
+    spheres, caps) that no ray comes to within it are not tested (a 2D lidar below a person's
+    waist meets only the bottom sphere)."""
     if not d[:, 2].any():
         return _level_pairs(o, d, snap, i)
     r, z0, z1 = snap.r[i], snap.z0[i], snap.z1[i]
@@ -128,22 +134,38 @@ def _round_pairs(o: np.ndarray, d: np.ndarray, snap: Snapshot, i: np.ndarray) ->
     lo, hi = (z0 + r, z1 - r) if people else (np.where(capsule, z0 + r, z0), np.where(capsule, z1 - r, z1))
     dx, dy, dz = d[:, 0], d[:, 1], d[:, 2]
     px, py, oz = o[:, 0] - snap.x[i], o[:, 1] - snap.y[i], o[:, 2]
+    # the heights the rays pass through within ``reach``: a part wholly above or below them is missed
+    low, high = -np.inf, np.inf
+    if math.isfinite(reach):
+        rise = dz * reach
+        low = float((oz + np.minimum(rise, 0.0)).min()) - Z_SLACK
+        high = float((oz + np.maximum(rise, 0.0)).max()) + Z_SLACK
+
+    def meets(bottom: np.ndarray, top: np.ndarray) -> bool:
+        return low <= float(top.max()) and float(bottom.min()) <= high
+
     r2 = r * r
-    a = dx * dx + dy * dy
     b = px * dx + py * dy
     c = px * px + py * py - r2
+    out = np.full(len(o), np.inf)
     with np.errstate(invalid="ignore", divide="ignore"):
-        disc = b * b - a * c
-        t = (-b - np.sqrt(disc)) / a
-        z = oz + t * dz
-        out = np.where((disc >= 0.0) & (a > 1e-12) & (t >= 0.0) & (z >= lo) & (z <= hi), t, np.inf)
+        if meets(lo, hi):  # the side
+            a = dx * dx + dy * dy
+            disc = b * b - a * c
+            t = (-b - np.sqrt(disc)) / a
+            z = oz + t * dz
+            out = np.where((disc >= 0.0) & (a > 1e-12) & (t >= 0.0) & (z >= lo) & (z <= hi), t, np.inf)
         for zc in (lo, hi) if people or capsule.any() else ():  # a capsule's end spheres
+            if not meets(zc - r, zc + r):
+                continue
             pz = oz - zc
             bs = b + pz * dz
             ds = bs * bs - (c + pz * pz)
             ts = -bs - np.sqrt(ds)
             np.minimum(out, np.where((ds >= 0.0) & (ts >= 0.0) & capsule, ts, np.inf), out=out)
         for zc in (z0, z1) if not people else ():  # a cylinder's caps
+            if not meets(zc, zc):
+                continue
             tc = (zc - oz) / dz
             qx, qy = px + tc * dx, py + tc * dy
             hit = (tc >= 0.0) & (qx * qx + qy * qy <= r2) & ~capsule
