@@ -118,6 +118,8 @@ class Crowd:
         self._count = int(self.walkers.sum())
         self._rays = np.tile(np.column_stack([self.wall_dir, np.zeros(WALL_RAYS)]), (self._count, 1))
         self._reach = np.full(len(self._rays), WALL_REACH)
+        self._origins = np.empty((self._count, WALL_RAYS, 3))  # where the wall rays start, filled each time
+        self._scripted = [(i, script) for i, script in enumerate(self.scripts) if script is not None]
         self._index = np.arange(len(plans))[self._w]  # the walkers' places among the movers
         self._fixed = np.flatnonzero(~self.walkers)  # the other movers'
         self._people_xy = None  # the people's places as complex numbers, made when first asked after a move
@@ -132,11 +134,10 @@ class Crowd:
         dt = 1.0 / self.rate_hz
         self.updates += 1
         self._people_xy = None
-        for i, script in enumerate(self.scripts):
-            if script is not None:
-                x, y, yaw = script.pose((step - self.born[i]) * dt)
-                self.pos[i] = (x, y)
-                self.yaw[i] = yaw
+        for i, script in self._scripted:
+            x, y, yaw = script.pose((step - self.born[i]) * dt)
+            self.pos[i] = (x, y)
+            self.yaw[i] = yaw
         if self._count:
             self._walk(step * dt, robots, robot_radius)
 
@@ -163,8 +164,10 @@ class Crowd:
         """The social force on walkers ``w`` now (sim/movers/social.py)."""
         radius = self.radius[w]
         # Walls: WALL_RAYS short rays from each walker, at its WALL_HEIGHT.
-        origins = np.repeat(np.column_stack([pos, self.z0[w] + WALL_HEIGHT]), WALL_RAYS, axis=0)
-        gaps = self.walls(origins, self._rays, self._reach).reshape(self._count, WALL_RAYS)
+        origins = self._origins
+        origins[:, :, :2] = pos[:, None, :]
+        origins[:, :, 2] = (self.z0[w] + WALL_HEIGHT)[:, None]
+        gaps = self.walls(origins.reshape(-1, 3), self._rays, self._reach).reshape(self._count, WALL_RAYS)
         # the other movers push as walkers do; robots as others
         fixed = self._fixed
         others = np.concatenate([self.pos[fixed], robots]) if len(robots) else self.pos[fixed]
