@@ -134,10 +134,12 @@ class MoverStage:
             self._radius[body] = float(np.hypot(hi[0] - lo[0], hi[1] - lo[1]) / 2.0)
         return self._radius[body]
 
-    def social(self, robot, state) -> None:
-        """Fill a robot's state's people figures (sim/state.py)."""
+    def social(self, robot, state, distance: bool) -> None:
+        """Fill a robot's state's people figures (sim/state.py); its distance to people only when
+        ``distance`` (its clearance is watched: what its goals' metrics read), as its clearance."""
         state.people_collisions = robot.people_collisions
-        state.people_distance = self.crowd.people_distance(state.true_x, state.true_y)
+        if distance:
+            state.people_distance = self.crowd.people_distance(state.true_x, state.true_y)
 
     def forget_robot(self, body: int) -> None:
         self._radius.pop(body, None)
