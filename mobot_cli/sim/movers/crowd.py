@@ -147,7 +147,7 @@ class Crowd:
         pos, vel = self.pos[w], self.vel[w]
         to_goal = pos - self.goal[w]
         due = (now >= self.deadline[w]) | (np.einsum("ij,ij->i", to_goal, to_goal) < GOAL_REACHED ** 2)
-        for j in np.flatnonzero(due).tolist():
+        for j in due.nonzero()[0].tolist():
             i = int(index[j])
             self.goal[i] = self._random_point(self.plans[i], self.rngs[i])
             self.deadline[i] = now + math.dist(pos[j], self.goal[i]) / self.speed[i] + PATIENCE

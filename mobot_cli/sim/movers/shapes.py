@@ -65,7 +65,7 @@ def cast(snap: Snapshot, origins: np.ndarray, dirs: np.ndarray, lengths: np.ndar
         return None
     o, d = np.asarray(origins, dtype=float), np.asarray(dirs, dtype=float)
     round_ = near & (snap.kind != BOX)
-    best = _round(o, d, snap, np.flatnonzero(round_), seen, apex, longest) if round_.any() else np.full(len(o), np.inf)
+    best = _round(o, d, snap, round_.nonzero()[0], seen, apex, longest) if round_.any() else np.full(len(o), np.inf)
     for i in np.flatnonzero(near & (snap.kind == BOX)).tolist():
         np.minimum(best, _box(o, d, snap, i), out=best)
     best[best > lengths] = np.inf
@@ -91,7 +91,7 @@ def _round(o: np.ndarray, d: np.ndarray, snap: Snapshot, index: np.ndarray,
     spread = offset if apex is None else APEX_SLACK
     heading = np.arctan2(d[:, 1], d[:, 0])
     flat = np.hypot(d[:, 0], d[:, 1]) > 1e-9
-    order = np.argsort(heading, kind="stable")
+    order = heading.argsort(kind="stable")  # (array methods: no Python wrapper a call, this runs a scan)
     ordered = heading[order]
     dx, dy = snap.x[index] - centre[0], snap.y[index] - centre[1]
     dist = np.hypot(dx, dy)
@@ -101,11 +101,11 @@ def _round(o: np.ndarray, d: np.ndarray, snap: Snapshot, index: np.ndarray,
     half[inside] = np.pi
     bearing = np.arctan2(dy, dx)
     shift = np.array([[0.0], [2 * np.pi], [-2 * np.pi]])  # each mover's bounds as they are and turned once
-    start = np.searchsorted(ordered, (bearing - half + shift).ravel())
-    count = np.searchsorted(ordered, (bearing + half + shift).ravel(), side="right") - start
+    start = ordered.searchsorted((bearing - half + shift).ravel())
+    count = ordered.searchsorted((bearing + half + shift).ravel(), side="right") - start
     total = int(count.sum())
-    owner = np.repeat(np.arange(3 * len(index)) % len(index), count)
-    ray = order[np.repeat(start - (np.cumsum(count) - count), count) + np.arange(total)]
+    owner = (np.arange(3 * len(index)) % len(index)).repeat(count)
+    ray = order[(start - (count.cumsum() - count)).repeat(count) + np.arange(total)]
     if not flat.all():  # rays straight up or down: every mover over their start
         up = np.flatnonzero(~flat)
         near = np.flatnonzero(dist <= reach)

@@ -100,7 +100,7 @@ class MoverStage:
             apart = np.hypot(crowd.pos[:, None, 0] - xy[None, :, 0], crowd.pos[:, None, 1] - xy[None, :, 1])
             gap = (apart - crowd.radius[:, None] - radius[None, :]).min(axis=1)
         cid, bodies = self.cid, self.bodies
-        close = np.flatnonzero(gap <= NEAR + AWAY).tolist()
+        close = (gap <= NEAR + AWAY).nonzero()[0].tolist()
         x, y, yaw = crowd.pos[close, 0].tolist(), crowd.pos[close, 1].tolist(), crowd.yaw[close].tolist()
         for k, i in enumerate(close):
             plan = crowd.plans[i]
