@@ -8,6 +8,7 @@ mover per log row, movers in the order they entered the world: ``pandas.read_csv
 
 from __future__ import annotations
 
+from itertools import chain
 from pathlib import Path
 
 from mobot_cli.record.sinks import named
@@ -41,10 +42,11 @@ class MoversCsvSink(Sink):
         names = tuple(movers)
         if names != self._names:  # one format for a whole row of movers: this runs on every log row
             self._names = names
-            self._format = "".join(f"%.6f,{name},%.6f,%.6f,%.6f\n" for name in names)
-        t = sample.step / self.rate
-        values = [v for pose in movers.values() for v in (t, *pose)]
-        self._rows.append((self._format % tuple(values)).replace("-0.000000", "0.000000"))
+            self._format = "".join(f",{name.replace('%', '%%')},%.6f,%.6f,%.6f\n" for name in names)
+        # every mover's line but its time, in one format; the time, the same on each, put in after
+        body = (self._format % tuple(chain.from_iterable(movers.values()))).replace("-0.000000", "0.000000")
+        t = "%.6f" % (sample.step / self.rate)
+        self._rows.append(t + body.replace("\n", "\n" + t)[:-len(t)])
         if len(self._rows) >= FLUSH_EVERY_ROWS:
             self._flush()
 

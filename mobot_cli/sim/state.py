@@ -47,7 +47,8 @@ class RobotState:
     hit: str = ""  # what its last collision was with, as messages name it ("static body 'box'"); not a column
     # With people in the world (movers of shape person, actors: docs/movers.md): collision events
     # with them (also counted in ``collisions``) and the distance in the plane from the root
-    # link's origin to the nearest person's axis (+inf: no person). Not columns.
+    # link's origin to the nearest person's axis (+inf: no person; measured, as clearance, for a
+    # robot whose clearance is watched: its goals' metrics read it). Not columns.
     people_collisions: int = 0
     people_distance: float = math.inf
 

@@ -38,3 +38,20 @@ def test_add_step_remove_and_record(tmp_path):
     assert names == {"bob", "crate", "w"}
     last = max(float(row["t"]) for row in rows)
     assert {row["name"] for row in rows if float(row["t"]) == last} == {"bob", "w"}
+
+
+@pytest.mark.parametrize("engine", ["bullet", "kinematic"])
+def test_people_distance_is_measured_for_a_robot_with_a_goal_as_its_clearance(tmp_path, engine):
+    """A state's distance to people is what goal metrics read: measured, like its clearance, once
+    the robot drives to a goal (+inf before, as its clearance)."""
+    with Simulation.open("empty", out=tmp_path / "run", overrides=[f"physics.engine={engine}"]) as sim:
+        sim.spawn("r", "mobot", x=0.0, y=0.0)
+        sim.add_mover("bob", path=[[2.0, -1.0], [2.0, 1.0]], mode="pingpong", speed=0.5)
+        sim.run_for(0.5)
+        before = sim.state("r")
+        assert before.people_distance == math.inf and before.clearance == math.inf
+        sim.goto("r", -1.0, 0.0)
+        sim.run_for(0.5)
+        state, (x, y, _) = sim.state("r"), sim.movers()["bob"]
+        assert 1.5 < state.people_distance < 2.5
+        assert state.people_distance == abs(complex(x, y) - complex(state.true_x, state.true_y))

@@ -64,3 +64,26 @@ def test_movers_csv_bag_and_same_bytes_with_the_same_seed(tmp_path):
     # 2.5 s of the 4 s north from (2, -2) to (2, 2), on Gazebo's spline: 4 (3 s^2 - 2 s^3) m, s = 0.625
     assert t == 3_000_000_000 and (x, y) == (2.0, 0.734375)
     assert (a / "trajectory.png").stat().st_size > 0
+
+
+def test_movers_csv_rows_are_one_line_a_mover_as_printf_writes_them(tmp_path):
+    """The rows written in one format a log row are the lines a per-mover ``%.6f`` would write,
+    a negative zero written as 0; a name with '%' in it (a Gazebo actor's may) is written as it is."""
+    from mobot_cli.record.movers_csv import MoversCsvSink
+    from mobot_cli.timeline.records import Sample
+
+    rows = [(0, {"w_0": (1.0, -2.5, 0.1), "50%_cart": (-0.0000001, 3.25, -3.1415926)}),
+            (12, {"w_0": (1.0625, -2.4375, -0.0), "50%_cart": (1e-7, -1234.5678905, 2.0)}),
+            (24, {"w_0": (-0.0000004, 0.0, 0.0)})]  # the cart went
+    sink = MoversCsvSink(tmp_path, 240)
+    for step, movers in rows:
+        sink.write(Sample(step, {}, True, movers))
+    sink.write(Sample(36, {}, True, None))  # not moved: no row
+    sink.close()
+    expected = ["t,name,x,y,yaw"]
+    for step, movers in rows:
+        for name, (x, y, yaw) in movers.items():
+            line = f"{step / 240:.6f},{name},{x:.6f},{y:.6f},{yaw:.6f}"
+            expected.append(line.replace("-0.000000", "0.000000"))
+    assert (tmp_path / "movers.csv").read_text().splitlines() == expected
+    assert "0.000000,50%_cart,0.000000,3.250000,-3.141593" in expected

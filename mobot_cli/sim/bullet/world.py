@@ -440,7 +440,7 @@ class World(MoversDoor):
             state.clearance, state.nearest = clearance.nearest(
                 self._cid, robot.body, self._clearance[name], [r.body for r in self._robots.values()], self.label)
         if self._stage is not None:
-            self._stage.social(robot, state)
+            self._stage.social(robot, state, name in self._clearance)
         return state
 
     def states(self, names) -> dict[str, RobotState]:

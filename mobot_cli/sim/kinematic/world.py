@@ -417,7 +417,7 @@ class KinematicWorld(World):
             return super().states(names)
         if self._stage is not None:
             for name, state in states.items():
-                self._stage.social(movers[name].robot, state)
+                self._stage.social(movers[name].robot, state, False)  # no clearance watched
         return states
 
     def read(self, name: str) -> RobotState:
@@ -429,7 +429,7 @@ class KinematicWorld(World):
                 self._cid, self._robot(name).body, self._clearance[name],
                 [r.body for r in self._robots.values()], self.label)
         if self._stage is not None:
-            self._stage.social(self._robot(name), state)
+            self._stage.social(self._robot(name), state, name in self._clearance)
         return state
 
 

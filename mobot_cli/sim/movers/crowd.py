@@ -62,7 +62,7 @@ class Crowd:
         return len(self.plans)
 
     def names(self) -> list[str]:
-        return [plan.name for plan in self.plans]
+        return list(self._names)
 
     def add(self, plan: MoverPlan, step: int) -> None:
         """A mover enters the world at ``step``, where its script or region puts it."""
@@ -99,6 +99,7 @@ class Crowd:
 
     def _shape_arrays(self) -> None:
         plans = self.plans
+        self._names = [p.name for p in plans]
         self.kind = np.array([KINDS[p.shape] for p in plans], dtype=int)
         box = self.kind == BOX
         self.hx = np.array([p.size[0] / 2.0 if p.shape == "box" else 0.0 for p in plans])
@@ -107,6 +108,7 @@ class Crowd:
         self.radius[box] = np.hypot(self.hx[box], self.hy[box])
         self.z0 = np.array([p.z for p in plans])
         self.z1 = np.array([p.z + (p.size[2] if p.shape == "box" else p.size[1]) for p in plans])
+        self.middle = ((self.z0 + self.z1) / 2.0).tolist()  # each one's centre height
         self.walkers = np.array([p.region is not None for p in plans], dtype=bool)
         self.people = self.kind == KINDS["person"]
         self.accel = np.zeros((len(plans), 2))  # the walkers' social force, as last worked out
@@ -115,6 +117,11 @@ class Crowd:
         self._w = slice(None) if self.walkers.all() else np.flatnonzero(self.walkers)
         self._count = int(self.walkers.sum())
         self._rays = np.tile(np.column_stack([self.wall_dir, np.zeros(WALL_RAYS)]), (self._count, 1))
+        self._reach = np.full(len(self._rays), WALL_REACH)
+        self._origins = np.empty((self._count, WALL_RAYS, 3))  # where the wall rays start, filled each time
+        self._scripted = [(i, script) for i, script in enumerate(self.scripts) if script is not None]
+        self._index = np.arange(len(plans))[self._w]  # the walkers' places among the movers
+        self._fixed = np.flatnonzero(~self.walkers)  # the other movers'
         self._people_xy = None  # the people's places as complex numbers, made when first asked after a move
         self.speed = np.array([p.speed for p in plans])
 
@@ -127,22 +134,20 @@ class Crowd:
         dt = 1.0 / self.rate_hz
         self.updates += 1
         self._people_xy = None
-        for i, script in enumerate(self.scripts):
-            if script is not None:
-                x, y, yaw = script.pose((step - self.born[i]) * dt)
-                self.pos[i] = (x, y)
-                self.yaw[i] = yaw
+        for i, script in self._scripted:
+            x, y, yaw = script.pose((step - self.born[i]) * dt)
+            self.pos[i] = (x, y)
+            self.yaw[i] = yaw
         if self._count:
             self._walk(step * dt, robots, robot_radius)
 
     def _walk(self, now: float, robots: np.ndarray, robot_radius: np.ndarray) -> None:
         # Runs 20 times a simulated second: each line is a numpy call or two on all walkers.
-        w = self._w
-        index = np.arange(len(self.plans))[w]
+        w, index = self._w, self._index
         pos, vel = self.pos[w], self.vel[w]
         to_goal = pos - self.goal[w]
         due = (now >= self.deadline[w]) | (np.einsum("ij,ij->i", to_goal, to_goal) < GOAL_REACHED ** 2)
-        for j in np.flatnonzero(due).tolist():
+        for j in due.nonzero()[0].tolist():
             i = int(index[j])
             self.goal[i] = self._random_point(self.plans[i], self.rngs[i])
             self.deadline[i] = now + math.dist(pos[j], self.goal[i]) / self.speed[i] + PATIENCE
@@ -159,10 +164,12 @@ class Crowd:
         """The social force on walkers ``w`` now (sim/movers/social.py)."""
         radius = self.radius[w]
         # Walls: WALL_RAYS short rays from each walker, at its WALL_HEIGHT.
-        origins = np.repeat(np.column_stack([pos, self.z0[w] + WALL_HEIGHT]), WALL_RAYS, axis=0)
-        gaps = self.walls(origins, self._rays, np.full(len(origins), WALL_REACH)).reshape(self._count, WALL_RAYS)
+        origins = self._origins
+        origins[:, :, :2] = pos[:, None, :]
+        origins[:, :, 2] = (self.z0[w] + WALL_HEIGHT)[:, None]
+        gaps = self.walls(origins.reshape(-1, 3), self._rays, self._reach).reshape(self._count, WALL_RAYS)
         # the other movers push as walkers do; robots as others
-        fixed = ~self.walkers
+        fixed = self._fixed
         others = np.concatenate([self.pos[fixed], robots]) if len(robots) else self.pos[fixed]
         others_r = np.concatenate([self.radius[fixed], robot_radius]) if len(robots) else self.radius[fixed]
         return social.forces(pos, vel, self.goal[w], self.speed[w], radius, others, others_r, gaps, self.wall_dir,
@@ -175,8 +182,7 @@ class Crowd:
 
     def poses(self) -> dict[str, tuple[float, float, float]]:
         """Each mover's x, y, yaw now, by name."""
-        return {plan.name: (float(x), float(y), float(a))
-                for plan, (x, y), a in zip(self.plans, self.pos.tolist(), self.yaw.tolist())}
+        return dict(zip(self._names, zip(self.pos[:, 0].tolist(), self.pos[:, 1].tolist(), self.yaw.tolist())))
 
     def people_distance(self, x: float, y: float) -> float:
         """The smallest distance in the plane from (x, y) to a person's axis (+inf: no person)."""

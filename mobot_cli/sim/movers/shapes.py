@@ -8,6 +8,7 @@ movers' shapes where they were when it was taken (``Snapshot``), the nearer hit 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,43 +41,57 @@ def see(snap: Snapshot, range_min: float, beams, position, rotation, ranges: np.
     ``rotation`` (3 x 3), meet a mover first."""
     dirs = beams.directions @ np.array(rotation).T
     origins = np.array(position) + dirs * range_min
-    hit = cast(snap, origins, dirs, beams.lengths32.astype(float))
+    flat = ranges.reshape(-1)
+    # a mover no nearer than a beam's range already is cannot shorten it: its pairs are skipped
+    hit = cast(snap, origins, dirs, beams.lengths32.astype(float), flat - range_min, np.array(position, dtype=float))
     if hit is not None:
-        flat = ranges.reshape(-1)
         np.minimum(flat, (hit + range_min).astype(np.float32), out=flat)
 
 
-def cast(snap: Snapshot, origins: np.ndarray, dirs: np.ndarray, lengths: np.ndarray) -> np.ndarray | None:
+def cast(snap: Snapshot, origins: np.ndarray, dirs: np.ndarray, lengths: np.ndarray,
+         seen: np.ndarray | None = None, apex: np.ndarray | None = None) -> np.ndarray | None:
     """Distance along each ray (unit ``dirs``) to the nearest mover within its length (+inf: none);
-    None when no mover is within reach of any ray (the usual case, cheaply)."""
+    None when no mover is within reach of any ray (the usual case, cheaply). ``seen``: how far
+    each ray is known to reach already; a mover that can only be further away along a ray may be
+    left out for it (+inf there, where it would have been beyond ``seen``). ``apex``: a point every
+    ray's line goes through (a lidar's centre, its rays starting ``range_min`` out), when there is one."""
     if not len(snap):
         return None
-    centre = origins.mean(axis=0)
-    spread = float(np.abs(origins - centre).max()) + float(lengths.max())
+    centre = origins.mean(axis=0) if apex is None else apex
+    longest = float(lengths.max())
+    spread = float(np.abs(origins - centre).max()) + longest
     near = np.hypot(snap.x - centre[0], snap.y - centre[1]) <= spread + snap.r
     if not near.any():
         return None
-    o, d = origins.astype(float), dirs.astype(float)
-    best = np.full(len(o), np.inf)
+    o, d = np.asarray(origins, dtype=float), np.asarray(dirs, dtype=float)
     round_ = near & (snap.kind != BOX)
-    if round_.any():
-        best = _round(o, d, snap, np.flatnonzero(round_))
+    best = _round(o, d, snap, round_.nonzero()[0], seen, apex, longest) if round_.any() else np.full(len(o), np.inf)
     for i in np.flatnonzero(near & (snap.kind == BOX)).tolist():
         np.minimum(best, _box(o, d, snap, i), out=best)
     best[best > lengths] = np.inf
     return best
 
 
-def _round(o: np.ndarray, d: np.ndarray, snap: Snapshot, index: np.ndarray) -> np.ndarray:
+SEEN_SLACK = 1e-3  # m: a pair is skipped only when its mover is this much beyond what the ray saw
+APEX_SLACK = 1e-6  # m added to a mover's radius for the angle it spans from the rays' apex
+Z_SLACK = 1e-6  # m around the heights rays pass through, for the parts of a shape they may meet
+
+
+def _round(o: np.ndarray, d: np.ndarray, snap: Snapshot, index: np.ndarray,
+           seen: np.ndarray | None = None, apex: np.ndarray | None = None, reach_along: float = np.inf) -> np.ndarray:
     """Rays (n) against upright cylinders (with caps) and capsules (m of them): the nearest hit of
     each ray. First the (ray, mover) pairs: the rays whose heading lies within the angle a mover
-    spans seen from the rays' starts (sorted headings, one search a mover), then the maths on those."""
+    spans seen from the rays' starts (sorted headings, one search for every mover and every 2 pi
+    shift of its bounds), less those whose ray reaches less far than the mover's nearest point
+    (``seen``), then the maths on those. Seen from the ``apex`` of the rays' lines, when given, a
+    mover spans the angle of its own circle; else that of its circle grown by the rays' spread."""
     out = np.full(len(o), np.inf)
-    centre = o.mean(axis=0)
-    spread = float(np.abs(o[:, :2] - centre[:2]).max()) * 1.5
+    centre = o.mean(axis=0) if apex is None else apex
+    offset = float(np.abs(o[:, :2] - centre[:2]).max()) * 1.5  # at least the rays' starts' distance from it
+    spread = offset if apex is None else APEX_SLACK
     heading = np.arctan2(d[:, 1], d[:, 0])
     flat = np.hypot(d[:, 0], d[:, 1]) > 1e-9
-    order = np.argsort(heading, kind="stable")
+    order = heading.argsort(kind="stable")  # (array methods: no Python wrapper a call, this runs a scan)
     ordered = heading[order]
     dx, dy = snap.x[index] - centre[0], snap.y[index] - centre[1]
     dist = np.hypot(dx, dy)
@@ -85,54 +100,72 @@ def _round(o: np.ndarray, d: np.ndarray, snap: Snapshot, index: np.ndarray) -> n
     half = np.arcsin(np.minimum(reach / np.maximum(dist, 1e-9), 1.0))
     half[inside] = np.pi
     bearing = np.arctan2(dy, dx)
-    rays, movers = [], []
-    for lo, hi in ((bearing - half, bearing + half), (bearing - half + 2 * np.pi, bearing + half + 2 * np.pi),
-                   (bearing - half - 2 * np.pi, bearing + half - 2 * np.pi)):
-        start, stop = np.searchsorted(ordered, lo), np.searchsorted(ordered, hi, side="right")
-        count = stop - start
-        if count.sum():
-            owner = np.repeat(np.arange(len(index)), count)
-            offset = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
-            rays.append(order[np.repeat(start, count) + offset])
-            movers.append(owner)
+    shift = np.array([[0.0], [2 * np.pi], [-2 * np.pi]])  # each mover's bounds as they are and turned once
+    start = ordered.searchsorted((bearing - half + shift).ravel())
+    count = ordered.searchsorted((bearing + half + shift).ravel(), side="right") - start
+    total = int(count.sum())
+    owner = (np.arange(3 * len(index)) % len(index)).repeat(count)
+    ray = order[(start - (count.cumsum() - count)).repeat(count) + np.arange(total)]
     if not flat.all():  # rays straight up or down: every mover over their start
         up = np.flatnonzero(~flat)
         near = np.flatnonzero(dist <= reach)
-        rays.append(np.repeat(up, len(near)))
-        movers.append(np.tile(near, len(up)))
-    if not rays:
+        ray = np.concatenate([ray, np.repeat(up, len(near))])
+        owner = np.concatenate([owner, np.tile(near, len(up))])
+    if seen is not None and len(ray):  # nearer than the surface ahead
+        keep = (dist - snap.r[index] - offset)[owner] <= seen[ray] + SEEN_SLACK
+        ray, owner = ray[keep], owner[keep]
+    if not len(ray):
         return out
-    ray, mover = np.concatenate(rays), np.concatenate(movers)
-    hits = _round_pairs(o[ray], d[ray], snap, index[mover])
+    hits = _round_pairs(o[ray], d[ray], snap, index[owner], reach_along)
     np.minimum.at(out, ray, hits)
     return out
 
 
-def _round_pairs(o: np.ndarray, d: np.ndarray, snap: Snapshot, i: np.ndarray) -> np.ndarray:
-    """The distance along each ray to its own cylinder or capsule (``i``: one mover a ray)."""
+def _round_pairs(o: np.ndarray, d: np.ndarray, snap: Snapshot, i: np.ndarray, reach: float = np.inf) -> np.ndarray:
+    """The distance along each ray to its own cylinder or capsule (``i``: one mover a ray). Hits
+    further than ``reach`` along a ray may be left out (+inf): the parts of the shapes (side, end
+    spheres, caps) that no ray comes to within it are not tested (a 2D lidar below a person's
+    waist meets only the bottom sphere)."""
     if not d[:, 2].any():
         return _level_pairs(o, d, snap, i)
     r, z0, z1 = snap.r[i], snap.z0[i], snap.z1[i]
     capsule = snap.kind[i] == PERSON
-    lo, hi = np.where(capsule, z0 + r, z0), np.where(capsule, z1 - r, z1)
+    people = bool(capsule.all())  # (the usual crowd)
+    lo, hi = (z0 + r, z1 - r) if people else (np.where(capsule, z0 + r, z0), np.where(capsule, z1 - r, z1))
     dx, dy, dz = d[:, 0], d[:, 1], d[:, 2]
     px, py, oz = o[:, 0] - snap.x[i], o[:, 1] - snap.y[i], o[:, 2]
+    # the heights the rays pass through within ``reach``: a part wholly above or below them is missed
+    low, high = -np.inf, np.inf
+    if math.isfinite(reach):
+        rise = dz * reach
+        low = float((oz + np.minimum(rise, 0.0)).min()) - Z_SLACK
+        high = float((oz + np.maximum(rise, 0.0)).max()) + Z_SLACK
+
+    def meets(bottom: np.ndarray, top: np.ndarray) -> bool:
+        return low <= float(top.max()) and float(bottom.min()) <= high
+
     r2 = r * r
-    a = dx * dx + dy * dy
     b = px * dx + py * dy
     c = px * px + py * py - r2
+    out = np.full(len(o), np.inf)
     with np.errstate(invalid="ignore", divide="ignore"):
-        disc = b * b - a * c
-        t = (-b - np.sqrt(disc)) / a
-        z = oz + t * dz
-        out = np.where((disc >= 0.0) & (a > 1e-12) & (t >= 0.0) & (z >= lo) & (z <= hi), t, np.inf)
-        for zc in (lo, hi):  # a capsule's end spheres
+        if meets(lo, hi):  # the side
+            a = dx * dx + dy * dy
+            disc = b * b - a * c
+            t = (-b - np.sqrt(disc)) / a
+            z = oz + t * dz
+            out = np.where((disc >= 0.0) & (a > 1e-12) & (t >= 0.0) & (z >= lo) & (z <= hi), t, np.inf)
+        for zc in (lo, hi) if people or capsule.any() else ():  # a capsule's end spheres
+            if not meets(zc - r, zc + r):
+                continue
             pz = oz - zc
             bs = b + pz * dz
             ds = bs * bs - (c + pz * pz)
             ts = -bs - np.sqrt(ds)
             np.minimum(out, np.where((ds >= 0.0) & (ts >= 0.0) & capsule, ts, np.inf), out=out)
-        for zc in (z0, z1):  # a cylinder's caps
+        for zc in (z0, z1) if not people else ():  # a cylinder's caps
+            if not meets(zc, zc):
+                continue
             tc = (zc - oz) / dz
             qx, qy = px + tc * dx, py + tc * dy
             hit = (tc >= 0.0) & (qx * qx + qy * qy <= r2) & ~capsule

@@ -50,7 +50,7 @@ def forces(pos: np.ndarray, vel: np.ndarray, goal: np.ndarray, speed: np.ndarray
     force += (push * diff).sum(axis=1)
     wall = A_WALL * np.exp((radius[:, None] - wall_gap) / B_WALL)  # exp(-inf) = 0 where no wall
     force -= wall @ (wall_dir[:, 0] + 1j * wall_dir[:, 1])
-    return np.column_stack([force.real, force.imag])
+    return force.view(float).reshape(-1, 2)  # (real, imaginary) pairs: x, y
 
 
 def integrate(pos: np.ndarray, vel: np.ndarray, accel: np.ndarray, speed: np.ndarray, dt: float) -> None:

@@ -100,19 +100,20 @@ class MoverStage:
             apart = np.hypot(crowd.pos[:, None, 0] - xy[None, :, 0], crowd.pos[:, None, 1] - xy[None, :, 1])
             gap = (apart - crowd.radius[:, None] - radius[None, :]).min(axis=1)
         cid, bodies = self.cid, self.bodies
-        for i in np.flatnonzero(gap <= NEAR + AWAY).tolist():
+        close = (gap <= NEAR + AWAY).nonzero()[0].tolist()
+        x, y, yaw = crowd.pos[close, 0].tolist(), crowd.pos[close, 1].tolist(), crowd.yaw[close].tolist()
+        for k, i in enumerate(close):
             plan = crowd.plans[i]
             uid = bodies.get(plan.name)
             if uid is None:
                 if gap[i] > NEAR:
                     continue
                 uid = self._make(plan)
-            z = (crowd.z0[i] + crowd.z1[i]) / 2.0
-            half = crowd.yaw[i] / 2.0
-            p.resetBasePositionAndOrientation(uid, (crowd.pos[i, 0], crowd.pos[i, 1], z),
+            half = yaw[k] / 2.0
+            p.resetBasePositionAndOrientation(uid, (x[k], y[k], crowd.middle[i]),
                                               (0.0, 0.0, math.sin(half), math.cos(half)), physicsClientId=cid)
-        if len(bodies) > int((gap <= NEAR + AWAY).sum()):
-            keep = {crowd.plans[i].name for i in np.flatnonzero(gap <= NEAR + AWAY).tolist()}
+        if len(bodies) > len(close):
+            keep = {crowd.plans[i].name for i in close}
             for name in [n for n in bodies if n not in keep]:
                 self._unmake(name)
 
@@ -133,10 +134,12 @@ class MoverStage:
             self._radius[body] = float(np.hypot(hi[0] - lo[0], hi[1] - lo[1]) / 2.0)
         return self._radius[body]
 
-    def social(self, robot, state) -> None:
-        """Fill a robot's state's people figures (sim/state.py)."""
+    def social(self, robot, state, distance: bool) -> None:
+        """Fill a robot's state's people figures (sim/state.py); its distance to people only when
+        ``distance`` (its clearance is watched: what its goals' metrics read), as its clearance."""
         state.people_collisions = robot.people_collisions
-        state.people_distance = self.crowd.people_distance(state.true_x, state.true_y)
+        if distance:
+            state.people_distance = self.crowd.people_distance(state.true_x, state.true_y)
 
     def forget_robot(self, body: int) -> None:
         self._radius.pop(body, None)

@@ -150,6 +150,8 @@ class StaticScene:
             out = np.full(len(origins), np.inf, dtype=np.float32)
         for point, normal in self._planes32:
             along = directions @ normal
+            if not along.any():  # every ray parallel to it (level rays and the floor): no hit
+                continue
             t = np.full(len(origins), np.inf, dtype=np.float32)
             np.divide((point - origins) @ normal, along, out=t, where=along != 0.0)  # parallel: no hit
             np.putmask(t, (t < 0.0) | (t >= lengths), np.inf)
