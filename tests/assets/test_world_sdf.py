@@ -357,6 +357,32 @@ def test_sdf_robot_joint_axes_end_up_in_the_joint_frame(tmp_path, axis, expected
     assert any("has no <inertial>" in str(n) for n in expansion.notices)
 
 
+@pytest.mark.parametrize("canonical, link", [("", "blade::plate"), (" canonical_link='tip'", "blade::tip")])
+def test_a_joint_may_name_a_nested_model_for_its_canonical_link(tmp_path, canonical, link):
+    """SDF 1.8 (gz-sim's lift_drag_nested.sdf): <child>blade</child> names the nested model's
+    canonical link, its canonical_link or else its first link."""
+    import xml.etree.ElementTree as ET
+
+    from mobot_cli.assets.description.sdf import expand_sdf
+    from mobot_cli.assets.resources import ResourceResolver
+
+    box = "<collision name='c'><geometry><box><size>0.2 0.2 0.2</size></box></geometry></collision>"
+    inner = ("plate", "tip") if link == "blade::plate" else ("tip", "plate")  # the canonical link first
+    (tmp_path / "r.sdf").write_text(sdf(f"""<model name='r'>
+      <link name='base'>{box}</link>
+      <model name='blade'{canonical}><pose>0.5 0 0 0 0 0</pose>
+        <link name='plate'>{box}</link><link name='tip'><pose>0.3 0 0 0 0 0</pose>{box}</link>
+        <joint name='inner' type='fixed'><parent>{inner[0]}</parent><child>{inner[1]}</child></joint></model>
+      <joint name='j' type='fixed'><parent>base</parent><child>blade</child></joint>
+    </model>""", version="1.8"))
+    robot = ET.fromstring(expand_sdf(tmp_path / "r.sdf", ResourceResolver(tmp_path)).text)
+    joint = robot.find("joint[@name='j']")
+    assert joint.find("parent").get("link") == "base" and joint.find("child").get("link") == link
+    assert joint.find("origin").get("xyz") == "0.5 0 0"  # the joint's frame: its child frame, the nested model's
+    tip = robot.find("link[@name='blade::tip']/collision/origin")
+    assert tip.get("xyz") == ("0.3 0 0" if link == "blade::tip" else "0 0 0")  # the tip 0.8 m out either way
+
+
 # --- what Gazebo accepts ------------------------------------------------------------------
 
 def test_a_comment_before_the_declaration_is_read_as_gazebo_reads_it(tmp_path):

@@ -285,7 +285,7 @@ class SdfReader:
         axis = tuple(float(v) for v in rotation @ (xyz / norm))
 
         def scoped(link: str) -> str:
-            return link if link == "world" else prefix + link
+            return link if link == "world" else prefix + _canonical(scope, link)
 
         return Joint(name=prefix + joint.get("name", ""), type=joint.get("type", ""),
                      parent=scoped(parent), child=scoped(child), pose=frame, axis=axis,
@@ -355,3 +355,14 @@ class SdfReader:
                              location=key_of(element, file),
                              hint=f"Write {len(default)} numbers separated by spaces.")
         return tuple(float(p) for p in parts)
+
+
+def _canonical(scope, name: str) -> str:
+    """A joint's parent or child as a link: a nested model stands for its canonical link (SDF 1.8:
+    its ``canonical_link``, else its first link), as ``MODEL::LINK``; anything else as written."""
+    element = scope.elements.get(name)
+    if element is None or element.tag != "model":
+        return name
+    canonical = element.get("canonical_link") or next((link.get("name") for link in element.findall("link")), None)
+    return f"{name}::{canonical}" if canonical else name
+
