@@ -19,6 +19,7 @@ import contextlib
 from dataclasses import dataclass
 from typing import Any, Optional
 
+from mobot_cli.sim.bullet import settled as settled_state
 from mobot_cli.sim.pb import p
 
 _keep = False
@@ -32,6 +33,7 @@ class KeptBody:
     key: Any  # (URDF text, xyz, quat) of the spawn that loaded it
     body: int
     state: int  # a p.saveState id
+    settled: Any = None  # settled.Settled: the end of its first settle, put back by the next ones
 
 
 @contextlib.contextmanager
@@ -62,9 +64,10 @@ def take(cid: int, kept: Optional[KeptBody], key: tuple) -> Optional[int]:
 
 
 def forget(cid: int, kept: KeptBody) -> None:
-    """Take the kept body out of the world and drop its saved state."""
+    """Take the kept body out of the world and drop its saved states."""
     p.removeBody(kept.body, physicsClientId=cid)
     p.removeState(kept.state, physicsClientId=cid)
+    settled_state.drop(cid, kept.settled)
 
 
 def leave(cid: int, stage, kept: Optional[KeptBody], waits: bool, bodies: list[int]) -> tuple[Any, list[int]]:
@@ -73,6 +76,7 @@ def leave(cid: int, stage, kept: Optional[KeptBody], waits: bool, bodies: list[i
     other one (all of them, the kept one too, when it is not kept)."""
     if kept is not None and (stage is None or not _keep):
         p.removeState(kept.state, physicsClientId=cid)
+        settled_state.drop(cid, kept.settled)
     if stage is None or kept is None or not _keep or not (waits or kept.body in bodies):
         return stage, bodies
     if not waits:
