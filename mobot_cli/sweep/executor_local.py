@@ -172,6 +172,8 @@ class LocalExecutor:
                 for i, worker in enumerate(workers):
                     if (worker is None or worker.task is None) and pending:
                         workers[i] = self._give(ctx, worker, pending.popleft())
+                    elif worker is not None and worker.task is None:
+                        self._tell_stop(worker)  # nothing left for it: it leaves while the others finish
                 busy = [w for w in workers if w is not None and w.task is not None]
                 if not busy:
                     return

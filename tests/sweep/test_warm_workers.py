@@ -29,6 +29,13 @@ robots:
     pose: {{x: -3.0, y: -2.5}}
     commands: [{{at: 0.5, linear: 0.3, angular: 0.4}}, {{at: 1.2, linear: 0.5, angular: -0.3}}]
 """
+# A second robot, with a lidar, that drives into the first one's way: the kept body among others.
+SECOND = """  - name: other
+    description: mobot
+    args: {{lidar: "true"}}
+    pose: {{x: -2.2, y: -1.8, yaw: -1.57}}
+    commands: [{{at: 0.5, linear: 0.4}}]
+"""
 # Runs 0-2 spawn the robot at one pose, 3-4 at another, 5 at the first again.
 ZIP = ["--zip", "robots.mobot.pose.x=-3.0,-3.0,-3.0,-2.5,-2.5,-3.0",
        "--zip", "robots.mobot.commands.0.linear=0.1,0.2,0.3,0.1,0.2,0.3"]
@@ -60,10 +67,11 @@ def no_kept_clients():
     clients.keep_clients(0)
 
 
-@pytest.mark.parametrize("engine,rate", [("bullet", 240), ("kinematic", 20)])
-def test_a_sweeps_run_folders_are_those_of_runs_alone(engine, rate, tmp_path, no_kept_clients):
+@pytest.mark.parametrize("engine,rate,robots", [("bullet", 240, 1), ("kinematic", 20, 1), ("bullet", 240, 2),
+                                                ("kinematic", 20, 2)])
+def test_a_sweeps_run_folders_are_those_of_runs_alone(engine, rate, robots, tmp_path, no_kept_clients):
     scenario = tmp_path / "warm.yaml"
-    scenario.write_text(SCENARIO.format(engine=engine, rate=rate))
+    scenario.write_text(SCENARIO.format(engine=engine, rate=rate) + (SECOND.format() if robots == 2 else ""))
     out = tmp_path / "sweep"
     assert invoke(["sweep", scenario, *ZIP, "--jobs", "1", "--out", out, "--quiet"]).exit_code == 0
     runs = sorted((out / "runs").iterdir())
