@@ -11,6 +11,7 @@ import mobot_cli.record.summary  # noqa: F401  (summary.json, written at the end
 import mobot_cli.run  # noqa: F401
 import mobot_cli.sim.kinematic.world  # noqa: F401  (either engine may run)
 import mobot_cli.sim.sensing.raycast  # noqa: F401  (the kinematic engine's static world)
+import mobot_cli.sim.sensing.render  # noqa: F401  (every World asks it about a GPU renderer)
 from mobot_cli.record import recording
 from mobot_cli.sim.bullet.clients import connect
 
