@@ -5,8 +5,9 @@ settle (0.5 s: 120 physics steps at 240 Hz, most of what a reset costs). With no
 the world and nothing drawn from the seed, those steps end in the same state every time. So the
 first settle's end is kept with the kept robot body (kept_body.py): PyBullet's ``saveState`` (in
 memory; it holds the bodies' positions and velocities and the contact points whose impulses
-warm-start the solver: restoreState finds the same overlapping pairs and gives each its saved
-points) and the numbers the World's Python side changed meanwhile (the step count, the
+warm-start the solver: restoreState runs the collision pass at the restored poses and gives each
+manifold of a body pair its saved points, and empties one with none saved, so nothing of the
+episode before warm-starts the next) and the numbers the World's Python side changed meanwhile (the step count, the
 robot's odometry, its health watch, the contact counter, the notices said, the timeline's
 marks). The next World built the same way, with the same robot spawned at step 0, restores them
 instead of stepping (``resettle``); episodes are byte for byte those of a settle that steps
@@ -17,7 +18,9 @@ spawned and no step taken before the settle; no sensors (their noise is drawn fr
 movers or actors, no clearance watch; a plain wheel drive (or none) without twist feedback,
 acceleration ramps or springs; a kept body and a key (the settle's steps, the robot's plan,
 the physics, the world and the timeline's log cadence) equal to the first. Anything else
-settles by stepping, as before.
+settles by stepping, as before. Not in a saved state: the motor torques applied in the last step
+(``getJointStates``' fourth value), an output of that step that the next step replaces; mobot
+reads them only after a step.
 """
 
 from __future__ import annotations
