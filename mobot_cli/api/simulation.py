@@ -105,6 +105,22 @@ class Simulation:
         self._open()
         self.step(steps(bounded("run_for: seconds", seconds, "s", MAX_SECONDS, low=0.0), self.rate_hz))
 
+    def settle(self, seconds: float) -> None:
+        """``run_for(seconds)``; in a Gymnasium env's reset, when this world holds the end of the
+        same settle kept before, that state is put back instead of stepping: the same state, byte
+        for byte (sim/bullet/settled.py)."""
+        self._open()
+        n = steps(bounded("settle: seconds", seconds, "s", MAX_SECONDS, low=0.0), self.rate_hz)
+        timeline, world = self._timeline, self._world
+        key = world.settle_key(n, (self.plan.log_every, self.plan.total_steps)) if timeline.idle() else None
+        marks = world.resettle(key)
+        if marks is not None:
+            timeline.restore_marks(marks)
+            return
+        self.step(n)
+        if key is not None:
+            world.keep_settled(key, timeline.marks())
+
     # -- robots -----------------------------------------------------------------------------
 
     @property

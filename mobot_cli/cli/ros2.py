@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from mobot_cli.cli.environment import Environment
 from mobot_cli.errors import Location
-from mobot_cli.plan import Plan, Ros2Settings
+
+if TYPE_CHECKING:  # the plan's module is imported by the commands that make one, not by every command's start
+    from mobot_cli.plan import Plan
 
 # The --ros2 option's help; run.py and serve.py declare the option.
 HELP = ("Join ROS 2 as node 'mobot': publish /clock, /tf, odom, joint_states, robot_description; "
@@ -15,6 +19,7 @@ def bridges(plan: Plan, asked: bool) -> list:
     """The ROS 2 bridge when ``--ros2`` or the scenario's ``ros2:`` asks for one, checked now."""
     if not asked and plan.ros2 is None:
         return []
+    from mobot_cli.plan import Ros2Settings
     from mobot_cli.ros2.bridge import Bridge
 
     where = Location(key="ros2") if plan.ros2 is not None else None

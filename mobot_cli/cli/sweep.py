@@ -46,7 +46,7 @@ def sweep(
     """Run variants of a scenario (grid, zip or random values); exit 1 when any run fails."""
     env = ctx.obj
     jobs = _check_args(jobs, executor, address, timeout, out, resume)
-    runner = _executor(executor, jobs, timeout, address)
+    runner = _executor(executor, jobs, timeout, address, pictures)
     # The fork server, then the workers, start now: their imports take the second core while
     # this process imports the scenario models and prepares the runs.
     runner.prestart()
@@ -120,7 +120,7 @@ def _check_args(jobs: int | None, executor: str, address: str | None, timeout: f
     return jobs or os.cpu_count() or 1
 
 
-def _executor(name: str, jobs: int, timeout: float | None, address: str | None):
+def _executor(name: str, jobs: int, timeout: float | None, address: str | None, pictures: bool = False):
     if name == "ray":
         from mobot_cli.sweep.executor_ray import RayExecutor, require_ray
 
@@ -128,4 +128,4 @@ def _executor(name: str, jobs: int, timeout: float | None, address: str | None):
         return RayExecutor(jobs, timeout, address)
     from mobot_cli.sweep.executor_local import LocalExecutor
 
-    return LocalExecutor(jobs, timeout)
+    return LocalExecutor(jobs, timeout, pictures=pictures)

@@ -23,8 +23,10 @@ at its own rate (docs/cameras.md). Every ``reset`` builds the world afresh, so `
 always starts the same episode, the lidar's noise included; without ``out`` it does so from
 what the first reset made and kept: the scenario prepared (only its seed changes), the robot
 resolved, and the PyBullet client with the world's static bodies (sim/bullet/clients.py) and
-the robot's body, restored as just loaded (sim/bullet/kept_body.py), so an episode is byte for
-byte the one a build from nothing gives (tests/run/test_scale_golden.py, tests/gym/test_resets.py).
+the robot's body, restored as just loaded (sim/bullet/kept_body.py), and on PyBullet the end of
+the first settle, put back instead of stepping when nothing in it depends on the seed
+(sim/bullet/settled.py), so an episode is byte for byte the one a build from nothing gives
+(tests/run/test_scale_golden.py, tests/gym/test_resets.py, tests/gym/test_settled.py).
 """
 
 from __future__ import annotations
@@ -173,7 +175,7 @@ class MobotEnv(gym.Env):
                              hint=f"Pick a divisor of {rate}, e.g. 10 at 240 Hz.")
         self._steps_per_action = round(steps)
         self._sim.spawn_plan(self._robot_plan(rate))
-        self._sim.run_for(self.settle)
+        self._sim.settle(self.settle)  # the kept end of the same settle, when there is one
 
     def _observation(self, s: RobotState, scan: Scan | None):
         obs = self._base_observation(s, scan)

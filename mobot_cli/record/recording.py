@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Optional, Sequence
 from mobot_cli import __version__
 from mobot_cli.common.files import write_text_atomic
 from mobot_cli.common.installed import version
+from mobot_cli.common.transforms import Planar
 from mobot_cli.errors import OutputError, SimulationFault, cannot_write
 from mobot_cli.plan import GoalControl, GoalStep, Plan, RobotPlan
 from mobot_cli.record.outcome import SUMMARY, Status
@@ -53,6 +54,7 @@ class _Life:
     rate: int = 1
     meter: Optional[Meter] = None  # its whole life's metrics, once it drives to goals
     running: list[dict] = field(default_factory=list)  # goals whose meter still runs (or waits for a row)
+    _origin: Optional[Planar] = None  # the first sample's true pose: the odom frame odom_error measures in
 
     def add(self, state: RobotState, step: int) -> None:
         if self.meter is None and self.first is None and any(isinstance(c, GoalStep) for c in self.plan.commands):
@@ -66,10 +68,12 @@ class _Life:
                 goal["meter"].add(state, step)
         if self.first is None:
             self.first = state
+            self._origin = Planar(state.true_x, state.true_y, state.true_yaw)  # odom_error's frame, made once
         else:
             if self.last is not None:
                 self.distance += math.hypot(state.true_x - self.last.true_x, state.true_y - self.last.true_y)
-            position = odom_error(self.first, state)[0]
+            x, y = self._origin(state.odom_x, state.odom_y)  # odom_error's position, on every row
+            position = math.hypot(x - state.true_x, y - state.true_y)
             if position > self.worst[0]:  # NaN never is: a broken state is not the worst
                 self.worst = (position, step)
         self.last = state

@@ -95,6 +95,15 @@ class ContactCounter:
                     robot.hit = self._name_of(other)
             self._last_touch[key] = self._samples
 
+    def mark(self) -> tuple:
+        """What the counter remembers now, for ``restore`` (sim/bullet/settled.py)."""
+        return self._samples, dict(self._last_touch)
+
+    def restore(self, mark: tuple) -> None:
+        """Remember again what ``mark`` gave."""
+        self._samples, touches = mark
+        self._last_touch = dict(touches)
+
     def forget(self, name: str) -> None:
         """Drop a removed robot's pairs (PyBullet may reuse its body id)."""
         self._last_touch = {k: v for k, v in self._last_touch.items()

@@ -41,25 +41,28 @@ def _worker_main(conn: Connection, runner: RunTask, sweep_pid: int) -> None:
     # Ctrl-C reaches the whole process group; the parent decides what stops, not each worker.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     die_with_sweep(sweep_pid)  # a sweep killed with SIGKILL cannot stop its workers itself
-    import mobot_cli.sweep.preload  # noqa: F401  (imported by the fork server already, but for spawn)
-    from mobot_cli.sim.bullet.clients import connect, keep_clients, release
+    from mobot_cli.sim.bullet.clients import adopt, keep_clients
+    from mobot_cli.sim.bullet.kept_body import keeping_robot_bodies
+    from mobot_cli.sweep import preload  # the fork server's (this worker's copy of its client), or for spawn
 
-    keep_clients(1)  # one run after another: each takes the PyBullet client the last one reset
-    release(*connect())  # connected now, while the sweep still prepares its runs
-
+    keep_clients(1)  # one run after another: each takes the PyBullet client the last one left
+    adopt(preload.CLIENT)
     conn.send(READY)
-    while True:
-        try:
-            task = conn.recv()
-        except EOFError:
-            return
-        if task is None:
-            return
-        try:
-            outcome = runner(task)
-        except Exception as exc:  # noqa: BLE001 - run_task never raises; a runner that does must not kill the worker
-            outcome = failed(task.index, "error", f"{type(exc).__name__}: {exc}")
-        conn.send(outcome)
+    # Runs follow one another in this one thread: the first robot's body stays in the kept client for
+    # the next run's same first spawn (sim/bullet/kept_body.py), the same records as a body loaded anew.
+    with keeping_robot_bodies(repeated=True):
+        while True:
+            try:
+                task = conn.recv()
+            except EOFError:
+                return
+            if task is None:
+                return
+            try:
+                outcome = runner(task)
+            except Exception as exc:  # noqa: BLE001 - run_task never raises; a runner that does must not kill it
+                outcome = failed(task.index, "error", f"{type(exc).__name__}: {exc}")
+            conn.send(outcome)
 
 
 class _Worker:
@@ -95,10 +98,11 @@ class LocalExecutor:
 
     name = "local"
 
-    def __init__(self, jobs: int, timeout: float | None = None, runner: RunTask = run_task):
+    def __init__(self, jobs: int, timeout: float | None = None, runner: RunTask = run_task, pictures: bool = True):
         self.jobs = max(1, jobs)
         self.timeout = timeout
         self.runner = runner
+        self.pictures = pictures  # the workers preload the drawing of trajectory.png (sweep/server.py)
         self._early: list[_Worker] = []  # started by prestart, not yet given to run
         self._starters: list[threading.Thread] = []
         self._asked = 0  # workers prestart asked its threads for
@@ -111,7 +115,7 @@ class LocalExecutor:
         # Without a fork server (spawn), run() starts the workers: each would import everything
         # itself, and the sweep's own imports would wait for the core. One that cannot start,
         # run() reports.
-        ctx = context()
+        ctx = context(self.pictures)
         if ctx.get_start_method() != "forkserver":
             return
         wanted = min(self.jobs, 1 if count is None else count) - self._asked
@@ -160,7 +164,7 @@ class LocalExecutor:
         self._stop_all(early[slots:])
         if not pending:
             return
-        ctx = context()
+        ctx = context(self.pictures)
         # A slot holds None after its worker was killed, until a task needs a new one.
         workers: list[_Worker | None] = early[:slots] + [_Worker(ctx, self.runner) for _ in range(slots - len(early))]
         try:
@@ -168,6 +172,8 @@ class LocalExecutor:
                 for i, worker in enumerate(workers):
                     if (worker is None or worker.task is None) and pending:
                         workers[i] = self._give(ctx, worker, pending.popleft())
+                    elif worker is not None and worker.task is None:
+                        self._tell_stop(worker)  # nothing left for it: it leaves while the others finish
                 busy = [w for w in workers if w is not None and w.task is not None]
                 if not busy:
                     return

@@ -63,8 +63,11 @@ def start_tracker() -> None:
         pass
 
 
-def context():
-    """The fork server with mobot imported where the platform has one, else plain spawn.
+def context(pictures: bool = True):
+    """The fork server with mobot imported where the platform has one (with the drawing of
+    trajectory.png when the runs draw ``pictures``), else plain spawn. A process has one fork
+    server: the first sweep's preload is every later sweep's in it (a later sweep with pictures
+    then loads the drawing in each worker's first run).
 
     What starting a worker imports is imported here, in the calling (main) thread, so that the
     pool's starter thread imports nothing: a Ctrl-C that lands in the main thread in the middle
@@ -75,6 +78,6 @@ def context():
         from multiprocessing import popen_forkserver, resource_tracker  # noqa: F401  (forkserver, spawn, ...)
 
         ctx = multiprocessing.get_context("forkserver")
-        ctx.set_forkserver_preload(["mobot_cli.sweep.preload"])
+        ctx.set_forkserver_preload(["mobot_cli.sweep.preload_pictures" if pictures else "mobot_cli.sweep.preload"])
         return ctx
     return multiprocessing.get_context("spawn")

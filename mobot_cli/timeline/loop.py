@@ -181,6 +181,19 @@ class Timeline:
                 self._read(step, due)
         self._ticked = step
 
+    def idle(self) -> bool:
+        """Nothing is due but log rows: no events, commands, goals, sensors, movers or inputs."""
+        return not (self._events or self._commands or self._stops or self._drivers or self._due or self._early
+                    or self._movers or self._moving or self._inputs or self._clearance)
+
+    def marks(self) -> tuple[int, int]:
+        """The last log row's step and the last tick's (sim/bullet/settled.py keeps them)."""
+        return self._logged, self._ticked
+
+    def restore_marks(self, marks: tuple[int, int]) -> None:
+        """Put back what ``marks`` gave, with the world's state of that time."""
+        self._logged, self._ticked = marks
+
     def sense_early(self) -> list[Reading]:
         """Take the readings due at this step now, before its tick, and return them (once); the tick
         hands them to the consumers in their usual place (after the log row), so every record

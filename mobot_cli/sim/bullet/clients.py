@@ -80,6 +80,16 @@ def connect(key: Any = None, fresh: bool = False) -> tuple[int, Optional[Stage]]
     return cid, None
 
 
+def adopt(cid: int) -> None:
+    """Keep a client connected just now and never used (empty) for the next World, as ``release``
+    keeps a World's; disconnect it when no more are kept."""
+    with _idle_lock:
+        if len(_idle) < _keep:
+            _idle.append((cid, None))
+            return
+    p.disconnect(physicsClientId=cid)
+
+
 def release(cid: int, stage: Optional[Stage] = None, robots: Iterable[int] = ()) -> None:
     """Disconnect a World's client, or keep it: with its ``stage`` once the ``robots`` (body
     ids) are removed, or reset to empty when there is no stage to keep."""

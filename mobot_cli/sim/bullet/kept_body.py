@@ -10,7 +10,9 @@ text at the same pose takes it back: ``restoreState`` puts every body where it w
 load (positions, velocities, contact points), and the spawn goes on as for a loaded body (joint
 motors freed, friction and damping set again: absolute values, so the same as the first time).
 Any other first spawn removes the kept body first, so the new one gets the id a new client gives.
-Episodes are byte for byte those of a build from nothing (tests/gym/test_resets.py).
+Episodes are byte for byte those of a build from nothing (tests/gym/test_resets.py). A sweep's
+workers keep bodies too, from the second run in a row with the same first spawn on (the records of
+each run are those of a run in a new client: tests/sweep/test_warm_workers.py).
 """
 
 from __future__ import annotations
@@ -19,9 +21,12 @@ import contextlib
 from dataclasses import dataclass
 from typing import Any, Optional
 
+from mobot_cli.sim.bullet import settled as settled_state
 from mobot_cli.sim.pb import p
 
 _keep = False
+_repeated = False  # keep a body only for a first spawn that came twice in a row (see keeping_robot_bodies)
+_last: Any = None  # the key of the last first spawn loaded
 PARK_Z = 1.0e4  # m: above any world mobot builds
 
 
@@ -32,17 +37,21 @@ class KeptBody:
     key: Any  # (URDF text, xyz, quat) of the spawn that loaded it
     body: int
     state: int  # a p.saveState id
+    settled: Any = None  # settled.Settled: the end of its first settle, put back by the next ones
 
 
 @contextlib.contextmanager
-def keeping_robot_bodies(on: bool = True):
-    """Within the block, keep the first robot's body of each World in its kept client."""
-    global _keep
-    before, _keep = _keep, bool(on)
+def keeping_robot_bodies(on: bool = True, repeated: bool = False):
+    """Within the block, keep the first robot's body of each World in its kept client; with
+    ``repeated``, only a body whose first spawn is the same as the one loaded before it (a sweep
+    worker's runs: saving a body's state costs about a millisecond, which runs that each spawn
+    another robot or pose would pay for nothing)."""
+    global _keep, _repeated, _last
+    before, _keep, _repeated, _last = (_keep, _repeated, _last), bool(on), bool(repeated), None
     try:
         yield
     finally:
-        _keep = before
+        _keep, _repeated, _last = before
 
 
 def body_key(urdf: str, xyz, quat) -> tuple:
@@ -62,9 +71,10 @@ def take(cid: int, kept: Optional[KeptBody], key: tuple) -> Optional[int]:
 
 
 def forget(cid: int, kept: KeptBody) -> None:
-    """Take the kept body out of the world and drop its saved state."""
+    """Take the kept body out of the world and drop its saved states."""
     p.removeBody(kept.body, physicsClientId=cid)
     p.removeState(kept.state, physicsClientId=cid)
+    settled_state.drop(cid, kept.settled)
 
 
 def leave(cid: int, stage, kept: Optional[KeptBody], waits: bool, bodies: list[int]) -> tuple[Any, list[int]]:
@@ -73,6 +83,7 @@ def leave(cid: int, stage, kept: Optional[KeptBody], waits: bool, bodies: list[i
     other one (all of them, the kept one too, when it is not kept)."""
     if kept is not None and (stage is None or not _keep):
         p.removeState(kept.state, physicsClientId=cid)
+        settled_state.drop(cid, kept.settled)
     if stage is None or kept is None or not _keep or not (waits or kept.body in bodies):
         return stage, bodies
     if not waits:
@@ -90,5 +101,10 @@ def park(cid: int, body: int) -> None:
 
 
 def save(cid: int, key: tuple, body: int) -> Optional[KeptBody]:
-    """The body just loaded, saved to be kept (None outside keeping_robot_bodies)."""
-    return KeptBody(key, body, p.saveState(physicsClientId=cid)) if _keep else None
+    """The body just loaded, saved to be kept (None outside keeping_robot_bodies, or when only a
+    repeated first spawn is kept and this one is not)."""
+    global _last
+    if not _keep:
+        return None
+    repeat, _last = key == _last, key
+    return KeptBody(key, body, p.saveState(physicsClientId=cid)) if repeat or not _repeated else None

@@ -10,6 +10,7 @@ for a line broken between its attributes.
 
 from __future__ import annotations
 
+import functools
 import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -145,8 +146,10 @@ def _split_tag(line: str) -> list[str]:
     return [piece for piece in _ATTRIBUTE.sub(lambda m: "\n" + indent + m.group(0)[1:], line).split("\n")]
 
 
+@functools.lru_cache(maxsize=64)
 def links_with_friction(text: str) -> frozenset[str]:
-    """Names of links whose URDF sets ``<contact><lateral_friction>`` (their author chose it)."""
+    """Names of links whose URDF sets ``<contact><lateral_friction>`` (their author chose it);
+    kept for the next spawn of the same text (a sweep's runs spawn the same robot again and again)."""
     root = ET.fromstring(text)
     return frozenset(
         link.get("name", "")

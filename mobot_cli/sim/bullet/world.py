@@ -22,6 +22,7 @@ from mobot_cli.sim.bullet.faults import Health
 from mobot_cli.sim.bullet.holonomic import ROLLER_FRICTION, HolonomicDrive
 from mobot_cli.sim.bullet.joints import set_initial_positions
 from mobot_cli.sim.bullet.robot import SimRobot
+from mobot_cli.sim.bullet.settled import Settling
 from mobot_cli.sim.bullet.steered import drive_class
 from mobot_cli.sim.bullet.urdf_file import links_with_friction, pybullet_file
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, ContactCounter
@@ -52,8 +53,9 @@ URDF_FLAGS = p.URDF_USE_INERTIA_FROM_FILE | p.URDF_USE_IMPLICIT_CYLINDER
 PART_REACH = 10.0  # m
 
 
-class World(MoversDoor):
-    """A headless physics world built from a plan; robots come and go by name (and movers: MoversDoor)."""
+class World(MoversDoor, Settling):
+    """A headless physics world built from a plan; robots come and go by name (and movers: MoversDoor;
+    a kept settle: Settling)."""
 
     def __init__(self, physics: Physics, world: WorldPlan, seed: int = 0, fresh: bool = False):
         self.physics = physics
