@@ -125,10 +125,13 @@ def _aabb(cid: int, uid: int):
     return [min(b[0][i] for b in found) for i in range(3)], [max(b[1][i] for b in found) for i in range(3)]
 
 
-def distances(cid: int, body: int, statics: list[int], robots: list[int], reach: float, floor: float):
+def distances(cid: int, body: int, statics: list[int], robots: list[int], reach: float, floor: float,
+              known: dict[int, float] | None = None):
     """(nearest static obstacle, {robot body: its distance}, bodies touched within CONTACT_SLOP):
     distances in m, negative when overlapping, ``reach`` when nothing is that near; support (at
-    the bottom of a robot whose lowest point is at ``floor``) does not count."""
+    the bottom of a robot whose lowest point is at ``floor``) does not count. ``known``: robots
+    known to be farther than CONTACT_SLOP, not asked: their distance is the one given (a lower
+    bound)."""
     low_static, touching = reach, set()
     band = floor + SUPPORT_BAND
     for other in statics:
@@ -145,6 +148,9 @@ def distances(cid: int, body: int, statics: list[int], robots: list[int], reach:
                 touching.add(other)
     apart = {}
     for other in robots:
+        if known and other in known:
+            apart[other] = min(known[other], reach)
+            continue
         low = reach
         for c in p.getClosestPoints(body, other, reach, physicsClientId=cid):
             d = c[8]
