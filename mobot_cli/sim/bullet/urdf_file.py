@@ -10,6 +10,7 @@ for a line broken between its attributes.
 
 from __future__ import annotations
 
+import functools
 import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -48,9 +49,17 @@ def urdf_path(text: str, folder: str = "urdf") -> Path:
         cache.store_file(folder, f"{digest}.urdf", data, bounded=True)
 
 
-def pybullet_file(urdf: str) -> Path:
-    """The file PyBullet loads for URDF text: ``pybullet_text`` of it, written by ``urdf_path``."""
-    return urdf_path(pybullet_text(urdf))
+def pybullet_file(urdf: str, known: dict[str, Path] | None = None) -> Path:
+    """The file PyBullet loads for URDF text: ``pybullet_text`` of it, written by ``urdf_path``.
+    ``known``: the files found so far (a fleet's robots share their text), kept up to date."""
+    if known is None:
+        return urdf_path(pybullet_text(urdf))
+    path = known.get(urdf)
+    if path is None or not path.is_file():  # a file pruned from the cache meanwhile is written again
+        if len(known) >= 64:
+            known.clear()
+        path = known[urdf] = urdf_path(pybullet_text(urdf))
+    return path
 
 
 def fits(text: str) -> bool:
@@ -145,6 +154,7 @@ def _split_tag(line: str) -> list[str]:
     return [piece for piece in _ATTRIBUTE.sub(lambda m: "\n" + indent + m.group(0)[1:], line).split("\n")]
 
 
+@functools.lru_cache(maxsize=32)  # a fleet's robots share their text: read once
 def links_with_friction(text: str) -> frozenset[str]:
     """Names of links whose URDF sets ``<contact><lateral_friction>`` (their author chose it)."""
     root = ET.fromstring(text)

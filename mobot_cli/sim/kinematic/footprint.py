@@ -94,8 +94,10 @@ def _round_about(cid: int, body: int, link: int, origin: np.ndarray, axis: np.nd
             continue
         if kind not in (CYLINDER, CAPSULE):
             return False
-        along = np.array(p.getMatrixFromQuaternion(orn)).reshape(3, 3)[:, 2]
-        if np.linalg.norm(np.cross(along, axis)) > ROUND:
+        m = p.getMatrixFromQuaternion(orn)
+        along = (m[2], m[5], m[8])  # the shape's z axis in the world
+        if math.hypot(along[1] * axis[2] - along[2] * axis[1], along[2] * axis[0] - along[0] * axis[2],
+                      along[0] * axis[1] - along[1] * axis[0]) > ROUND:
             return False
     return True
 

@@ -69,7 +69,7 @@ def robot_pairs(everyone: list, reach: np.ndarray, measured: np.ndarray, moves,
         moving[rows] = True
     i, j = close_pairs(x, y, limit, moving)
     if not len(i):
-        return {}
+        return _with_touched({}, everyone, moves)
     dx, dy = x[i] - x[j], y[i] - y[j]
     travel = np.fromiter([m.travel for m in everyone], float, n)
     margin = bound[i] + bound[j] + CONTACT_SLOP
@@ -81,7 +81,23 @@ def robot_pairs(everyone: list, reach: np.ndarray, measured: np.ndarray, moves,
     out: dict = {}
     for a, b in zip(i[keep].tolist(), j[keep].tolist()):
         out.setdefault(everyone[a], []).append(everyone[b])
-    return out
+    return _with_touched(out, everyone, moves)
+
+
+def _with_touched(near: dict, everyone: list, moves) -> dict:
+    """``near`` with the robots each moving robot touched at its last query added: what it
+    touched is asked again, wherever either went since."""
+    by_body = None
+    for mover, _ in moves:
+        if not mover.touches:
+            continue
+        if by_body is None:
+            by_body = {m.robot.body: m for m in everyone}
+        for body in mover.touches:
+            other = by_body.get(body)
+            if other is not None and other is not mover and other not in near.get(mover, ()):
+                near.setdefault(mover, []).append(other)
+    return near
 
 
 def footprint_gaps(everyone: list, x: np.ndarray, y: np.ndarray, shapes: np.ndarray, i: np.ndarray,

@@ -66,6 +66,7 @@ class KinematicWorld(World):
         self._measured = np.zeros((0, 0))
         self._room = self._measured  # _measured is its top-left corner (see _reindex)
         self._reach = np.zeros(0)
+        self._rects: dict[tuple, tuple | None] = {}  # (URDF, joint positions) -> its footprint
         self._shapes = np.zeros((0, 4))  # footprints: centre x, y and half sizes (NaN: none), see pairs.py
         self._near: dict[str, Near] = {}
         self._floor = Floor(self._cid, world)
@@ -121,9 +122,12 @@ class KinematicWorld(World):
             mover = kind(sim, self.physics.dt, lo[2], reach,
                          feet(self._probes, sim.body, lo, (x, y, sim.spawn_xy_yaw[2])))
             mover.above = hi[2] - z  # its highest point above its link origin
-            if mover.level:  # its footprint, measured facing +x
-                mover.place(mover.x, mover.y, mover.z, 0.0)
-                mover.rect, mover.synced = rectangle(self._cid, sim.body, mover.x, mover.y), False
+            if mover.level:  # its footprint, measured facing +x (once for robots alike)
+                key = (robot.urdf, tuple(sorted(mover.positions.items())))
+                if key not in self._rects:
+                    mover.place(mover.x, mover.y, mover.z, 0.0)
+                    self._rects[key], mover.synced = rectangle(self._cid, sim.body, mover.x, mover.y), False
+                mover.rect = self._rects[key]
             floor = self._floor_under([mover], mover.floor + SUPPORT_BAND)[0]
             if not np.isfinite(floor):
                 raise SpawnError(f"robot '{robot.name}' has no floor under it",
@@ -231,14 +235,7 @@ class KinematicWorld(World):
 
     def _robot_pairs(self, moves) -> dict[Mover, list[Mover]]:
         """The robots each moving robot might touch this step (sim/kinematic/pairs.py)."""
-        near = robot_pairs(self._order, self._reach, self._measured, moves, self._shapes)
-        for mover, _ in moves:  # what it touched is asked again, wherever it went since
-            for body in mover.touches:
-                hit = self._by_body.get(body)
-                other = self._movers.get(hit.name) if hit is not None else None
-                if other is not None and other is not mover and other not in near.get(mover, ()):
-                    near.setdefault(mover, []).append(other)
-        return near
+        return robot_pairs(self._order, self._reach, self._measured, moves, self._shapes)
 
     def _move(self, mover: Mover, motion, others: list[Mover]) -> bool:
         """One robot's step, asking PyBullet what is in its way (step() makes a step in open

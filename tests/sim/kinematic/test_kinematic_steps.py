@@ -161,10 +161,11 @@ def brute_force_pairs(movers, moves, reach, measured):
 
 
 class FakeMover:
-    __slots__ = ("index", "x", "y", "travel", "bound")
+    __slots__ = ("index", "x", "y", "travel", "bound", "touches")
 
     def __init__(self, index, x, y, travel, bound):
         self.index, self.x, self.y, self.travel, self.bound = index, x, y, travel, bound
+        self.touches = set()
 
 
 robot_st = st.tuples(st.floats(-2.0, 2.0), st.floats(-2.0, 2.0), st.floats(0.1, 0.4), st.floats(0.0, 2.0),
