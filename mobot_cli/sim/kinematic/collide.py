@@ -146,19 +146,15 @@ def distances(cid: int, body: int, statics: list[int], robots: list[int], reach:
                 low_static = d
             if d <= CONTACT_SLOP:
                 touching.add(other)
-    apart = {}
+    apart, closest = {}, p.getClosestPoints
     for other in robots:
         if known and other in known:
             apart[other] = min(known[other], reach)
             continue
-        low = reach
-        for c in p.getClosestPoints(body, other, reach, physicsClientId=cid):
-            d = c[8]
-            if d < low:
-                low = d
-            if d <= CONTACT_SLOP:
-                touching.add(other)
-        apart[other] = low
+        found = closest(body, other, reach, physicsClientId=cid)
+        low = apart[other] = min(reach, min([c[8] for c in found])) if found else reach
+        if low <= CONTACT_SLOP:  # reach is more
+            touching.add(other)
     return low_static, apart, touching
 
 
