@@ -12,6 +12,7 @@ import math
 from mobot_cli.sim.bullet.robot import SimRobot
 from mobot_cli.sim.bullet.steered import SteeredDrive
 from mobot_cli.sim.drive import Odometry, arc, body_twist, ramp, wheel_speeds, wrap_angle
+from mobot_cli.sim.kinematic.seen import Seen
 from mobot_cli.sim.pb import p
 from mobot_cli.sim.state import RobotState
 from mobot_cli.sim.steering import lever_arc, steering_angle
@@ -50,6 +51,7 @@ class Mover:
         self.queried = -1  # when it last asked what is in its way
         self.travel = 0.0  # m its collision points may have moved in all, summed over its steps
         self.index = -1  # its row in the World's pair matrix
+        self.seen = Seen()  # what its queries found, by pose
         self.rect: tuple[float, ...] | None = None  # its footprint (footprint.py), if it has one
         self.synced = False  # the PyBullet body is at this pose
         self.rates = self.goal = (0.0, 0.0)  # left, right wheel rates (rad/s, forward positive)

@@ -126,15 +126,16 @@ def _aabb(cid: int, uid: int):
 
 
 def distances(cid: int, body: int, statics: list[int], robots: list[int], reach: float, floor: float,
-              known: dict[int, float] | None = None):
+              known: dict[int, float] | None = None, static: tuple[float, frozenset] | None = None):
     """(nearest static obstacle, {robot body: its distance}, bodies touched within CONTACT_SLOP):
     distances in m, negative when overlapping, ``reach`` when nothing is that near; support (at
     the bottom of a robot whose lowest point is at ``floor``) does not count. ``known``: robots
-    known to be farther than CONTACT_SLOP, not asked: their distance is the one given (a lower
-    bound)."""
-    low_static, touching = reach, set()
+    not asked, with their distance (found before, or a lower bound farther than CONTACT_SLOP);
+    ``static``: the static part found before (nearest, bodies touched), not asked again."""
+    low_static, touching = static if static is not None else (reach, set())
+    touching = set(touching)
     band = floor + SUPPORT_BAND
-    for other in statics:
+    for other in statics if static is None else ():
         for c in p.getClosestPoints(body, other, reach, physicsClientId=cid):
             # contactNormalOnB points from the static body into the robot: up is a floor, under
             # the robot (not in its way) or holding it up; it is in the way only where it rises
@@ -149,7 +150,9 @@ def distances(cid: int, body: int, statics: list[int], robots: list[int], reach:
     apart, closest = {}, p.getClosestPoints
     for other in robots:
         if known and other in known:
-            apart[other] = min(known[other], reach)
+            low = apart[other] = min(known[other], reach)
+            if low <= CONTACT_SLOP:  # found before, touching
+                touching.add(other)
             continue
         found = closest(body, other, reach, physicsClientId=cid)
         low = apart[other] = min(reach, min([c[8] for c in found])) if found else reach

@@ -11,6 +11,7 @@ from mobot_cli.sim.contacts import CONTACT_SLOP
 from mobot_cli.sim.kinematic.body import Mover
 from mobot_cli.sim.kinematic.collide import QUERY_REACH, Near, distances, nearest
 from mobot_cli.sim.kinematic.footprint import apart_from
+from mobot_cli.sim.kinematic.seen import Seen
 
 # How far a robot may end up inside another body (m): the bisection stops within this.
 PENETRATION = 0.001
@@ -20,11 +21,12 @@ MIN_MOVE = 1e-4  # m
 
 
 def fit(cid: int, mover: Mover, distance: float, turn: float, others: list[Mover], near: Near,
-        bodies: list[int]):
+        bodies: list[int], seen: Seen):
     """The largest part of the step (1.0 when all of it) that does not push the robot into
     anything deeper than PENETRATION (or than it already is), and the distances there (a
     ``distances`` answer); the robot's body is left there. ``others``: the robots it might
-    touch, ``near``: the static bodies around it (found already), ``bodies``: movers' bodies."""
+    touch, ``near``: the static bodies around it (found already), ``bodies``: movers' bodies,
+    ``seen``: what its queries found before (seen.py)."""
     body, z, reach = mover.robot.body, mover.z, mover.reach + QUERY_REACH
     robots = [other.robot.body for other in others] + bodies
     shaped = apart_from(mover, others)
@@ -34,8 +36,13 @@ def fit(cid: int, mover: Mover, distance: float, turn: float, others: list[Mover
         mover.place(x, y, z, yaw)
         # Robots whose footprints are farther than ``limit``: not asked. Past CONTACT_SLOP none
         # is touched, nor in the way (every try below compares with a floor under zero).
-        known = shaped(x, y, yaw, limit) if shaped is not None else None
-        return distances(cid, body, near.within(x, y, reach), robots, QUERY_REACH, mover.floor, known)
+        known = shaped(x, y, yaw, limit) if shaped is not None else {}
+        key = (x, y, z, yaw, mover.floor)
+        static, before = seen.recall(key, others, known)
+        found = distances(cid, body, near.within(x, y, reach), robots, QUERY_REACH, mover.floor,
+                          {**before, **known}, static)
+        seen.keep(key, found, robots, known, bodies)
+        return found
 
     full = at(1.0)
     if nearest(full) >= -PENETRATION or mover.bound == 0.0:

@@ -82,6 +82,7 @@ class KinematicWorld(World):
         self._idle = 0  # samples without touches not yet told to _contacts
         # Counts every move and query (Mover.moved, queried, stuck): which came first, within a step too.
         self._clock = 0
+        self._epoch = 0  # counts what may move a body's links unseen: Mover.seen forgets (seen.py)
         self._all_synced = -1  # the step at which every body was last put where its robot is
         self._mover_bodies: list[int] = []  # movers' bodies in the world this step (step() finds them)
 
@@ -96,7 +97,7 @@ class KinematicWorld(World):
         self._sync_all()  # checked against the other robots where they are
         super().teleport(name, pose, linear, angular)
         mover = self._movers[name]
-        self._clock += 1
+        self._clock, self._epoch = self._clock + 1, self._epoch + 1
         mover.relocate(self._clock)
         self._all_synced = -1
         self._measured[mover.index, :] = -np.inf  # its distances to the others: measure again
@@ -106,12 +107,14 @@ class KinematicWorld(World):
         """The root link's world pose and velocity now (its body put where it is first)."""
         if name in self._movers:
             self._movers[name].sync(full=True)
+            self._epoch += 1
             self._robot_boxes.forget()  # its wheels turned: its box may have changed
         return super().kinematics(name)
 
     def spawn(self, robot: RobotPlan) -> None:
         """Load and check the robot as the physics engine does, then stand it on the floor."""
         self._sync_all()  # a spawn is checked against the other robots where they are
+        self._epoch += 1  # a body id may be a removed robot's
         super().spawn(robot)
         sim = self._robots[robot.name]
         try:
@@ -144,6 +147,7 @@ class KinematicWorld(World):
     def remove(self, name: str) -> None:
         """Delete a robot from the world."""
         super().remove(name)
+        self._epoch += 1
         gone = self._movers.pop(name, None)
         if gone is not None:
             keep = [m.index for m in self._movers.values()]
@@ -252,7 +256,9 @@ class KinematicWorld(World):
             other.sync()
         near = self._near[mover.robot.name]
         near.around(mover.x, mover.y, mover.z, mover.reach, mover.height, mover.floor, mover.z + mover.above)
-        fraction, (static, apart, touching) = fit(self._cid, mover, distance, turn, others, near, self._mover_bodies)
+        mover.seen.start(self._epoch, self._clock)
+        fraction, (static, apart, touching) = fit(self._cid, mover, distance, turn, others, near, self._mover_bodies,
+                                                  mover.seen)
         if not self._tops:  # no static body but the ground: nothing static is ever in the way
             static = math.inf
         elif not others and not self._near[mover.robot.name].bodies:
@@ -309,22 +315,15 @@ class KinematicWorld(World):
     def _count(self) -> None:
         """One contact sample from the touches the robots' last queries found (and the movers' bodies)."""
         met = self._mover_touches() if self._stage is not None else set()
-        for mover in self._order:
-            if mover.touches:
-                break
-        else:
-            if met:
-                if self._idle:
-                    self._contacts.idle(self._idle)
-                    self._idle = 0
-                self._contacts.record(met)
-                return
+        if any(mover.touches for mover in self._order):
+            met = touched_pairs(self._order, self._by_body) | met
+        elif not met:
             self._idle += 1  # told to the counter before the next sample with touches
             return
         if self._idle:
             self._contacts.idle(self._idle)
             self._idle = 0
-        self._contacts.record(touched_pairs(self._order, self._by_body) | met)
+        self._contacts.record(met)
 
     def _mover_touches(self) -> set:
         """(robot, ("body", mover body)) of the robots touching a mover's body now."""
@@ -348,7 +347,7 @@ class KinematicWorld(World):
             return
         for mover in self._movers.values():
             mover.sync(full)
-        self._all_synced = self._steps
+        self._all_synced, self._epoch = self._steps, self._epoch + full  # full: wheels turned
 
     def sense(self, due: list[tuple[str, str]]) -> list[object]:
         """Readings due now: the robots' bodies are put where they are first."""

@@ -224,3 +224,27 @@ def test_static_walls_keep_their_place_in_a_packed_fleet(tmp_path):
     (poses, hits) = trace(plan, 30)
     assert poses[-1][0][0] == pytest.approx(0.6 - 0.05 - 0.1, abs=0.002)  # against the wall
     assert hits[0] == 1
+
+
+def test_answers_at_a_pose_are_kept_for_the_robots_that_have_not_moved_since():
+    """seen.py: at a pose asked before, the static answer and the distances of robots not moved
+    since are given back; a robot that moved, a lower bound, a mover's body or a new epoch are
+    asked again."""
+    from types import SimpleNamespace
+
+    from mobot_cli.sim.kinematic.seen import Seen
+
+    def robot(body, moved):
+        return SimpleNamespace(robot=SimpleNamespace(body=body), moved=moved)
+
+    seen, key = Seen(), (1.0, 2.0, 0.1, 0.3, 0.0)
+    seen.start(epoch=0, clock=10)
+    assert seen.recall(key, [robot(5, 3)], {}) == (None, {})
+    # asked about statics 1, 2 (touching 2) and robots 5, 6, 7 (7 only bounded), and mover body 9
+    seen.keep(key, (0.02, {5: -0.0005, 6: 0.2, 7: 0.3, 9: 0.1}, {2, 5}), [5, 6, 7, 9], {7: 0.3}, [9])
+    seen.start(epoch=0, clock=14)
+    static, before = seen.recall(key, [robot(5, 9), robot(6, 12), robot(7, 1)], {})
+    assert static == (0.02, frozenset({2})) and before == {5: -0.0005}  # 6 moved at 12, after 10
+    assert seen.recall((1.0, 2.0, 0.1, 0.3, 0.01), [robot(5, 9)], {}) == (None, {})  # another floor
+    seen.start(epoch=1, clock=15)  # a sensor turned the wheels, a robot was spawned...
+    assert seen.recall(key, [robot(5, 9)], {}) == (None, {})
