@@ -28,8 +28,14 @@ DIRECTIONS = ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (-1.0, 0.0, 0.0), (0.0, 1.0, 0.0
               (0.0, -1.0, 0.0))
 
 
+# Rays see static bodies only (PyBullet's collision filter group of bodies without mass): a ray
+# from inside a robot's convex shape finds it again at every RAY_STEP, and would walk through a
+# neighbouring robot in MAX_CROSSINGS tiny steps, never reaching the world behind it.
+STATIC_GROUP = 2
+
+
 def surfaces_along(cid: int, origins, directions) -> list[list[tuple[int, float]]]:
-    """For each ray (origin, direction), the (body, distance) of every surface it crosses."""
+    """For each ray (origin, direction), the (body, distance) of every static surface it crosses."""
     found: list[list[tuple[int, float]]] = [[] for _ in origins]
     starts = [tuple(o) for o in origins]
     travelled = [0.0] * len(origins)
@@ -39,7 +45,7 @@ def surfaces_along(cid: int, origins, directions) -> list[list[tuple[int, float]
             break
         ends = [tuple(s + d * (RAY_REACH - travelled[i]) for s, d in zip(starts[i], directions[i]))
                 for i in live]
-        hits = p.rayTestBatch([starts[i] for i in live], ends, physicsClientId=cid)
+        hits = p.rayTestBatch([starts[i] for i in live], ends, collisionFilterMask=STATIC_GROUP, physicsClientId=cid)
         still = []
         for i, hit in zip(live, hits):
             if hit[0] < 0:

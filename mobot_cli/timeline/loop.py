@@ -54,6 +54,7 @@ class Timeline:
         self.plan, self.world = plan, world
         self.rate_hz = plan.physics.rate_hz
         self.robots: dict[str, RobotPlan] = {}  # the plans of the robots in the world, in spawn order
+        self._namespaces: set[str] = set()  # theirs (a fleet's spawns: not N^2 looks)
         self._held: list[Record] | None = []  # records made before a consumer is attached
         self._consumers: list[Consumer] = []
         self._consume: Consumer = self._held.append
@@ -265,11 +266,11 @@ class Timeline:
     def spawn(self, robot: RobotPlan, by: str) -> None:
         """Place a robot now (SpawnError when refused); it gets a row at once unless the log
         row of this step is still to come."""
-        taken = {plan.namespace: name for name, plan in self.robots.items()}
-        if robot.name in self.robots or robot.namespace in taken:
+        if robot.name in self.robots or robot.namespace in self._namespaces:
             raise NameTaken(f"robot '{robot.name}' or namespace '{robot.namespace}' is already in the world")
         self.world.spawn(robot)
         self.robots[robot.name] = robot
+        self._namespaces.add(robot.namespace)
         if self._clearance:
             reach = max(self._clearance.get(robot.name, 0.0), self._clearance.get("all", 0.0))
             if reach:
@@ -294,7 +295,7 @@ class Timeline:
             self._consume(Sample(self.step, {name: self.world.read(name)}, complete=False))
         self._cancel(name)
         self.world.remove(name)
-        del self.robots[name]
+        self._namespaces.discard(self.robots.pop(name).namespace)
         self._stops.pop(name, None)
         self._consume(Deleted(self.step, name, by, message))
 

@@ -119,3 +119,13 @@ def test_goto_drives_with_the_goal_controller_and_reports_how_it_ended():
         sim.run_for(1.0)
         sim.command("r", 0.0, 0.0)  # a command takes over
         assert sim.goal_status("r") == "cancelled"
+
+
+def test_a_deleted_robots_name_and_namespace_can_be_taken_again():
+    with Simulation.open("empty") as sim:
+        sim.spawn("a", "mobot")
+        sim.delete("a")
+        sim.spawn("a", "mobot", x=2.0)  # its namespace /a is free again
+        assert sim.robots == ["a"] and sim.state("a").true_x == pytest.approx(2.0, abs=1e-6)
+        with pytest.raises(SpawnError, match="already in the world"):
+            sim.spawn("a", "mobot", x=-2.0)

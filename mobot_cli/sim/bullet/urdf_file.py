@@ -49,9 +49,17 @@ def urdf_path(text: str, folder: str = "urdf") -> Path:
         cache.store_file(folder, f"{digest}.urdf", data, bounded=True)
 
 
-def pybullet_file(urdf: str) -> Path:
-    """The file PyBullet loads for URDF text: ``pybullet_text`` of it, written by ``urdf_path``."""
-    return urdf_path(pybullet_text(urdf))
+def pybullet_file(urdf: str, known: dict[str, Path] | None = None) -> Path:
+    """The file PyBullet loads for URDF text: ``pybullet_text`` of it, written by ``urdf_path``.
+    ``known``: the files found so far (a fleet's robots share their text), kept up to date."""
+    if known is None:
+        return urdf_path(pybullet_text(urdf))
+    path = known.get(urdf)
+    if path is None or not path.is_file():  # a file pruned from the cache meanwhile is written again
+        if len(known) >= 64:
+            known.clear()
+        path = known[urdf] = urdf_path(pybullet_text(urdf))
+    return path
 
 
 def fits(text: str) -> bool:
@@ -149,7 +157,8 @@ def _split_tag(line: str) -> list[str]:
 @functools.lru_cache(maxsize=64)
 def links_with_friction(text: str) -> frozenset[str]:
     """Names of links whose URDF sets ``<contact><lateral_friction>`` (their author chose it);
-    kept for the next spawn of the same text (a sweep's runs spawn the same robot again and again)."""
+    kept for the next spawn of the same text (a sweep's runs and a fleet's robots spawn the same
+    robot again and again)."""
     root = ET.fromstring(text)
     return frozenset(
         link.get("name", "")

@@ -9,6 +9,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import replace
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from mobot_cli.common.streams import silenced
@@ -79,6 +80,7 @@ class World(MoversDoor, Settling):
         self._clearance: dict[str, float] = {}  # robot -> how far its clearance is measured (m)
         self._health = Health(self._cid, physics.faults, physics.rate_hz)
         self._robot_boxes = RobotBoxes()  # the robots' boxes, for spawn checks (sim/broadphase.py)
+        self._files: dict[str, Path] = {}  # URDF text -> the file PyBullet loads it from (_load)
         # Said once during the run (a stalled robot, a clamped car turn); a Timeline hands them on to summary.json.
         self.notices: list[str] = []
         # A robot's body kept for the same first spawn (sim/bullet/kept_body.py); until it is taken it waits.
@@ -158,10 +160,10 @@ class World(MoversDoor, Settling):
     def _load(self, urdf: str, xyz, quat, fixed: bool = False) -> int:
         """Load URDF text (in lines PyBullet reads whole: urdf_file.pybullet_text); -1 when PyBullet
         refuses it."""
-        path = str(pybullet_file(urdf))
+        path = pybullet_file(urdf, self._files)
         try:
             with silenced(1):  # the importer prints its warnings to stdout
-                return p.loadURDF(path, xyz, quat, useFixedBase=fixed,
+                return p.loadURDF(str(path), xyz, quat, useFixedBase=fixed,
                                   flags=URDF_FLAGS, physicsClientId=self._cid)
         except p.error:
             return -1

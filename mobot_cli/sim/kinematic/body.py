@@ -12,6 +12,7 @@ import math
 from mobot_cli.sim.bullet.robot import SimRobot
 from mobot_cli.sim.bullet.steered import SteeredDrive
 from mobot_cli.sim.drive import Odometry, arc, body_twist, ramp, wheel_speeds, wrap_angle
+from mobot_cli.sim.kinematic.seen import Seen
 from mobot_cli.sim.pb import p
 from mobot_cli.sim.state import RobotState
 from mobot_cli.sim.steering import lever_arc, steering_angle
@@ -44,11 +45,14 @@ class Mover:
         self.clear = 0.0  # m to the nearest static body (not floor) when last measured
         self.used = 0.0  # m the robot's points may have moved since: query again past ``clear``
         self.touches: set[int] = set()  # bodies it touched at the last query
-        self.stuck: tuple | None = None  # (motion, step): that motion was blocked entirely at that step
-        self.moved = 0  # the last step its pose changed: a robot stuck against it stays stuck till then
-        self.queried = -1  # the step of its last collision query
+        # Ticks of the World's clock (KinematicWorld._clock), which counts moves and queries:
+        self.stuck: tuple | None = None  # (motion, tick): that motion was blocked entirely at that query
+        self.moved = 0  # when its pose last changed: a robot stuck against it stays stuck till then
+        self.queried = -1  # when it last asked what is in its way
         self.travel = 0.0  # m its collision points may have moved in all, summed over its steps
         self.index = -1  # its row in the World's pair matrix
+        self.seen = Seen()  # what its queries found, by pose
+        self.rect: tuple[float, ...] | None = None  # its footprint (footprint.py), if it has one
         self.synced = False  # the PyBullet body is at this pose
         self.rates = self.goal = (0.0, 0.0)  # left, right wheel rates (rad/s, forward positive)
         # What the rates give, worked out once per change of ``rates`` (they are a new tuple then):
@@ -191,7 +195,7 @@ class Mover:
             velocities[name] = rate
         self._wheel_steps, self.velocities = steps, velocities
 
-    def relocate(self, step: int) -> None:
+    def relocate(self, tick: int) -> None:
         """Take the PyBullet body's pose as the robot's (after a teleport): the floor under it is
         where it stands now, and nothing near it is known any more."""
         x, y, z, roll, pitch, yaw = self.robot.link_pose_rpy()
@@ -201,7 +205,7 @@ class Mover:
         self.tilt, self.level = (roll, pitch), roll == 0.0 and pitch == 0.0
         self.floor = z - self.height
         self.clear = self.used = 0.0
-        self.touches, self.stuck, self.moved, self.synced = set(), None, step, True
+        self.touches, self.stuck, self.moved, self.synced = set(), None, tick, True
         self._stayed = None
 
     def link_pose(self, x: float, y: float, z: float, yaw: float):

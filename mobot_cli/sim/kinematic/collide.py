@@ -125,13 +125,17 @@ def _aabb(cid: int, uid: int):
     return [min(b[0][i] for b in found) for i in range(3)], [max(b[1][i] for b in found) for i in range(3)]
 
 
-def distances(cid: int, body: int, statics: list[int], robots: list[int], reach: float, floor: float):
+def distances(cid: int, body: int, statics: list[int], robots: list[int], reach: float, floor: float,
+              known: dict[int, float] | None = None, static: tuple[float, frozenset] | None = None):
     """(nearest static obstacle, {robot body: its distance}, bodies touched within CONTACT_SLOP):
     distances in m, negative when overlapping, ``reach`` when nothing is that near; support (at
-    the bottom of a robot whose lowest point is at ``floor``) does not count."""
-    low_static, touching = reach, set()
+    the bottom of a robot whose lowest point is at ``floor``) does not count. ``known``: robots
+    not asked, with their distance (found before, or a lower bound farther than CONTACT_SLOP);
+    ``static``: the static part found before (nearest, bodies touched), not asked again."""
+    low_static, touching = static if static is not None else (reach, set())
+    touching = set(touching)
     band = floor + SUPPORT_BAND
-    for other in statics:
+    for other in statics if static is None else ():
         for c in p.getClosestPoints(body, other, reach, physicsClientId=cid):
             # contactNormalOnB points from the static body into the robot: up is a floor, under
             # the robot (not in its way) or holding it up; it is in the way only where it rises
@@ -143,16 +147,17 @@ def distances(cid: int, body: int, statics: list[int], robots: list[int], reach:
                 low_static = d
             if d <= CONTACT_SLOP:
                 touching.add(other)
-    apart = {}
+    apart, closest = {}, p.getClosestPoints
     for other in robots:
-        low = reach
-        for c in p.getClosestPoints(body, other, reach, physicsClientId=cid):
-            d = c[8]
-            if d < low:
-                low = d
-            if d <= CONTACT_SLOP:
+        if known and other in known:
+            low = apart[other] = min(known[other], reach)
+            if low <= CONTACT_SLOP:  # found before, touching
                 touching.add(other)
-        apart[other] = low
+            continue
+        found = closest(body, other, reach, physicsClientId=cid)
+        low = apart[other] = min(reach, min([c[8] for c in found])) if found else reach
+        if low <= CONTACT_SLOP:  # reach is more
+            touching.add(other)
     return low_static, apart, touching
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from mobot_cli.sim.contacts import CONTACT_SLOP
+from mobot_cli.sim.kinematic.footprint import SLACK
 
 # The window is widened by this (relative) before the exact test, so that no rounding of
 # x - limit can leave out a pair the exact test keeps.
@@ -42,10 +43,14 @@ def close_pairs(x: np.ndarray, y: np.ndarray, limit: float, rows: np.ndarray | N
     return i[first], j[first]
 
 
-def robot_pairs(everyone: list, reach: np.ndarray, measured: np.ndarray, moves) -> dict:
+def robot_pairs(everyone: list, reach: np.ndarray, measured: np.ndarray, moves,
+                shapes: np.ndarray | None = None) -> dict:
     """The robots each moving robot might touch this step, in a few numpy passes:
     not those whose circles (reach) stay apart by more than both their steps, nor those
-    whose distance, last measured, is more than both have travelled since (and this step).
+    whose distance, last measured, is more than both have travelled since (and this step),
+    nor those whose footprints do (``shapes``: each robot's footprint rectangle as centre x, y
+    and half sizes in its root frame, NaN for none, see footprint.py), unless the moving robot
+    touched something at its last query (what it touched must be asked again).
     ``everyone``: the robots (Movers) in order; ``reach``: their circles' radii; ``measured``:
     pair distances when last measured plus both travels then (world._measured)."""
     n = len(everyone)
@@ -64,14 +69,74 @@ def robot_pairs(everyone: list, reach: np.ndarray, measured: np.ndarray, moves) 
         moving[rows] = True
     i, j = close_pairs(x, y, limit, moving)
     if not len(i):
-        return {}
+        return _with_touched({}, everyone, moves)
     dx, dy = x[i] - x[j], y[i] - y[j]
     travel = np.fromiter([m.travel for m in everyone], float, n)
     margin = bound[i] + bound[j] + CONTACT_SLOP
     gap = np.hypot(dx, dy) - reach[i] - reach[j]
     left = measured[i, j] - travel[i] - travel[j]
     keep = (gap <= margin) & (left <= margin)
+    if shapes is not None:
+        keep &= ~(footprint_gaps(everyone, x, y, shapes, i, j) > margin)
     out: dict = {}
     for a, b in zip(i[keep].tolist(), j[keep].tolist()):
         out.setdefault(everyone[a], []).append(everyone[b])
-    return out
+    return _with_touched(out, everyone, moves)
+
+
+def _with_touched(near: dict, everyone: list, moves) -> dict:
+    """``near`` with the robots each moving robot touched at its last query added: what it
+    touched is asked again, wherever either went since."""
+    by_body = None
+    for mover, _ in moves:
+        if not mover.touches:
+            continue
+        if by_body is None:
+            by_body = {m.robot.body: m for m in everyone}
+        for body in mover.touches:
+            other = by_body.get(body)
+            if other is not None and other is not mover and other not in near.get(mover, ()):
+                near.setdefault(mover, []).append(other)
+    return near
+
+
+def footprint_gaps(everyone: list, x: np.ndarray, y: np.ndarray, shapes: np.ndarray, i: np.ndarray,
+                   j: np.ndarray) -> np.ndarray:
+    """footprint.gap of each pair (i, j) of robots at (x, y) now, NaN where either has no
+    footprint or is not level, or i touched something at its last query."""
+    n = len(everyone)
+    yaw = np.fromiter([m.yaw for m in everyone], float, n)
+    level = np.fromiter([m.level for m in everyone], bool, n)
+    free = np.fromiter([not m.touches for m in everyone], bool, n)
+    c, s = np.cos(yaw), np.sin(yaw)
+    mx, my, hx, hy = shapes.T
+    cx, cy = x + c * mx - s * my, y + s * mx + c * my  # the rectangles' centres in the world
+    dx, dy = cx[j] - cx[i], cy[j] - cy[i]
+    ac, as_, bc, bs = c[i], s[i], c[j], s[j]
+    cd, sd = np.abs(bc * ac + bs * as_), np.abs(bs * ac - bc * as_)
+    ahx, ahy, bhx, bhy = hx[i], hy[i], hx[j], hy[j]
+    found = np.maximum.reduce([np.abs(dx * ac + dy * as_) - ahx - bhx * cd - bhy * sd,
+                               np.abs(dy * ac - dx * as_) - ahy - bhx * sd - bhy * cd,
+                               np.abs(dx * bc + dy * bs) - bhx - ahx * cd - ahy * sd,
+                               np.abs(dy * bc - dx * bs) - bhy - ahx * sd - ahy * cd]) - SLACK
+    found[~(level[i] & level[j] & free[i])] = np.nan
+    return found
+
+
+def touched_pairs(everyone: list, by_body: dict) -> set:
+    """A contact sample from what each robot (Mover) touched at its last query: (robot,
+    ("body", id)) for a static body, (robot, ("robot", name)) both ways for two robots
+    (``by_body``: body id -> SimRobot of the robots)."""
+    pairs = set()
+    for mover in everyone:
+        if not mover.touches:
+            continue
+        robot = mover.robot
+        for other in mover.touches:
+            hit = by_body.get(other)
+            if hit is None:
+                pairs.add((robot, ("body", other)))
+            elif hit is not robot:
+                pairs.add((robot, ("robot", hit.name)))
+                pairs.add((hit, ("robot", robot.name)))
+    return pairs

@@ -35,21 +35,16 @@ from mobot_cli.sim.kinematic.collide import (
     Floor,
     Near,
     body_top,
-    distances,
     feet,
-    nearest,
     static_boxes,
 )
+from mobot_cli.sim.kinematic.fit import fit
+from mobot_cli.sim.kinematic.footprint import rectangle, shape
 from mobot_cli.sim.kinematic.holonomic import HolonomicMover
-from mobot_cli.sim.kinematic.pairs import robot_pairs
+from mobot_cli.sim.kinematic.pairs import robot_pairs, touched_pairs
 from mobot_cli.sim.placement import body_bounds
 from mobot_cli.sim.state import RobotState
 
-# How far a robot may end up inside another body (m): the bisection stops within this.
-PENETRATION = 0.001
-BISECTIONS = 8  # a 0.1 m step is resolved to 0.4 mm
-# A blocked robot makes no move shorter than this (it would creep into the tolerance forever).
-MIN_MOVE = 1e-4  # m
 # The floor under a robot changes only by more than this (rays in float32 jitter below it).
 FLOOR_TOLERANCE = 1e-6  # m
 
@@ -71,6 +66,8 @@ class KinematicWorld(World):
         self._measured = np.zeros((0, 0))
         self._room = self._measured  # _measured is its top-left corner (see _reindex)
         self._reach = np.zeros(0)
+        self._rects: dict[tuple, tuple | None] = {}  # (URDF, joint positions) -> its footprint
+        self._shapes = np.zeros((0, 4))  # footprints: centre x, y and half sizes (NaN: none), see pairs.py
         self._near: dict[str, Near] = {}
         self._floor = Floor(self._cid, world)
         self._flat = self._floor.flat and world.ground_plane  # the floor is z = 0 everywhere
@@ -83,6 +80,9 @@ class KinematicWorld(World):
         self._contacts = ContactCounter(max(1, round(RELEASE_SAMPLES * sample_hz / CONTACT_RATE_HZ)),
                                         name_of=self._hit_name, person=self._is_person)
         self._idle = 0  # samples without touches not yet told to _contacts
+        # Counts every move and query (Mover.moved, queried, stuck): which came first, within a step too.
+        self._clock = 0
+        self._epoch = 0  # counts what may move a body's links unseen: Mover.seen forgets (seen.py)
         self._all_synced = -1  # the step at which every body was last put where its robot is
         self._mover_bodies: list[int] = []  # movers' bodies in the world this step (step() finds them)
 
@@ -97,7 +97,8 @@ class KinematicWorld(World):
         self._sync_all()  # checked against the other robots where they are
         super().teleport(name, pose, linear, angular)
         mover = self._movers[name]
-        mover.relocate(self._steps)
+        self._clock, self._epoch = self._clock + 1, self._epoch + 1
+        mover.relocate(self._clock)
         self._all_synced = -1
         self._measured[mover.index, :] = -np.inf  # its distances to the others: measure again
         self._measured[:, mover.index] = -np.inf
@@ -106,12 +107,14 @@ class KinematicWorld(World):
         """The root link's world pose and velocity now (its body put where it is first)."""
         if name in self._movers:
             self._movers[name].sync(full=True)
+            self._epoch += 1
             self._robot_boxes.forget()  # its wheels turned: its box may have changed
         return super().kinematics(name)
 
     def spawn(self, robot: RobotPlan) -> None:
         """Load and check the robot as the physics engine does, then stand it on the floor."""
         self._sync_all()  # a spawn is checked against the other robots where they are
+        self._epoch += 1  # a body id may be a removed robot's
         super().spawn(robot)
         sim = self._robots[robot.name]
         try:
@@ -122,6 +125,12 @@ class KinematicWorld(World):
             mover = kind(sim, self.physics.dt, lo[2], reach,
                          feet(self._probes, sim.body, lo, (x, y, sim.spawn_xy_yaw[2])))
             mover.above = hi[2] - z  # its highest point above its link origin
+            if mover.level:  # its footprint, measured facing +x (once for robots alike)
+                key = (robot.urdf, tuple(sorted(mover.positions.items())))
+                if key not in self._rects:
+                    mover.place(mover.x, mover.y, mover.z, 0.0)
+                    self._rects[key], mover.synced = rectangle(self._cid, sim.body, mover.x, mover.y), False
+                mover.rect = self._rects[key]
             floor = self._floor_under([mover], mover.floor + SUPPORT_BAND)[0]
             if not np.isfinite(floor):
                 raise SpawnError(f"robot '{robot.name}' has no floor under it",
@@ -138,6 +147,7 @@ class KinematicWorld(World):
     def remove(self, name: str) -> None:
         """Delete a robot from the world."""
         super().remove(name)
+        self._epoch += 1
         gone = self._movers.pop(name, None)
         if gone is not None:
             keep = [m.index for m in self._movers.values()]
@@ -157,6 +167,7 @@ class KinematicWorld(World):
             self._order.append(mover)
             self._by_body[mover.robot.body] = mover.robot
             self._reach = np.append(self._reach, mover.reach)
+            self._shapes = np.vstack([self._shapes, shape(mover.rect)])
             n = len(self._order)
             if n > len(self._room):
                 room = np.full((2 * n, 2 * n), -np.inf)
@@ -169,6 +180,7 @@ class KinematicWorld(World):
         self._order = list(movers.values())
         self._by_body = {m.robot.body: m.robot for m in self._order}
         self._reach = np.array([m.reach for m in self._order])
+        self._shapes = np.array([shape(m.rect) for m in self._order]).reshape(-1, 4)
         for index, mover in enumerate(self._order):
             mover.index = index
         n, had = len(self._order), min(len(self._order), len(self._measured))
@@ -202,7 +214,7 @@ class KinematicWorld(World):
                 moves.append((mover, motion))
         if moves:
             near = self._robot_pairs(moves) if len(self._order) > 1 else {}
-            steps, move, moved = self._steps, self._move, []
+            move, moved = self._move, []
             # movers' bodies near a robot (sim/movers/stage.py): in the way as robots are, never skipped
             self._mover_bodies = self._stage.placed_bodies() if self._stage is not None else []
             for mover, motion in moves:
@@ -213,7 +225,8 @@ class KinematicWorld(World):
                     # no robot near: the whole step, no query.
                     mover.used += bound
                     mover.move(motion[0], motion[1], 1.0)
-                    mover.moved, mover.travel = steps, mover.travel + bound
+                    self._clock += 1
+                    mover.moved, mover.travel = self._clock, mover.travel + bound
                     moved.append(mover)
                 elif move(mover, motion, near.get(mover, ())):
                     moved.append(mover)
@@ -226,7 +239,7 @@ class KinematicWorld(World):
 
     def _robot_pairs(self, moves) -> dict[Mover, list[Mover]]:
         """The robots each moving robot might touch this step (sim/kinematic/pairs.py)."""
-        return robot_pairs(self._order, self._reach, self._measured, moves)
+        return robot_pairs(self._order, self._reach, self._measured, moves, self._shapes)
 
     def _move(self, mover: Mover, motion, others: list[Mover]) -> bool:
         """One robot's step, asking PyBullet what is in its way (step() makes a step in open
@@ -241,71 +254,31 @@ class KinematicWorld(World):
             return False  # touching, and nothing moved since: the same touches
         for other in others:
             other.sync()
-        fraction, (static, apart, touching) = self._fit(mover, distance, turn, others)
+        near = self._near[mover.robot.name]
+        near.around(mover.x, mover.y, mover.z, mover.reach, mover.height, mover.floor, mover.z + mover.above)
+        mover.seen.start(self._epoch, self._clock)
+        fraction, (static, apart, touching) = fit(self._cid, mover, distance, turn, others, near, self._mover_bodies,
+                                                  mover.seen)
         if not self._tops:  # no static body but the ground: nothing static is ever in the way
             static = math.inf
         elif not others and not self._near[mover.robot.name].bodies:
             # Nothing static within the box Near looked in: none within NEAR_MARGIN / 2 either.
             static = QUERY_REACH + NEAR_MARGIN / 2.0
-        mover.clear, mover.used, mover.touches, mover.queried = static, 0.0, touching, self._steps
         if motion is not None:
-            mover.stuck = (motion, self._steps) if fraction == 0.0 else None
             mover.move(distance, turn, fraction)
             if fraction > 0.0:
-                mover.moved, mover.travel = self._steps, mover.travel + bound * fraction
+                self._clock += 1
+                mover.moved, mover.travel = self._clock, mover.travel + bound * fraction
             mover.synced = True  # _fit left the body at the pose it moved to
+        self._clock += 1  # what the query found is where the robot is now: after its move
+        mover.clear, mover.used, mover.touches, mover.queried = static, 0.0, touching, self._clock
+        if motion is not None:
+            mover.stuck = (motion, self._clock) if fraction == 0.0 else None
         for other in others:  # distance now, plus both travels so far: see _robot_pairs
             i, j = mover.index, other.index
             self._measured[i, j] = self._measured[j, i] = \
                 apart.get(other.robot.body, QUERY_REACH) + mover.travel + other.travel
         return motion is not None and fraction > 0.0
-
-    def _fit(self, mover: Mover, distance: float, turn: float, others: list[Mover]):
-        """The largest part of the step (1.0 when all of it) that does not push the robot into
-        anything deeper than PENETRATION (or than it already is), and the distances there."""
-        near = self._near[mover.robot.name]
-        near.around(mover.x, mover.y, mover.z, mover.reach, mover.height, mover.floor, mover.z + mover.above)
-        body, z, reach = mover.robot.body, mover.z, mover.reach + QUERY_REACH
-        robots = [other.robot.body for other in others] + self._mover_bodies
-
-        def at(fraction: float):
-            x, y, yaw = mover.target(distance, turn, fraction)
-            mover.place(x, y, z, yaw)
-            return distances(self._cid, body, near.within(x, y, reach), robots, QUERY_REACH, mover.floor)
-
-        full = at(1.0)
-        if nearest(full) >= -PENETRATION or mover.bound == 0.0:
-            return 1.0, full
-        here = at(0.0)
-        floor = min(-PENETRATION, nearest(here))  # already deeper: it may not go deeper still
-        if nearest(full) >= floor:
-            at(1.0)
-            return 1.0, full
-        lo, hi, best = 0.0, 1.0, here
-        # Conservative advancement first: no point of the robot moves more than ``bound`` over
-        # the whole step, so the part of it within the clearance here (and the tolerance) is
-        # safe. Approaching a wall or a robot head-on, that is all the way: one query.
-        bound = mover.bound  # no point of the robot moves farther in the whole step
-        safe = (nearest(here) - floor) / bound if bound > 0.0 else 0.0
-        if safe * bound < MIN_MOVE:  # pressed against it already: stay put (and be stuck)
-            mover.place(mover.x, mover.y, z, mover.yaw)
-            return 0.0, here
-        if safe < 1.0:
-            found = at(safe)
-            if nearest(found) >= floor:
-                mover.place(*_xy_z_yaw(mover.target(distance, turn, safe), z))
-                return safe, found
-            hi = safe
-        for _ in range(BISECTIONS):
-            mid = (lo + hi) / 2.0
-            found = at(mid)
-            if nearest(found) >= floor:
-                lo, best = mid, found
-            else:
-                hi = mid
-        x, y, yaw = mover.target(distance, turn, lo)
-        mover.place(x, y, z, yaw)
-        return lo, best
 
     def _lift(self, moved: list[Mover]) -> None:
         """Stand the robots that moved on the floor now under them (one ray batch for all)."""
@@ -317,7 +290,8 @@ class KinematicWorld(World):
                     hint="Keep it on the world's floor, or give the world a ground plane.",
                     robot=mover.robot.name, step=self._steps, kind="off_floor")
             if abs(floor - mover.floor) > FLOOR_TOLERANCE:  # not the rays' rounding
-                mover.moved, mover.travel = self._steps, mover.travel + abs(floor - mover.floor)
+                self._clock += 1
+                mover.moved, mover.travel = self._clock, mover.travel + abs(floor - mover.floor)
                 mover.used += abs(floor - mover.floor)
                 mover.floor, mover.z = floor, floor + mover.height
                 mover.synced = False
@@ -341,35 +315,15 @@ class KinematicWorld(World):
     def _count(self) -> None:
         """One contact sample from the touches the robots' last queries found (and the movers' bodies)."""
         met = self._mover_touches() if self._stage is not None else set()
-        for mover in self._order:
-            if mover.touches:
-                break
-        else:
-            if met:
-                if self._idle:
-                    self._contacts.idle(self._idle)
-                    self._idle = 0
-                self._contacts.record(met)
-                return
+        if any(mover.touches for mover in self._order):
+            met = touched_pairs(self._order, self._by_body) | met
+        elif not met:
             self._idle += 1  # told to the counter before the next sample with touches
             return
         if self._idle:
             self._contacts.idle(self._idle)
             self._idle = 0
-        by_body = self._by_body
-        pairs = set()
-        for mover in self._order:
-            if not mover.touches:
-                continue
-            robot = mover.robot
-            for other in mover.touches:
-                hit = by_body.get(other)
-                if hit is None:
-                    pairs.add((robot, ("body", other)))
-                elif hit is not robot:
-                    pairs.add((robot, ("robot", hit.name)))
-                    pairs.add((hit, ("robot", robot.name)))
-        self._contacts.record(pairs | met)
+        self._contacts.record(met)
 
     def _mover_touches(self) -> set:
         """(robot, ("body", mover body)) of the robots touching a mover's body now."""
@@ -393,7 +347,7 @@ class KinematicWorld(World):
             return
         for mover in self._movers.values():
             mover.sync(full)
-        self._all_synced = self._steps
+        self._all_synced, self._epoch = self._steps, self._epoch + full  # full: wheels turned
 
     def sense(self, due: list[tuple[str, str]]) -> list[object]:
         """Readings due now: the robots' bodies are put where they are first."""
@@ -434,13 +388,8 @@ class KinematicWorld(World):
 
 
 def _still(movers: list[Mover], since: int) -> bool:
-    """None of ``movers`` has moved after step ``since``."""
+    """None of ``movers`` has moved after ``since`` (a tick of KinematicWorld._clock)."""
     for mover in movers:
         if mover.moved > since:
             return False
     return True
-
-
-def _xy_z_yaw(pose: tuple[float, float, float], z: float) -> tuple[float, float, float, float]:
-    return pose[0], pose[1], z, pose[2]
-

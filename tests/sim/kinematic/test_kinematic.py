@@ -13,7 +13,8 @@ from mobot_cli.plan import Physics, SpawnPose, StaticBody, StaticShape, WorldPla
 from mobot_cli.scenario.prepare import prepare
 from mobot_cli.sim.bullet.world import World
 from mobot_cli.sim.engine import open_world
-from mobot_cli.sim.kinematic.world import PENETRATION, KinematicWorld
+from mobot_cli.sim.kinematic.fit import PENETRATION
+from mobot_cli.sim.kinematic.world import KinematicWorld
 from mobot_cli.sim.pb import p
 from tests.sim.test_contacts import box
 

@@ -19,7 +19,7 @@ from mobot_cli.scenario.prepare import prepare
 from mobot_cli.sim.contacts import CONTACT_SLOP, ContactCounter
 from mobot_cli.sim.drive import arc, body_twist, ramp, wheel_speeds, wrap_angle
 from mobot_cli.sim.engine import open_world
-from mobot_cli.sim.kinematic.world import KinematicWorld
+from mobot_cli.sim.kinematic.pairs import robot_pairs
 from mobot_cli.timeline.records import Sample
 from tests.sim.test_contacts import box
 
@@ -161,10 +161,11 @@ def brute_force_pairs(movers, moves, reach, measured):
 
 
 class FakeMover:
-    __slots__ = ("index", "x", "y", "travel", "bound")
+    __slots__ = ("index", "x", "y", "travel", "bound", "touches")
 
     def __init__(self, index, x, y, travel, bound):
         self.index, self.x, self.y, self.travel, self.bound = index, x, y, travel, bound
+        self.touches = set()
 
 
 robot_st = st.tuples(st.floats(-2.0, 2.0), st.floats(-2.0, 2.0), st.floats(0.1, 0.4), st.floats(0.0, 2.0),
@@ -181,8 +182,7 @@ def test_the_robot_pair_filter_finds_the_pairs_the_rule_on_every_pair_finds(robo
     measured = np.array(data.draw(st.lists(st.one_of(st.just(-math.inf), st.floats(-0.01, 3.0)),
                                            min_size=n * n, max_size=n * n))).reshape(n, n)
     measured = np.minimum(measured, measured.T)  # the engine keeps it symmetric
-    world = SimpleNamespace(_order=movers, _reach=reach, _measured=measured)
-    found = KinematicWorld._robot_pairs(world, moves)
+    found = robot_pairs(movers, reach, measured, moves)  # without footprints: the circles' rule
     pairs = {(a.index, b.index) for a, others in found.items() for b in others}
     assert pairs == brute_force_pairs(movers, [m for m, _ in moves], reach, measured)
     assert all(others == sorted(others, key=lambda m: m.index) for others in found.values())
