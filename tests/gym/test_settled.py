@@ -92,6 +92,11 @@ def world_of(env: MobotEnv):
     return env._sim._world  # noqa: SLF001
 
 
+# Attributes that hold no state of the run: the plan, and the World's cache of URDF files by text
+# (a world whose robot body was kept never loads it, one that loads it keeps its file).
+CACHES = ("plan", "_files")
+
+
 def python_side(obj, seen=None, depth: int = 0):
     """The numbers and texts of mobot's objects reachable from ``obj``, as nested plain values
     (callables left out): what a kept settle must have put back."""
@@ -109,7 +114,7 @@ def python_side(obj, seen=None, depth: int = 0):
     if isinstance(obj, np.ndarray):  # the broad phase's room for boxes is np.empty: only its shape is state
         return (obj.shape, str(obj.dtype))
     if type(obj).__module__.startswith("mobot_cli") and hasattr(obj, "__dict__"):
-        return {k: python_side(v, seen, depth + 1) for k, v in sorted(vars(obj).items()) if k != "plan"}
+        return {k: python_side(v, seen, depth + 1) for k, v in sorted(vars(obj).items()) if k not in CACHES}
     return type(obj).__name__
 
 
