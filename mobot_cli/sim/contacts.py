@@ -84,7 +84,9 @@ class ContactCounter:
         self._samples += samples
 
     def _count(self, touching: Iterable[tuple[Counted, Hashable]]) -> None:
-        for robot, other in touching:
+        # In name order, not the set's (robots hash by address): when two touches start in one
+        # sample, which one a robot's ``hit`` names is the same in every run.
+        for robot, other in sorted(touching, key=lambda pair: (pair[0].name, pair[1])):
             key = (robot.name, other)
             last = self._last_touch.get(key)
             if last is None or self._samples - last > self._release:

@@ -77,3 +77,19 @@ def test_two_robots_meeting_count_one_collision_each(bundled):
         world.spawn(replace(robot, name="a", namespace="/a", frame_prefix="a/"))
         world.spawn(replace(robot, name="b", namespace="/b", frame_prefix="b/", pose=facing))
         assert drive(world, ["a", "b"], 4.0) == {"a": 1, "b": 1}
+
+
+def test_which_touch_a_robot_hit_names_does_not_depend_on_the_order_they_come_in():
+    """Two touches starting in one sample: ``hit`` names the same one whatever order the set
+    of touches iterates in (robots hash by address, so a set's order differs run to run)."""
+    from types import SimpleNamespace
+
+    from mobot_cli.sim.contacts import ContactCounter
+
+    hits = []
+    for order in (1, -1):
+        robot = SimpleNamespace(name="r", body=1, collisions=0, people_collisions=0, hit="")
+        counter = ContactCounter(name_of=lambda key: f"{key[0]} {key[1]}")
+        counter.record([(robot, ("body", 7)), (robot, ("robot", "a")), (robot, ("body", 3))][::order])
+        hits.append((robot.collisions, robot.hit))
+    assert hits[0] == hits[1] == (3, "robot a")
