@@ -20,6 +20,7 @@ import math
 
 import numpy as np
 
+from mobot_cli.sim.bullet.friction import rigid
 from mobot_cli.sim.pb import p
 
 SPHERE, CYLINDER, CAPSULE = p.GEOM_SPHERE, p.GEOM_CYLINDER, p.GEOM_CAPSULE  # round about their z axis
@@ -61,22 +62,12 @@ def _turning(cid: int, body: int, link: int):
         return None
     info = p.getJointInfo(body, link, physicsClientId=cid)
     if info[2] == p.JOINT_FIXED:
-        return False if _moves(cid, body, info[16]) else None
-    if info[2] not in TURNING or _moves(cid, body, info[16]):
+        return None if rigid(cid, body, info[16]) else False
+    if info[2] not in TURNING or not rigid(cid, body, info[16]):
         return False
     state = p.getLinkState(body, link, computeForwardKinematics=True, physicsClientId=cid)
     frame = np.array(p.getMatrixFromQuaternion(state[5])).reshape(3, 3)
     return np.array(state[4]), frame @ np.array(info[13])
-
-
-def _moves(cid: int, body: int, link: int) -> bool:
-    """True when the link (or a link it hangs from) is on a joint that is not fixed."""
-    while link >= 0:
-        info = p.getJointInfo(body, link, physicsClientId=cid)
-        if info[2] != p.JOINT_FIXED:
-            return True
-        link = info[16]
-    return False
 
 
 def _round_about(cid: int, body: int, link: int, origin: np.ndarray, axis: np.ndarray) -> bool:
