@@ -147,6 +147,15 @@ def test_a_controller_naming_a_missing_joint_is_located_in_its_file(tmp_path):
     assert "rear_left_joint" in err.value.hint
 
 
+
+def test_a_mecanum_controller_naming_a_missing_joint_is_located_at_its_own_parameter(tmp_path):
+    """The older parameter names (husarion's): a rear wheel's typo is located at that wheel's key."""
+    text = (MECANUM_STYLE.replace("_wheel_command_joint_name", "_wheel_name")
+            .replace("rear_left_wheel_name: rear_left_joint", "rear_left_wheel_name: rear_lefft_joint"))
+    with pytest.raises(DescriptionError, match="rear_lefft_joint") as err:
+        load_robot(str(robot_with(tmp_path, text, rollers=False)))
+    assert err.value.location.key == "mecanum_controller.rear_left_wheel_name"
+
 @pytest.mark.parametrize("content, said", [(None, "cannot be read"), ("a: [1, 2\n", "not readable YAML")])
 def test_an_unreadable_file_is_said_and_the_geometry_decides(tmp_path, content, said):
     described = load_robot(str(robot_with(tmp_path, content)))

@@ -82,8 +82,7 @@ def _detect(robot: ET.Element, notices: list[Notice], source: Path | None,
     if plugin is not None:
         spec = _from_plugin(plugin, tree, notices, source)
         if spec is not None:
-            label = plugin.get("filename") or plugin.get("name") or "diff-drive"
-            holonomic.note_rollers(spec, robot, tree, f"the {label} plugin", notices, source)
+            holonomic.note_rollers(spec, robot, tree, f"the {_plugin_label(plugin)} plugin", notices, source)
             return Detected(spec)
     else:
         found = _from_controllers(controllers, robot, tree, notices, source)
@@ -137,16 +136,21 @@ def _drive_plugin(robot: ET.Element) -> ET.Element | None:
     return None
 
 
+def _plugin_label(plugin: ET.Element) -> str:
+    """How messages name a diff-drive plugin: its file name, else its name."""
+    return plugin.get("filename") or plugin.get("name") or "diff-drive"
+
+
 def _from_plugin(plugin: ET.Element, tree: LinkTree, notices: list[Notice],
                  file: Path | None) -> DriveSpec | None:
-    label = plugin.get("filename") or plugin.get("name") or "diff-drive"
+    label = _plugin_label(plugin)
     left, right = _texts(plugin, *_LEFT_TAGS), _texts(plugin, *_RIGHT_TAGS)
     if not left or not right:
         notices.append(Notice(f"the {label} plugin names no left or right joints; "
                               "detecting the wheels from the URDF instead", Location(file=file)))
         return None
     wheels = _named_wheels(f"the {label} plugin", {"left": left, "right": right}, tree, notices, file,
-                           lambda side: Location(file=file, key=f"gazebo.plugin.{side}_joint"))
+                           lambda side, _name: Location(file=file, key=f"gazebo.plugin.{side}_joint"))
     radius = _number(plugin, "wheel_radius")
     diameter = _number(plugin, "wheelDiameter", "wheel_diameter")
     if radius is None and diameter is not None:
@@ -163,14 +167,16 @@ def _from_plugin(plugin: ET.Element, tree: LinkTree, notices: list[Notice],
 def _named_wheels(who: str, named: dict[str, list[str]], tree: LinkTree, notices: list[Notice],
                   file: Path | None, where) -> list[tuple[str, Wheel]]:
     """(side, wheel) for each joint a plugin or controller names on a side ("left", "right"):
-    a located error for a name that is no movable joint, a notice for one on the other side."""
+    a located error (``where(side, name)``) for a name that is no movable joint, a notice for
+    one on the other side."""
     wheels: list[tuple[str, Wheel]] = []
     for side, names in named.items():
         for name in dict.fromkeys(names):
-            movable_joint(tree, name, f"{who} names {side} wheel joint", where(side), "Name a continuous wheel joint.")
+            movable_joint(tree, name, f"{who} names {side} wheel joint", where(side, name),
+                          "Name a continuous wheel joint.")
             wheels.append((side, wheel(tree, name, strict=False)))  # type: ignore[arg-type]
     for side, found in wheels:
-        if side in ("left", "right") and (side == "left") != (found.y > 0):
+        if (side == "left") != (found.y > 0):
             notices.append(Notice(f"{who} drives '{found.joint}' as a {side} wheel "
                                   f"but it sits at y = {found.y:+.3f} m in the root frame",
                                   Location(file=file)))
@@ -181,7 +187,7 @@ def _named_wheels(who: str, named: dict[str, list[str]], tree: LinkTree, notices
 REFUSED_CONTROLLERS = {"tricycle_controller": "tricycle drive", "tricycle_steering_controller": "tricycle drive",
                        "bicycle_steering_controller": "bicycle drive",
                        "omni_wheel_drive_controller": "omni-wheel drive"}
-# mecanum_drive_controller's wheel joints (upstream names, then the older *_wheel_name ones).
+# mecanum_drive_controller's wheels: the side and corner of each (the corner names its parameter).
 _MECANUM_JOINTS = (("left", "front_left"), ("right", "front_right"), ("left", "rear_left"), ("right", "rear_right"))
 
 
@@ -223,11 +229,10 @@ def _from_diff_controller(controller: ros2_control.Controller, label: str, tree:
                               "URDF instead", controller.location()))
         return None
     wheels = _named_wheels(label, named, tree, notices, controller.file,
-                           lambda side: controller.location(f"{side}_wheel_names"))
+                           lambda side, _name: controller.location(f"{side}_wheel_names"))
     radius = ros2_control.number(controller, "wheel_radius")
     separation = ros2_control.number(controller, "wheel_separation")
-    _disagreement(f"the parameters of {label.removeprefix('the ')}", wheels, radius, separation, notices,
-                  controller.file, says="say", whose="the controller's")
+    _controller_disagreement(controller, wheels, radius, separation, notices)
     spec = _spec([w for _, w in wheels], source="ros2_control", notices=notices, file=controller.file,
                  sides={w.joint: s for s, w in wheels}, radius=radius, separation=separation)
     if spec is None:
@@ -250,23 +255,32 @@ def _from_mecanum_controller(controller: ros2_control.Controller, label: str, tr
                              notices: list[Notice]) -> DriveSpec | None:
     """mecanum_drive_controller: its four wheels; radius and spacing from it where it gives them."""
     named: dict[str, list[str]] = {"left": [], "right": []}
+    key_of: dict[str, str] = {}  # joint -> the parameter naming it, for errors
     for side, corner in _MECANUM_JOINTS:
-        named[side] += ros2_control.names(controller, f"{corner}_wheel_command_joint_name", f"{corner}_wheel_name")
+        keys = (f"{corner}_wheel_command_joint_name", f"{corner}_wheel_name")
+        found = ros2_control.names(controller, *keys)
+        named[side] += found
+        key_of.update(dict.fromkeys(found, next((k for k in keys if k in controller.params), keys[0])))
     if len(named["left"]) != 2 or len(named["right"]) != 2:
         notices.append(Notice(f"{label} does not name its four wheels; detecting the wheels from the URDF "
                               "instead", controller.location()))
         return None
-    front = {"left": "front_left", "right": "front_right"}
     wheels = _named_wheels(label, named, tree, notices, controller.file,
-                           lambda side: controller.location(f"{front[side]}_wheel_command_joint_name"))
+                           lambda side, name: controller.location(key_of[name]))
     radius = ros2_control.number(controller, "kinematics.wheels_radius", "wheel_radius")
     separation = ros2_control.number(controller, "wheel_separation_y")
-    _disagreement(f"the parameters of {label.removeprefix('the ')}", wheels, radius, separation, notices,
-                  controller.file, says="say", whose="the controller's")
+    _controller_disagreement(controller, wheels, radius, separation, notices)
     return holonomic.holonomic_spec("mecanum", [w for _, w in wheels], {w.joint: s for s, w in wheels},
                                     odometry="encoder", source="ros2_control", notices=notices,
                                     file=controller.file, radius=radius, separation=separation,
                                     wheelbase=ros2_control.number(controller, "wheel_separation_x"))
+
+
+def _controller_disagreement(controller: ros2_control.Controller, wheels: list[tuple[str, Wheel]],
+                             radius: float | None, separation: float | None, notices: list[Notice]) -> None:
+    """plugin_values.disagreement, worded for a controller's parameters."""
+    _disagreement(f"the parameters of {controller.package} controller '{controller.name}'", wheels, radius,
+                  separation, notices, controller.file, says="say", whose="the controller's")
 
 
 def _spec(wheels: list[Wheel], *, source: str, notices: list[Notice], file: Path | None,
