@@ -104,7 +104,7 @@ def gap(a: tuple[float, ...], ax: float, ay: float, ayaw: float,
         b: tuple[float, ...], bx: float, by: float, byaw: float) -> float:
     """A lower bound of the distance between rectangle ``a`` of a robot at (ax, ay, ayaw) and
     ``b`` of one at (bx, by, byaw) (zero or less: they may touch)."""
-    return _gap(*_placed(a, ax, ay, ayaw), *_placed(b, bx, by, byaw))
+    return placed_gap(*_placed(a, ax, ay, ayaw), *_placed(b, bx, by, byaw))
 
 
 def _placed(rect: tuple[float, ...], x: float, y: float, yaw: float) -> tuple[float, ...]:
@@ -114,14 +114,15 @@ def _placed(rect: tuple[float, ...], x: float, y: float, yaw: float) -> tuple[fl
     return x + c * mx - s * my, y + s * mx + c * my, c, s, (rect[2] - rect[0]) / 2.0, (rect[3] - rect[1]) / 2.0
 
 
-def _gap(ax, ay, ac, as_, ahx, ahy, bx, by, bc, bs, bhx, bhy) -> float:
-    """The largest gap between two placed rectangles along their four edge directions."""
+def placed_gap(ax, ay, ac, as_, ahx, ahy, bx, by, bc, bs, bhx, bhy, most=max):
+    """The largest gap between two placed rectangles along their four edge directions; of
+    numbers, or (``most``: an elementwise maximum of its arguments) of numpy arrays of pairs."""
     dx, dy = bx - ax, by - ay
     cd, sd = abs(bc * ac + bs * as_), abs(bs * ac - bc * as_)  # cosine and sine of the angle between them
-    return max(abs(dx * ac + dy * as_) - ahx - bhx * cd - bhy * sd,
-               abs(dy * ac - dx * as_) - ahy - bhx * sd - bhy * cd,
-               abs(dx * bc + dy * bs) - bhx - ahx * cd - ahy * sd,
-               abs(dy * bc - dx * bs) - bhy - ahx * sd - ahy * cd) - SLACK
+    return most(abs(dx * ac + dy * as_) - ahx - bhx * cd - bhy * sd,
+                abs(dy * ac - dx * as_) - ahy - bhx * sd - bhy * cd,
+                abs(dx * bc + dy * bs) - bhx - ahx * cd - ahy * sd,
+                abs(dy * bc - dx * bs) - bhy - ahx * sd - ahy * cd) - SLACK
 
 
 def apart_from(mover, others: list):
@@ -138,7 +139,7 @@ def apart_from(mover, others: list):
     def known(x: float, y: float, yaw: float, limit: float) -> dict[int, float]:
         here, found = _placed(rect, x, y, yaw), {}
         for uid, other in shaped:
-            apart = _gap(*here, *other)
+            apart = placed_gap(*here, *other)
             if apart > limit:
                 found[uid] = apart
         return found

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from mobot_cli.sim.contacts import CONTACT_SLOP
-from mobot_cli.sim.kinematic.footprint import SLACK
+from mobot_cli.sim.kinematic.footprint import placed_gap
 
 # The window is widened by this (relative) before the exact test, so that no rounding of
 # x - limit can leave out a pair the exact test keeps.
@@ -111,14 +111,8 @@ def footprint_gaps(everyone: list, x: np.ndarray, y: np.ndarray, shapes: np.ndar
     c, s = np.cos(yaw), np.sin(yaw)
     mx, my, hx, hy = shapes.T
     cx, cy = x + c * mx - s * my, y + s * mx + c * my  # the rectangles' centres in the world
-    dx, dy = cx[j] - cx[i], cy[j] - cy[i]
-    ac, as_, bc, bs = c[i], s[i], c[j], s[j]
-    cd, sd = np.abs(bc * ac + bs * as_), np.abs(bs * ac - bc * as_)
-    ahx, ahy, bhx, bhy = hx[i], hy[i], hx[j], hy[j]
-    found = np.maximum.reduce([np.abs(dx * ac + dy * as_) - ahx - bhx * cd - bhy * sd,
-                               np.abs(dy * ac - dx * as_) - ahy - bhx * sd - bhy * cd,
-                               np.abs(dx * bc + dy * bs) - bhx - ahx * cd - ahy * sd,
-                               np.abs(dy * bc - dx * bs) - bhy - ahx * sd - ahy * cd]) - SLACK
+    found = placed_gap(cx[i], cy[i], c[i], s[i], hx[i], hy[i], cx[j], cy[j], c[j], s[j], hx[j], hy[j],
+                 most=lambda *terms: np.maximum.reduce(terms))
     found[~(level[i] & level[j] & free[i])] = np.nan
     return found
 
