@@ -365,4 +365,3 @@ def _canonical(scope, name: str) -> str:
         return name
     canonical = element.get("canonical_link") or next((link.get("name") for link in element.findall("link")), None)
     return f"{name}::{canonical}" if canonical else name
-

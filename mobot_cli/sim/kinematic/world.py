@@ -261,7 +261,7 @@ class KinematicWorld(World):
                                                   mover.seen)
         if not self._tops:  # no static body but the ground: nothing static is ever in the way
             static = math.inf
-        elif not others and not self._near[mover.robot.name].bodies:
+        elif not others and not near.bodies:
             # Nothing static within the box Near looked in: none within NEAR_MARGIN / 2 either.
             static = QUERY_REACH + NEAR_MARGIN / 2.0
         if motion is not None:
