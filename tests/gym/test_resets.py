@@ -12,13 +12,17 @@ from mobot_cli.gym.env import MobotEnv
 from mobot_cli.sim.bullet.clients import keep_clients
 
 
-def episode(env: MobotEnv, seed: int, steps: int = 15) -> str:
+def episode(env: MobotEnv, seed: int, steps: int = 15, truth: bool = False) -> str:
+    """The hash of an episode: every observation, reward, flag and info (and, with ``truth``,
+    the robot's ground-truth state beside what the agent sees)."""
     obs, info = env.reset(seed=seed)
     actions = np.random.default_rng(seed)
     h = hashlib.sha256()
     for _ in range(steps):
         for part in obs.values() if isinstance(obs, dict) else (obs,):
             h.update(np.asarray(part).tobytes())
+        if truth:
+            h.update(repr(env._sim.state(env.robot)).encode())  # noqa: SLF001
         obs, reward, terminated, truncated, info = env.step(actions.uniform(-1.0, 1.0, env.action_space.shape))
         h.update(repr((reward, terminated, truncated, sorted(info.items()))).encode())
     return h.hexdigest()

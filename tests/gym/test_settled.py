@@ -6,7 +6,6 @@ another pose, another settle) steps as before."""
 
 from __future__ import annotations
 
-import hashlib
 import math
 
 import numpy as np
@@ -16,6 +15,7 @@ from mobot_cli.gym.env import MobotEnv
 from mobot_cli.sim.bullet.clients import keep_clients
 from mobot_cli.sim.bullet.world import World
 from mobot_cli.sim.pb import p
+from tests.gym.test_resets import episode as reset_episode
 
 # A static 0.4 m box 0.45 m ahead of the robot: random episodes run into it.
 BOX_WORLD = """<?xml version="1.0"?>
@@ -64,17 +64,7 @@ def scenario(tmp_path, world: str, engine: str = "bullet"):
 
 def episode(env: MobotEnv, seed: int, steps: int = 20) -> str:
     """The hash of an episode: every observation, reward, flag, info and ground-truth pose."""
-    obs, info = env.reset(seed=seed)
-    actions = np.random.default_rng(seed)
-    h = hashlib.sha256()
-    for _ in range(steps):
-        for part in obs.values() if isinstance(obs, dict) else (obs,):
-            h.update(np.asarray(part).tobytes())
-        s = env._sim.state(env.robot)  # noqa: SLF001 - the ground truth, beside what the agent sees
-        h.update(repr(s).encode())
-        obs, reward, terminated, truncated, info = env.step(actions.uniform(-1.0, 1.0, env.action_space.shape))
-        h.update(repr((reward, terminated, truncated, sorted(info.items()))).encode())
-    return h.hexdigest()
+    return reset_episode(env, seed, steps, truth=True)
 
 
 def fresh_episodes(kwargs: dict, seeds: list[int], steps: int = 20) -> list[str]:
