@@ -15,7 +15,7 @@ from typing import Any, Callable
 from mobot_cli.live import protocol
 from mobot_cli.live.protocol import Feature, Refusal, Result, SimulationState
 
-SPAWN_FORMATS = ("urdf", "xacro")
+SPAWN_FORMATS = ("urdf", "xacro", "sdf")
 
 
 @dataclass

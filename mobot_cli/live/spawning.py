@@ -29,8 +29,8 @@ from mobot_cli.sim.bullet.urdf_file import pybullet_file, urdf_path
 from mobot_cli.sim.state import RobotState
 from mobot_cli.timeline.loop import NameTaken, NotInWorld
 
-DESCRIPTION_SUFFIXES = (".urdf", ".xacro")
-UNSUPPORTED_SUFFIXES = (".sdf", ".world", ".dae", ".stl", ".obj", ".mjcf", ".xml")
+DESCRIPTION_SUFFIXES = (".urdf", ".xacro", ".sdf")  # .sdf: a Gazebo model, as a scenario's description takes
+UNSUPPORTED_SUFFIXES = (".world", ".dae", ".stl", ".obj", ".mjcf", ".xml")
 # Far past any run: a live robot's spawn time is only known when it is spawned.
 NO_END = 2**62
 # The world's thread loads a spawned robot into PyBullet and checks it for collisions; past
@@ -39,8 +39,11 @@ MAX_LINKS = 1000
 MAX_URDF_CHARS = 16 * 1024 * 1024
 MAX_NOTICES, MAX_NOTICE_CHARS = 50, 2000  # xacro messages from a client come back as notices
 _FACES: dict[tuple[str, int, int], int] = {}  # faces of a mesh file, by path, mtime and size
+_SDF_TEXT = re.compile(r"\s*(<\?xml[^>]*\?>\s*)?(<!--.*?-->\s*)*<sdf\b", re.DOTALL)
+_SDF_WORLD = re.compile(r"<world\b")
 _MISSING_ASSET = re.compile(r"mesh '.*' of link '.*' (cannot be found|resolves to .* not a readable file)"
-                            r"|^included file '.*' cannot be read", re.DOTALL)
+                            r"|^included file '.*' cannot be read"
+                            r"|(model|mesh) '[^']*' not found|'[^']*' not found\. Folders searched", re.DOTALL)  # SDF's
 
 
 def load_plan(request: Spawn, rate_hz: int, bounds: tuple[int, int] | None = None) -> tuple[RobotPlan, list[str]]:
@@ -53,7 +56,8 @@ def load_plan(request: Spawn, rate_hz: int, bounds: tuple[int, int] | None = Non
     description, label, files, roots = request.description, None, (), []
     if request.urdf is not None:
         path = _text_file(request.urdf)
-        description, label, files = str(path), "<urdf text>", (path,)
+        label = "<sdf text>" if path.suffix == ".sdf" else "<urdf text>"
+        description, files = str(path), (path,)
     else:
         roots.append(_package_of(_check_format(description, base_dir)))
     roots.extend(ResourceResolver(base_dir).roots)
@@ -75,9 +79,12 @@ def load_plan(request: Spawn, rate_hz: int, bounds: tuple[int, int] | None = Non
 
 
 def _text_file(text: str) -> Path:
-    """URDF or xacro text as a file named by its content (xacro and the checks read files)."""
-    if text.lstrip().startswith("<sdf"):
-        raise Refusal(Result.UNSUPPORTED_FORMAT, "the text is an SDF model: mobot spawns URDF and xacro")
+    """URDF, xacro or SDF text as a file named by its content (xacro and the checks read files)."""
+    if _SDF_TEXT.match(text):  # a Gazebo model: the same path as a .sdf file (description.sdf)
+        if _SDF_WORLD.search(text):
+            raise Refusal(Result.UNSUPPORTED_FORMAT, "the text is an SDF world, not a model: a live world "
+                          "spawns robots (`mobot serve WORLD` loads a world)")
+        return urdf_path(text, folder="spawned", suffix=".sdf")
     return urdf_path(text, folder="spawned")  # xacro is detected from the text
 
 
@@ -88,16 +95,20 @@ def _check_format(description: str, base_dir: Path) -> Path:
     except ResourceError as exc:
         raise Refusal(Result.NO_RESOURCE, str(exc)) from None
     if path.name.lower().endswith(UNSUPPORTED_SUFFIXES) or not path.name.endswith(DESCRIPTION_SUFFIXES):
-        raise Refusal(Result.UNSUPPORTED_FORMAT, f"{path} is not a URDF or xacro file: mobot spawns "
-                      ".urdf, .urdf.xacro and .xacro descriptions")
+        raise Refusal(Result.UNSUPPORTED_FORMAT, f"{path} is not a robot description: mobot spawns "
+                      ".urdf, .urdf.xacro, .xacro and SDF model (.sdf, a model folder) descriptions")
     return path
 
 
 def _package_of(path: Path) -> Path:
-    """The package (nearest folder with a package.xml) holding a description, else its folder."""
+    """The package (nearest folder with a package.xml) holding a description; else, for a
+    Gazebo model folder (a model.config beside it), the folder of models holding it, whose
+    siblings its model:// URIs name; else its folder."""
     for folder in path.parents:
         if (folder / "package.xml").is_file():
             return folder
+    if path.name.endswith(".sdf") and (path.parent / "model.config").is_file():
+        return path.parent.parent
     return path.parent
 
 

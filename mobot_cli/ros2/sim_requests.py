@@ -23,7 +23,7 @@ FEATURES = {
     "SIMULATION_STATE_SETTING": 25, "SIMULATION_STATE_PAUSE": 26, "STEP_SIMULATION_SINGLE": 31,
     "STEP_SIMULATION_MULTIPLE": 32, "STEP_SIMULATION_ACTION": 33,
 }
-SPAWN_FORMATS = ("urdf", "xacro")
+SPAWN_FORMATS = ("urdf", "xacro", "sdf")
 CUSTOM_INFO = ("mobot live world (simulation_interfaces 1.5 Jazzy layout); ResetSimulation: SCOPE_ALL only; "
                "entities are robots; see docs/ros2.md")
 # Result codes (msg/Result.msg) and the extra codes of the services that have them.

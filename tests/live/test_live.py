@@ -157,11 +157,15 @@ def test_refused_spawns_name_their_result(mobot, blocker, args, result, text):
 def test_bad_names_and_formats(mobot, tmp_path):
     code, _, err = mobot("spawn", "9lives", "--file", "mobot")
     assert code == 2 and err.startswith("mobot: error: NAME_INVALID: '9lives' is not a valid robot name")
-    sdf = tmp_path / "model.sdf"
-    sdf.write_text("<sdf version='1.6'><model name='m'/></sdf>")
-    code, _, err = mobot("spawn", "sdf", "--file", sdf)
+    world = tmp_path / "shop.world"  # a world is not a robot (SDF models are: tests/live/test_sdf_spawn.py)
+    world.write_text("<sdf version='1.6'><world name='w'/></sdf>")
+    code, _, err = mobot("spawn", "shop", "--file", world)
     assert code == 2 and err.startswith("mobot: error: UNSUPPORTED_FORMAT: ")
-    code, _, err = mobot("spawn", "sdf", "--string", sdf.read_text())
+    code, _, err = mobot("spawn", "shop", "--string", world.read_text())
+    assert code == 2 and err.startswith("mobot: error: UNSUPPORTED_FORMAT: ")
+    mesh = tmp_path / "part.stl"
+    mesh.write_text("solid x\nendsolid x\n")
+    code, _, err = mobot("spawn", "part", "--file", mesh)
     assert code == 2 and err.startswith("mobot: error: UNSUPPORTED_FORMAT: ")
 
 

@@ -30,6 +30,7 @@ robots:
   - {name: r1, description: mobot, pose: {x: 0.0, y: 0.0}}
 """
 BOX = (REPO / "tests" / "data" / "box.urdf").read_text()
+ROVER = REPO / "tests" / "data" / "sdf_models" / "rover"  # an SDF model folder (gz-sim's DiffDrive)
 XACRO = """<?xml version="1.0"?>
 <robot name="xcrate" xmlns:xacro="http://www.ros.org/wiki/xacro">
   <xacro:property name="side" value="0.3"/>
@@ -97,7 +98,9 @@ def test_a_real_rclpy_client_calls_every_service(ros_py, tmp_path, tmp_path_fact
                                          "initial_pose": {"header": {"frame_id": "crate"},
                                                           "pose": {"position": {"y": 1.5}}}}],
         ["spawn_evil", "spawn_entity", {"name": "evil", "resource_string": EVIL.format(marker=marker)}],
-        ["spawn_sdf", "spawn_entity", {"name": "s", "resource_string": "<sdf version='1.9'><model name='m'/></sdf>"}],
+        ["spawn_sdf", "spawn_entity", {"name": "rover", "uri": f"file://{ROVER}",
+                                       "initial_pose": {"pose": {"position": {"y": -3.0}}}}],
+        ["spawn_world", "spawn_entity", {"name": "w", "resource_string": "<sdf version='1.9'><world name='w'/></sdf>"}],
         ["spawn_empty", "spawn_entity", {"name": "e"}],
         ["spawn_bad_ns", "spawn_entity", {"name": "n", "resource_string": BOX, "entity_namespace": "1bad"}],
         ["spawn_bad_name", "spawn_entity", {"name": "9x", "resource_string": BOX}],
@@ -165,7 +168,7 @@ def test_a_real_rclpy_client_calls_every_service(ros_py, tmp_path, tmp_path_fact
 
     features = out["features"]["features"]
     assert set(features["features"]) == {0, 1, 9, 10, 11, 20, 24, 25, 26, 31, 32, 33}
-    assert features["spawn_formats"] == ["urdf", "xacro"]
+    assert features["spawn_formats"] == ["urdf", "xacro", "sdf"]
     assert out["state0"]["state"]["state"] == 2 and code(out["state0"])[0] == OK  # started --paused
 
     assert code(out["spawn_text"]) == (OK, "") and out["spawn_text"]["entity_name"] == "crate"
@@ -175,7 +178,8 @@ def test_a_real_rclpy_client_calls_every_service(ros_py, tmp_path, tmp_path_fact
     assert code(out["spawn_xacro"])[0] == OK and out["spawn_xacro"]["entity_name"] == "xbox"
     result, message = code(out["spawn_evil"])
     assert result == 106 and not marker.exists()  # RESOURCE_PARSE_ERROR, and the code never ran
-    assert code(out["spawn_sdf"])[0] == 103  # UNSUPPORTED_FORMAT
+    assert code(out["spawn_sdf"]) == (OK, "") and out["spawn_sdf"]["entity_name"] == "rover"  # a Gazebo model
+    assert code(out["spawn_world"])[0] == 103  # UNSUPPORTED_FORMAT: a world is not an entity
     assert code(out["spawn_empty"])[0] == 104  # NO_RESOURCE
     assert code(out["spawn_bad_ns"])[0] == 105  # NAMESPACE_INVALID
     assert code(out["spawn_bad_name"])[0] == 102  # NAME_INVALID
@@ -203,7 +207,7 @@ def test_a_real_rclpy_client_calls_every_service(ros_py, tmp_path, tmp_path_fact
     assert code(out["teleport_unknown"])[0] == NOT_FOUND
     assert code(out["teleport_bad"])[0] == 101  # SetEntityState's INVALID_POSE
 
-    assert out["entities"]["entities"] == ["r1", "crate", "crate_0", "xbox"]
+    assert out["entities"]["entities"] == ["r1", "crate", "crate_0", "xbox", "rover"]
     assert out["entities_crate"]["entities"] == ["crate", "crate_0"]
     assert out["entities_objects"]["entities"] == []  # every entity mobot lists is a robot
     assert code(out["entities_tags"])[0] == FEATURE_UNSUPPORTED
@@ -231,7 +235,7 @@ def test_a_real_rclpy_client_calls_every_service(ros_py, tmp_path, tmp_path_fact
 
     history = [json.loads(line) for line in (tmp_path / "run" / "history.jsonl").read_text().splitlines()]
     spawned = [h["name"] for h in history if h.get("op") == "spawn" and h.get("result") == "OK"]
-    assert spawned[:4] == ["r1", "crate", "crate_0", "xbox"]  # the same records as `mobot spawn`
+    assert spawned[:5] == ["r1", "crate", "crate_0", "xbox", "rover"]  # the same records as `mobot spawn`
 
 
 def test_kilted_twist_stamped_drives_a_robot_as_jazzy_twist_does(ros_py, tmp_path, tmp_path_factory):

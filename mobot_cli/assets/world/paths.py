@@ -6,6 +6,9 @@ mobot's resource roots (DESIGN.md, "Resources"), which include ``GZ_SIM_RESOURCE
 ``GAZEBO_MODEL_PATH``. ``https://`` URIs (Gazebo Fuel) are never downloaded: a model already
 in Fuel's local cache (``gz fuel download``) is used, anything else is an error or, with
 ``--skip-missing``, a warning.
+
+A live spawn of an SDF model reads only what its confinement allows (assets/sandbox.py): each
+file and folder is checked before it is looked at, so a refusal says nothing of what is there.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from urllib.parse import unquote, urlparse
 
 from lxml import etree
 
+from mobot_cli.assets import sandbox
 from mobot_cli.assets.lenient import gazebo_xml_bytes
 from mobot_cli.assets.resources import ResourceResolver, model_sdf
 from mobot_cli.errors import Location, MobotError, Notice, WorldError
@@ -103,6 +107,7 @@ class SdfPaths:
         from mobot_cli.assets.description.xacro import is_xacro
 
         expanded = False
+        sandbox.check(path, str(path))
         try:
             data = path.read_bytes()
             # by its name or its content, as a robot description: nav2's depot.sdf is xacro inside
@@ -142,10 +147,10 @@ class SdfPaths:
         """The folder of model NAME: ROOT/NAME or ROOT/models/NAME for the first root that has it."""
         for root in self.roots:
             for candidate in (root / name, root / "models" / name):
-                if candidate.is_dir():
+                if sandbox.allows(candidate) and candidate.is_dir():  # live spawns: inside their roots
                     self._add_local(candidate.parent)
                     return candidate
-        listing = "; ".join(str(r) for r in self.roots)
+        listing = "; ".join(str(r) for r in self.roots if sandbox.allows(r))
         raise WorldError(f"model '{name}' not found. Folders searched: {listing}", location=where,
                          hint="Add the folder holding it to GAZEBO_MODEL_PATH, GZ_SIM_RESOURCE_PATH "
                               f"or MOBOT_RESOURCE_PATH (separated by '{os.pathsep}').")
@@ -166,6 +171,7 @@ class SdfPaths:
                 folder = self.find_model(unquote(name), where) / unquote(rest)
             else:
                 folder = self.local_file(uri, file, where)
+            sandbox.check(folder, f"'{uri}' names {folder}, which")  # a Fuel cache, a model's subfolder
             target = model_sdf(folder) if folder.is_dir() else folder
         except MobotError as exc:
             if not reader.skip_missing:
@@ -187,12 +193,14 @@ class SdfPaths:
                              "paths are supported", location=where,
                              hint="Nothing is fetched from the network; use a local copy.")
         if os.path.isabs(text):
+            sandbox.check(text, f"'{uri}' names {text}, which")  # before looking: no existence oracle
             bases, rel = [Path("/")], text.lstrip("/")
         else:
             folder = Path(file).resolve().parent
             bases = [folder, _package_root(folder), *self.roots]
             bases = list(dict.fromkeys(b for b in bases if b is not None))
             rel = text
+        bases = [base for base in bases if sandbox.allows(base / rel)]  # live spawns: inside their roots
         for base in bases:
             if (base / rel).exists():
                 return (base / rel).resolve()
@@ -214,6 +222,7 @@ class SdfPaths:
         if uri.startswith("model://"):
             name, _, rest = uri[len("model://"):].partition("/")
             path = self.find_model(unquote(name), where) / unquote(rest)
+            sandbox.check(path, f"mesh '{uri}' names {path}, which")  # before looking
             if path.is_file():
                 return path.resolve()
             real = case_variant(path)

@@ -32,8 +32,8 @@ class UnwritableURDF(DescriptionError):
     """A name or value PyBullet would read is longer than a line it can read."""
 
 
-def urdf_path(text: str, folder: str = "urdf") -> Path:
-    """A file holding ``text``, named by its content hash, written once and atomically.
+def urdf_path(text: str, folder: str = "urdf", suffix: str = ".urdf") -> Path:
+    """A file holding ``text``, named by its content hash (and ``suffix``), written once and atomically.
 
     The folder is bounded (``prune``): every distinct text a live client sends makes a file.
     """
@@ -45,8 +45,8 @@ def urdf_path(text: str, folder: str = "urdf") -> Path:
     digest = hashlib.sha256(data).hexdigest()[:32]
     # A hit is checked against its name; the cache off or faulty, the file goes to a private
     # temporary folder instead (a cache only costs time). Parallel sweep workers may write it too.
-    return cache.load_file(folder, f"{digest}.urdf", digest) or \
-        cache.store_file(folder, f"{digest}.urdf", data, bounded=True)
+    return cache.load_file(folder, f"{digest}{suffix}", digest) or \
+        cache.store_file(folder, f"{digest}{suffix}", data, bounded=True)
 
 
 def pybullet_file(urdf: str, known: dict[str, Path] | None = None) -> Path:
