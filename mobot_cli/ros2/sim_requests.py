@@ -19,7 +19,8 @@ from mobot_cli.live.protocol import Refusal, Result
 # simulation_interfaces/msg/SimulatorFeatures: what works here, no more.
 FEATURES = {
     "SPAWNING": 0, "DELETING": 1, "SPAWNING_RESOURCE_STRING": 9, "ENTITY_STATE_GETTING": 10,
-    "ENTITY_STATE_SETTING": 11, "SIMULATION_RESET": 20, "SIMULATION_STATE_GETTING": 24,
+    "ENTITY_STATE_SETTING": 11, "ENTITY_INFO_GETTING": 12, "SPAWNABLES": 14, "SIMULATION_RESET": 20,
+    "SIMULATION_STATE_GETTING": 24,
     "SIMULATION_STATE_SETTING": 25, "SIMULATION_STATE_PAUSE": 26, "STEP_SIMULATION_SINGLE": 31,
     "STEP_SIMULATION_MULTIPLE": 32, "STEP_SIMULATION_ACTION": 33,
 }
@@ -58,6 +59,20 @@ def result_code(reply: dict[str, Any], service: str) -> tuple[int, str]:
     if service == "set_entity_state" and code == int(Result.INVALID_POSE):
         return SET_STATE_INVALID_POSE, message
     return OPERATION_FAILED, f"{reply.get('result', code)}: {message}"
+
+
+def spawnables(sources: Any) -> tuple[list[tuple[str, str]], dict[str, Any]]:
+    """GetSpawnables: (uri, description) of each bundled robot, and the reply. A client's
+    ``sources`` are not searched (a live spawn reads only the folders it is allowed, and a path or
+    URI names any other description); they are named in the message, which does not fail the call."""
+    from mobot_cli.assets.description.describe import bundled_robot_names
+
+    found = [(name, f"mobot's bundled robot '{name}' (xacro; its arguments are spawn's NAME:=VALUE)")
+             for name in bundled_robot_names()]
+    unsearched = [str(source) for source in sources or ()]
+    message = ("sources not searched (spawn any other description by its path, file://, package:// or "
+               f"model:// URI): {', '.join(unsearched)}") if unsearched else ""
+    return found, {"ok": True, "code": OK, "message": message}
 
 
 def refused(result: Result | int, message: str) -> dict[str, Any]:

@@ -108,7 +108,8 @@ class SimulationServices:
                 "get_entity_state": self._entity_state, "get_entities_states": self._entities_states,
                 "set_entity_state": self._set_state, "get_simulation_state": self._simulation_state,
                 "set_simulation_state": self._set_simulation_state, "step_simulation": self._step,
-                "reset_simulation": self._reset}
+                "reset_simulation": self._reset, "get_entity_info": self._entity_info,
+                "get_spawnables": self._spawnables}
 
     def _wrap(self, service: str, handler: Callable[[Any, Any], Any]) -> Callable[[Any, Any], Any]:
         """A service callback: a refusal or any failure becomes the response's Result, never an exception."""
@@ -188,6 +189,28 @@ class SimulationServices:
                 entities.append(name)
                 states.append(state)
         response.entities, response.states = entities, states
+        return reply
+
+    def _entity_info(self, client: Client, request, response):
+        """Every entity mobot lists is a robot (CATEGORY_ROBOT), without tags."""
+        reply = client.call("list")
+        robot = next((r for r in reply.get("robots", ()) if r["name"] == request.entity), None)
+        if reply.get("ok") and robot is None:
+            return sr.refused(sr.NOT_FOUND, f"no robot named '{request.entity}' in the world")
+        if robot is not None:
+            response.info.category.category = self.msg.EntityCategory.CATEGORY_ROBOT
+            response.info.description = f"a robot in namespace {robot['namespace']}" + \
+                ("" if robot["has_drive"] else " (no drive: it does not take cmd_vel)")
+        return reply
+
+    def _spawnables(self, client: Client, request, response):
+        found, reply = sr.spawnables(request.sources)
+        items = []
+        for uri, description in found:
+            item = self.msg.Spawnable()
+            item.uri, item.description = uri, description  # spawn_bounds: TYPE_EMPTY, none given
+            items.append(item)
+        response.spawnables = items
         return reply
 
     def _set_state(self, client: Client, request, response):

@@ -118,6 +118,10 @@ def test_a_real_rclpy_client_calls_every_service(ros_py, tmp_path, tmp_path_fact
         ["readback", "get_entity_state", {"entity": "crate"}],
         ["xbox", "get_entity_state", {"entity": "xbox"}],
         ["teleport_unknown", "set_entity_state", {"entity": "nope"}],
+        ["info", "get_entity_info", {"entity": "rover"}],
+        ["info_crate", "get_entity_info", {"entity": "xbox"}],
+        ["info_unknown", "get_entity_info", {"entity": "nope"}],
+        ["spawnables", "get_spawnables", {"sources": ["/opt/models"]}],
         ["teleport_bad", "set_entity_state", {"entity": "crate", "state": {"pose": {"orientation": {"w": 0.0}}}}],
         ["entities", "get_entities", {}],
         ["entities_crate", "get_entities", {"filters": {"filter": "^crate"}}],
@@ -167,7 +171,7 @@ def test_a_real_rclpy_client_calls_every_service(ros_py, tmp_path, tmp_path_fact
     assert [v["bool_value"] for v in params["after_set"]["values"]] == [True]
 
     features = out["features"]["features"]
-    assert set(features["features"]) == {0, 1, 9, 10, 11, 20, 24, 25, 26, 31, 32, 33}
+    assert set(features["features"]) == {0, 1, 9, 10, 11, 12, 14, 20, 24, 25, 26, 31, 32, 33}
     assert features["spawn_formats"] == ["urdf", "xacro", "sdf"]
     assert out["state0"]["state"]["state"] == 2 and code(out["state0"])[0] == OK  # started --paused
 
@@ -205,6 +209,15 @@ def test_a_real_rclpy_client_calls_every_service(ros_py, tmp_path, tmp_path_fact
     xbox = out["xbox"]["state"]["pose"]["position"]  # spawned 1.5 m along the crate's y, at (2, 1)
     assert math.dist((xbox["x"], xbox["y"]), (2.0, 2.5)) < 1e-3
     assert code(out["teleport_unknown"])[0] == NOT_FOUND
+    info = out["info"]
+    assert code(info) == (OK, "") and info["info"]["category"]["category"] == 1  # CATEGORY_ROBOT
+    assert info["info"]["description"] == "a robot in namespace /rover" and info["info"]["tags"] == []
+    assert out["info_crate"]["info"]["description"] == "a robot in namespace /xns (no drive: it does not take cmd_vel)"
+    assert code(out["info_unknown"])[0] == NOT_FOUND
+    spawnables = out["spawnables"]
+    result, message = code(spawnables)
+    assert result == OK and "sources not searched" in message and "/opt/models" in message
+    assert {"mobot", "jackal_like"} <= {item["uri"] for item in spawnables["spawnables"]}
     assert code(out["teleport_bad"])[0] == 101  # SetEntityState's INVALID_POSE
 
     assert out["entities"]["entities"] == ["r1", "crate", "crate_0", "xbox", "rover"]
