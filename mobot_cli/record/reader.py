@@ -183,6 +183,9 @@ class RunFolder:
     def csv_rows(self, relative: str | Path) -> tuple[list[str], list[list[str]]]:
         """A CSV file's header and rows as text (a row cut short by a killed run included)."""
         text = self.read_text(relative, self.limits.csv) or ""
+        # A NUL byte is text in a field on Python 3.11 and later, an error of the whole file before:
+        # made a character that no number reads, it is the same on every Python.
+        text = text.replace("\x00", "\ufffd")
         rows: list[list[str]] = []
         reader = csv.reader(io.StringIO(text, newline=""))
         try:
