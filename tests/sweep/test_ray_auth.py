@@ -31,12 +31,16 @@ def free_port() -> int:
 @pytest.fixture(scope="module")
 def cluster():
     """A one-CPU Ray head with RAY_AUTH_MODE=token, in a session (process group) of its own."""
-    if shutil.which("ray") is None:
-        pytest.skip("the `ray` command is not on PATH")
+    # The `ray` of this Python's environment: another one on PATH is another Ray, which the
+    # client here refuses to join ("Version mismatch").
+    beside = Path(sys.executable).with_name("ray")
+    ray = str(beside) if beside.is_file() else shutil.which("ray")
+    if ray is None:
+        pytest.skip("the `ray` command is neither beside this Python nor on PATH")
     home = Path(tempfile.mkdtemp(prefix="mrh-"))  # short: Ray's socket paths live under --temp-dir
     token, port = secrets.token_hex(16), free_port()
     env = {**os.environ, "HOME": str(home), "RAY_AUTH_MODE": "token", "RAY_AUTH_TOKEN": token}
-    head = subprocess.Popen(["ray", "start", "--head", "--block", "--port", str(port), "--num-cpus", "1",
+    head = subprocess.Popen([ray, "start", "--head", "--block", "--port", str(port), "--num-cpus", "1",
                              "--include-dashboard", "false", "--temp-dir", str(home / "t")],
                             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     try:
