@@ -56,7 +56,7 @@ def test_movers_are_drawn_where_they_are(page, tmp_path):
         live.close()
 
 
-def test_a_replay_shows_the_movers_of_the_run(page, tmp_path):
+def test_a_replay_shows_the_movers_of_the_run(page, tmp_path, monkeypatch):
     from mobot_cli.cli import invoke
     from mobot_cli.view.replay import Replay
     from mobot_cli.view.runfolder import read_run
@@ -67,6 +67,9 @@ def test_a_replay_shows_the_movers_of_the_run(page, tmp_path):
                         "movers:\n  - {name: crate, shape: box, size: [0.5, 0.4, 0.6], "
                         "path: [[-2, 0], [-2, 2]], at: 1}\n")
     assert invoke(["run", str(scenario), "--out", str(tmp_path / "run"), "--quiet"]).exit_code == 0
+    # A run folder's world is read as a live spawn's (docs/security.md): only inside the folder and
+    # the resource path, where a user puts the folder of their worlds.
+    monkeypatch.setenv("MOBOT_RESOURCE_PATH", str(DATA))
     view = read_run(tmp_path / "run")
     assert set(view.movers) == {"walker", "crate"}
     assert view.movers_at(0.5) == {"walker": (2.0, -2.0, 1.5708)}  # the crate comes at 1 s
