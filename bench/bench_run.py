@@ -64,6 +64,12 @@ def mobot_loop(prepared, out_dir: Path) -> float:
     execute(prepared.plan, prepared.resolved_yaml, out_dir)
 
 
+def mobot_csv(prepared, out_dir: Path) -> None:
+    """The loop with its CSV written (as raw_run.py writes its own): no trajectory.png; the few
+    lines of summary.json left to the page cache, as a sweep's run leaves them."""
+    execute(prepared.plan, prepared.resolved_yaml, out_dir, durable=False, pictures=False)
+
+
 def mobot_sim_only(prepared, out_dir: Path) -> None:
     """mobot's timeline alone (spawn checks, drive, odometry, contacts, reads), no files."""
     for _ in simulate(prepared.plan):  # every record, nothing written
@@ -84,15 +90,17 @@ def main() -> None:
             path = work / f"bench{robots}.yaml"
             path.write_text(scenario_text(robots, args.seconds))
             prepared = prepare(path)
-            results: dict[str, list[tuple[float, float]]] = {"raw": [], "run": [], "sim": []}
+            results: dict[str, list[tuple[float, float]]] = {"raw": [], "run": [], "csv": [], "sim": []}
             for i in range(args.repeat):
                 (work / f"raw{robots}-{i}").mkdir()
                 results["raw"].append(timed(raw_loop, spec(prepared.plan, work), work / f"raw{robots}-{i}"))
                 results["run"].append(timed(mobot_loop, prepared, work / f"mobot{robots}-{i}"))
+                results["csv"].append(timed(mobot_csv, prepared, work / f"csv{robots}-{i}"))
                 results["sim"].append(timed(mobot_sim_only, prepared, work))
             raw_wall = statistics.median(w for w, _ in results["raw"])
             raw_cpu = statistics.median(c for _, c in results["raw"])
-            for key, label in (("run", "whole run (files, png)"), ("sim", "simulation loop only")):
+            for key, label in (("run", "whole run (files, png)"), ("csv", "loop and its CSV"),
+                               ("sim", "simulation loop only")):
                 wall = statistics.median(w for w, _ in results[key])
                 cpu = statistics.median(c for _, c in results[key])
                 print(f"{robots:>6} {label:<22} {raw_wall:>7.3f} {wall:>8.3f} {wall / raw_wall:>10.3f} "
