@@ -24,8 +24,9 @@ Each control tick (``Dwb.command``):
    * GoalDist: distance of the last pose from the local goal (the path's end within
      ``LOCAL_PLAN``); GoalAlign: the same for the point ahead of it. When the path ahead runs
      into an obstacle, these distances are measured through free space (a wavefront on a
-     ``WAVE_CELL`` grid around the robot, as nav2 propagates them through its costmap), so a
-     rollout that goes round the obstacle scores better than one that waits before it.
+     ``WAVE_CELL`` grid around the robot, timeline/wavefront.py, as nav2 propagates them
+     through its costmap), so a rollout that goes round the obstacle scores better than one
+     that waits before it.
    * Oscillation: once the robot turned on the spot one way, turning on the spot the other
      way is rejected until it has moved ``OSCILLATION_RESET`` m or turned
      ``OSCILLATION_RESET_ANGLE`` rad (nav2's oscillation_reset_dist / _angle).
@@ -44,6 +45,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mobot_cli.plan import GoalControl
+from mobot_cli.timeline.wavefront import WAVE_CELL, WAVE_REACH, Wavefront
 
 SIM_TIME = 1.7  # s: how far ahead each rollout looks (nav2 DWB sim_time)
 STEPS = 8  # poses per rollout (0.11 m apart at 0.5 m/s)
@@ -59,8 +61,6 @@ OSCILLATION_RESET = 0.05  # m
 OSCILLATION_RESET_ANGLE = 0.2  # rad
 SPIN = 0.05  # m/s: below this a rollout turns on the spot (nav2 Oscillation x_only_threshold)
 PATH_SLACK = 0.05  # m: how much nearer than the footprint's radius a path may pass a point (the planner's cell)
-WAVE_CELL = 0.1  # m: the free-space distance grid, when the path ahead is blocked
-WAVE_REACH = 2.5  # m: its half width around the robot
 FANS_KEPT = 256  # windows kept (cleared when full)
 WEIGHTS = {  # nav2's default DWB critic scales (nav2_params.yaml)
     "BaseObstacle": 0.02,
@@ -120,7 +120,7 @@ class Dwb:
         along = math.hypot(goal[0], goal[1])
         nose = goal + FORWARD_POINT * (goal / along if along > 1e-9 else np.array([1.0, 0.0]))
         if blocked:  # a path through an obstacle is no guide: the wavefront leads round it
-            field = _Wavefront(goal, seen, self.radius)
+            field = Wavefront(goal, seen, self.radius)
             score += WEIGHTS["GoalDist"] * field.at(xs[:, -1], ys[:, -1]) / CELL
             score += WEIGHTS["GoalAlign"] * field.at(fx - nose[0] + goal[0], fy - nose[1] + goal[1]) / CELL
         else:
@@ -255,60 +255,6 @@ class _Fan:
         self.efx, self.efy = np.concatenate([self.ex, self.fx]), np.concatenate([self.ey, self.fy])
         self.last32 = np.stack([self.ex, self.ey], axis=1).astype(np.float32)
         self.last_sq = (self.last32 * self.last32).sum(axis=1)
-
-
-class _Wavefront:
-    """Distances (m) to the goal through free space on a square grid around the robot."""
-
-    def __init__(self, goal, points: np.ndarray, radius: float):
-        n = int(round(2 * WAVE_REACH / WAVE_CELL))
-        self.n, self.origin = n, -WAVE_REACH
-        blocked = np.zeros((n, n), dtype=bool)
-        if len(points):
-            ij = np.floor((points - self.origin) / WAVE_CELL).astype(int)
-            inside = ((ij >= 0) & (ij < n)).all(axis=1)
-            blocked[ij[inside, 1], ij[inside, 0]] = True
-            blocked = _dilate(blocked, radius / WAVE_CELL)
-        gx, gy = (np.clip(np.floor((np.asarray(goal) - self.origin) / WAVE_CELL).astype(int), 0, n - 1))
-        seed_d = math.hypot(goal[0] - (self.origin + (gx + 0.5) * WAVE_CELL),
-                            goal[1] - (self.origin + (gy + 0.5) * WAVE_CELL))
-        dist = np.full((n, n), np.inf)
-        free = ~blocked
-        free[gy, gx] = True
-        dist[gy, gx] = seed_d
-        diag = math.sqrt(2.0) * WAVE_CELL
-        moves = [(0, 1, WAVE_CELL), (0, -1, WAVE_CELL), (1, 0, WAVE_CELL), (-1, 0, WAVE_CELL),
-                 (1, 1, diag), (1, -1, diag), (-1, 1, diag), (-1, -1, diag)]
-        for _ in range(4 * n):  # relax until nothing changes
-            before = dist.copy()
-            for dy, dx, step in moves:
-                src = dist[max(0, -dy):n - max(0, dy), max(0, -dx):n - max(0, dx)] + step
-                dst = dist[max(0, dy):n - max(0, -dy), max(0, dx):n - max(0, -dx)]
-                np.minimum(dst, src, out=dst)
-            dist[~free] = np.inf
-            if np.array_equal(dist, before):
-                break
-        # Cells nothing reaches (inside obstacles, walled off) cost as far as the grid is wide.
-        dist[~np.isfinite(dist)] = 2 * n * WAVE_CELL
-        self.dist = dist
-
-    def at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """The distance at each point (the grid's edge value beyond it)."""
-        ix = np.clip(np.floor((x - self.origin) / WAVE_CELL).astype(int), 0, self.n - 1)
-        iy = np.clip(np.floor((y - self.origin) / WAVE_CELL).astype(int), 0, self.n - 1)
-        return self.dist[iy, ix]
-
-
-def _dilate(mask: np.ndarray, cells: float) -> np.ndarray:
-    reach = int(math.ceil(cells))
-    out = mask.copy()
-    ny, nx = mask.shape
-    for dy in range(-reach, reach + 1):
-        for dx in range(-reach, reach + 1):
-            if (dx or dy) and dx * dx + dy * dy <= (cells + 0.5) ** 2:
-                src = mask[max(0, -dy):ny - max(0, dy), max(0, -dx):nx - max(0, dx)]
-                out[max(0, dy):ny - max(0, -dy), max(0, dx):nx - max(0, -dx)] |= src
-    return out
 
 
 def _cut(path: np.ndarray, length: float) -> tuple[np.ndarray, np.ndarray]:
