@@ -6,26 +6,26 @@ Worlds can live in one process (tests, sweeps in threads).
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from mobot_cli.common.streams import silenced
-from mobot_cli.errors import SimulationFault, SpawnError, WorldError, did_you_mean
+from mobot_cli.errors import SimulationFault, SpawnError, did_you_mean
 from mobot_cli.plan import Physics, RobotPlan, SpawnPose, WorldPlan
-from mobot_cli.sim import clearance, entity, parts, placement, static_shapes, surroundings
+from mobot_cli.sim import clearance, entity, placement
 from mobot_cli.sim.broadphase import RobotBoxes
-from mobot_cli.sim.bullet import friction, kept_body
+from mobot_cli.sim.bullet import kept_body, statics
 from mobot_cli.sim.bullet.clients import Stage, connect, release
 from mobot_cli.sim.bullet.faults import Health
-from mobot_cli.sim.bullet.holonomic import ROLLER_FRICTION, HolonomicDrive
+from mobot_cli.sim.bullet.holonomic import HolonomicDrive
 from mobot_cli.sim.bullet.joints import set_initial_positions
+from mobot_cli.sim.bullet.placing import Placing
 from mobot_cli.sim.bullet.robot import SimRobot
 from mobot_cli.sim.bullet.settled import Settling
 from mobot_cli.sim.bullet.steered import drive_class
-from mobot_cli.sim.bullet.urdf_file import links_with_friction, pybullet_file
+from mobot_cli.sim.bullet.urdf_file import pybullet_file
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, ContactCounter
 from mobot_cli.sim.movers.door import MoversDoor
 from mobot_cli.sim.pb import p
@@ -49,14 +49,11 @@ HEALTH_RATE_HZ = 10
 # welds casters into the chassis, and linorobot2 2wd then rested on its two casters with its
 # wheels unloaded (it could not move); it also loses per-link <contact> friction.
 URDF_FLAGS = p.URDF_USE_INERTIA_FROM_FILE | p.URDF_USE_IMPLICIT_CYLINDER
-# A refusal names the part of a world model nearest the robot within this reach (a robot
-# inside a closed mesh touches none of it).
-PART_REACH = 10.0  # m
 
 
-class World(MoversDoor, Settling):
+class World(MoversDoor, Settling, Placing):
     """A headless physics world built from a plan; robots come and go by name (and movers: MoversDoor;
-    a kept settle: Settling)."""
+    a kept settle: Settling; a spawn's placement and its checks: Placing)."""
 
     def __init__(self, physics: Physics, world: WorldPlan, seed: int = 0, fresh: bool = False):
         self.physics = physics
@@ -125,37 +122,8 @@ class World(MoversDoor, Settling):
         self._add_actors()
 
     def _build(self, world: WorldPlan) -> None:
-        cid, physics = self._cid, self.physics
-        p.setPhysicsEngineParameter(
-            fixedTimeStep=physics.dt, numSolverIterations=physics.solver_iterations,
-            numSubSteps=0, deterministicOverlappingPairs=1, enableConeFriction=friction.CONE_FRICTION,
-            physicsClientId=cid)
-        p.setGravity(*physics.gravity, physicsClientId=cid)
-        self._statics: dict[int, str] = {}
-        self._names: dict[int, str] = {}  # static body id -> its name (what a collision was with)
-        self._solids: set[int] = set()  # static bodies with an inside (not planes)
-        self._ground: int | None = None
-        if world.ground_plane:
-            self._ground = self._plane(0.0)
-            self._statics[self._ground] = "the ground plane"
-            self._names[self._ground] = "ground_plane"
-        for body in world.bodies:
-            if body.shapes:
-                uids = static_shapes.create(cid, body)
-                for uid in uids:
-                    p.changeDynamics(uid, -1, physicsClientId=cid, lateralFriction=friction.DEFAULT_FRICTION
-                                     if body.friction is None else body.friction)
-            else:
-                uids = [self._load(body.urdf, body.xyz, body.quat, fixed=True)]
-                if uids[0] < 0:
-                    raise WorldError(f"PyBullet could not load static body '{body.name}'",
-                                     hint="Check its geometry: meshes must exist and be readable.")
-                friction.set_friction(cid, uids[0], links_with_friction(body.urdf), {}, friction.DEFAULT_FRICTION)
-            for uid in uids:
-                self._statics[uid] = body.label or f"static body '{body.name}'"
-                self._names[uid] = body.name
-                if not any(shape.kind == "plane" for shape in body.shapes):
-                    self._solids.add(uid)
+        self._statics, self._names, self._solids, self._ground = statics.build(
+            self._cid, self.physics, world, self._load)
 
     def _load(self, urdf: str, xyz, quat, fixed: bool = False) -> int:
         """Load URDF text (in lines PyBullet reads whole: urdf_file.pybullet_text); -1 when PyBullet
@@ -183,13 +151,6 @@ class World(MoversDoor, Settling):
         """A kept body no first spawn took leaves before the world moves."""
         kept_body.forget(self._cid, self._kept)
         self._kept, self._kept_waits = None, False
-
-    def _plane(self, z: float) -> int:
-        cid = self._cid
-        shape = p.createCollisionShape(p.GEOM_PLANE, physicsClientId=cid)
-        uid = p.createMultiBody(0.0, shape, basePosition=(0.0, 0.0, z), physicsClientId=cid)
-        p.changeDynamics(uid, -1, lateralFriction=friction.FLOOR_FRICTION, physicsClientId=cid)
-        return uid
 
     @property
     def step_count(self) -> int:
@@ -246,65 +207,6 @@ class World(MoversDoor, Settling):
         if isinstance(sim_robot.drive, HolonomicDrive):
             self._pushed.append(sim_robot.drive)
         self._health.watch(sim_robot, self._steps)
-
-    def _settle_in(self, uid: int, robot: RobotPlan) -> None:
-        """Place the robot (z: auto), refuse overlaps, set contact and damping defaults."""
-        cid, pose = self._cid, robot.pose
-        probe_z = 0.0 if self._ground is not None else placement.PROBE_Z
-        lowest = placement.lowest_points(self._probes, uid, self._ground, probe_z)
-        if pose.z_auto:
-            floors = set(self._statics)  # the ground plane is among them
-            placement.rest_on_floor(self._probes, uid, self._ground, floors, pose.xyz, pose.quat, robot.name,
-                                    probe_z)
-        self._check_placed(uid, robot.name, pose.z_auto)
-        bottom = min(lowest.values(), default=0.0)
-        wheels = friction.wheel_links(cid, uid, robot)
-        casters = {link for link, h in lowest.items()
-                   if h - bottom <= friction.CASTER_BAND and link not in wheels and friction.rigid(cid, uid, link)}
-        holonomic = robot.drive is not None and robot.drive.kind in ("mecanum", "omni")
-        if robot.drive is not None and not holonomic and robot.drive.kind != "ackermann" and max(
-                len(robot.drive.left_joints), len(robot.drive.right_joints)) > 1:
-            fraction = friction.skid_axial_fraction(cid, uid, wheels, robot.drive.wheel_separation)
-            friction.soften_axial_friction(cid, uid, wheels, fraction)
-        explicit = links_with_friction(robot.urdf)
-        friction.set_friction(cid, uid, explicit, {link: friction.CASTER_FRICTION for link in casters},
-                              friction.DEFAULT_FRICTION)
-        for link in wheels if holonomic else ():  # rollers: the base force moves the robot
-            p.changeDynamics(uid, link, lateralFriction=ROLLER_FRICTION, physicsClientId=cid)
-        for link in range(-1, p.getNumJoints(uid, physicsClientId=cid)):
-            # PyBullet damps every body (0.04) by default; Gazebo does not, and it slows robots.
-            p.changeDynamics(uid, link, linearDamping=0.0, angularDamping=0.0,
-                             activationState=p.ACTIVATION_STATE_DISABLE_SLEEPING,
-                             physicsClientId=cid)
-
-    def _check_placed(self, uid: int, name: str, z_auto: bool) -> None:
-        """SpawnError unless the body is clear of the floor, the world and the other robots."""
-        cid = self._cid
-        xyz = placement.link_frame_xyz(cid, uid)
-        others = dict(self._statics)
-        # Only the robots whose boxes meet this one's can be reached into (sim/broadphase.py).
-        robots = self._robots
-        others.update({r.body: f"robot '{r.name}'" for r in self._robot_boxes.near(cid, self._steps, robots.values(),
-                                                                                   len(robots), uid)})
-        part = functools.partial(self._part, uid)
-        placement.check_clear(cid, uid, others, name, xyz, z_auto=z_auto, part=part)
-        box = placement.body_bounds(self._probes, uid)
-        surroundings.check_not_inside(cid, {b: self._statics[b] for b in self._solids}, name, xyz, box, part)
-        if not z_auto:
-            surroundings.check_above_floor(cid, self._statics, name, xyz, box, part)
-
-    def _part(self, robot: int, other: int) -> str:
-        """Which part of static body ``other`` a refused robot met (error path only)."""
-        label = self._statics.get(other)
-        body = next((b for b in self.plan.bodies if (b.label or f"static body '{b.name}'") == label), None)
-        shape = placement.nearest_part(self._probes, robot, body, PART_REACH) if body is not None else None
-        return parts.describe(body, shape) if shape is not None else ""
-
-    def _rest(self, uid: int, pose: SpawnPose, name: str) -> None:
-        """Rest a body at (x, y) on the floor below (z: auto), as a spawn does."""
-        probe_z = 0.0 if self._ground is not None else placement.PROBE_Z
-        placement.rest_on_floor(self._probes, uid, self._ground, set(self._statics), pose.xyz, pose.quat, name,
-                                probe_z)
 
     def kinematics(self, name: str) -> entity.Kinematics:
         """The root link's world pose and velocity (of its origin) now."""
