@@ -20,7 +20,7 @@ from mobot_cli.plan import RobotPlan, SensorSpec
 from mobot_cli.scenario.model import RobotSpec
 from mobot_cli.scenario.robots import RobotResolver
 from mobot_cli.sim.sensing.lidar import axis_angles
-from mobot_cli.sim.sensing.rig import ScanData
+from mobot_cli.sim.sensing.readings import ScanData
 from mobot_cli.timeline.records import Deleted, Reading
 
 NO_END = 2**62  # a spawned robot's commands come from your code, not a script

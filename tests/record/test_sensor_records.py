@@ -23,7 +23,7 @@ from mobot_cli.ros import sensor_cdr
 from mobot_cli.ros.definitions import CONTACTS_STATE, MESSAGES
 from mobot_cli.run import execute
 from mobot_cli.sim.sensing.lidar import Beams
-from mobot_cli.sim.sensing.rig import Contact
+from mobot_cli.sim.sensing.readings import Contact
 from tests.sim.sensor_world import lidar, one_robot, planned
 
 REPO = Path(__file__).resolve().parents[2]

@@ -14,7 +14,7 @@ from mobot_cli.ros import sensor_cdr
 from mobot_cli.ros.definitions import CONTACTS_STATE, IMU, POINT_CLOUD2
 from mobot_cli.ros2 import names
 from mobot_cli.sim.sensing.lidar import Beams
-from mobot_cli.sim.sensing.rig import Contact
+from mobot_cli.sim.sensing.readings import Contact
 from tests.record.test_sensor_records import _typestore
 from tests.sim.sensor_world import lidar
 
