@@ -88,11 +88,14 @@ def test_a_signal_flushes_the_record_and_exits_0(tmp_path, cache, signum):
 def test_live_requests_win_over_the_script(tmp_path, cache):
     """Deleting a robot live, or taking a scripted spawn's name, skips those events (recorded)."""
     out = tmp_path / "rec"
-    server = LiveProcess(str(EVENTS), "--rtf", "2", cache_dir=cache, out=out)
+    # Paused until both requests are in: on a busy machine a playing world could reach the
+    # script's 3 s before they are answered.
+    server = LiveProcess(str(EVENTS), "--rtf", "2", "--paused", cache_dir=cache, out=out)
     try:
         with server.client() as client:
             client.delete("mobot_1")  # the script deletes it at 3 s
             client.spawn("late", description="mobot", pose={"x": -3.0})  # the script spawns 'late' at 3.5 s
+            client.resume()
             wait_for_step(client, 4 * 240)
             client.stop()
         assert server.wait() == 0

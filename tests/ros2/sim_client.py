@@ -62,23 +62,35 @@ def call(node, clients: dict, service: str, fields: dict) -> dict:
 
 
 def simulate_steps(node, steps: int) -> dict:
+    """Send a SimulateSteps goal; its feedback is read from the action's feedback topic itself, as
+    every message the server published: rclpy's goal handle drops the feedback that trails the
+    result (seen on a loaded machine, where only the first of three came through the handle)."""
     client = ActionClient(node, action.SimulateSteps, "/simulate_steps")
     if not client.wait_for_server(timeout_sec=WAIT):
         return {"error": "/simulate_steps did not appear"}
-    feedback: list[list[int]] = []
-    goal = client.send_goal_async(action.SimulateSteps.Goal(steps=steps),
-                                  feedback_callback=lambda f: feedback.append(
-                                      [f.feedback.completed_steps, f.feedback.remaining_steps]))
+    topic = "/simulate_steps/_action/feedback"
+    published: list[tuple[bytes, list[int]]] = []
+    node.create_subscription(action.SimulateSteps.Impl.FeedbackMessage, topic, lambda m: published.append(
+        (bytes(m.goal_id.uuid), [m.feedback.completed_steps, m.feedback.remaining_steps])), 10)
+    deadline = time.monotonic() + WAIT
+    while node.count_publishers(topic) == 0 and time.monotonic() < deadline:
+        rclpy.spin_once(node, timeout_sec=0.05)
+    goal = client.send_goal_async(action.SimulateSteps.Goal(steps=steps))
     rclpy.spin_until_future_complete(node, goal, timeout_sec=WAIT)
     handle = goal.result()
     if handle is None or not handle.accepted:
         return {"error": "goal not accepted"}
     result = handle.get_result_async()
     rclpy.spin_until_future_complete(node, result, timeout_sec=WAIT)
+    mine = bytes(handle.goal_id.uuid)
+
+    def feedback() -> list[list[int]]:
+        return [values for goal_id, values in published if goal_id == mine]
+
     deadline = time.monotonic() + 10.0  # feedback comes on a topic of its own: it may trail the result
-    while len(feedback) < steps and time.monotonic() < deadline and result.result().status == 4:
+    while len(feedback()) < steps and time.monotonic() < deadline and result.result().status == 4:
         rclpy.spin_once(node, timeout_sec=0.1)
-    return {"status": result.result().status, "result": _plain(result.result().result), "feedback": feedback}
+    return {"status": result.result().status, "result": _plain(result.result().result), "feedback": feedback()}
 
 
 def publish(node, topic: str, stamped: bool, linear: float, angular: float, seconds: float) -> dict:
