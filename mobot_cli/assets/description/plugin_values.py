@@ -35,9 +35,11 @@ def number(plugin: ET.Element, *tags: str) -> float | None:
 
 def disagreement(who: str, wheels: list[tuple[str, Wheel]], radius: float | None,
                  separation: float | None, notices: list[Notice], file: Path | None, *,
-                 says: str = "says", whose: str = "the plugin's") -> None:
+                 says: str = "says", whose: str = "the plugin's", holonomic: bool = False) -> None:
     """One warning when a plugin's (``who``: "the X plugin") or a controller's radius or
-    separation is > 2 % off the wheel geometry."""
+    separation is > 2 % off the wheel geometry. A ``holonomic`` base's body follows its
+    commanded twist in mobot (sim/bullet/holonomic.py), so the warning says what Gazebo would
+    do instead of what mobot does."""
     parts, effects = [], []
     left = [w.y for side, w in wheels if side == "left"]
     right = [w.y for side, w in wheels if side == "right"]
@@ -54,7 +56,13 @@ def disagreement(who: str, wheels: list[tuple[str, Wheel]], radius: float | None
             parts.append(f"wheel_radius {radius:.3f} m, but its wheels' collisions have radius "
                          f"{measured:.3f} m")
             effects.append(f"drives {_percent(measured / radius)} than commanded")
-    if parts:
+    if parts and holonomic:
+        notices.append(Notice(
+            f"{who} {says} {'; and '.join(parts)}: in Gazebo the robot {' and '.join(effects)}; mobot "
+            f"moves a holonomic base as commanded and turns its wheels and integrates odometry with {whose} "
+            "values, so neither shows it (set drive: wheel_radius / wheel_separation to use the geometry)",
+            Location(file=file)))
+    elif parts:
         notices.append(Notice(
             f"{who} {says} {'; and '.join(parts)}: mobot uses {whose} values, "
             f"as Gazebo does, so the robot {' and '.join(effects)} (set drive: wheel_radius / "

@@ -47,8 +47,33 @@ def wheel(tree: LinkTree, joint_name: str, strict: bool) -> Wheel | None:
     radius = wheel_radius(tree, joint.child, frame.pos, axis_root, meshes=not strict)
     if strict and radius is None:
         return None
-    return Wheel(joint=joint.name, x=frame.pos[0], y=frame.pos[1], radius=radius,
+    y = tyre_y(tree, joint.child, frame.pos, axis_root, radius)
+    return Wheel(joint=joint.name, x=frame.pos[0], y=frame.pos[1] if y is None else y, radius=radius,
                  sign=1.0 if axis >= 0 else -1.0)
+
+
+def tyre_y(tree: LinkTree, link: str, centre: Vec, axis_root: Vec, radius: float | None) -> float | None:
+    """Where along y (root frame) the wheel meets the floor: the centre of the cylinder or sphere
+    that reaches ``radius``, when it sits off the joint along the axle (limo, whose tyres hang
+    2 cm outboard of their joints). None when no such shape, or it is centred on the joint."""
+    element = tree.links.get(link)
+    if element is None or not radius:
+        return None
+    link_frame = tree.frame(link)
+    for collision in element.findall("collision"):
+        geometry = collision.find("geometry")
+        shape = None if geometry is None else next(
+            (g for g in (geometry.find("cylinder"), geometry.find("sphere")) if g is not None), None)
+        if shape is None:
+            continue
+        frame = link_frame.compose(origin_frame(collision))
+        if shape.tag == "cylinder" and abs(sum(
+                a * b for a, b in zip(mat_vec(frame.rot, (0.0, 0.0, 1.0)), axis_root))) < PARALLEL:
+            continue
+        reach = _off_axis(frame.pos, centre, axis_root) + floats(shape.get("radius"), 1, (0.0,))[0]
+        if abs(reach - radius) < 1e-9 and abs(frame.pos[1] - centre[1]) > 1e-6:
+            return frame.pos[1]
+    return None
 
 
 def wheel_layout(tree: LinkTree, left: tuple[str, ...], right: tuple[str, ...],
