@@ -215,3 +215,125 @@ def test_wheels_with_grip_and_mecanum_rollers_draw_no_friction_notice(tmp_path):
     assert not [n for n in load_robot(str(path)).notices if "friction 0" in n.message]
     path.write_text(four_wheels(FRICTIONLESS, MECANUM_PLUGIN))
     assert not [n for n in load_robot(str(path)).notices if "friction 0" in n.message]
+
+
+def _mm_tyre(folder) -> str:
+    """A tyre mesh of radius 0.05 m, 0.04 m wide, written in millimetres (<unit meter="0.001"/>)
+    as Rover Robotics' pro_tire.dae is: its axis is the mesh's z."""
+    trimesh = pytest.importorskip("trimesh")
+    from trimesh.exchange.dae import export_collada
+
+    text = export_collada(trimesh.creation.cylinder(radius=50.0, height=40.0, sections=48)).decode()
+    text = text.replace("<up_axis>Y_UP</up_axis>", '<unit name="millimeter" meter="0.001"/><up_axis>Z_UP</up_axis>')
+    path = folder / "tyre.dae"
+    path.write_text(text)
+    return str(path)
+
+
+def mesh_wheeled(folder, plugin: str = "") -> str:
+    """``diff_robot(0)`` with its wheels' cylinders replaced by the millimetre tyre mesh."""
+    mesh = f'<mesh filename="{_mm_tyre(folder)}"/>'
+    return diff_robot(0.0, plugin).replace('<cylinder radius="0.05" length="0.04"/>', mesh)
+
+
+def test_a_collada_wheel_in_millimetres_is_measured_in_metres(tmp_path):
+    from mobot_cli.assets.description.drive import drive_from_joints
+
+    urdf = mesh_wheeled(tmp_path)
+    spec = drive_from_joints(urdf, ("left_joint",), ("right_joint",))
+    assert spec.wheel_radius == pytest.approx(0.05, rel=0.01)  # trimesh alone read 50 m
+    path = tmp_path / "m.urdf"
+    path.write_text(mesh_wheeled(tmp_path, DIFF_PLUGIN.format(sep=0.3)))
+    described = load_robot(str(path))
+    assert not [n for n in described.notices if "wheel_radius" in n.message]
+    xmin, xmax, ymin, ymax = described.footprint
+    assert (xmax - xmin, ymax - ymin) == pytest.approx((0.3, 0.34), abs=0.005)  # was 100 m across
+
+
+def test_the_millimetre_wheels_roll_their_distance(tmp_path):
+    """Real PyBullet, which loads the COLLADA unit: 0.25 m/s for 4 s on the plugin's radius."""
+    from mobot_cli.api import Simulation
+
+    path = tmp_path / "m.urdf"
+    path.write_text(mesh_wheeled(tmp_path, DIFF_PLUGIN.format(sep=0.3)))
+    with Simulation.open("empty") as sim:
+        sim.spawn("m", str(path))
+        sim.run_for(0.5)
+        x0 = sim.state("m").true_x
+        sim.command("m", linear=0.25, angular=0.0, duration=4.0)
+        sim.run_for(4.5)
+        assert sim.state("m").true_x - x0 == pytest.approx(1.0, rel=0.03)
+
+
+def test_a_skid_plugin_mismatch_says_the_twist_loop_drives_as_commanded(tmp_path):
+    """rover_4wd's DiffDrive says 0.24 m for wheels 0.36 m apart. Real PyBullet: the body still
+    turns 90 degrees of 90, as the notice says."""
+    from mobot_cli.api import Simulation
+
+    plugin = ('<plugin filename="gz-sim-diff-drive-system" name="gz::sim::systems::DiffDrive">'
+              '<left_joint>front_left_joint</left_joint><left_joint>rear_left_joint</left_joint>'
+              '<right_joint>front_right_joint</right_joint><right_joint>rear_right_joint</right_joint>'
+              '<wheel_separation>0.35</wheel_separation><wheel_radius>0.05</wheel_radius></plugin>')
+    path = tmp_path / "skid.urdf"
+    path.write_text(four_wheels(plugin=plugin))
+    (said,) = [n.message for n in load_robot(str(path)).notices if "wheel_separation" in n.message]
+    assert "where the robot turns 30 % less than commanded; mobot's skid-steer twist loop drives the body " \
+           "as commanded" in said
+    with Simulation.open("empty") as sim:
+        sim.spawn("s", str(path))
+        sim.run_for(0.5)
+        start = sim.state("s").true_yaw
+        sim.command("s", linear=0.0, angular=0.5, duration=math.pi)
+        sim.run_for(math.pi + 1.0)
+        assert math.degrees(sim.state("s").true_yaw - start) == pytest.approx(90.0, abs=4.0)
+
+
+def test_no_drive_wheels_says_why_each_spinning_joint_is_none():
+    """scout_mini's wheels spin about the root's x axis; hunter2's have mesh collisions only."""
+    from mobot_cli.assets.description.frames import LinkTree
+    from mobot_cli.assets.description.wheels import why_not_wheels
+
+    sideways = diff_robot(0.0).replace('<axis xyz="0 1 0"/>', '<axis xyz="1 0 0"/>')
+    assert why_not_wheels(LinkTree(ET.fromstring(sideways))) == (
+        "left_joint spins about (+1.00, +0.00, +0.00), not the root's y axis; "
+        "right_joint spins about (+1.00, +0.00, +0.00), not the root's y axis")
+    meshy = diff_robot(0.0).replace('<cylinder radius="0.05" length="0.04"/>', '<mesh filename="w.stl"/>')
+    assert why_not_wheels(LinkTree(ET.fromstring(meshy))).startswith(
+        "left_joint has no cylinder or sphere collision (a mesh wheel: name it in drive: left_joints")
+    assert why_not_wheels(LinkTree(ET.fromstring(diff_robot(0.0)))) == ""
+
+
+def test_no_drive_notice_carries_the_reasons(tmp_path):
+    path = tmp_path / "x.urdf"
+    path.write_text(diff_robot(0.0).replace('<axis xyz="0 1 0"/>', '<axis xyz="1 0 0"/>'))
+    (said,) = [n.message for n in load_robot(str(path)).notices if "no drive wheels" in n.message]
+    assert said.startswith("no drive wheels found: the robot will not move on commands (left_joint spins about")
+
+
+HECTOR_IMU = ('<gazebo><plugin name="imu_plugin" filename="libhector_gazebo_ros_imu.so"><bodyName>base</bodyName>'
+              '<topicName>imu_data</topicName><updateRate>50</updateRate>'
+              '<accelGaussianNoise>{accel}</accelGaussianNoise><rateGaussianNoise>{rate}</rateGaussianNoise>'
+              '</plugin></gazebo>')
+
+
+@pytest.mark.parametrize(("accel", "rate", "expected", "notices"), [
+    ("0.01", "0.002", (0.01, 0.002), 0),
+    ("0.01 0.01 0.01", "0.002 0.002 0.002", (0.01, 0.002), 0),
+    ("0.007 0.01 0.0114", "0.0028 0.0028 0.00055", (0.0096430, 0.0023081), 2),  # MiR's, rounded
+])
+def test_hector_imu_noise_per_axis_is_read(tmp_path, accel, rate, expected, notices):
+    path = tmp_path / "imu.urdf"
+    path.write_text(diff_robot(0.0).replace("</robot>", HECTOR_IMU.format(accel=accel, rate=rate) + "</robot>"))
+    described = load_robot(str(path))
+    (imu,) = described.sensors
+    assert (imu.accel_noise_stddev, imu.noise_stddev) == pytest.approx(expected, rel=1e-3)
+    assert len([n for n in described.notices if "per axis" in n.message]) == notices
+
+
+def test_hector_imu_noise_that_is_no_number_is_still_refused(tmp_path):
+    from mobot_cli.errors import DescriptionError
+
+    path = tmp_path / "imu.urdf"
+    path.write_text(diff_robot(0.0).replace("</robot>", HECTOR_IMU.format(accel="0.01 x 0.01", rate="0") + "</robot>"))
+    with pytest.raises(DescriptionError, match="accelGaussianNoise"):
+        load_robot(str(path))

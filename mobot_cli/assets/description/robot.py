@@ -30,7 +30,7 @@ from mobot_cli.assets.description.process import (
 )
 from mobot_cli.assets.description.sanity import check_mesh_file, check_sanity
 from mobot_cli.assets.description.sensors import DescribedSensor, collision_names, read_sensors, sensor_summary
-from mobot_cli.assets.description.wheels import wheel_layout
+from mobot_cli.assets.description.wheels import wheel_layout, why_not_wheels
 from mobot_cli.assets.description.xacro import Expansion
 from mobot_cli.assets.lenient import gazebo_xml
 from mobot_cli.assets.resources import ResourceResolver
@@ -166,7 +166,8 @@ def _build(source: Path, expansion: Expansion, resolver: ResourceResolver,
     detected = detect(robot, notices=notices, source=source, controllers=controllers)
     drive = detected.spec
     if drive is None and not detected.refused:  # a refused drive was named in its own notice
-        notices.append(Notice(NO_DRIVE, Location(file=source)))
+        why = why_not_wheels(LinkTree(robot))
+        notices.append(Notice(f"{NO_DRIVE} ({why})" if why else NO_DRIVE, Location(file=source)))
     holds = read_holds(robot, drive, notices, source)
     notices += [n for n in (slipping_wheels(robot, drive, friction, source),) if n is not None]
     try:  # written once as PyBullet reads it whole, so `check` fails where `run` would

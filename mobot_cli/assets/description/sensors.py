@@ -162,7 +162,7 @@ def read_sensors(robot: ET.Element, source: Path,
                 continue
             _check_placement(xml, links, found)
             found.append(_read(xml))
-    for values in plugin_sensors(robot, source, skipped):
+    for values in plugin_sensors(robot, source, skipped, notices):
         sensor = DescribedSensor(**values)
         if any(s.kind == "imu" and (s.link == sensor.link or (s.topic or default_topic(s)) == sensor.topic)
                for s in found):

@@ -12,6 +12,7 @@ import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
+from mobot_cli.assets.description.collada_unit import metres_per_unit
 from mobot_cli.assets.description.frames import LinkTree, floats, origin_frame
 from mobot_cli.common.transforms import Vec, mat_vec
 
@@ -74,6 +75,28 @@ def tyre_y(tree: LinkTree, link: str, centre: Vec, axis_root: Vec, radius: float
         if abs(reach - radius) < 1e-9 and abs(frame.pos[1] - centre[1]) > 1e-6:
             return frame.pos[1]
     return None
+
+
+def why_not_wheels(tree: LinkTree, limit: int = 4) -> str:
+    """Why the spinning joints of a robot without drive wheels are none ("" without any), for
+    the notice that says no drive wheels were found (scout_mini's wheels spin about x)."""
+    reasons = []
+    for joint in tree.joints:
+        if joint.type != "continuous":
+            continue
+        frame = tree.frame(joint.child)
+        axis = mat_vec(frame.rot, joint.axis)
+        if abs(axis[1]) < PARALLEL:
+            why = f"spins about ({axis[0]:+.2f}, {axis[1]:+.2f}, {axis[2]:+.2f}), not the root's y axis"
+        elif not carried_by_body(tree, joint.parent):
+            why = "hangs below a swivel or free joint"
+        elif wheel_radius(tree, joint.child, frame.pos, axis) is None:
+            why = "has no cylinder or sphere collision (a mesh wheel: name it in drive: left_joints / right_joints)"
+        else:
+            continue
+        reasons.append(f"{joint.name} {why}")
+    more = [f"{len(reasons) - limit} more"] if len(reasons) > limit else []
+    return "; ".join(reasons[:limit] + more)
 
 
 def wheel_layout(tree: LinkTree, left: tuple[str, ...], right: tuple[str, ...],
@@ -167,7 +190,8 @@ def _mesh_radius(mesh: ET.Element, frame, centre: Vec, axis: Vec) -> float | Non
         return None
     if len(vertices) == 0:
         return None
-    scale = np.array(floats(mesh.get("scale"), 3, (1.0, 1.0, 1.0)))
+    unit = metres_per_unit(mesh.get("filename", ""))  # trimesh ignores a COLLADA <unit>
+    scale = np.array(floats(mesh.get("scale"), 3, (1.0, 1.0, 1.0))) * unit
     points = (vertices * scale) @ np.array(frame.rot).T + np.array(frame.pos) - np.array(centre)
     direction = np.array(axis) / (np.linalg.norm(axis) or 1.0)
     off_axis = points - np.outer(points @ direction, direction)
