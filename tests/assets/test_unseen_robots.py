@@ -337,3 +337,27 @@ def test_hector_imu_noise_that_is_no_number_is_still_refused(tmp_path):
     path.write_text(diff_robot(0.0).replace("</robot>", HECTOR_IMU.format(accel="0.01 x 0.01", rate="0") + "</robot>"))
     with pytest.raises(DescriptionError, match="accelGaussianNoise"):
         load_robot(str(path))
+
+
+CLIFF = ('<link name="cliff"><inertial><mass value="0.001"/><inertia ixx="1e-6" iyy="1e-6" izz="1e-6" ixy="0" ixz="0" '
+         'iyz="0"/></inertial></link><joint name="cliff_joint" type="fixed"><parent link="base"/><child link="cliff"/>'
+         '<origin xyz="0.1 0 -0.03" rpy="0 1.5707963267948966 0"/></joint>'
+         '<gazebo reference="cliff"><sensor type="ray" name="cliff"><update_rate>10</update_rate><ray><scan><horizontal>'
+         '<samples>1</samples><resolution>1</resolution><min_angle>0</min_angle><max_angle>0</max_angle></horizontal>'
+         '</scan><range><min>0.0001</min><max>0.15</max><resolution>{res}</resolution></range></ray></sensor></gazebo>')
+
+
+@pytest.mark.parametrize(("res", "reads", "said"), [(1.0, 0.0001, 1), (0.01, 0.02, 0)])
+def test_a_coarse_range_resolution_keeps_returns_within_the_span(tmp_path, res, reads, said):
+    """create3's cliff sensors: one beam 2 cm down to the floor, ranges rounded to 1 m. Real
+    PyBullet: the return read 0.0, below its range_min; now range_min, and a warning says why."""
+    from mobot_cli.api import Simulation
+
+    path = tmp_path / "cliff.urdf"
+    path.write_text(diff_robot(0.0).replace("</robot>", CLIFF.format(res=res) + "</robot>"))
+    notices = [n.message for n in load_robot(str(path)).notices if "no finer than their span" in n.message]
+    assert len(notices) == said
+    with Simulation.open("empty") as sim:
+        sim.spawn("c", str(path))
+        sim.run_for(0.5)
+        assert float(sim.scan("c", "cliff").ranges.ravel()[0]) == pytest.approx(reads, abs=1e-6)
