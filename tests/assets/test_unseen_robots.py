@@ -342,8 +342,8 @@ def test_hector_imu_noise_that_is_no_number_is_still_refused(tmp_path):
 CLIFF = ('<link name="cliff"><inertial><mass value="0.001"/><inertia ixx="1e-6" iyy="1e-6" izz="1e-6" ixy="0" ixz="0" '
          'iyz="0"/></inertial></link><joint name="cliff_joint" type="fixed"><parent link="base"/><child link="cliff"/>'
          '<origin xyz="0.1 0 -0.03" rpy="0 1.5707963267948966 0"/></joint>'
-         '<gazebo reference="cliff"><sensor type="ray" name="cliff"><update_rate>10</update_rate><ray><scan><horizontal>'
-         '<samples>1</samples><resolution>1</resolution><min_angle>0</min_angle><max_angle>0</max_angle></horizontal>'
+         '<gazebo reference="cliff"><sensor type="ray" name="cliff"><update_rate>10</update_rate><ray><scan>'
+         '<horizontal><samples>1</samples><resolution>1</resolution><min_angle>0</min_angle><max_angle>0</max_angle></horizontal>'
          '</scan><range><min>0.0001</min><max>0.15</max><resolution>{res}</resolution></range></ray></sensor></gazebo>')
 
 
