@@ -66,7 +66,7 @@ class RobotResolver:
         sensors = resolve_sensors(spec, desc, path, self)
         commands = self.commands(spec, path, spawn_step, desc.footprint, drive)
         if drive is None:  # said here, not by describe(): a drive: naming the wheels silences it
-            self.notices.extend(str(n) for n in desc.notices if n.message == NO_DRIVE)
+            self.notices.extend(str(n) for n in desc.notices if n.message.startswith(NO_DRIVE))
         if commands and drive is None and desc.refused_drive:
             raise ScenarioError(f"robot '{spec.name}' has commands but mobot cannot drive its "
                                 f"{desc.refused_drive}", location=self.locate_key(path + ("commands",)),
@@ -357,7 +357,7 @@ def holonomic_drive(drive: DriveSpec, desc: RobotDescription, kind: str, given: 
 
 def _shown(desc: RobotDescription) -> list[str]:
     """The description's notices but the missing drive, which plans() says when it applies."""
-    return [str(n) for n in desc.notices if n.message != NO_DRIVE]
+    return [str(n) for n in desc.notices if not n.message.startswith(NO_DRIVE)]
 
 
 def unlisted_robots(world: LoadedWorld, robots) -> list[str]:

@@ -196,7 +196,7 @@ def _from_controllers(controllers: tuple[ros2_control.Controller, ...], robot: E
     """The drive of the first drive controller the robot's ros2_control plugin loads; None
     without one (or when it names no wheels: the geometry decides, with a notice)."""
     for controller in controllers:
-        package, label = controller.package, f"the {controller.package} controller '{controller.name}'"
+        package, label = controller.kind, f"the {controller.package} controller '{controller.name}'"
         if package in REFUSED_CONTROLLERS:
             return steering.refusal(REFUSED_CONTROLLERS[package], f"{controller.type}, {controller.file}",
                                     notices, source)
@@ -269,18 +269,34 @@ def _from_mecanum_controller(controller: ros2_control.Controller, label: str, tr
                            lambda side, name: controller.location(key_of[name]))
     radius = ros2_control.number(controller, "kinematics.wheels_radius", "wheel_radius")
     separation = ros2_control.number(controller, "wheel_separation_y")
-    _controller_disagreement(controller, wheels, radius, separation, notices)
-    return holonomic.holonomic_spec("mecanum", [w for _, w in wheels], {w.joint: s for s, w in wheels},
+    _controller_disagreement(controller, wheels, radius, separation, notices, holonomic=True)
+    spec = holonomic.holonomic_spec("mecanum", [w for _, w in wheels], {w.joint: s for s, w in wheels},
                                     odometry="encoder", source="ros2_control", notices=notices,
                                     file=controller.file, radius=radius, separation=separation,
                                     wheelbase=ros2_control.number(controller, "wheel_separation_x"))
+    reach = ros2_control.number(controller, _REACH)
+    if spec is None or reach is None or reach <= spec.wheel_separation / 2:
+        return spec
+    measured = (spec.wheel_separation + spec.wheelbase) / 2
+    if abs(reach - measured) > 0.02 * measured:
+        notices.append(Notice(f"the parameters of {controller.package} controller '{controller.name}' say {_REACH} "
+                              f"{reach:.4f} m, but its wheels are {measured:.4f} m (lx + ly) from the centre: "
+                              "mobot turns the wheels and integrates odometry with the controller's value, "
+                              "as Gazebo does", controller.location(_REACH)))
+    # The controller's inverse kinematics use only lx + ly: keep the track, fit the wheelbase.
+    return dataclasses.replace(spec, wheelbase=2 * reach - spec.wheel_separation)
+
+
+# mecanum_drive_controller's lx + ly: the wheels' distance from the centre along x plus along y.
+_REACH = "kinematics.sum_of_robot_center_projection_on_X_Y_axis"
 
 
 def _controller_disagreement(controller: ros2_control.Controller, wheels: list[tuple[str, Wheel]],
-                             radius: float | None, separation: float | None, notices: list[Notice]) -> None:
+                             radius: float | None, separation: float | None, notices: list[Notice],
+                             holonomic: bool = False) -> None:
     """plugin_values.disagreement, worded for a controller's parameters."""
     _disagreement(f"the parameters of {controller.package} controller '{controller.name}'", wheels, radius,
-                  separation, notices, controller.file, says="say", whose="the controller's")
+                  separation, notices, controller.file, says="say", whose="the controller's", holonomic=holonomic)
 
 
 def _spec(wheels: list[Wheel], *, source: str, notices: list[Notice], file: Path | None,

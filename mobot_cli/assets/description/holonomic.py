@@ -77,7 +77,8 @@ def from_plugin(element: ET.Element, robot: ET.Element, tree: LinkTree, notices:
     radius = number(element, "wheel_radius")
     separation = number(element, "wheel_separation")
     wheelbase = number(element, "wheelbase", "wheel_base")
-    disagreement(f"the {label} plugin", [(sides[w.joint], w) for w in found], radius, separation, notices, file)
+    disagreement(f"the {label} plugin", [(sides[w.joint], w) for w in found], radius, separation, notices, file,
+                 holonomic=True)
     return holonomic_spec("mecanum", found, sides, odometry="encoder", source="plugin", notices=notices,
                           file=file, radius=radius, separation=separation, wheelbase=wheelbase)
 

@@ -6,7 +6,8 @@ here through world/to_urdf.py) is a spring; a joint in a ``<ros2_control>`` bloc
 position or velocity command interface is held by its controller (at the state interface's
 ``initial_value``, else 0), with the joint's ``<limit effort>``, except continuous joints
 with only a velocity interface (wheels: a tricycle's traction wheel); a joint a model plugin
-names (other than the drive and joint-state publishers) is held at 0 the same way; a
+names (other than the drive and joint-state publishers) is held at 0 the same way, except a
+continuous joint (a wheel) named by a plugin that is not a position controller: it spins; a
 ``<mimic>`` joint whose leader is held is held where the mimic puts it. Every other revolute
 or prismatic joint that is not a drive wheel stays free and is named in one notice. Continuous
 joints (casters, free wheels) spin freely in Gazebo too and are not named.
@@ -40,12 +41,19 @@ def read_holds(robot: ET.Element, drive: DriveSpec | None, notices: list[Notice]
     if drive is not None:
         wheels = {*drive.left_joints, *drive.right_joints, *getattr(drive, "steering_joints", ())}
     holds: dict[str, JointHold] = {}
-    for name, hold in (*_springs(robot), *_controlled(robot, joints), *_plugin_held(robot, joints)):
+    spinning: dict[str, list[str]] = {}  # plugin -> the continuous joints it names, left to spin
+    for name, hold in (*_springs(robot), *_controlled(robot, joints), *_plugin_held(robot, joints, spinning)):
         if name in joints and name not in wheels and name not in holds:
             holds[name] = hold
     for name, hold in _mimics(joints, holds):
         if name not in wheels:
             holds[name] = hold
+    for label, names in spinning.items():
+        names = [n for n in dict.fromkeys(names) if n not in wheels and n not in holds]
+        if names:
+            notices.append(Notice(
+                f"mobot does not know the {label} plugin: the continuous joints it names spin freely "
+                f"({', '.join(names)}), as wheels it does not drive", Location(file=source)))
     free = [name for name, joint in joints.items()
             if name not in wheels and name not in holds and joint.get("type") in LIMITED]
     if free:
@@ -82,16 +90,24 @@ def _controlled(robot: ET.Element, joints: dict[str, ET.Element]):
                                   effort=_effort(joints[name]), source="ros2_control")
 
 
-def _plugin_held(robot: ET.Element, joints: dict[str, ET.Element]):
-    """Joints named in the parameters of a model plugin that controls joints."""
+def _plugin_held(robot: ET.Element, joints: dict[str, ET.Element], spinning: dict[str, list[str]]):
+    """Joints named in the parameters of a model plugin that controls joints.
+
+    A continuous joint is held only by a position controller: one named by another plugin mobot
+    does not know (a vendor's drive, ROS 1's ``libgazebo_ros_ackerman.so``) is a wheel that
+    plugin would turn, and locking it would drag the robot; it goes to ``spinning`` instead."""
     for plugin in robot.iter("plugin"):
         label = re.sub(r"[-_ ]", "", plugin.get("filename", "") + plugin.get("name", "")).lower()
         if any(word in label for word in _NOT_HOLDING):
             continue
+        positions = "position" in label
         initial = _number(plugin.findtext("initial_position"))  # gz-sim JointPositionController
         for element in plugin.iter():
             name = (element.text or "").strip()
             if element is not plugin and name in joints:
+                if joints[name].get("type") == "continuous" and not positions:
+                    spinning.setdefault(plugin.get("filename", "") or plugin.get("name", ""), []).append(name)
+                    continue
                 yield name, JointHold(joint=name, kind="position", target=initial, effort=_effort(joints[name]),
                                       source=plugin.get("filename", "") or plugin.get("name", ""))
 

@@ -35,9 +35,12 @@ def number(plugin: ET.Element, *tags: str) -> float | None:
 
 def disagreement(who: str, wheels: list[tuple[str, Wheel]], radius: float | None,
                  separation: float | None, notices: list[Notice], file: Path | None, *,
-                 says: str = "says", whose: str = "the plugin's") -> None:
+                 says: str = "says", whose: str = "the plugin's", holonomic: bool = False) -> None:
     """One warning when a plugin's (``who``: "the X plugin") or a controller's radius or
-    separation is > 2 % off the wheel geometry."""
+    separation is > 2 % off the wheel geometry. A ``holonomic`` base's body follows its
+    commanded twist in mobot (sim/bullet/holonomic.py), and so does a skid-steer base's (more
+    than one wheel a side: its twist loop, sim/bullet/twist_trim.py), so for those the warning
+    says what Gazebo would do and what mobot does instead."""
     parts, effects = [], []
     left = [w.y for side, w in wheels if side == "left"]
     right = [w.y for side, w in wheels if side == "right"]
@@ -54,7 +57,21 @@ def disagreement(who: str, wheels: list[tuple[str, Wheel]], radius: float | None
             parts.append(f"wheel_radius {radius:.3f} m, but its wheels' collisions have radius "
                          f"{measured:.3f} m")
             effects.append(f"drives {_percent(measured / radius)} than commanded")
-    if parts:
+    sides = [side for side, _ in wheels]
+    skid = max(sides.count("left"), sides.count("right")) > 1
+    if parts and skid and not holonomic:
+        notices.append(Notice(
+            f"{who} {says} {'; and '.join(parts)}: mobot uses {whose} values, as Gazebo does, where the "
+            f"robot {' and '.join(effects)}; mobot's skid-steer twist loop drives the body as commanded "
+            "(drive: {twist_feedback: false} to leave it out; wheel_radius / wheel_separation to use the "
+            "geometry)", Location(file=file)))
+    elif parts and holonomic:
+        notices.append(Notice(
+            f"{who} {says} {'; and '.join(parts)}: in Gazebo the robot {' and '.join(effects)}; mobot "
+            f"moves a holonomic base as commanded and turns its wheels and integrates odometry with {whose} "
+            "values, so neither shows it (set drive: wheel_radius / wheel_separation to use the geometry)",
+            Location(file=file)))
+    elif parts:
         notices.append(Notice(
             f"{who} {says} {'; and '.join(parts)}: mobot uses {whose} values, "
             f"as Gazebo does, so the robot {' and '.join(effects)} (set drive: wheel_radius / "

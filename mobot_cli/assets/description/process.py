@@ -27,6 +27,7 @@ import os
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+from mobot_cli.assets.description.collada_unit import metres_per_unit
 from mobot_cli.assets.description.frames import LinkTree, floats, origin_frame
 from mobot_cli.assets.resources import ResourceResolver
 from mobot_cli.common.transforms import Frame
@@ -299,10 +300,11 @@ def _geometry_points(frame: Frame, geometry: ET.Element | None, source: Path,
 def _mesh_points(frame: Frame, mesh: ET.Element, source: Path,
                  notices: list[Notice]) -> list[tuple[float, float, float]]:
     # Only collision meshes on a cold load get here; trimesh is imported for them alone.
-    # trimesh ignores COLLADA <unit>, so a footprint from a .dae mesh may be off by its unit.
+    # trimesh ignores COLLADA <unit>: scaled by it here, as PyBullet loads the mesh.
     import trimesh
 
-    scale = floats(mesh.get("scale"), 3, (1.0, 1.0, 1.0))
+    unit = metres_per_unit(mesh.get("filename", ""))
+    scale = tuple(v * unit for v in floats(mesh.get("scale"), 3, (1.0, 1.0, 1.0)))
     try:
         loaded = trimesh.load(mesh.get("filename"), force="mesh")
         (x0, y0, z0), (x1, y1, z1) = loaded.bounds

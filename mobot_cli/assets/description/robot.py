@@ -18,6 +18,7 @@ from mobot_cli.assets.description import ros2_control
 from mobot_cli.assets.description.check import check_geometry, check_tree, check_with_yourdfpy, parse_urdf
 from mobot_cli.assets.description.drive import detect
 from mobot_cli.assets.description.frames import LinkTree, floats
+from mobot_cli.assets.description.grip import slipping_wheels
 from mobot_cli.assets.description.joints import read_holds
 from mobot_cli.assets.description.process import (
     apply_friction,
@@ -29,7 +30,7 @@ from mobot_cli.assets.description.process import (
 )
 from mobot_cli.assets.description.sanity import check_mesh_file, check_sanity
 from mobot_cli.assets.description.sensors import DescribedSensor, collision_names, read_sensors, sensor_summary
-from mobot_cli.assets.description.wheels import wheel_layout
+from mobot_cli.assets.description.wheels import wheel_layout, why_not_wheels
 from mobot_cli.assets.description.xacro import Expansion
 from mobot_cli.assets.lenient import gazebo_xml
 from mobot_cli.assets.resources import ResourceResolver
@@ -158,15 +159,17 @@ def _build(source: Path, expansion: Expansion, resolver: ResourceResolver,
     joints = tuple(_joint_info(joint) for joint in robot.findall("joint"))
     notices += fix_inertials(robot, source)
     sensors = read_sensors(robot, source, notices)
-    apply_friction(robot)
+    friction = apply_friction(robot)
     bounds = collision_bounds(LinkTree(robot), source, notices)
     controllers, parameter_files = ros2_control.read(robot, resolver, source, notices)
     found.update(parameter_files)  # an edited parameters file makes the cached entry stale, as a mesh does
     detected = detect(robot, notices=notices, source=source, controllers=controllers)
     drive = detected.spec
     if drive is None and not detected.refused:  # a refused drive was named in its own notice
-        notices.append(Notice(NO_DRIVE, Location(file=source)))
+        why = why_not_wheels(LinkTree(robot))
+        notices.append(Notice(f"{NO_DRIVE} ({why})" if why else NO_DRIVE, Location(file=source)))
     holds = read_holds(robot, drive, notices, source)
+    notices += [n for n in (slipping_wheels(robot, drive, friction, source),) if n is not None]
     try:  # written once as PyBullet reads it whole, so `check` fails where `run` would
         urdf = pybullet_text('<?xml version="1.0"?>\n' + ET.tostring(robot, encoding="unicode"))
     except UnwritableURDF as exc:

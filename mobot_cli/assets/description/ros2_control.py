@@ -16,6 +16,7 @@ from the geometry, as without the plugin.
 
 from __future__ import annotations
 
+import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,6 +30,10 @@ from mobot_cli.errors import Location, MobotError, Notice
 
 # A parameters file larger than this is not read (they are a few kB).
 MAX_BYTES = 1_000_000
+# ros2_controllers' drive controllers mobot reads (drive.py) or refuses, by package.
+KNOWN_PACKAGES = ("diff_drive_controller", "mecanum_drive_controller", "ackermann_steering_controller",
+                  "tricycle_controller", "tricycle_steering_controller", "bicycle_steering_controller",
+                  "omni_wheel_drive_controller")
 # What a plugin's name or file name holds when it is ros2_control's Gazebo plugin.
 PLUGIN_WORDS = ("ros2_control",)
 
@@ -46,6 +51,17 @@ class Controller:
     def package(self) -> str:
         """The plugin's package, lower case: "diff_drive_controller"."""
         return self.type.partition("/")[0].strip().lower()
+
+    @property
+    def kind(self) -> str:
+        """The controller as ros2_controllers names its package, also for a vendor's fork of one
+        (``clearpath_mecanum_drive_controller/MecanumDriveController``): the package when it is
+        one of those mobot reads, else the class name in snake case ("mecanum_drive_controller")."""
+        package, _, cls = self.type.partition("/")
+        package = package.strip().lower()
+        if package in KNOWN_PACKAGES or not cls.strip():
+            return package
+        return re.sub(r"(?<=[a-z0-9])(?=[A-Z])", "_", cls.strip().rpartition("::")[2]).lower()
 
     def location(self, parameter: str = "") -> Location:
         key = f"{self.name}.{parameter}" if parameter else self.name

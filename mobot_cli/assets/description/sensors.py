@@ -162,7 +162,7 @@ def read_sensors(robot: ET.Element, source: Path,
                 continue
             _check_placement(xml, links, found)
             found.append(_read(xml))
-    for values in plugin_sensors(robot, source, skipped):
+    for values in plugin_sensors(robot, source, skipped, notices):
         sensor = DescribedSensor(**values)
         if any(s.kind == "imu" and (s.link == sensor.link or (s.topic or default_topic(s)) == sensor.topic)
                for s in found):
@@ -185,6 +185,11 @@ def read_sensors(robot: ET.Element, source: Path,
                 file=source, key=f"gazebo.sensor.{sensor.name}.{XML_KEYS.get(field, field)}"),
                 hint=hint.replace("{field}", XML_NAMES.get(field, field)))
         checked.append(with_gazebo_collision(sensor, collisions))
+    coarse = [f"{s.name} ({s.range_resolution:g} m over {s.range_min:g}..{s.range_max:g} m)" for s in checked
+              if s.kind in RAY_KINDS and s.range_resolution >= s.range_max - s.range_min > 0]
+    if coarse:  # create3's cliff and IR sensors: every return reads range_min or range_max
+        notices.append(Notice("sensors round ranges to a resolution no finer than their span, so every return "
+                              f"reads one of their limits: {', '.join(coarse)}", Location(file=source)))
     return tuple(checked)
 
 

@@ -12,6 +12,7 @@ import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
+from mobot_cli.assets.description.collada_unit import metres_per_unit
 from mobot_cli.assets.description.frames import LinkTree, floats, origin_frame
 from mobot_cli.common.transforms import Vec, mat_vec
 
@@ -47,8 +48,55 @@ def wheel(tree: LinkTree, joint_name: str, strict: bool) -> Wheel | None:
     radius = wheel_radius(tree, joint.child, frame.pos, axis_root, meshes=not strict)
     if strict and radius is None:
         return None
-    return Wheel(joint=joint.name, x=frame.pos[0], y=frame.pos[1], radius=radius,
+    y = tyre_y(tree, joint.child, frame.pos, axis_root, radius)
+    return Wheel(joint=joint.name, x=frame.pos[0], y=frame.pos[1] if y is None else y, radius=radius,
                  sign=1.0 if axis >= 0 else -1.0)
+
+
+def tyre_y(tree: LinkTree, link: str, centre: Vec, axis_root: Vec, radius: float | None) -> float | None:
+    """Where along y (root frame) the wheel meets the floor: the centre of the cylinder or sphere
+    that reaches ``radius``, when it sits off the joint along the axle (limo, whose tyres hang
+    2 cm outboard of their joints). None when no such shape, or it is centred on the joint."""
+    element = tree.links.get(link)
+    if element is None or not radius:
+        return None
+    link_frame = tree.frame(link)
+    for collision in element.findall("collision"):
+        geometry = collision.find("geometry")
+        shape = None if geometry is None else next(
+            (g for g in (geometry.find("cylinder"), geometry.find("sphere")) if g is not None), None)
+        if shape is None:
+            continue
+        frame = link_frame.compose(origin_frame(collision))
+        if shape.tag == "cylinder" and abs(sum(
+                a * b for a, b in zip(mat_vec(frame.rot, (0.0, 0.0, 1.0)), axis_root))) < PARALLEL:
+            continue
+        reach = _off_axis(frame.pos, centre, axis_root) + floats(shape.get("radius"), 1, (0.0,))[0]
+        if abs(reach - radius) < 1e-9 and abs(frame.pos[1] - centre[1]) > 1e-6:
+            return frame.pos[1]
+    return None
+
+
+def why_not_wheels(tree: LinkTree, limit: int = 4) -> str:
+    """Why the spinning joints of a robot without drive wheels are none ("" without any), for
+    the notice that says no drive wheels were found (scout_mini's wheels spin about x)."""
+    reasons = []
+    for joint in tree.joints:
+        if joint.type != "continuous":
+            continue
+        frame = tree.frame(joint.child)
+        axis = mat_vec(frame.rot, joint.axis)
+        if abs(axis[1]) < PARALLEL:
+            why = f"spins about ({axis[0]:+.2f}, {axis[1]:+.2f}, {axis[2]:+.2f}), not the root's y axis"
+        elif not carried_by_body(tree, joint.parent):
+            why = "hangs below a swivel or free joint"
+        elif wheel_radius(tree, joint.child, frame.pos, axis) is None:
+            why = "has no cylinder or sphere collision (a mesh wheel: name it in drive: left_joints / right_joints)"
+        else:
+            continue
+        reasons.append(f"{joint.name} {why}")
+    more = [f"{len(reasons) - limit} more"] if len(reasons) > limit else []
+    return "; ".join(reasons[:limit] + more)
 
 
 def wheel_layout(tree: LinkTree, left: tuple[str, ...], right: tuple[str, ...],
@@ -142,7 +190,8 @@ def _mesh_radius(mesh: ET.Element, frame, centre: Vec, axis: Vec) -> float | Non
         return None
     if len(vertices) == 0:
         return None
-    scale = np.array(floats(mesh.get("scale"), 3, (1.0, 1.0, 1.0)))
+    unit = metres_per_unit(mesh.get("filename", ""))  # trimesh ignores a COLLADA <unit>
+    scale = np.array(floats(mesh.get("scale"), 3, (1.0, 1.0, 1.0))) * unit
     points = (vertices * scale) @ np.array(frame.rot).T + np.array(frame.pos) - np.array(centre)
     direction = np.array(axis) / (np.linalg.norm(axis) or 1.0)
     off_axis = points - np.outer(points @ direction, direction)

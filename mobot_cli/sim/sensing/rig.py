@@ -342,9 +342,13 @@ def _lidar_noise(rig: _Rig, ranges: np.ndarray) -> np.ndarray:
         np.clip(ranges, spec.range_min, spec.range_max, out=ranges, where=returns)
     if spec.range_resolution > 0.0:  # +inf stays +inf
         step = np.float32(spec.range_resolution)
+        returns = np.isfinite(ranges)
         ranges /= step
         np.round(ranges, out=ranges)
         ranges *= step
+        # rounding never takes a return out of the sensor's span (create3's cliff sensors have a
+        # 1 m resolution over 0.0001..0.15 m: their returns rounded to 0)
+        np.clip(ranges, spec.range_min, spec.range_max, out=ranges, where=returns)
     return ranges.astype(np.float32, copy=False)
 
 
