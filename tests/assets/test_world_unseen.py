@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+from dataclasses import astuple
+
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
 from mobot_cli.assets.world.pose import stream_numbers
 from mobot_cli.assets.world.worldplan import load_world
+from mobot_cli.cli import invoke
 from mobot_cli.errors import WorldError
 from tests.assets.test_world_sdf import body, box_model, world_file
 
@@ -56,6 +59,16 @@ def test_a_heightmap_floor_is_named_where_the_robots_have_nothing_to_stand_on(tm
     assert any("'ground' uses <heightmap> geometry, which mobot does not simulate" in n for n in notices)
     assert any(n.endswith("nothing to stand on (heightmap geometry left out)") for n in notices), notices
     assert world.plan.bodies == ()
+
+
+def test_a_robot_spawned_over_a_left_out_heightmap_hears_it_may_have_been_the_floor(tmp_path):
+    world_file(tmp_path, HEIGHTMAP, "mars.sdf")
+    (tmp_path / "s.yaml").write_text("version: 1\nduration: 1\nworld: worlds/mars.sdf\nrobots:\n"
+                                     "  - {name: rover}\n")
+    code, out, err = astuple(invoke(["run", tmp_path / "s.yaml", "--out", tmp_path / "r"]))
+    assert code == 2
+    assert "robots have nothing to stand on (heightmap geometry left out)" in err
+    assert err.endswith("a Fuel model or a <heightmap> that was left out may have been its floor).\n")
 
 
 # A world Gazebo classic saved, then edited (dynamic_logistics_warehouse): '41.632-0.191335' in a
