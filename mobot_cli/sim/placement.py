@@ -122,7 +122,7 @@ def floor_height(cid: int, box: Bounds, floors: set[int], top: float, name: str)
         raise SpawnError(
             f"robot '{name}' has nothing to rest on below ({x:.3f}, {y:.3f})",
             hint="Spawn it over the world's floor, or give the world one (<include><uri>model://ground_plane"
-                 "</uri></include>; a Fuel model that was left out may have been its floor).")
+                 "</uri></include>; a Fuel model or a <heightmap> that was left out may have been its floor).")
     return max(hits)
 
 

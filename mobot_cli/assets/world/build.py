@@ -171,8 +171,9 @@ def build_world(path: Path, resolver: ResourceResolver,
     line = ignored_line(str(path), dict(world.ignored), world.max_step_size)
     notices = [*(str(n) for n in reader.notices), *([line] if line else [])]
     if not builder.bodies and not builder.ground:
+        left = sorted(kind for kind in world.ignored if kind.endswith(" geometry"))  # a heightmap floor
         notices.append(f"{path.name} has no collision geometry and no ground plane: robots have "
-                       "nothing to stand on")
+                       "nothing to stand on" + (f" ({', '.join(left)} left out)" if left else ""))
     if builder.held_fixed:
         notices.append(f"{path.name}: {len(builder.held_fixed)} non-static model(s) without joints "
                        f"are held fixed, as the world is static: {', '.join(builder.held_fixed[:5])}"

@@ -25,6 +25,9 @@ def key_of(element, file: Path) -> Location:
 
 
 
+JOINT = "\0joint:"  # key of a joint whose name a link, model or frame of the same model also has
+
+
 class Scope:
     """Named frames of one <model>: links, nested models, includes, joints and <frame>s."""
 
@@ -33,16 +36,27 @@ class Scope:
         self.elements = {}
         for child in model:
             if child.tag in ("link", "model", "frame", "joint"):
-                self.elements[child.get("name", "")] = child
+                self._add(child.get("name", ""), child)
             elif child.tag == "include":
                 self.elements[child.findtext("name", "").strip() or "__include__"] = child
         self._done: dict[str, Matrix] = {}
         self._busy: set[str] = set()
 
+    def _add(self, name: str, element) -> None:
+        """Name a frame; a joint sharing a link's name (SDF < 1.7 allows it) keeps a key of its own."""
+        held = self.elements.get(name)
+        if held is not None and "joint" in (held.tag, element.tag) and held.tag != element.tag:
+            joint, other = (element, held) if element.tag == "joint" else (held, element)
+            self.elements[JOINT + name], self.elements[name] = joint, other
+            return
+        self.elements[name] = element
+
     def frame(self, name: str, element=None) -> Matrix:
         """Pose of the named frame (or of ``element``) relative to the model frame."""
         if name in ("", "__model__"):
             return IDENTITY
+        if element is not None and self.elements.get(JOINT + name) is element:
+            name = JOINT + name
         if name in self._done:
             return self._done[name]
         if "::" in name and name not in self.elements:
@@ -52,8 +66,9 @@ class Scope:
             raise WorldError(f"no frame, link or joint named '{name}' in this model",
                              hint="relative_to, attached_to and expressed_in name frames of the "
                                   "same model.")
+        shown = name.removeprefix(JOINT)
         if name in self._busy:
-            raise WorldError(f"frames refer to each other in a cycle through '{name}'",
+            raise WorldError(f"frames refer to each other in a cycle through '{shown}'",
                              location=key_of(element, self.file),
                              hint="relative_to and attached_to must form a tree.")
         self._busy.add(name)
@@ -62,8 +77,8 @@ class Scope:
                    "frame": element.get("attached_to", "")}.get(element.tag, "")
         relative = relative_to(pose_el) or default
         if relative not in ("", "__model__", *self.elements) and "::" not in relative:
-            raise WorldError(f"{element.tag} '{name}' is placed relative to '{relative}', which this "
-                             "model does not have", location=key_of(pose_el if pose_el is not None
+            raise WorldError(f"{element.tag} '{shown}' is placed relative to '{relative}', which "
+                             "this model does not have", location=key_of(pose_el if pose_el is not None
                                                                     else element, self.file),
                              hint="relative_to and attached_to name a link, joint, frame or nested "
                                   "model of the same model.")

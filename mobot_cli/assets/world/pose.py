@@ -6,6 +6,7 @@ The rotation maths is common.transforms'; SDF reading composes whole transforms,
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 
@@ -66,3 +67,19 @@ def rpy(m: Matrix) -> tuple[float, float, float]:
 def _clean(v: float) -> float:
     # Round to 1e-12 so composing poses does not leave 1e-17 noise in texts and caches.
     return round(float(v), 12) + 0.0
+
+
+_NUMBER = re.compile(r"\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)")
+
+
+def stream_numbers(text: str) -> list[str] | None:
+    """The numbers a C++ stream reads from ``text``, as Gazebo classic reads a pose: '41.6-0.19' is
+    41.6 and -0.19. None when anything else is left."""
+    out, pos, text = [], 0, text.strip()
+    while pos < len(text):
+        match = _NUMBER.match(text, pos)
+        if match is None:
+            return None
+        out.append(match.group(1))
+        pos = match.end()
+    return out

@@ -18,7 +18,7 @@ from mobot_cli.assets.world import paths as sdf_paths
 from mobot_cli.assets.world.frames import Scope, is_number, key_of, relative_to, truthy
 from mobot_cli.assets.world.geometry import parse_shape
 from mobot_cli.assets.world.model import Inertial, Joint, Link, Model, World
-from mobot_cli.assets.world.pose import IDENTITY, Matrix, inverse, parse_pose
+from mobot_cli.assets.world.pose import IDENTITY, Matrix, inverse, parse_pose, stream_numbers
 from mobot_cli.errors import Location, Notice, WorldError
 
 MAX_INCLUDE_DEPTH = 32
@@ -327,10 +327,21 @@ class SdfReader:
         if element is None:
             return IDENTITY.copy()
         quat = element.get("rotation_format", "") == "quat_xyzw"
+        text = (element.text or "").strip()
         try:
-            return parse_pose(element.text, truthy(element.get("degrees")), quat)
+            return parse_pose(text, truthy(element.get("degrees")), quat)
         except ValueError as exc:
-            raise WorldError(f"pose '{(element.text or '').strip()}' {exc}",
+            parts = stream_numbers(text)
+            if parts is not None and len(parts) != len(text.split()):  # numbers run together
+                try:
+                    matrix = parse_pose(" ".join(parts), truthy(element.get("degrees")), quat)
+                except ValueError:
+                    pass
+                else:
+                    self.warn(f"pose '{text}' runs numbers together; read as Gazebo reads it: "
+                              f"'{' '.join(parts)}'", key_of(element, file))
+                    return matrix
+            raise WorldError(f"pose '{text}' {exc}",
                              location=key_of(element, file),
                              hint="A pose is 'x y z roll pitch yaw' in metres and radians.") from None
 

@@ -21,7 +21,7 @@ from mobot_cli.plan import FaultLimits
 from mobot_cli.sim.contacts import CONTACT_SLOP
 from mobot_cli.sim.pb import p
 
-# A robot below this height has fallen out of the world.
+# A robot this far below its spawn (or below z = 0, whichever is lower) has fallen out of the world.
 FLOOR_OF_THE_WORLD = -10.0  # m
 # Higher than its last support by more than this (m) counts as above it: not a robot rolling
 # off a curb.
@@ -44,6 +44,7 @@ class Watch:
     fastest: float = 0.0  # m/s, the largest linear speed commanded so far
     at_limit_since: int = -1  # the step its wheels reached their torque limit under command; -1: not
     stall_told: bool = False
+    fall_z: float = FLOOR_OF_THE_WORLD  # below this height it fell out: FLOOR_OF_THE_WORLD under its spawn
 
 
 class Health:
@@ -60,7 +61,10 @@ class Health:
         """Start watching a robot as it stands at its spawn: its up axis is the reference."""
         pos, orn = robot.link_pose()
         m = p.getMatrixFromQuaternion(orn)
-        self.watches[robot.name] = Watch(up=(m[6], m[7], m[8]), touched_at=step, touched_z=pos[2])
+        # A world may be sunk far below z = 0 (PX4's kth_marinarium: a tank floor at z = -96.8 m).
+        base_z = p.getBasePositionAndOrientation(robot.body, physicsClientId=self.cid)[0][2]
+        self.watches[robot.name] = Watch(up=(m[6], m[7], m[8]), touched_at=step, touched_z=pos[2],
+                                         fall_z=min(0.0, base_z) + FLOOR_OF_THE_WORLD)
 
     def moved(self, robot, step: int) -> None:
         """A robot was put somewhere (a teleport): its flight starts over, its up axis stays."""
@@ -81,7 +85,7 @@ class Health:
         cid, limits, w = self.cid, self.limits, self.watches[robot.name]
         pos, orn = p.getBasePositionAndOrientation(robot.body, physicsClientId=cid)
         # One comparison chain first; NaN and inf fail it, then we look closer.
-        if not (FLOOR_OF_THE_WORLD < pos[2] < math.inf and abs(pos[0]) + abs(pos[1]) < math.inf):
+        if not (w.fall_z < pos[2] < math.inf and abs(pos[0]) + abs(pos[1]) < math.inf):
             _lost(robot.name, pos, step, _collides(cid, robot.body))
         pos, orn = robot.link_pose()
         m = p.getMatrixFromQuaternion(orn)
