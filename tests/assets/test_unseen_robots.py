@@ -129,20 +129,25 @@ def test_a_plugin_that_measured_the_tyres_draws_no_warning():
         "the libgazebo_ros_diff_drive.so plugin says wheel_separation 0.300 m, but its wheel joints are 0.340 m apart"]
 
 
+def turned_in_place(path) -> float:
+    """Degrees a robot turns in place, on PyBullet, for 0.5 rad/s over pi s (90 degrees commanded)."""
+    from mobot_cli.api import Simulation
+
+    with Simulation.open("empty") as sim:
+        sim.spawn("r", str(path))
+        sim.run_for(0.5)
+        start = sim.state("r").true_yaw
+        sim.command("r", linear=0.0, angular=0.5, duration=math.pi)
+        sim.run_for(math.pi + 1.0)
+        return math.degrees(sim.state("r").true_yaw - start)
+
+
 def test_tyres_outboard_turn_as_detected(tmp_path):
     """Real PyBullet: a 90 degree turn in place of the robot whose tyres sit 5 cm outboard."""
-    from mobot_cli.api import Simulation
 
     path = tmp_path / "d.urdf"
     path.write_text(diff_robot(0.05))
-    with Simulation.open("empty") as sim:
-        sim.spawn("d", str(path))
-        sim.run_for(0.5)
-        start = sim.state("d").true_yaw
-        sim.command("d", linear=0.0, angular=0.5, duration=math.pi)
-        sim.run_for(math.pi + 1.0)
-        turned = sim.state("d").true_yaw - start
-    assert math.degrees(turned) == pytest.approx(90.0, abs=3.0)  # driven as 0.3 m apart it turned 67.5 degrees
+    assert turned_in_place(path) == pytest.approx(90.0, abs=3.0)  # driven as 0.3 m apart it turned 67.5 degrees
 
 
 VENDOR_MECANUM = """
@@ -268,7 +273,6 @@ def test_the_millimetre_wheels_roll_their_distance(tmp_path):
 def test_a_skid_plugin_mismatch_says_the_twist_loop_drives_as_commanded(tmp_path):
     """rover_4wd's DiffDrive says 0.24 m for wheels 0.36 m apart. Real PyBullet: the body still
     turns 90 degrees of 90, as the notice says."""
-    from mobot_cli.api import Simulation
 
     plugin = ('<plugin filename="gz-sim-diff-drive-system" name="gz::sim::systems::DiffDrive">'
               '<left_joint>front_left_joint</left_joint><left_joint>rear_left_joint</left_joint>'
@@ -279,13 +283,7 @@ def test_a_skid_plugin_mismatch_says_the_twist_loop_drives_as_commanded(tmp_path
     (said,) = [n.message for n in load_robot(str(path)).notices if "wheel_separation" in n.message]
     assert "where the robot turns 30 % less than commanded; mobot's skid-steer twist loop drives the body " \
            "as commanded" in said
-    with Simulation.open("empty") as sim:
-        sim.spawn("s", str(path))
-        sim.run_for(0.5)
-        start = sim.state("s").true_yaw
-        sim.command("s", linear=0.0, angular=0.5, duration=math.pi)
-        sim.run_for(math.pi + 1.0)
-        assert math.degrees(sim.state("s").true_yaw - start) == pytest.approx(90.0, abs=4.0)
+    assert turned_in_place(path) == pytest.approx(90.0, abs=4.0)
 
 
 def test_no_drive_wheels_says_why_each_spinning_joint_is_none():

@@ -10,7 +10,9 @@ import subprocess
 import sys
 import tempfile
 import time
+from contextlib import contextmanager
 from pathlib import Path
+from typing import Iterator
 
 from mobot_cli.errors import LiveWorldError
 from mobot_cli.live.client import Client
@@ -94,3 +96,15 @@ def wait_for_step(client: Client, step: int, timeout: float = 60.0) -> dict:
             return reply
         time.sleep(0.01)
     raise AssertionError(f"the world did not reach step {step} within {timeout} s")
+
+
+@contextmanager
+def fast_world(tmp_path_factory) -> Iterator[LiveProcess]:
+    """A `--fast` empty world for a test module, with the session's cache; it must outlive the
+    module's tests (a server that died fails the module), then it is killed."""
+    server = LiveProcess("--fast", cache_dir=tmp_path_factory.getbasetemp() / "mobot-cache")
+    try:
+        yield server
+        assert server.process.poll() is None, f"the server died: {server.output()}"
+    finally:
+        server.kill()

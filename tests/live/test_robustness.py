@@ -13,15 +13,13 @@ import zmq
 from mobot_cli.cli import invoke
 from mobot_cli.live.client import Client
 from mobot_cli.live.protocol import HARD_LIMIT_BYTES, MAX_REQUEST_BYTES
-from tests.live.live_server import LiveProcess, wait_for_step
+from tests.live.live_server import fast_world, wait_for_step
 
 
 @pytest.fixture(scope="module")
 def live(tmp_path_factory):
-    server = LiveProcess("--fast", cache_dir=tmp_path_factory.getbasetemp() / "mobot-cache")
-    yield server
-    assert server.process.poll() is None, f"the server died: {server.output()}"
-    server.kill()
+    with fast_world(tmp_path_factory) as server:
+        yield server
 
 
 @pytest.fixture

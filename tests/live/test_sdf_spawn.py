@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 
 from mobot_cli.cli import invoke
-from tests.live.live_server import REPO, LiveProcess
+from tests.live.live_server import REPO, fast_world
 
 MODELS = REPO / "tests" / "data" / "sdf_models"
 ROVER = MODELS / "rover"
@@ -25,10 +25,8 @@ SDF = (ROVER / "model.sdf").read_text()
 
 @pytest.fixture(scope="module")
 def live(tmp_path_factory):
-    server = LiveProcess("--fast", cache_dir=tmp_path_factory.getbasetemp() / "mobot-cache")
-    yield server
-    assert server.process.poll() is None, f"the server died: {server.output()}"
-    server.kill()
+    with fast_world(tmp_path_factory) as server:
+        yield server
 
 
 def drive_straight(client, name: str, start_x: float) -> float:

@@ -22,7 +22,7 @@ from mobot_cli.errors import DescriptionError
 from mobot_cli.live import protocol
 from mobot_cli.live.schema import parse
 from mobot_cli.live.spawning import load_plan
-from tests.live.live_server import LiveProcess
+from tests.live.live_server import LiveProcess, fast_world
 
 HEAD = '<?xml version="1.0"?>\n<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">\n'
 SECRET = "SECRET-TOKEN-4711"
@@ -34,10 +34,8 @@ def robot(body: str) -> str:
 
 @pytest.fixture(scope="module")
 def live(tmp_path_factory):
-    server = LiveProcess("--fast", cache_dir=tmp_path_factory.getbasetemp() / "mobot-cache")
-    yield server
-    assert server.process.poll() is None, f"the server died: {server.output()}"
-    server.kill()
+    with fast_world(tmp_path_factory) as server:
+        yield server
 
 
 @pytest.fixture(scope="module")
