@@ -8,6 +8,7 @@ to trimesh.
 
 from __future__ import annotations
 
+import functools
 import re
 from pathlib import Path
 
@@ -19,7 +20,28 @@ _STL_TRIANGLE = np.dtype([("normal", "<f4", 3), ("v", "<f4", (3, 3)), ("attr", "
 
 
 def read_mesh(path: str) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices (n, 3) and triangle indices (m, 3); empty arrays when the file is unreadable."""
+    """Vertices (n, 3) and triangle indices (m, 3); empty arrays when the file is unreadable.
+
+    The arrays are read-only: the last files read are kept (by path, size and modification
+    time), since a world's floor, floor plan and lidar scene read each of its meshes, and a
+    furnished world places one mesh file dozens of times."""
+    try:
+        stat = Path(path).stat()
+        key = (str(path), stat.st_size, stat.st_mtime_ns)
+    except OSError:
+        return _read(str(path))
+    return _kept(key)
+
+
+@functools.lru_cache(maxsize=256)
+def _kept(key: tuple[str, int, int]) -> tuple[np.ndarray, np.ndarray]:
+    vertices, faces = _read(key[0])
+    vertices.flags.writeable = False
+    faces.flags.writeable = False
+    return vertices, faces
+
+
+def _read(path: str) -> tuple[np.ndarray, np.ndarray]:
     suffix = Path(path).suffix.lower()
     try:
         if suffix == ".obj":
@@ -35,8 +57,31 @@ def read_mesh(path: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _obj(text: str) -> tuple[np.ndarray, np.ndarray]:
+    fast = _plain_obj(text)
+    if fast is not None:
+        return fast
     vertices, groups = obj_groups(text)
     return vertices, np.concatenate(groups) if groups else np.zeros((0, 3), dtype=int)
+
+
+def _plain_obj(text: str) -> tuple[np.ndarray, np.ndarray] | None:
+    """An OBJ of "v x y z" and "f a b c" lines only (as mobot writes converted meshes), read by
+    numpy at once; None for anything else (texture or normal indices, polygons, negative
+    indices, vertex colours), which obj_groups reads line by line."""
+    lines = text.splitlines()
+    v = [line[2:] for line in lines if line.startswith("v ")]
+    f = [line[2:] for line in lines if line.startswith("f ")]
+    if any("/" in line or "-" in line for line in f):
+        return None
+    try:
+        vertices = np.array(" ".join(v).split(), dtype=float)
+        faces = np.array(" ".join(f).split(), dtype=np.int64)
+    except ValueError:
+        return None
+    if vertices.size != 3 * len(v) or faces.size != 3 * len(f):
+        return None
+    vertices, faces = vertices.reshape(-1, 3), faces.reshape(-1, 3) - 1
+    return vertices, faces[(faces >= 0).all(axis=1) & (faces < len(vertices)).all(axis=1)]
 
 
 def obj_groups(text: str) -> tuple[np.ndarray, list[np.ndarray]]:

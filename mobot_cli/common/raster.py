@@ -111,3 +111,83 @@ def dilate(mask: np.ndarray, cells: float) -> np.ndarray:
                 src = mask[max(0, -dy):ny - max(0, dy), max(0, -dx):nx - max(0, dx)]
                 out[max(0, dy):ny - max(0, -dy), max(0, dx):nx - max(0, -dx)] |= src
     return out
+
+
+SMALL = 8  # cells: a triangle whose candidate cells span at most this many each way is batched
+
+
+def fill_shapes(mask: np.ndarray, grid: Grid, shapes) -> None:
+    """``fill_shape`` for many shapes at once, cell for cell the same: triangles spanning a few
+    cells and segments are rasterised together with numpy, the rest one by one. A furnished
+    world's floor plan holds a million triangles; one by one they take minutes."""
+    triangles = [shape for shape in shapes if len(shape) == 3]
+    segments = [shape for shape in shapes if len(shape) == 2]
+    for shape in shapes:
+        if len(shape) > 3:
+            fill_shape(mask, grid, shape)
+    if triangles:
+        _fill_triangles(mask, grid, np.asarray(triangles, dtype=float))
+    if segments:
+        _fill_segments(mask, grid, np.asarray(segments, dtype=float))
+
+
+def _spans(low: np.ndarray, high: np.ndarray, origin: float, cell: float, n: int):
+    """Grid.span for arrays."""
+    first = np.maximum(0, np.floor((low - origin) / cell - 0.5)).astype(np.int64)
+    last = np.minimum(n, np.ceil((high - origin) / cell + 0.5)).astype(np.int64)
+    return first, last
+
+
+def _fill_triangles(mask: np.ndarray, grid: Grid, tri: np.ndarray) -> None:
+    """fill_polygon (even-odd at cell centres) and the cells of the corners, for (n, 3, 2) triangles."""
+    x0, x1 = _spans(tri[:, :, 0].min(axis=1), tri[:, :, 0].max(axis=1), grid.x0, grid.cell, grid.nx)
+    y0, y1 = _spans(tri[:, :, 1].min(axis=1), tri[:, :, 1].max(axis=1), grid.y0, grid.cell, grid.ny)
+    w, h = x1 - x0, y1 - y0
+    some = (w > 0) & (h > 0)
+    small = some & (w <= SMALL) & (h <= SMALL)
+    for i in np.nonzero(some & ~small)[0]:
+        fill_polygon(mask, grid, tri[i])
+    idx = np.nonzero(small)[0]
+    offsets = np.arange(SMALL)
+    for start in range(0, len(idx), 20_000):
+        part = idx[start:start + 20_000]
+        t, ix0, iy0 = tri[part], x0[part], y0[part]
+        cols, rows = ix0[:, None] + offsets, iy0[:, None] + offsets  # (n, SMALL)
+        xs = grid.x0 + (cols + 0.5) * grid.cell
+        ys = grid.y0 + (rows + 0.5) * grid.cell
+        a, b = t, np.roll(t, -1, axis=1)  # (n, 3 edges, xy)
+        ay, by = a[:, :, 1, None], b[:, :, 1, None]
+        yy = ys[:, None, :]
+        crosses = (ay > yy) != (by > yy)  # (n, edges, rows)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            xi = a[:, :, 0, None] + (yy - ay) / (by - ay) * (b[:, :, 0, None] - a[:, :, 0, None])
+        xi = np.where(crosses, xi, -np.inf)
+        inside = (xi[:, :, :, None] > xs[:, None, None, :]).sum(axis=1) % 2 == 1  # (n, rows, cols)
+        valid = (offsets[None, :, None] < h[part, None, None]) & (offsets[None, None, :] < w[part, None, None])
+        n, r, c = np.nonzero(inside & valid)
+        mask[rows[n, r], cols[n, c]] = True
+    _fill_points(mask, grid, tri.reshape(-1, 2))
+
+
+def _fill_points(mask: np.ndarray, grid: Grid, points: np.ndarray) -> None:
+    """The cells holding the points (Grid.cell_of), where inside the grid."""
+    ix = np.floor((points[:, 0] - grid.x0) / grid.cell)
+    iy = np.floor((points[:, 1] - grid.y0) / grid.cell)
+    keep = (ix >= 0) & (ix < grid.nx) & (iy >= 0) & (iy < grid.ny)
+    mask[iy[keep].astype(np.int64), ix[keep].astype(np.int64)] = True
+
+
+def _fill_segments(mask: np.ndarray, grid: Grid, seg: np.ndarray) -> None:
+    """fill_segment for (n, 2 ends, 2) segments: the same samples (np.linspace's arithmetic)."""
+    a, b = seg[:, 0], seg[:, 1]
+    d = b - a
+    counts = np.maximum(2, np.ceil(np.hypot(d[:, 0], d[:, 1]) / (grid.cell / 5)).astype(np.int64) + 1)
+    owner = np.repeat(np.arange(len(seg)), counts)
+    first = np.cumsum(counts) - counts
+    i = np.arange(len(owner)) - first[owner]
+    t = i * (1.0 / (counts - 1))[owner] + 0.0
+    t[first + counts - 1] = 1.0
+    ix = np.floor((a[owner, 0] + t * d[owner, 0] - grid.x0) / grid.cell).astype(int)
+    iy = np.floor((a[owner, 1] + t * d[owner, 1] - grid.y0) / grid.cell).astype(int)
+    keep = (ix >= 0) & (ix < grid.nx) & (iy >= 0) & (iy < grid.ny)
+    mask[iy[keep], ix[keep]] = True

@@ -25,6 +25,19 @@ REACH_MARGIN = 0.5  # m
 # A closest point on the robot's floor this close to its height is an edge of the floor's own
 # triangles (below the 0.02 m where maps start to count obstacles).
 SEAM = 0.01  # m
+# The closest points are asked for within FIRST_REACH first, then GROWTH times as far each time,
+# up to the reach, and link by link: PyBullet answers one point per triangle within the
+# distance, so a dense mesh within the reach (a 23,000-triangle table, asked about by a robot's
+# six links at once) is slow and overflows the answer's buffer, which crashes the process.
+FIRST_REACH = 0.05  # m
+GROWTH = 1.5
+
+
+def _gap(lo, hi, reach: float, box) -> float:
+    """How far a body's bounding box lies from the robot's (``lo``/``hi`` are the robot's box
+    grown by ``reach``): a lower bound of its distance, 0 when they overlap."""
+    d = [max(box[0][i] - (hi[i] - reach), (lo[i] + reach) - box[1][i], 0.0) for i in range(3)]
+    return math.sqrt(sum(v * v for v in d))
 
 
 def nearest(cid: int, body: int, reach: float, robots: Iterable[int], label: Callable[[int], str]) -> tuple[float, str]:
@@ -36,15 +49,27 @@ def nearest(cid: int, body: int, reach: float, robots: Iterable[int], label: Cal
     hi = [max(b[1][i] for b in boxes) + reach for i in range(3)]
     near = {uid for uid, _ in p.getOverlappingObjects(lo, hi, physicsClientId=cid) or ()} - {body}
     robots = set(robots)
+    gaps = {other: _gap(lo, hi, reach, p.getAABB(other, -1, physicsClientId=cid))
+            for other in near if p.getNumJoints(other, physicsClientId=cid) == 0}
     floors: dict[int, float] = {}  # body it stands on -> the height of its support
-    found = []
-    for other in sorted(near):
-        for point in p.getClosestPoints(body, other, reach, physicsClientId=cid):
-            distance, normal_up, height = point[8], point[7][2], point[6][2]  # normal on B: into ours
-            if other not in robots and normal_up > SUPPORT_NORMAL_Z:
-                floors[other] = max(floors.get(other, -math.inf), height)  # what it stands on
-            else:
-                found.append((distance, other, height))
+    found: list[tuple[float, int, float]] = []
+    radius = min(reach, FIRST_REACH)
+    while True:  # the nearest point is among those within the smallest radius that finds one
+        floors.clear()
+        found.clear()
+        for other in sorted(near):
+            if gaps.get(other, 0.0) > radius:
+                continue  # its box lies further than this
+            for link in links:  # link by link: PyBullet overflows on too many points in one answer
+                for point in p.getClosestPoints(body, other, radius, linkIndexA=link, physicsClientId=cid):
+                    distance, normal_up, height = point[8], point[7][2], point[6][2]  # normal on B: into ours
+                    if other not in robots and normal_up > SUPPORT_NORMAL_Z:
+                        floors[other] = max(floors.get(other, -math.inf), height)  # what it stands on
+                    else:
+                        found.append((distance, other, height))
+        if radius >= reach or any(height > floors.get(other, -math.inf) + SEAM for _, other, height in found):
+            break
+        radius = min(reach, radius * GROWTH)
     best, what = math.inf, ""
     for distance, other, height in found:
         if height <= floors.get(other, -math.inf) + SEAM:

@@ -7,6 +7,9 @@ hulls: the hull of a house's walls fills every room. PyBullet's URDF importer ig
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
+
 from mobot_cli.errors import WorldError
 from mobot_cli.plan import StaticBody, StaticShape
 from mobot_cli.sim.pb import p
@@ -18,13 +21,57 @@ _TYPES = {"box": p.GEOM_BOX, "cylinder": p.GEOM_CYLINDER, "capsule": p.GEOM_CAPS
 # PyBullet's command buffer holds at most 16 shapes per compound (MAX_COMPOUND_COLLISION_SHAPES);
 # more overwrite memory and crash the process, so larger models become several bodies.
 MAX_SHAPES_PER_BODY = 16
+# PyBullet answers a closest-point query with one point per triangle within the distance, into
+# a buffer that overflows (and crashes the process) past about 46,000 points: a body holds at
+# most this many triangles, a larger mesh being cut into pieces of this many, each a body.
+MAX_TRIANGLES_PER_BODY = 20_000
 
 
 def create(cid: int, body: StaticBody) -> list[int]:
-    """Fixed bodies holding the body's shapes, at most 16 to a compound; their ids."""
-    shapes = body.shapes
-    return [_create(cid, body, shapes[i:i + MAX_SHAPES_PER_BODY])
-            for i in range(0, len(shapes), MAX_SHAPES_PER_BODY)]
+    """Fixed bodies holding the body's shapes, at most 16 and 20,000 triangles to a body; their ids."""
+    return [_create(cid, body, group) for group in groups(body.shapes)]
+
+
+def groups(shapes: tuple[StaticShape, ...]) -> list[tuple[StaticShape, ...]]:
+    """The shapes in bodies' worth, in order: at most MAX_SHAPES_PER_BODY shapes and
+    MAX_TRIANGLES_PER_BODY triangles each (a larger mesh is cut into pieces)."""
+    out: list[tuple[StaticShape, ...]] = []
+    current: list[StaticShape] = []
+    triangles = 0
+    for shape in shapes:
+        for piece, count in _pieces(shape):
+            if current and (len(current) == MAX_SHAPES_PER_BODY or triangles + count > MAX_TRIANGLES_PER_BODY):
+                out.append(tuple(current))
+                current, triangles = [], 0
+            current.append(piece)
+            triangles += count
+    if current:
+        out.append(tuple(current))
+    return out
+
+
+def _pieces(shape: StaticShape) -> list[tuple[StaticShape, int]]:
+    """The shape and its triangles, or a mesh over MAX_TRIANGLES_PER_BODY as OBJ pieces (cached)."""
+    if shape.kind != "mesh":
+        return [(shape, 0)]
+    import numpy as np
+
+    from mobot_cli.common import cache
+    from mobot_cli.common.meshfile import read_mesh
+
+    vertices, faces = read_mesh(shape.mesh)
+    if len(faces) <= MAX_TRIANGLES_PER_BODY:
+        return [(shape, len(faces))]
+    out = []
+    for start in range(0, len(faces), MAX_TRIANGLES_PER_BODY):
+        part = faces[start:start + MAX_TRIANGLES_PER_BODY]
+        used, local = np.unique(part, return_inverse=True)
+        text = "".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in vertices[used].tolist()) + \
+            "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in local.reshape(-1, 3).tolist())
+        data = text.encode("utf-8")
+        path = cache.store_file("meshes", f"piece-{hashlib.sha256(data).hexdigest()}.obj", data)
+        out.append((dataclasses.replace(shape, mesh=str(path)), len(part)))
+    return out
 
 
 def _create(cid: int, body: StaticBody, shapes: tuple[StaticShape, ...]) -> int:

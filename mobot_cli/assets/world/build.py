@@ -20,7 +20,7 @@ from mobot_cli.plan import StaticBody, StaticShape, WorldPlan
 
 # A model placed farther than this from the origin is a typo (the AWS bookstore has a book
 # at z = 343 km): it is left out with a warning rather than stretching the world.
-ABSURD_DISTANCE = 10_000.0  # m
+ABSURD_DISTANCE = meshes.FAR  # m
 # A plane with a <size> is a box this thick behind its surface: Gazebo's physics makes every
 # plane infinite, which turns a poster on a wall into an endless wall across the world.
 THIN_PLANE = 0.01  # m
@@ -86,6 +86,12 @@ class _Builder:
                 path = str(shape.mesh or "")
                 if shape.kind == "mesh":
                     mesh = meshes.collision_mesh(shape.mesh, shape.location)
+                    if mesh.dropped and mesh.source not in self.meshes:
+                        self.reader.warn(
+                            f"mesh {Path(mesh.source).name}: {mesh.dropped} of its "
+                            f"{mesh.triangles + mesh.dropped} triangles lie more than "
+                            f"{meshes.FAR / 1000:g} km from its origin (up to {mesh.farthest:.3g} m): "
+                            "left out, as no robot reaches them", shape.location)
                     self.meshes[mesh.source] = mesh
                     path = mesh.path
                     self.extend(model.pose @ local, _box_corners(mesh.bounds, size))
@@ -202,7 +208,7 @@ def build_world(path: Path, resolver: ResourceResolver,
                          static_models=tuple(builder.static_models), summary=summary,
                          notices=tuple(dict.fromkeys(notices)))
     deps = [*(str(p) for p in paths.files), *(m.source for m in builder.meshes.values()),
-            *(m.path for m in converted)]
+            *(m.path for m in builder.meshes.values() if m.path != m.source)]
     return loaded, deps
 
 

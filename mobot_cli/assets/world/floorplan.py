@@ -23,6 +23,7 @@ Polygon = list[Point]
 
 BAND = (0.02, 2.0)  # metres above the floor: lower is floor, higher is ceiling
 ROUND = 24  # points on a projected circle
+SLIVER = 1e-3  # m: a triangle's shadow thinner than this is drawn as its longest side
 
 
 def floor_plan(world: WorldPlan, starts: list[tuple[float, float, float]] = ()) -> list[Polygon]:
@@ -102,7 +103,11 @@ def _mesh_shadow(path: str, scale: tuple[float, ...], xyz: Vec, quat: Quat,
     tri = tri[keep][:, :, :2]
     a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
     area = np.abs((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
-    flat = area > 1e-6  # the rest are upright faces seen edge-on: a wall's sides, drawn as lines
+    sides = np.stack([np.hypot(*(np.roll(tri, -1, axis=1) - tri)[:, k].T) for k in range(3)], axis=1)
+    # the rest are upright faces seen edge-on: a wall's sides, drawn as lines; so are faces
+    # within SLIVER of upright (exported walls lean by a few micrometres), whose shadow is
+    # too thin to hold a cell's centre
+    flat = (area > 1e-6) & (area > SLIVER * sides.max(axis=1, initial=0.0))
     out = [[(x0, y0), (x1, y1), (x2, y2)] for (x0, y0), (x1, y1), (x2, y2) in tri[flat].tolist()]
     edge_on = tri[~flat]
     ends = np.stack([edge_on, np.roll(edge_on, -1, axis=1)], axis=2)  # (n, 3 edges, 2 ends, xy)

@@ -13,7 +13,7 @@ import numpy as np
 
 from mobot_cli.assets.world.floorplan import BAND, body_shadows, body_shapes, shape_shadow
 from mobot_cli.common.polygon import contains
-from mobot_cli.common.raster import Grid, fill_shape
+from mobot_cli.common.raster import Grid, fill_shapes
 from mobot_cli.common.transforms import compose_poses
 from mobot_cli.plan import WorldPlan
 from mobot_cli.sim.parts import describe
@@ -79,11 +79,13 @@ def obstacle_mask(world: WorldPlan, grid: Grid, band: tuple[float, float] | None
     band = band or ground_band(world)
     mask = grid.empty()
     xmax, ymax = grid.x0 + grid.nx * grid.cell, grid.y0 + grid.ny * grid.cell
+    shapes = []
     for _, polygons in body_shadows(world, band):
         for shape in polygons:
             xs, ys = [p[0] for p in shape], [p[1] for p in shape]
             if max(xs) >= grid.x0 and min(xs) <= xmax and max(ys) >= grid.y0 and min(ys) <= ymax:
-                fill_shape(mask, grid, shape)
+                shapes.append(shape)
+    fill_shapes(mask, grid, shapes)
     return mask
 
 

@@ -4,13 +4,17 @@ PyBullet cannot build a concave triangle mesh from COLLADA, and trimesh ignores 
 ``<unit>`` (the AWS worlds are in centimetres). A .dae file is therefore loaded with trimesh
 + pycollada, its node transforms applied, scaled by its unit, and written as a plain OBJ in
 the cache, keyed by the .dae file's content. ``<up_axis>`` is ignored, as Gazebo ignores it.
-STL and OBJ files are used as they are.
+STL and OBJ files are used as they are, unless some of their triangles lie farther than
+``FAR`` from the mesh's origin: exporters leave debris there (a SketchUp node at 8e17 m), which
+no robot meets but which would stretch the world's extent and every map. Those triangles are
+left out (counted in ``MeshFile.dropped`` for a warning) and the rest is written as an OBJ.
 """
 
 from __future__ import annotations
 
 import hashlib
 import logging
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -28,6 +32,11 @@ class MeshFile:
     triangles: int
     bounds: tuple[tuple[float, float, float], tuple[float, float, float]]  # in the mesh frame
     converted: bool  # a COLLADA file turned into OBJ
+    dropped: int = 0  # triangles left out for lying farther than FAR from the mesh's origin
+    farthest: float = 0.0  # m: the farthest vertex of those, for the warning
+
+
+FAR = 10_000.0  # m from the mesh's origin: beyond, a triangle is exporter debris
 
 
 def collision_mesh(source: Path, where: Location) -> MeshFile:
@@ -44,15 +53,22 @@ def collision_mesh(source: Path, where: Location) -> MeshFile:
     obj = None
     if isinstance(meta, dict) and collada:  # the OBJ is used only if its bytes are the ones noted
         obj = cache.load_file("meshes", f"{key}.obj", str(meta.get("obj_sha256")))
-    hit = _from_meta(meta, source, obj if collada else source, collada) \
-        if meta is not None and (obj is not None or not collada) else None
+    if isinstance(meta, dict) and meta.get("dropped"):  # a cleaned STL or OBJ
+        obj = cache.load_file("meshes", f"{key}.obj", str(meta.get("obj_sha256")))
+        rewritten = True
+    else:
+        rewritten = collada
+    hit = _from_meta(meta, source, obj if rewritten else source, collada) \
+        if meta is not None and (obj is not None or not rewritten) else None
     if hit is not None:
         return hit
     vertices, faces = _load(source, data, collada, where)
-    meta = {"triangles": int(len(faces)),
+    vertices, faces, dropped, farthest = _near(vertices, faces, source, where)
+    meta = {"triangles": int(len(faces)), "dropped": dropped, "farthest": farthest,
             "bounds": [[float(v) for v in vertices.min(axis=0)],
                        [float(v) for v in vertices.max(axis=0)]]}
-    if collada:
+    rewritten = collada or dropped > 0
+    if rewritten:
         text = obj_text(vertices, faces, f"collision mesh from {source.name}").encode("utf-8")
         meta["obj_sha256"] = hashlib.sha256(text).hexdigest()
         try:
@@ -61,7 +77,29 @@ def collision_mesh(source: Path, where: Location) -> MeshFile:
             raise WorldError(f"cannot write the converted mesh of {source.name}: {exc.strerror}",
                              location=where, hint="Free some disk space or set TMPDIR.") from None
     cache.store("meshes", key, meta)
-    return _from_meta(meta, source, obj if collada else source, collada)  # type: ignore[return-value]
+    return _from_meta(meta, source, obj if rewritten else source, collada)  # type: ignore[return-value]
+
+
+def _near(vertices, faces, source: Path, where: Location):
+    """The triangles within FAR of the mesh's origin, their vertices renumbered; how many were
+    left out and how far the farthest vertex of those lies (m)."""
+    import numpy as np
+
+    distance = np.linalg.norm(vertices, axis=1)
+    far = ~np.isfinite(distance) | (distance > FAR)
+    if not far.any():
+        return vertices, faces, 0, 0.0
+    bad = far[faces].any(axis=1)
+    if bad.all():
+        raise WorldError(f"mesh {source.name}: all of its {len(faces)} triangles lie more than "
+                         f"{FAR / 1000:g} km from its origin", location=where,
+                         hint="Re-export the mesh in metres, near its origin.")
+    farthest = float(np.nan_to_num(distance[far], nan=np.inf, posinf=np.inf).max())
+    kept = faces[~bad]
+    used = np.unique(kept)
+    renumber = np.full(len(vertices), -1, dtype=np.int64)
+    renumber[used] = np.arange(len(used))
+    return vertices[used], renumber[kept], int(bad.sum()), farthest
 
 
 def _from_meta(meta, source: Path, path, collada: bool) -> MeshFile | None:
@@ -73,8 +111,11 @@ def _from_meta(meta, source: Path, path, collada: bool) -> MeshFile | None:
             return None
     except (KeyError, TypeError, ValueError):
         return None
+    if "dropped" not in meta:
+        return None
     return MeshFile(path=str(path), source=str(source), triangles=triangles,
-                    bounds=bounds, converted=collada)  # type: ignore[arg-type]
+                    bounds=bounds, converted=collada, dropped=int(meta["dropped"]),
+                    farthest=float(meta.get("farthest", 0.0)))  # type: ignore[arg-type]
 
 
 def _load(source: Path, data: bytes, collada: bool, where: Location):
@@ -86,7 +127,9 @@ def _load(source: Path, data: bytes, collada: bool, where: Location):
     logger = getattr(trimesh.util, "log", None) or logging.getLogger("trimesh")
     was_disabled, logger.disabled = logger.disabled, True
     try:
-        loaded = trimesh.load(str(source), force="scene")
+        with warnings.catch_warnings():  # trimesh's merging casts debris at 1e17 m to int64
+            warnings.simplefilter("ignore", RuntimeWarning)
+            loaded = trimesh.load(str(source), force="scene")
         merged = loaded.to_geometry() if hasattr(loaded, "to_geometry") else \
             loaded.dump(concatenate=True)
     except Exception as exc:  # noqa: BLE001 - any parser failure is a broken mesh to the user

@@ -1,0 +1,170 @@
+"""Classes of trouble public Gazebo worlds gave mobot, each on a small world written here.
+
+- a COLLADA/OBJ mesh with exporter debris 1e17 m away (chaolmu's pot_flower in office_env_large)
+- walls of a mesh that lean by micrometres (chaolmu's cpr_office): a gap on the map
+- a dense furniture mesh near a robot (chaolmu's office_small): PyBullet's closest-point answer
+  overflowed and the process crashed
+- a floor plan of a million small triangles (office_small, office_env_large): minutes to map
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from dataclasses import astuple
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from mobot_cli.assets.world.worldplan import load_world
+from mobot_cli.cli import invoke
+from mobot_cli.common import meshfile
+from mobot_cli.common.raster import Grid, fill_shape, fill_shapes
+from mobot_cli.errors import WorldError
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def obj(vertices, faces) -> str:
+    return "".join(f"v {float(x)!r} {float(y)!r} {float(z)!r}\n" for x, y, z in vertices) + \
+        "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces)
+
+
+def mesh_world(tmp_path: Path, mesh: str, name: str = "m.obj", pose: str = "0 0 0 0 0 0", ground: str = "") -> Path:
+    (tmp_path / name).write_text(mesh)
+    path = tmp_path / "w.sdf"
+    path.write_text(
+        f"<?xml version='1.0'?><sdf version='1.9'><world name='w'>{ground}<model name='thing'><static>true</static>"
+        f"<pose>{pose}</pose><link name='l'><collision name='c'><geometry><mesh><uri>{name}</uri></mesh>"
+        "</geometry></collision></link></model></world></sdf>")
+    return path
+
+
+CUBE_V = [(x, y, z) for x in (0.0, 1.0) for y in (0.0, 1.0) for z in (0.0, 1.0)]
+CUBE_F = [(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1),
+          (2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3)]
+
+
+def test_triangles_far_from_a_meshs_origin_are_left_out_with_a_warning(tmp_path):
+    far = [(8.1e17, 0.0, 6.9e17), (8.1e17, 1.0, 6.9e17), (8.1e17, 0.0, 6.9e17 + 1.0)]
+    path = mesh_world(tmp_path, obj(CUBE_V + far, CUBE_F + [(8, 9, 10)]))
+    world = load_world(str(path), tmp_path)
+    bounds = world.summary["bounds"]
+    assert bounds["min"] == pytest.approx([0, 0, 0]) and bounds["max"] == pytest.approx([1, 1, 1])
+    assert world.summary["meshes"]["triangles"] == 12
+    warning = next(n for n in world.notices if "km from its origin" in n)
+    assert "mesh m.obj: 1 of its 13 triangles lie more than 10 km from its origin (up to 1.06e+18 m): " \
+           "left out, as no robot reaches them" in warning
+    assert "w.sdf:1, key 'model[thing].link[l].collision[c]'" in warning
+    shape = world.plan.bodies[0].shapes[0]
+    assert shape.mesh.endswith(".obj") and shape.mesh != str(tmp_path / "m.obj")  # the cleaned copy
+    assert len(meshfile.read_mesh(shape.mesh)[1]) == 12
+    # the map is the cube's, not a grid from 0 to 8e17 m (which is refused as too large)
+    done = invoke(["map", path, "--out", tmp_path / "map"])
+    assert done.exit_code == 0, done.stderr
+    assert "40 x 40 cells of 0.05 m from (-0.5, -0.5), 441 occupied" in done.stdout
+
+
+def test_a_mesh_whose_triangles_all_lie_far_away_is_a_located_error(tmp_path):
+    path = mesh_world(tmp_path, obj([(v[0] + 2e4, v[1], v[2]) for v in CUBE_V], CUBE_F))
+    with pytest.raises(WorldError) as err:
+        load_world(str(path), tmp_path)
+    assert "mesh m.obj: all of its 12 triangles lie more than 10 km from its origin" in str(err.value)
+    assert err.value.location.key == "model[thing].link[l].collision[c]"
+
+
+@pytest.mark.parametrize("lean", [0.0, 3e-5, 4e-4])
+def test_a_mesh_wall_leaning_by_micrometres_is_a_whole_wall_on_the_map(tmp_path, lean):
+    """A 2 m wall along y = 1, 1 m tall, its top edge `lean` off the vertical: its shadow is a
+    sliver thinner than any cell's centre can fall in, so it is drawn as its side, as an
+    upright wall is (cpr_office's walls lean by 3e-5 m; before, only their ends were mapped)."""
+    wall = [(0.0, 1.0, 0.0), (2.0, 1.0, 0.0), (2.0, 1.0 + lean, 1.0), (0.0, 1.0 + lean, 1.0)]
+    path = mesh_world(tmp_path, obj(wall, [(0, 1, 2), (0, 2, 3)]))
+    done = invoke(["map", path, "--out", tmp_path / "map", "--origin", "-1,-1", "--size", "4,4"])
+    assert done.exit_code == 0, done.stderr
+    data = (tmp_path / "map" / "map.pgm").read_bytes()
+    image = np.frombuffer(data[len(b"P5\n80 80\n255\n"):], dtype=np.uint8).reshape(80, 80)[::-1]
+    row = image[int((1.0 + 1.0) / 0.05)]  # the cells from y = 1.0 to 1.05
+    columns = np.nonzero(row == 0)[0]
+    assert len(columns) == 41 and columns[0] == 20 and columns[-1] == 60  # x = 0 .. 2 m, every cell
+    assert (image == 0).sum() == 41
+
+
+def _plate(n: int) -> str:
+    """A 1 m x 0.5 m upright plate of 2 n^2 triangles, facing x, at x = 0."""
+    ys, zs = np.linspace(-0.5, 0.5, n + 1), np.linspace(0.0, 0.5, n + 1)
+    vertices = [(0.0, y, z) for z in zs for y in ys]
+    faces = []
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i
+            faces += [(a, a + 1, a + n + 2), (a, a + n + 2, a + n + 1)]
+    return obj(vertices, faces)
+
+
+@pytest.mark.parametrize("engine", ["bullet", "kinematic"])
+def test_clearance_to_a_dense_mesh_does_not_crash_and_is_the_gap(tmp_path, engine):
+    """51,200 triangles within the metrics' 2 m of a six-link robot: PyBullet answered one point
+    per triangle per link in one buffer, overflowed it and crashed the process (a segfault, so
+    the run is a child process here)."""
+    mesh_world(tmp_path, _plate(160), pose="1 0 0 0 0 0", ground="<include><uri>model://ground_plane</uri></include>")
+    scenario = tmp_path / "s.yaml"
+    scenario.write_text(f"version: 1\nworld: w.sdf\nduration: 0.2\nphysics: {{engine: {engine}}}\nrobots:\n"
+                        "  - name: mobot\n    description: mobot\n    pose: {x: 0.0, y: 0.0, yaw: 0.0}\n"
+                        "expect:\n  - {robot: mobot, clearance: {min: 0.5}}\n")
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    done = subprocess.run([sys.executable, "-m", "mobot_cli", "run", str(scenario), "--out", str(tmp_path / "out"),
+                           "--quiet"], capture_output=True, text=True, env=env, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    happened = summary["expectations"]["results"][0]["happened"]
+    closest = float(happened.split("came within ")[1].split(" m")[0])
+    assert closest == pytest.approx(1.0 - 0.10, abs=0.02)  # the chassis front is 0.10 m ahead
+    assert "of world model 'thing'" in happened
+
+
+# --- the same cells and triangles, faster ------------------------------------------------
+
+point = st.tuples(st.floats(-1.5, 1.8, allow_nan=False), st.floats(-1.5, 1.8, allow_nan=False))
+snapped = st.tuples(st.integers(-60, 72), st.integers(-60, 72)).map(lambda p: (p[0] * 0.025, p[1] * 0.025))
+shape = st.lists(st.one_of(point, snapped), min_size=2, max_size=5)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(shape, min_size=1, max_size=40))
+def test_fill_shapes_sets_the_cells_fill_shape_sets(shapes):
+    grid = Grid(-1.0, -1.3, 0.05, 50, 60)
+    one, many = grid.empty(), grid.empty()
+    for polygon in shapes:
+        fill_shape(one, grid, polygon)
+    fill_shapes(many, grid, shapes)
+    assert (one == many).all()
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(*[st.floats(-1e3, 1e3, allow_nan=False)] * 3), min_size=3, max_size=12),
+       st.lists(st.tuples(*[st.integers(0, 11)] * 3), max_size=12), st.booleans())
+def test_plain_obj_reads_as_the_line_by_line_reader(vertices, faces, grouped):
+    text = "# comment\n" + obj(vertices, faces) + ("g part\nf 1 2 3\n" if grouped else "")
+    fast = meshfile._plain_obj(text)
+    slow_v, groups = meshfile.obj_groups(text)
+    slow_f = np.concatenate(groups) if groups else np.zeros((0, 3), dtype=int)
+    assert fast is not None
+    assert np.array_equal(fast[0], slow_v) and np.array_equal(fast[1], slow_f)
+    assert meshfile._plain_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1 2/2 3/3\n") is None  # texture indices
+
+
+def test_read_mesh_keeps_a_file_until_it_changes(tmp_path):
+    path = tmp_path / "m.obj"
+    path.write_text(obj(CUBE_V, CUBE_F))
+    vertices, faces = meshfile.read_mesh(str(path))
+    assert meshfile.read_mesh(str(path))[0] is vertices and not vertices.flags.writeable
+    path.write_text(obj(CUBE_V, CUBE_F[:2]) + "# edited\n")
+    assert len(meshfile.read_mesh(str(path))[1]) == 2
+    code, *_ = astuple(invoke(["check", mesh_world(tmp_path, obj(CUBE_V, CUBE_F), name="n.obj")]))
+    assert code == 0
