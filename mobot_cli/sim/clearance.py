@@ -15,7 +15,7 @@ stands on, at the floor's height (within SEAM of its support in the same query),
 from __future__ import annotations
 
 import math
-from typing import Callable, Iterable
+from typing import Callable, Container, Iterable
 
 from mobot_cli.sim.contacts import SUPPORT_NORMAL_Z
 from mobot_cli.sim.pb import p
@@ -40,36 +40,28 @@ def _gap(lo, hi, reach: float, box) -> float:
     return math.sqrt(sum(v * v for v in d))
 
 
-def nearest(cid: int, body: int, reach: float, robots: Iterable[int], label: Callable[[int], str]) -> tuple[float, str]:
+def nearest(cid: int, body: int, reach: float, robots: Iterable[int], label: Callable[[int], str],
+            meshes: Container[int] = ()) -> tuple[float, str]:
     """The smallest distance (m, negative when overlapping) from ``body`` to anything within
-    ``reach`` but its floor, and what that is; (inf, "") when nothing is that close."""
+    ``reach`` but its floor, and what that is; (inf, "") when nothing is that close. ``meshes``:
+    the static bodies that hold triangle meshes (PyBullet answers them a point per triangle)."""
     links = range(-1, p.getNumJoints(body, physicsClientId=cid))
     boxes = [p.getAABB(body, link, physicsClientId=cid) for link in links]
     lo = [min(b[0][i] for b in boxes) - reach for i in range(3)]
     hi = [max(b[1][i] for b in boxes) + reach for i in range(3)]
     near = {uid for uid, _ in p.getOverlappingObjects(lo, hi, physicsClientId=cid) or ()} - {body}
     robots = set(robots)
-    gaps = {other: _gap(lo, hi, reach, p.getAABB(other, -1, physicsClientId=cid))
-            for other in near if p.getNumJoints(other, physicsClientId=cid) == 0}
     floors: dict[int, float] = {}  # body it stands on -> the height of its support
     found: list[tuple[float, int, float]] = []
-    radius = min(reach, FIRST_REACH)
-    while True:  # the nearest point is among those within the smallest radius that finds one
-        floors.clear()
-        found.clear()
-        for other in sorted(near):
-            if gaps.get(other, 0.0) > radius:
-                continue  # its box lies further than this
-            for link in links:  # link by link: PyBullet overflows on too many points in one answer
-                for point in p.getClosestPoints(body, other, radius, linkIndexA=link, physicsClientId=cid):
-                    distance, normal_up, height = point[8], point[7][2], point[6][2]  # normal on B: into ours
-                    if other not in robots and normal_up > SUPPORT_NORMAL_Z:
-                        floors[other] = max(floors.get(other, -math.inf), height)  # what it stands on
-                    else:
-                        found.append((distance, other, height))
-        if radius >= reach or any(height > floors.get(other, -math.inf) + SEAM for _, other, height in found):
-            break
-        radius = min(reach, radius * GROWTH)
+    meshes = []
+    for other in sorted(near):
+        if other in meshes:
+            meshes.append(other)  # one point per triangle: asked for below, with care
+        else:  # one point per pair of shapes: the whole robot at once
+            _collect(p.getClosestPoints(body, other, reach, physicsClientId=cid), other, robots, floors, found)
+    if meshes:
+        best = min((d for d, other, height in found if height > floors.get(other, -math.inf) + SEAM), default=math.inf)
+        _meshes(cid, body, links, lo, hi, reach, meshes, min(reach, best), robots, floors, found)
     best, what = math.inf, ""
     for distance, other, height in found:
         if height <= floors.get(other, -math.inf) + SEAM:
@@ -77,3 +69,38 @@ def nearest(cid: int, body: int, reach: float, robots: Iterable[int], label: Cal
         if distance < best:
             best, what = distance, label(other)
     return best, what
+
+
+def _meshes(cid: int, body: int, links, lo, hi, reach: float, meshes: list[int], beyond: float, robots: set[int],
+            floors: dict[int, float], found: list) -> None:
+    """The closest points of static triangle meshes: link by link, within FIRST_REACH first and
+    GROWTH times as far each time, until a point that is not floor turns up, or ``beyond`` (a
+    nearer point already found elsewhere) or the reach is passed."""
+    gaps = {other: _gap(lo, hi, reach, p.getAABB(other, -1, physicsClientId=cid)) for other in meshes}
+    radius = min(reach, FIRST_REACH)
+    while True:  # the nearest point is among those within the smallest radius that finds one
+        points: list[tuple[float, int, float]] = []
+        heights: dict[int, float] = {}
+        for other in meshes:
+            if gaps[other] > radius:
+                continue  # its box lies further than this
+            for link in links:  # link by link: PyBullet overflows on too many points in one answer
+                _collect(p.getClosestPoints(body, other, radius, linkIndexA=link, physicsClientId=cid),
+                         other, robots, heights, points)
+        if radius >= min(reach, beyond) or \
+                any(height > heights.get(other, -math.inf) + SEAM for _, other, height in points):
+            break
+        radius = min(reach, radius * GROWTH)
+    for other, height in heights.items():
+        floors[other] = max(floors.get(other, -math.inf), height)
+    found.extend(points)
+
+
+def _collect(points, other: int, robots: set[int], floors: dict[int, float], found: list) -> None:
+    """Sort closest points into what the robot stands on (floors) and the rest (found)."""
+    for point in points:
+        distance, normal_up, height = point[8], point[7][2], point[6][2]  # normal on B: into ours
+        if other not in robots and normal_up > SUPPORT_NORMAL_Z:
+            floors[other] = max(floors.get(other, -math.inf), height)  # what it stands on
+        else:
+            found.append((distance, other, height))

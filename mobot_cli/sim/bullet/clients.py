@@ -30,6 +30,7 @@ class Stage:
     probes: Any  # placement.Probes: shapes made once per client
     names: dict[int, str] = field(default_factory=dict)  # static body id -> its name in the world
     body: Any = None  # kept_body.KeptBody: a robot's body left in the client for the same spawn
+    meshes: set[int] = field(default_factory=set)  # static bodies holding triangle meshes
 
 
 _idle: list[tuple[int, Optional[Stage]]] = []  # kept clients, each empty or holding a stage

@@ -15,12 +15,14 @@ from mobot_cli.sim.pb import p
 
 class Statics(NamedTuple):
     """The static bodies by id: their labels (for refusals), names (what a collision was with),
-    those with an inside (not planes), and the ground plane's id (None without one)."""
+    those with an inside (not planes), the ground plane's id (None without one), and those that
+    hold triangle meshes (PyBullet keeps a fixed body's meshes concave: sim/clearance.py)."""
 
     labels: dict[int, str]
     names: dict[int, str]
     solids: set[int]
     ground: int | None
+    meshes: set[int]
 
 
 def build(cid: int, physics: Physics, world: WorldPlan, load: Callable[..., int]) -> Statics:
@@ -34,6 +36,7 @@ def build(cid: int, physics: Physics, world: WorldPlan, load: Callable[..., int]
     labels: dict[int, str] = {}
     names: dict[int, str] = {}
     solids: set[int] = set()
+    meshes: set[int] = set()
     ground: int | None = None
     if world.ground_plane:
         ground = plane(cid, 0.0)
@@ -56,7 +59,9 @@ def build(cid: int, physics: Physics, world: WorldPlan, load: Callable[..., int]
             names[uid] = body.name
             if not any(shape.kind == "plane" for shape in body.shapes):
                 solids.add(uid)
-    return Statics(labels, names, solids, ground)
+            if not body.shapes or any(shape.kind == "mesh" for shape in body.shapes):  # URDF: may hold meshes
+                meshes.add(uid)
+    return Statics(labels, names, solids, ground, meshes)
 
 
 def plane(cid: int, z: float) -> int:

@@ -83,8 +83,8 @@ class World(MoversDoor, Settling, Placing):
         # A robot's body kept for the same first spawn (sim/bullet/kept_body.py); until it is taken it waits.
         self._kept, self._kept_waits = (stage.body, stage.body is not None) if stage is not None else (None, False)
         if stage is not None:
-            self._probes, self._statics, self._solids, self._ground, self._names = \
-                stage.probes, stage.statics, stage.solids, stage.ground, stage.names
+            self._probes, self._statics, self._solids, self._ground, self._names, self._meshes = \
+                stage.probes, stage.statics, stage.solids, stage.ground, stage.names, stage.meshes
         else:
             self._probes = placement.Probes(self._cid)
             try:
@@ -122,7 +122,7 @@ class World(MoversDoor, Settling, Placing):
         self._add_actors()
 
     def _build(self, world: WorldPlan) -> None:
-        self._statics, self._names, self._solids, self._ground = statics.build(
+        self._statics, self._names, self._solids, self._ground, self._meshes = statics.build(
             self._cid, self.physics, world, self._load)
 
     def _load(self, urdf: str, xyz, quat, fixed: bool = False) -> int:
@@ -344,7 +344,8 @@ class World(MoversDoor, Settling, Placing):
         state = robot.state(self._steps)
         if self._clearance and name in self._clearance:
             state.clearance, state.nearest = clearance.nearest(
-                self._cid, robot.body, self._clearance[name], [r.body for r in self._robots.values()], self.label)
+                self._cid, robot.body, self._clearance[name], [r.body for r in self._robots.values()], self.label,
+                self._meshes)
         if self._stage is not None:
             self._stage.social(robot, state, name in self._clearance)
         return state
@@ -380,7 +381,7 @@ class World(MoversDoor, Settling, Placing):
 
                 self._pristine = not discard(self._cid) and self._pristine
             stage = Stage((self.physics, self.plan), self._statics, self._solids, self._ground, self._probes,
-                          self._names) if self._pristine else None
+                          self._names, meshes=self._meshes) if self._pristine else None
             release(self._cid, *kept_body.leave(self._cid, stage, self._kept, self._kept_waits,
                                                 [robot.body for robot in self._robots.values()]))
             self._cid = -1

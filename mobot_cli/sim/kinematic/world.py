@@ -381,7 +381,7 @@ class KinematicWorld(World):
             self._sync_all()
             state.clearance, state.nearest = clearance_mod.nearest(
                 self._cid, self._robot(name).body, self._clearance[name],
-                [r.body for r in self._robots.values()], self.label)
+                [r.body for r in self._robots.values()], self.label, self._meshes)
         if self._stage is not None:
             self._stage.social(self._robot(name), state, name in self._clearance)
         return state
