@@ -142,6 +142,20 @@ def turned_in_place(path) -> float:
         return math.degrees(sim.state("r").true_yaw - start)
 
 
+def travelled(path, linear: float, seconds: float) -> float:
+    """Metres a robot goes along x, on PyBullet, for ``linear`` m/s over ``seconds`` (and 0.5 s
+    more to come to rest)."""
+    from mobot_cli.api import Simulation
+
+    with Simulation.open("empty") as sim:
+        sim.spawn("r", str(path))
+        sim.run_for(0.5)
+        x0 = sim.state("r").true_x
+        sim.command("r", linear=linear, angular=0.0, duration=seconds)
+        sim.run_for(seconds + 0.5)
+        return sim.state("r").true_x - x0
+
+
 def test_tyres_outboard_turn_as_detected(tmp_path):
     """Real PyBullet: a 90 degree turn in place of the robot whose tyres sit 5 cm outboard."""
 
@@ -196,7 +210,6 @@ FRICTIONLESS = '<gazebo reference="{link}"><mu1 value="0.0"/><mu2 value="0.0"/><
 def test_frictionless_drive_wheels_are_said_and_do_not_move_the_robot(tmp_path):
     """summit_xl's omni wheels (mu1 = mu2 = 0) without its planar-move plugin: a skid drive that
     cannot push. Real PyBullet: it stands still, as in Gazebo; the notice says why."""
-    from mobot_cli.api import Simulation
 
     path = tmp_path / "slip.urdf"
     path.write_text(four_wheels(FRICTIONLESS))
@@ -205,13 +218,7 @@ def test_frictionless_drive_wheels_are_said_and_do_not_move_the_robot(tmp_path):
     assert len(said) == 1 and said[0].startswith("drive wheels front_left_joint, rear_left_joint, "
                                                  "front_right_joint, rear_right_joint have Gazebo friction 0")
     assert "drive: {type: holonomic}" in said[0]
-    with Simulation.open("empty") as sim:
-        sim.spawn("r", str(path))
-        sim.run_for(0.5)
-        x0 = sim.state("r").true_x
-        sim.command("r", linear=0.3, angular=0.0, duration=2.0)
-        sim.run_for(2.0)
-        assert abs(sim.state("r").true_x - x0) < 0.01
+    assert abs(travelled(path, 0.3, 2.0)) < 0.01
 
 
 def test_wheels_with_grip_and_mecanum_rollers_draw_no_friction_notice(tmp_path):
@@ -257,17 +264,10 @@ def test_a_collada_wheel_in_millimetres_is_measured_in_metres(tmp_path):
 
 def test_the_millimetre_wheels_roll_their_distance(tmp_path):
     """Real PyBullet, which loads the COLLADA unit: 0.25 m/s for 4 s on the plugin's radius."""
-    from mobot_cli.api import Simulation
 
     path = tmp_path / "m.urdf"
     path.write_text(mesh_wheeled(tmp_path, DIFF_PLUGIN.format(sep=0.3)))
-    with Simulation.open("empty") as sim:
-        sim.spawn("m", str(path))
-        sim.run_for(0.5)
-        x0 = sim.state("m").true_x
-        sim.command("m", linear=0.25, angular=0.0, duration=4.0)
-        sim.run_for(4.5)
-        assert sim.state("m").true_x - x0 == pytest.approx(1.0, rel=0.03)
+    assert travelled(path, 0.25, 4.0) == pytest.approx(1.0, rel=0.03)
 
 
 def test_a_skid_plugin_mismatch_says_the_twist_loop_drives_as_commanded(tmp_path):
