@@ -145,3 +145,11 @@ def count_faces(path: str) -> int:
             text = dae.read()
         return sum(int(n) for n in _DAE_COUNT.findall(text))
     return 0
+
+
+def obj_text(vertices: np.ndarray, faces: np.ndarray, what: str) -> str:
+    """A minimal OBJ of the shape (what it is, in a comment)."""
+    lines = [f"# mobot: {what}, in metres\n"]
+    lines.extend(f"v {x:.9g} {y:.9g} {z:.9g}\n" for x, y, z in vertices.tolist())
+    lines.extend(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces.tolist())
+    return "".join(lines)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+from pathlib import Path
 
 from mobot_cli.errors import WorldError
 from mobot_cli.plan import StaticBody, StaticShape
@@ -57,7 +58,7 @@ def _pieces(shape: StaticShape) -> list[tuple[StaticShape, int]]:
     import numpy as np
 
     from mobot_cli.common import cache
-    from mobot_cli.common.meshfile import read_mesh
+    from mobot_cli.common.meshfile import obj_text, read_mesh
 
     vertices, faces = read_mesh(shape.mesh)
     if len(faces) <= MAX_TRIANGLES_PER_BODY:
@@ -66,9 +67,8 @@ def _pieces(shape: StaticShape) -> list[tuple[StaticShape, int]]:
     for start in range(0, len(faces), MAX_TRIANGLES_PER_BODY):
         part = faces[start:start + MAX_TRIANGLES_PER_BODY]
         used, local = np.unique(part, return_inverse=True)
-        text = "".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in vertices[used].tolist()) + \
-            "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in local.reshape(-1, 3).tolist())
-        data = text.encode("utf-8")
+        data = obj_text(vertices[used], local.reshape(-1, 3), f"piece {start // MAX_TRIANGLES_PER_BODY} of "
+                        f"{Path(shape.mesh).name}").encode("utf-8")
         path = cache.store_file("meshes", f"piece-{hashlib.sha256(data).hexdigest()}.obj", data)
         out.append((dataclasses.replace(shape, mesh=str(path)), len(part)))
     return out

@@ -84,6 +84,7 @@ def _solid(reader, element, geometry, kind_el, file: Path, collision: bool, what
     """A cone, ellipsoid or polyline as a mesh shape (its OBJ in the cache)."""
     from mobot_cli.assets.world import solids
     from mobot_cli.common import cache
+    from mobot_cli.common.meshfile import obj_text
 
     kind = kind_el.tag
     where = key_of(kind_el, file)
@@ -110,7 +111,7 @@ def _solid(reader, element, geometry, kind_el, file: Path, collision: bool, what
         if nested and collision:
             reader.warn(f"{what}: a <polyline> outline lies inside another; Gazebo makes it a hole, "
                         "mobot a solid of its own", where)
-    text = solids.obj_text(vertices, faces, f"SDF <{kind}> {size}").encode("utf-8")
+    text = obj_text(vertices, faces, f"SDF <{kind}> {size}").encode("utf-8")
     try:
         path = cache.store_file("meshes", f"{cache.digest(kind, text)}.obj", text)
     except OSError as exc:

@@ -18,8 +18,8 @@ import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
-from mobot_cli.assets.world.solids import obj_text
 from mobot_cli.common import cache
+from mobot_cli.common.meshfile import obj_text
 from mobot_cli.errors import Location, WorldError
 
 

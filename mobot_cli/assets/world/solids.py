@@ -129,11 +129,3 @@ def _cross(a, b, c) -> float:
 
 def _in_triangle(p, a, b, c) -> bool:
     return _cross(a, b, p) >= 0.0 and _cross(b, c, p) >= 0.0 and _cross(c, a, p) >= 0.0
-
-
-def obj_text(vertices: np.ndarray, faces: np.ndarray, what: str) -> str:
-    """A minimal OBJ of the shape (what it is, in a comment)."""
-    lines = [f"# mobot: {what}, in metres\n"]
-    lines.extend(f"v {x:.9g} {y:.9g} {z:.9g}\n" for x, y, z in vertices.tolist())
-    lines.extend(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces.tolist())
-    return "".join(lines)
