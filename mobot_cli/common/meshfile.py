@@ -153,3 +153,38 @@ def obj_text(vertices: np.ndarray, faces: np.ndarray, what: str) -> str:
     lines.extend(f"v {x:.9g} {y:.9g} {z:.9g}\n" for x, y, z in vertices.tolist())
     lines.extend(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces.tolist())
     return "".join(lines)
+
+
+# A COLLADA file's <asset> comes first: a file lxml cannot parse (which trimesh may still read)
+# has its unit looked for in the first bytes.
+_UNIT_HEAD = 65536
+_UNIT = re.compile(rb"<unit\b[^>]*\bmeter\s*=\s*[\"']([^\"']+)[\"']")
+
+
+def collada_unit(data: bytes) -> float:
+    """The metres per unit of a COLLADA document's <asset><unit meter=...> (1 when absent or not
+    a positive number). trimesh ignores it; PyBullet and Gazebo apply it."""
+    from lxml import etree
+
+    try:
+        root = etree.fromstring(data, etree.XMLParser(resolve_entities=False, huge_tree=True))
+        unit = root.find("{*}asset/{*}unit")
+        text = unit.get("meter", "1") if unit is not None else "1"
+    except etree.XMLSyntaxError:
+        found = _UNIT.search(data[:_UNIT_HEAD])
+        text = found.group(1).decode("ascii", "replace") if found else "1"
+    try:
+        meter = float(text)
+    except ValueError:
+        return 1.0
+    return meter if 0.0 < meter < float("inf") else 1.0
+
+
+def collada_unit_of(path: str) -> float:
+    """``collada_unit`` of a .dae file; 1 for other files, or when it cannot be read."""
+    if not path.lower().endswith(".dae"):
+        return 1.0
+    try:
+        return collada_unit(Path(path).read_bytes())
+    except OSError:
+        return 1.0

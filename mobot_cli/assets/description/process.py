@@ -27,9 +27,9 @@ import os
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from mobot_cli.assets.description.collada_unit import metres_per_unit
 from mobot_cli.assets.description.frames import LinkTree, floats, origin_frame
 from mobot_cli.assets.resources import ResourceResolver
+from mobot_cli.common.meshfile import collada_unit_of
 from mobot_cli.common.transforms import Frame
 from mobot_cli.errors import DescriptionError, Location, MobotError, Notice
 
@@ -303,7 +303,7 @@ def _mesh_points(frame: Frame, mesh: ET.Element, source: Path,
     # trimesh ignores COLLADA <unit>: scaled by it here, as PyBullet loads the mesh.
     import trimesh
 
-    unit = metres_per_unit(mesh.get("filename", ""))
+    unit = collada_unit_of(mesh.get("filename", ""))
     scale = tuple(v * unit for v in floats(mesh.get("scale"), 3, (1.0, 1.0, 1.0)))
     try:
         loaded = trimesh.load(mesh.get("filename"), force="mesh")

@@ -12,8 +12,8 @@ import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
-from mobot_cli.assets.description.collada_unit import metres_per_unit
 from mobot_cli.assets.description.frames import LinkTree, floats, origin_frame
+from mobot_cli.common.meshfile import collada_unit_of
 from mobot_cli.common.transforms import Vec, mat_vec
 
 # |cos| above this counts as parallel: turtlebot3 rotates its wheels by -1.57, not -pi/2.
@@ -190,7 +190,7 @@ def _mesh_radius(mesh: ET.Element, frame, centre: Vec, axis: Vec) -> float | Non
         return None
     if len(vertices) == 0:
         return None
-    unit = metres_per_unit(mesh.get("filename", ""))  # trimesh ignores a COLLADA <unit>
+    unit = collada_unit_of(mesh.get("filename", ""))  # trimesh ignores a COLLADA <unit>
     scale = np.array(floats(mesh.get("scale"), 3, (1.0, 1.0, 1.0))) * unit
     points = (vertices * scale) @ np.array(frame.rot).T + np.array(frame.pos) - np.array(centre)
     direction = np.array(axis) / (np.linalg.norm(axis) or 1.0)

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from mobot_cli.common import cache
-from mobot_cli.common.meshfile import obj_text
+from mobot_cli.common.meshfile import collada_unit, obj_text
 from mobot_cli.errors import Location, WorldError
 
 
@@ -144,21 +144,5 @@ def _load(source: Path, data: bytes, collada: bool, where: Location):
         raise WorldError(f"mesh {source.name} has no triangles", location=where,
                          hint="A collision mesh needs triangles; check the exported file.")
     if collada:
-        vertices = vertices * _collada_unit(data)
+        vertices = vertices * collada_unit(data)
     return vertices, faces
-
-
-def _collada_unit(data: bytes) -> float:
-    """The metres per unit of a COLLADA document's <asset><unit meter=...> (1 when absent)."""
-    from lxml import etree
-
-    try:
-        root = etree.fromstring(data, etree.XMLParser(resolve_entities=False, huge_tree=True))
-    except etree.XMLSyntaxError:
-        return 1.0  # trimesh read it, so it is good enough; assume metres
-    unit = root.find("{*}asset/{*}unit")
-    try:
-        meter = float(unit.get("meter", "1")) if unit is not None else 1.0
-    except ValueError:
-        return 1.0
-    return meter if meter > 0 else 1.0
