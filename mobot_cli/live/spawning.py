@@ -39,8 +39,8 @@ MAX_LINKS = 1000
 MAX_URDF_CHARS = 16 * 1024 * 1024
 MAX_NOTICES, MAX_NOTICE_CHARS = 50, 2000  # xacro messages from a client come back as notices
 _FACES: dict[tuple[str, int, int], int] = {}  # faces of a mesh file, by path, mtime and size
-_SDF_TEXT = re.compile(r"\s*(<\?xml[^>]*\?>\s*)?(<!--.*?-->\s*)*<sdf\b", re.DOTALL)
 _SDF_WORLD = re.compile(r"<world\b")
+_ELEMENT = re.compile(r"<([A-Za-z_][\w.:-]*)")  # an element's opening tag, its name
 _MISSING_ASSET = re.compile(r"mesh '.*' of link '.*' (cannot be found|resolves to .* not a readable file)"
                             r"|^included file '.*' cannot be read"
                             r"|(model|mesh) '[^']*' not found|'[^']*' not found\. Folders searched", re.DOTALL)  # SDF's
@@ -80,12 +80,37 @@ def load_plan(request: Spawn, rate_hz: int, bounds: tuple[int, int] | None = Non
 
 def _text_file(text: str) -> Path:
     """URDF, xacro or SDF text as a file named by its content (xacro and the checks read files)."""
-    if _SDF_TEXT.match(text):  # a Gazebo model: the same path as a .sdf file (description.sdf)
+    if _root_tag(text) == "sdf":  # a Gazebo model: the same path as a .sdf file (description.sdf)
         if _SDF_WORLD.search(text):
             raise Refusal(Result.UNSUPPORTED_FORMAT, "the text is an SDF world, not a model: a live world "
                           "spawns robots (`mobot serve WORLD` loads a world)")
         return urdf_path(text, folder="spawned", suffix=".sdf")
     return urdf_path(text, folder="spawned")  # xacro is detected from the text
+
+
+def _root_tag(text: str) -> str:
+    """The name of the document's first element, past its declaration, comments and DOCTYPE:
+    a forward scan (a client's text may be megabytes)."""
+    i = 0
+    while True:
+        while i < len(text) and text[i].isspace():
+            i += 1
+        for opening, closing in (("<?", "?>"), ("<!--", "-->")):
+            if text.startswith(opening, i):
+                end = text.find(closing, i)
+                i = len(text) if end < 0 else end + len(closing)
+                break
+        else:
+            if not text.startswith("<!DOCTYPE", i):
+                break
+            end = text.find(">", i)
+            subset = text.find("[", i, end if end >= 0 else len(text))
+            if subset >= 0:  # an internal subset: up to its "]", then the ">"
+                close = text.find("]", subset)
+                end = -1 if close < 0 else text.find(">", close)
+            i = len(text) if end < 0 else end + 1
+    match = _ELEMENT.match(text, i)
+    return match.group(1) if match else ""
 
 
 def _check_format(description: str, base_dir: Path) -> Path:

@@ -125,6 +125,19 @@ def test_an_include_outside_the_allowed_folders_is_refused(live, outside):
     assert str(outside) not in name_reply["message"]
 
 
+def test_an_entity_bomb_behind_a_doctype_is_refused_as_sdf(live):
+    """A billion laughs in the DOCTYPE of SDF text: read as SDF (past its prolog), refused by the
+    XML parser's amplification limit, named as SDF text; the world answers on."""
+    entities = '<!ENTITY a "aaaaaaaaaa">' + "".join(
+        f'<!ENTITY {b} "{("&" + a + ";") * 10}">' for a, b in zip("abcde", "bcdef"))
+    bomb = f'<?xml version="1.0"?>\n<!DOCTYPE sdf [{entities}]>\n<sdf version="1.9"><model name="&f;"/></sdf>'
+    with live.client() as client:
+        reply = client.call("spawn", name="bomb", urdf=bomb)
+        assert client.ping()["ok"]
+    assert reply["result"] == "RESOURCE_PARSE_ERROR" and reply["message"].startswith("robot 'bomb': <sdf text>")
+    assert "entity" in reply["message"]
+
+
 def test_features_list_sdf(live):
     with live.client() as client:
         assert "sdf" in client.features()["spawn_formats"]
