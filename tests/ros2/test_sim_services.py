@@ -13,6 +13,7 @@ import json
 import math
 import os
 import subprocess
+import time
 from pathlib import Path
 
 import pytest
@@ -264,8 +265,8 @@ def test_kilted_twist_stamped_drives_a_robot_as_jazzy_twist_does(ros_py, tmp_pat
                                   "seconds": 1.5}],
             ["stamped", "publish", {"topic": "/r2/cmd_vel", "stamped": True, "linear": 0.3, "angular": 0.2,
                                     "seconds": 1.5}]], tmp_path)
-        with live.client() as client:
-            end = {name: client.odom(name) for name in ("r1", "r2")}
+        with live.client() as client:  # the commands are held: each robot goes on until it has gone 0.3 m
+            end = {name: _after_moving(client, name, start[name], 0.3) for name in ("r1", "r2")}
     finally:
         live.signal()
         live.kill()
@@ -276,3 +277,15 @@ def test_kilted_twist_stamped_drives_a_robot_as_jazzy_twist_does(ros_py, tmp_pat
         assert moved > 0.3, name
         assert end[name]["truth"]["vx"] == pytest.approx(0.3, abs=0.05)
         assert end[name]["truth"]["wz"] == pytest.approx(0.2, abs=0.05)
+
+
+def _after_moving(client, name: str, start: dict, distance: float, patience: float = 60.0) -> dict:
+    """The robot's odom once it is ``distance`` from ``start`` (a real-time world on a busy machine
+    may take longer than the publisher's seconds), or when ``patience`` s of wall time ran out."""
+    deadline = time.monotonic() + patience
+    while True:
+        odom = client.odom(name)
+        if math.dist((odom["truth"]["x"], odom["truth"]["y"]), (start["x"], start["y"])) > distance or \
+                time.monotonic() > deadline:
+            return odom
+        time.sleep(0.05)
