@@ -17,14 +17,11 @@ from __future__ import annotations
 import math
 from typing import Callable, Container, Iterable
 
-from mobot_cli.sim.contacts import SUPPORT_NORMAL_Z
+from mobot_cli.sim.contacts import SEAM, SUPPORT_NORMAL_Z
 from mobot_cli.sim.pb import p
 
 # How much further than the tightest clearance asked for the distances are measured.
 REACH_MARGIN = 0.5  # m
-# A closest point on the robot's floor this close to its height is an edge of the floor's own
-# triangles (below the 0.02 m where maps start to count obstacles).
-SEAM = 0.01  # m
 # The closest points are asked for within FIRST_REACH first, then GROWTH times as far each time,
 # up to the reach, and link by link: PyBullet answers one point per triangle within the
 # distance, so a dense mesh within the reach (a 23,000-triangle table, asked about by a robot's

@@ -9,6 +9,7 @@ count, for both robots.
 
 from __future__ import annotations
 
+import math
 from typing import Callable, Hashable, Iterable, Protocol
 
 from mobot_cli.sim.pb import p
@@ -21,6 +22,13 @@ CONTACT_RATE_HZ = 50
 SUPPORT_NORMAL_Z = 0.7
 # Manifold points can be reported a little before bodies touch; closer than this is touching.
 CONTACT_SLOP = 1e-3  # m
+# The edges of a mesh floor's own triangles: beside the triangle a wheel stands on, PyBullet
+# reports its neighbours' edges and corners a fraction of a millimetre away, their normals
+# anywhere from vertical to horizontal (the huge floor triangles of Clearpath's office world,
+# AWS's hospital). A point of a body the robot stands on, no higher than this above its support
+# in the same sample or query, is floor too (below the 0.02 m where maps count obstacles; a
+# wall of the same mesh still counts above it).
+SEAM = 0.01  # m
 # A pair must be apart for this many samples (0.1 s at 50 Hz) before touching again counts as
 # a new collision, so solver jitter in one long scrape along a wall is not many collisions.
 RELEASE_SAMPLES = 5
@@ -54,6 +62,8 @@ class ContactCounter:
         if not by_body:
             return
         touching: set[tuple[Counted, Hashable]] = set()
+        supports: dict[tuple[Counted, int], float] = {}  # (robot, body) -> its highest support point
+        steep: list[tuple[Counted, int, float]] = []  # (robot, body, height of the body's point)
         for contact in p.getContactPoints(physicsClientId=cid):
             ra, rb = by_body.get(contact[1]), by_body.get(contact[2])
             if (ra is None and rb is None) or contact[8] > CONTACT_SLOP:
@@ -65,11 +75,15 @@ class ContactCounter:
                 continue
             # contactNormalOnB points from B towards A: turn it to point from the other body
             # into the robot.
-            robot, other, up = (ra, contact[2], contact[7][2]) if ra is not None \
-                else (rb, contact[1], -contact[7][2])
+            robot, other, up, height = (ra, contact[2], contact[7][2], contact[6][2]) if ra is not None \
+                else (rb, contact[1], -contact[7][2], contact[5][2])
             if up > SUPPORT_NORMAL_Z:
+                supports[(robot, other)] = max(supports.get((robot, other), -math.inf), height)
                 continue
-            touching.add((robot, ("body", other)))
+            steep.append((robot, other, height))
+        for robot, other, height in steep:
+            if height > supports.get((robot, other), -math.inf) + SEAM:  # not an edge of its floor's triangles
+                touching.add((robot, ("body", other)))
         self._count(touching)
 
     def record(self, touching: Iterable[tuple[Counted, Hashable]]) -> None:

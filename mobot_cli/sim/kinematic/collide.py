@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from mobot_cli.plan import WorldPlan
-from mobot_cli.sim.contacts import CONTACT_SLOP, SUPPORT_NORMAL_Z
+from mobot_cli.sim.contacts import CONTACT_SLOP, SEAM, SUPPORT_NORMAL_Z
 from mobot_cli.sim.pb import p
 
 # Static bodies are looked up in a box this much wider than the robot's reach around it and
@@ -136,12 +136,16 @@ def distances(cid: int, body: int, statics: list[int], robots: list[int], reach:
     touching = set(touching)
     band = floor + SUPPORT_BAND
     for other in statics if static is None else ():
-        for c in p.getClosestPoints(body, other, reach, physicsClientId=cid):
-            # contactNormalOnB points from the static body into the robot: up is a floor, under
-            # the robot (not in its way) or holding it up; it is in the way only where it rises
-            # into the robot above its lowest band.
+        found = p.getClosestPoints(body, other, reach, physicsClientId=cid)
+        # contactNormalOnB points from the static body into the robot: up is a floor, under
+        # the robot (not in its way) or holding it up; it is in the way only where it rises
+        # into the robot above its lowest band. Beside what holds it up, the edges of the same
+        # body's floor triangles are floor too (SEAM, as sim/contacts.py counts them).
+        support = max((c[6][2] for c in found if c[7][2] > SUPPORT_NORMAL_Z and (c[8] > 0.0 or c[5][2] <= band)),
+                      default=-math.inf) + SEAM
+        for c in found:
             d = c[8]
-            if c[7][2] > SUPPORT_NORMAL_Z and (d > 0.0 or c[5][2] <= band):
+            if (c[7][2] > SUPPORT_NORMAL_Z and (d > 0.0 or c[5][2] <= band)) or c[6][2] <= support:
                 continue
             if d < low_static:
                 low_static = d
