@@ -113,7 +113,7 @@ def draw(draws: tuple[FreeDraw, ...], world: WorldPlan, starts: dict[str, tuple[
     floor = occupancy.floor_under(world, [])
     corners = [(d.region[a], d.region[b]) for d in draws for a in (0, 1) for b in (2, 3)]
     grid = _grid(world, [*corners, *starts.values()])
-    occ = occupancy.occupancy(world, grid, floor)
+    occ = occupancy.drivable(world, grid, floor)  # never off the floor's edge
     out: list[tuple[str, str]] = []
     for d in sorted(draws, key=lambda d: d.goal):  # poses first: goals are reached from them
         # a pose anywhere in its cell: the inflation reaches half a cell's diagonal further; a goal

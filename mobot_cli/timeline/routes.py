@@ -2,11 +2,12 @@
 
 The grid is the map `mobot map` writes (assets/world/occupancy.py) at ``CELL``, in the band
 above the floor under the robot, covering the world and the goal's points; it is inflated by the
-goal's ``inflation`` (the robot's footprint radius unless given). Each leg (start to the first
-point, point to point, and for a patrol the last point back to the first) is an A* search
-(planner.py) pruned to its turns. A start inside the inflation but clear of the obstacle itself
-(a robot parked near a wall) leaves from the nearest free cell; a point inside the inflation
-cannot be reached, and neither can a start inside an obstacle.
+goal's ``inflation`` (the robot's footprint radius unless given), with the floor's edges
+(assets/world/dropoffs.py: no floor, or the foot of a drop off a platform) as obstacles too.
+Each leg (start to the first point, point to point, and for a patrol the last point back to the
+first) is an A* search (planner.py) pruned to its turns. A start inside the inflation but clear
+of the obstacle itself (a robot parked near a wall) leaves from the nearest free cell; a point
+inside the inflation cannot be reached, and neither can a start inside an obstacle.
 """
 
 from __future__ import annotations
@@ -45,12 +46,12 @@ def plan_route(world: WorldPlan | None, start: tuple[float, float, float], goal:
     band = (floor + occupancy.BAND[0], floor + occupancy.BAND[1])
     plan_world = world or WorldPlan()
     grid = occupancy.grid_for(plan_world, CELL, band, also=[start[:2], *points])
-    occ = occupancy.occupancy(plan_world, grid, floor)
+    occ = occupancy.drivable(plan_world, grid, floor)
     radius = goal.control.inflation
     blocked = occ.inflated(radius)
     here = grid.cell_of(*start[:2])
     if occ.occupied[here[1], here[0]]:
-        return Route(reason=f"the start ({start[0]:.2f}, {start[1]:.2f}) is inside an obstacle")
+        return Route(reason=f"the start ({start[0]:.2f}, {start[1]:.2f}) is {_inside(occ, here)}")
     if blocked[here[1], here[0]]:
         here = _nearest_free(blocked, occ.occupied, here)
         if here is None:
@@ -58,6 +59,8 @@ def plan_route(world: WorldPlan | None, start: tuple[float, float, float], goal:
                                 f"this inflation ({radius:.2f} m) with no free cell around it")
     cells = [grid.cell_of(*p) for p in points]
     for i, (cell, point) in enumerate(zip(cells, points)):
+        if occ.edges is not None and occ.edges[cell[1], cell[0]]:
+            return Route(reason=f"{_name(goal, i)} ({point[0]:g}, {point[1]:g}) is {_inside(occ, cell)}")
         if blocked[cell[1], cell[0]]:
             return Route(reason=f"{_name(goal, i)} ({point[0]:g}, {point[1]:g}) is inside an obstacle at this "
                                 f"inflation ({radius:.2f} m from obstacles)")
@@ -109,6 +112,14 @@ def _nearest_free(blocked: np.ndarray, occupied: np.ndarray, cell: tuple[int, in
                 seen.add(n)
                 queue.append(n)
     return None
+
+
+def _inside(occ, cell: tuple[int, int]) -> str:
+    """What an occupied cell is, for a message."""
+    if occ.edges is not None and occ.edges[cell[1], cell[0]]:
+        return "off the floor's edge (no floor there, or below a drop of more than " \
+               f"{occ.band[0]:g} m from the floor beside it)"
+    return "inside an obstacle"
 
 
 def _name(goal: GoalStep, i: int) -> str:

@@ -34,6 +34,7 @@ class Occupancy:
     occupied: np.ndarray
     floor: float = 0.0
     band: tuple[float, float] = BAND
+    edges: np.ndarray | None = None  # ``drivable``: the floor's edges among the occupied cells
 
     def inflated(self, radius: float) -> np.ndarray:
         """The occupied cells grown by ``radius`` (m)."""
@@ -95,6 +96,16 @@ def _checked(grid: Grid) -> Grid:
 def occupancy(world: WorldPlan, grid: Grid, floor: float = 0.0, band: tuple[float, float] = BAND) -> Occupancy:
     """The cells of ``grid`` that static geometry between ``floor + band`` covers."""
     return Occupancy(grid, _mask(world, grid, (floor + band[0], floor + band[1])).copy(), floor, band)
+
+
+def drivable(world: WorldPlan, grid: Grid, floor: float = 0.0, band: tuple[float, float] = BAND) -> Occupancy:
+    """``occupancy`` with the floor's edges occupied too (dropoffs.py: no floor there, or the foot
+    of a drop): what a planner or a spawn must keep off, beyond what the map shows."""
+    from mobot_cli.assets.world.dropoffs import edges
+
+    occ = occupancy(world, grid, floor, band)
+    off = edges(world, grid, floor + band[0], band[0])
+    return Occupancy(grid, occ.occupied | off, floor, band, off)
 
 
 @functools.lru_cache(maxsize=8)  # a run's goals plan on the same world, band and grid again and again
