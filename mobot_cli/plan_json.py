@@ -1,13 +1,14 @@
 """Plans (and answers holding them) as JSON and back, for a process that hands its parent a plan.
 
-A confined process that resolved an untrusted description (record/plan_loader.py) answers its
-parent in JSON, never a pickle: unpickling runs whatever the bytes say, so a subverted child
-would run code in the parent. The parent validates the answer against its type with pydantic
-(which already validates scenario files): strict types (no string for a number, no float for an
-int), no key a dataclass does not have and none missing, so only the plan's own dataclasses and
-plain values come out, and nothing runs but their validation. The child writes with the standard
-library's json (no schema to build first): every field of every dataclass, tuples as arrays.
-Floats round-trip bit for bit; inf and nan are JSON's ``Infinity`` and ``NaN`` tokens.
+A confined process that resolved an untrusted description (record/plan_loader.py: a run folder's
+scenario; live/worker.py: a spawned robot) answers its parent in JSON, never a pickle: unpickling
+runs whatever the bytes say, so a subverted child would run code in the parent. The parent
+validates the answer against its type with pydantic (which already validates scenario files):
+strict types (no string for a number, no float for an int), no key a dataclass does not have and
+none missing, so only the plan's own dataclasses and plain values come out, and nothing runs but
+their validation. The child writes with the standard library's json (no schema to build first):
+every field of every dataclass, tuples as arrays. Floats round-trip bit for bit; inf and nan are
+JSON's ``Infinity`` and ``NaN`` tokens.
 """
 
 from __future__ import annotations
