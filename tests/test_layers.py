@@ -9,7 +9,8 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 
 # Higher imports lower, as DESIGN.md draws the folders. mobot_cli/__init__.py (the version),
-# mobot_cli/errors.py and mobot_cli/plan.py (the Plan every layer passes down) sit below everything;
+# mobot_cli/errors.py, mobot_cli/plan.py (the Plan every layer passes down) and mobot_cli/plan_json.py
+# (a Plan as JSON) sit below everything;
 # mobot_cli/__main__.py is the entry point above everything.
 LAYERS = {
     "cli": 8,
@@ -22,7 +23,7 @@ LAYERS = {
     "sim": 1,
     "common": 0,
 }
-BOTTOM = {"", "errors", "plan"}  # the package itself, mobot_cli.errors, mobot_cli.plan
+BOTTOM = {"", "errors", "plan", "plan_json"}  # the package itself, mobot_cli.errors, mobot_cli.plan (and its JSON)
 TOP = {"__main__"}
 # The only imports between two packages of the same layer, each one way.
 SAME_LAYER = {("live", "run"), ("sweep", "run"), ("api", "run"), ("gym", "api"), ("ros2", "run"), ("view", "run"),

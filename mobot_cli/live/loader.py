@@ -30,6 +30,7 @@ from typing import Any
 
 from mobot_cli.live.protocol import Refusal, Result
 from mobot_cli.live.schema import Spawn
+from mobot_cli.live.worker import ANSWER, ANSWER_LIMIT
 
 WALL_FACTOR = 3  # CPU time is the limit (fair on a busy machine); wall time only catches waiting
 FAILED_STARTS = 3  # workers that end before they are ready, in a row: the installation is broken
@@ -99,6 +100,9 @@ class LoaderPool:
         """Start the first worker now, so the first spawn finds it warm."""
         if not self._workers:
             self._workers.append(self._start_worker())
+        from mobot_cli import plan_json
+
+        plan_json.adapter(ANSWER)  # the checker of answers, built while the worker starts (~0.1 s)
 
     def submit(self, job: Job) -> None:
         """Queue a load; it starts as soon as a worker is free."""
@@ -140,7 +144,7 @@ class LoaderPool:
                 self._demote_if_busy(worker, now)
             try:
                 if worker.connection.poll(0):
-                    self._receive(worker, worker.connection.recv())
+                    self._receive(worker, worker.connection.recv_bytes(ANSWER_LIMIT))
             except (EOFError, OSError):
                 self._failed_starts = 0 if worker.ready else self._failed_starts + 1
                 self._fail(worker, Result.RESOURCE_PARSE_ERROR, self._death(worker))
@@ -215,7 +219,11 @@ class LoaderPool:
                                   "(see the server's error output); nothing can be spawned")
             self._done.append(job)
 
-    def _receive(self, worker: _Worker, message: tuple) -> None:
+    def _receive(self, worker: _Worker, data: bytes) -> None:
+        message = _answer(data)
+        if isinstance(message, str):  # not an answer: the worker is not to be trusted with another load
+            self._fail(worker, Result.OPERATION_FAILED, f"internal error: the loader's answer is not one ({message})")
+            return
         if message[0] == "ready":
             worker.ready, self._failed_starts = True, 0
             return
@@ -225,7 +233,7 @@ class LoaderPool:
         if message[0] == "ok":
             job.outcome = (message[1], message[2])
         else:
-            job.outcome = Refusal(Result(message[1]), message[2])
+            job.outcome = Refusal(message[1], message[2])
         self._done.append(job)
         if worker.demoted:  # it cannot get its priority back: a fresh worker takes its place
             self._retire(worker)
@@ -280,6 +288,18 @@ class LoaderPool:
 
     def _reap(self) -> None:
         self._dying = [process for process in self._dying if process.poll() is None]
+
+
+def _answer(data: bytes) -> tuple | str:
+    """A worker's answer checked (it is untrusted: a hostile load may have subverted the worker),
+    with its Result made one; or why it is not an answer."""
+    from mobot_cli import plan_json
+
+    try:
+        message = plan_json.load(ANSWER, data, ANSWER_LIMIT)
+        return (message[0], Result(message[1]), message[2]) if message[0] == "refused" else message
+    except ValueError as exc:  # not JSON, not an ANSWER, or a Result that does not exist
+        return str(exc)
 
 
 def _cpu_seconds(pid: int) -> float | None:

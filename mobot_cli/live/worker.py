@@ -3,7 +3,9 @@
 LoaderPool (loader.py) starts it as ``python -m mobot_cli.live.worker FD MEMORY_BYTES SECONDS FACES LINKS``.
 It limits its own address space (RLIMIT_AS) to MEMORY_BYTES, reads
 ``(Spawn request, rate_hz)`` pairs from the connection on FD and answers each with
-``("ok", RobotPlan, notices)`` or ``("refused", Result, message)``, pickled. Descriptions are
+``("ok", RobotPlan, notices)`` or ``("refused", Result, message)`` in JSON (mobot_cli/plan_json.py;
+never a pickle, which would run code in the server if a hostile load subverted this process: the
+pool validates each answer against ANSWER). Descriptions are
 loaded confined (assets/sandbox.py). Each load may use SECONDS of CPU time: the kernel ends the
 process past that (SIGXCPU, RLIMIT_CPU), whether or not the server is still there to notice;
 the pool also kills a load that takes three times as long in wall time (one that waits).
@@ -16,6 +18,14 @@ import os
 import resource
 import signal
 import sys
+from typing import Literal
+
+from mobot_cli.plan import RobotPlan
+
+# What a worker sends: it is ready (its pid), a loaded robot and its notices, or a refusal (Result, message).
+ANSWER = (tuple[Literal["ready"], int] | tuple[Literal["ok"], RobotPlan, list[str]]
+          | tuple[Literal["refused"], int, str])
+ANSWER_LIMIT = 64 << 20  # bytes: a robot has at most 16 M characters of URDF (live/spawning.py)
 
 
 def main(argv: list[str]) -> int:
@@ -32,7 +42,7 @@ def main(argv: list[str]) -> int:
     connection = Connection(fd)
     from mobot_cli.live import spawning  # warm: pydantic, the scenario model, the loaders
 
-    connection.send(("ready", os.getpid()))
+    _send(connection, ("ready", os.getpid()))
     while True:
         try:
             request, rate_hz = connection.recv()
@@ -40,7 +50,21 @@ def main(argv: list[str]) -> int:
             return 0
         _cpu_budget(seconds)
         outcome = _load(spawning, request, rate_hz, memory, bounds)
-        connection.send(outcome)
+        _send(connection, outcome)
+
+
+def _send(connection, message: tuple) -> None:
+    """One answer, as JSON; text that is not UTF-8 in a message is escaped, in a robot a refusal."""
+    from mobot_cli import plan_json
+    from mobot_cli.live.protocol import Result
+
+    if message[0] == "refused":
+        message = (message[0], int(message[1]), message[2].encode("utf-8", "backslashreplace").decode("utf-8"))
+    try:
+        data = plan_json.dump(message)
+    except ValueError as exc:  # a file name that is not UTF-8 in the robot: JSON has no such text
+        data = plan_json.dump(("refused", int(Result.OPERATION_FAILED), f"the loaded robot cannot be sent: {exc}"))
+    connection.send_bytes(data)
 
 
 def _load(spawning, request, rate_hz: int, memory: int, bounds: tuple[int, int] | None) -> tuple:

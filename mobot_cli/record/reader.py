@@ -41,6 +41,7 @@ class ReadLimits:
     json: int = 16 * MIB  # sweep.json, history.jsonl
     plan_seconds: float = 10.0  # CPU seconds to resolve scenario.yaml (wall: six times as long)
     plan_memory: int = 1024 * MIB
+    plan_reply: int = 64 * MIB  # the plan the loader process answers with, as JSON
 
     @classmethod
     def from_env(cls) -> "ReadLimits":

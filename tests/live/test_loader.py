@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import os
+import pickle
 import signal
 import time
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mobot_cli.live import loader
 from mobot_cli.live.loader import Job, Limits, LoaderPool
@@ -146,3 +149,58 @@ def test_a_load_waiting_for_the_cpu_is_not_demoted():
             os.kill(worker.process.pid, signal.SIGCONT)
     finally:
         pool.close()
+
+
+class _Evil:
+    marker = ""
+
+    def __reduce__(self):
+        return (os.system, (f"touch {_Evil.marker}",))
+
+
+@pytest.mark.parametrize("data", [
+    pickle.dumps(("ok", _Evil(), [])), b"", b"\x80\x04garbage", b'["ok", {}, []]', b'["refused", 999, "x"]',
+    b'["refused", "1", "x"]', b'["ok", null, []]', b'["ready"]', b'["done", 1]', b'["ready", 1, "extra"]',
+], ids=repr)
+def test_an_answer_that_is_not_one_is_a_reason_never_run_or_raised(data, tmp_path):
+    _Evil.marker = str(tmp_path / "pwned")
+    assert isinstance(loader._answer(data), str)
+    assert not (tmp_path / "pwned").exists()
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.binary(max_size=500))
+def test_random_bytes_from_a_worker_are_a_reason(data):
+    assert isinstance(loader._answer(data), str)
+
+
+def test_answers_come_back_with_their_result():
+    assert loader._answer(b'["refused", 106, "no"]') == ("refused", Result.RESOURCE_PARSE_ERROR, "no")
+    assert loader._answer(b'["ready", 42]') == ("ready", 42)
+
+
+def test_a_subverted_worker_refuses_its_load_and_is_replaced(tmp_path):
+    """A pickle (or anything not an answer) from a worker: the load is refused, the worker killed."""
+    _Evil.marker = str(tmp_path / "pwned")
+    pool = LoaderPool(Limits(seconds=300, memory=512 * 2**20))
+    try:
+        job, worker = _endless_load(pool)
+        pool._receive(worker, pickle.dumps(("ok", _Evil(), [])))
+        assert job.outcome.result == Result.OPERATION_FAILED and "answer is not one" in job.outcome.message
+        assert worker not in pool._workers and worker.process.wait(30) is not None
+        assert not (tmp_path / "pwned").exists()
+    finally:
+        assert pool.close() == []
+
+
+def test_a_robot_from_a_worker_equals_the_one_loaded_here():
+    pool = LoaderPool(Limits(seconds=10, memory=512 * 2**20))
+    try:
+        pool.start()
+        job = Job(spawn("same", description="mobot"), 240)
+        pool.submit(job)
+        finish(pool, [job])
+    finally:
+        pool.close()
+    here, notices = load_plan(spawn("same", description="mobot"), 240)
+    assert job.outcome == (here, notices) and type(job.outcome[0].drive.wheel_radius) is float
