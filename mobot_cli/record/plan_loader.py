@@ -158,7 +158,8 @@ def main(argv: list[str]) -> int:
     from mobot_cli.scenario.prepare import prepare
 
     roots = [folder, *ResourceResolver(folder).roots]
-    readable = [*roots, cache_dir(), *(p for p in sys.path[1:] if p), sys.prefix, sys.base_prefix]
+    package = str(Path(_PACKAGE_PARENT) / "mobot_cli")  # its own lazy imports: that folder, not its parent
+    readable = [*roots, cache_dir(), package, *(p for p in sys.path[1:] if p), sys.prefix, sys.base_prefix]
     refusals = _guard_opens([str(Path(p).resolve()) for p in readable])
     try:
         with sandbox.confined(roots):
