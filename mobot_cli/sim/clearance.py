@@ -14,6 +14,7 @@ stands on, at the floor's height (within SEAM of its support in the same query),
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Callable, Container, Iterable
 
@@ -48,20 +49,24 @@ def nearest(cid: int, body: int, reach: float, robots: Iterable[int], label: Cal
     hi = [max(b[1][i] for b in boxes) + reach for i in range(3)]
     near = {uid for uid, _ in p.getOverlappingObjects(lo, hi, physicsClientId=cid) or ()} - {body}
     robots = set(robots)
-    floors: dict[int, float] = {}  # body it stands on -> the height of its support
+    # body it stands on -> the height of its support; keyed by label: a mesh split into several
+    # PyBullet bodies (sim/static_shapes.py) is one floor, its chunks' seams included
+    floors: dict[str, float] = {}
+    label = functools.lru_cache(maxsize=None)(label)
     found: list[tuple[float, int, float]] = []
-    meshes = []
+    dense = []  # the static triangle meshes near it
     for other in sorted(near):
         if other in meshes:
-            meshes.append(other)  # one point per triangle: asked for below, with care
+            dense.append(other)  # one point per triangle: asked for below, with care
         else:  # one point per pair of shapes: the whole robot at once
-            _collect(p.getClosestPoints(body, other, reach, physicsClientId=cid), other, robots, floors, found)
-    if meshes:
-        best = min((d for d, other, height in found if height > floors.get(other, -math.inf) + SEAM), default=math.inf)
-        _meshes(cid, body, links, lo, hi, reach, meshes, min(reach, best), robots, floors, found)
+            _collect(p.getClosestPoints(body, other, reach, physicsClientId=cid), other, robots, floors, found, label)
+    if dense:
+        best = min((d for d, other, height in found if height > floors.get(label(other), -math.inf) + SEAM),
+                   default=math.inf)
+        _meshes(cid, body, links, lo, hi, reach, dense, min(reach, best), robots, floors, found, label)
     best, what = math.inf, ""
     for distance, other, height in found:
-        if height <= floors.get(other, -math.inf) + SEAM:
+        if height <= floors.get(label(other), -math.inf) + SEAM:
             continue  # an edge of the floor's own triangles
         if distance < best:
             best, what = distance, label(other)
@@ -69,7 +74,7 @@ def nearest(cid: int, body: int, reach: float, robots: Iterable[int], label: Cal
 
 
 def _meshes(cid: int, body: int, links, lo, hi, reach: float, meshes: list[int], beyond: float, robots: set[int],
-            floors: dict[int, float], found: list) -> None:
+            floors: dict[str, float], found: list, label: Callable[[int], str]) -> None:
     """The closest points of static triangle meshes: link by link, within FIRST_REACH first and
     GROWTH times as far each time, until a point that is not floor turns up, or ``beyond`` (a
     nearer point already found elsewhere) or the reach is passed."""
@@ -77,15 +82,15 @@ def _meshes(cid: int, body: int, links, lo, hi, reach: float, meshes: list[int],
     radius = min(reach, FIRST_REACH)
     while True:  # the nearest point is among those within the smallest radius that finds one
         points: list[tuple[float, int, float]] = []
-        heights: dict[int, float] = {}
+        heights: dict[str, float] = {}
         for other in meshes:
             if gaps[other] > radius:
                 continue  # its box lies further than this
             for link in links:  # link by link: PyBullet overflows on too many points in one answer
                 _collect(p.getClosestPoints(body, other, radius, linkIndexA=link, physicsClientId=cid),
-                         other, robots, heights, points)
+                         other, robots, heights, points, label)
         if radius >= min(reach, beyond) or \
-                any(height > heights.get(other, -math.inf) + SEAM for _, other, height in points):
+                any(height > heights.get(label(other), -math.inf) + SEAM for _, other, height in points):
             break
         radius = min(reach, radius * GROWTH)
     for other, height in heights.items():
@@ -93,11 +98,13 @@ def _meshes(cid: int, body: int, links, lo, hi, reach: float, meshes: list[int],
     found.extend(points)
 
 
-def _collect(points, other: int, robots: set[int], floors: dict[int, float], found: list) -> None:
-    """Sort closest points into what the robot stands on (floors) and the rest (found)."""
+def _collect(points, other: int, robots: set[int], floors: dict[str, float], found: list,
+             label: Callable[[int], str]) -> None:
+    """Sort closest points into what the robot stands on (floors, by label) and the rest (found)."""
     for point in points:
         distance, normal_up, height = point[8], point[7][2], point[6][2]  # normal on B: into ours
         if other not in robots and normal_up > SUPPORT_NORMAL_Z:
-            floors[other] = max(floors.get(other, -math.inf), height)  # what it stands on
+            key = label(other)
+            floors[key] = max(floors.get(key, -math.inf), height)  # what it stands on
         else:
             found.append((distance, other, height))

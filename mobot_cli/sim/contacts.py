@@ -62,8 +62,11 @@ class ContactCounter:
         if not by_body:
             return
         touching: set[tuple[Counted, Hashable]] = set()
-        supports: dict[tuple[Counted, int], float] = {}  # (robot, body) -> its highest support point
+        # (robot, world body) -> its highest support point: the chunks of a mesh split into
+        # several PyBullet bodies are one floor (named alike)
+        supports: dict[tuple[Counted, Hashable], float] = {}
         steep: list[tuple[Counted, int, float]] = []  # (robot, body, height of the body's point)
+        group = self._group
         for contact in p.getContactPoints(physicsClientId=cid):
             ra, rb = by_body.get(contact[1]), by_body.get(contact[2])
             if (ra is None and rb is None) or contact[8] > CONTACT_SLOP:
@@ -78,13 +81,18 @@ class ContactCounter:
             robot, other, up, height = (ra, contact[2], contact[7][2], contact[6][2]) if ra is not None \
                 else (rb, contact[1], -contact[7][2], contact[5][2])
             if up > SUPPORT_NORMAL_Z:
-                supports[(robot, other)] = max(supports.get((robot, other), -math.inf), height)
+                key = (robot, group(other))
+                supports[key] = max(supports.get(key, -math.inf), height)
                 continue
             steep.append((robot, other, height))
         for robot, other, height in steep:
-            if height > supports.get((robot, other), -math.inf) + SEAM:  # not an edge of its floor's triangles
+            if height > supports.get((robot, group(other)), -math.inf) + SEAM:  # not an edge of its floor's triangles
                 touching.add((robot, ("body", other)))
         self._count(touching)
+
+    def _group(self, uid: int) -> Hashable:
+        """The world body a PyBullet body is part of: its name, when the counter knows names."""
+        return self._name_of(("body", uid)) if self._name_of is not None else uid
 
     def record(self, touching: Iterable[tuple[Counted, Hashable]]) -> None:
         """One sample of pairs found touching by other means (the kinematic engine's queries):

@@ -128,6 +128,72 @@ def test_clearance_to_a_dense_mesh_does_not_crash_and_is_the_gap(tmp_path, engin
     assert "of world model 'thing'" in happened
 
 
+def _dense_floor(n: int) -> str:
+    """A 4 m square floor of 2 n^2 triangles round the origin, and a 1 m high block (x 1.2-1.4,
+    y -1..1) in the same mesh."""
+    xs = np.linspace(-2.0, 2.0, n + 1)
+    vertices = [(x, y, 0.0) for y in xs for x in xs]
+    faces = []
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i
+            faces += [(a, a + 1, a + n + 2), (a, a + n + 2, a + n + 1)]
+    base = len(vertices)
+    vertices += [(x, y, z) for x in (1.2, 1.4) for y in (-1.0, 1.0) for z in (0.0, 1.0)]
+    faces += [(base + a, base + b, base + c) for a, b, c in CUBE_F]
+    return obj(vertices, faces)
+
+
+@pytest.mark.parametrize("engine", ["bullet", "kinematic"])
+def test_clearance_over_a_floor_split_into_chunks_is_the_gap_to_the_block(tmp_path, engine):
+    """51,200 floor triangles are split into three PyBullet bodies (20,000 a body): the robot stands
+    on one, and the next one's floor triangles are floor too, not an obstacle 0.25 m away."""
+    mesh_world(tmp_path, _dense_floor(160))
+    scenario = tmp_path / "s.yaml"
+    scenario.write_text(f"version: 1\nworld: w.sdf\nduration: 0.2\nphysics: {{engine: {engine}}}\nrobots:\n"
+                        "  - name: mobot\n    description: mobot\n    pose: {x: 0.0, y: 0.0, yaw: 0.0}\n"
+                        "expect:\n  - {robot: mobot, clearance: {min: 1.5}}\n")
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    done = subprocess.run([sys.executable, "-m", "mobot_cli", "run", str(scenario), "--out", str(tmp_path / "out"),
+                           "--quiet"], capture_output=True, text=True, env=env, timeout=300)
+    assert done.returncode == 1, done.stderr[-2000:]  # the expectation fails, with the distance
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["robots"]["mobot"]["collisions"] == 0
+    happened = summary["expectations"]["results"][0]["happened"]
+    closest = float(happened.split("came within ")[1].split(" m")[0])
+    assert closest == pytest.approx(1.2 - 0.10, abs=0.02)  # the chassis front is 0.10 m ahead
+
+
+def test_a_static_triangle_mesh_is_asked_about_link_by_link(tmp_path, monkeypatch):
+    """The careful path for meshes (PyBullet answers them a point per triangle, and one answer for
+    a whole robot beside a dense mesh overflowed its buffer and crashed AWS's and Clearpath's
+    offices) is taken for every static mesh body: each query of one names the robot's link."""
+    from mobot_cli.scenario.prepare import prepare
+    from mobot_cli.sim import clearance
+    from mobot_cli.sim.engine import open_world
+    from mobot_cli.sim.pb import p
+
+    mesh_world(tmp_path, _dense_floor(40))
+    (tmp_path / "s.yaml").write_text("version: 1\nworld: w.sdf\nduration: 0.2\nrobots:\n"
+                                     "  - {name: mobot, description: mobot, pose: {x: 0.0, y: 0.0}}\n")
+    plan = prepare(tmp_path / "s.yaml").plan
+    asked = []
+    real = p.getClosestPoints
+
+    def spy(a, b, distance, **kwargs):
+        asked.append((b, "linkIndexA" in kwargs))
+        return real(a, b, distance, **kwargs)
+
+    with open_world(plan.physics, plan.world) as world:
+        world.spawn(plan.robots[0])
+        body, meshes = world._robots["mobot"].body, world._meshes  # noqa: SLF001 - the world's own bookkeeping
+        monkeypatch.setattr(p, "getClosestPoints", spy)
+        distance, what = clearance.nearest(world._cid, body, 2.0, [], world.label, meshes)  # noqa: SLF001
+    assert what.startswith("world model 'thing'") and distance == pytest.approx(1.1, abs=0.02)
+    about_meshes = [by_link for b, by_link in asked if b in meshes]
+    assert about_meshes and all(about_meshes)
+
+
 # --- the same cells and triangles, faster ------------------------------------------------
 
 point = st.tuples(st.floats(-1.5, 1.8, allow_nan=False), st.floats(-1.5, 1.8, allow_nan=False))

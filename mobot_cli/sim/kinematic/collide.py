@@ -44,8 +44,10 @@ class Near:
     """The static bodies near a robot that can be in its way, cached until it has moved
     NEAR_MARGIN / 2 (or its floor changed); a body wholly below its support band is floor."""
 
-    def __init__(self, cid: int, tops: dict[int, float], boxes: dict[int, list[tuple[float, ...]]]):
+    def __init__(self, cid: int, tops: dict[int, float], boxes: dict[int, list[tuple[float, ...]]],
+                 groups: dict[int, str] | None = None):
         self.cid, self.tops, self.boxes = cid, tops, boxes
+        self.groups = groups or {}  # static body -> the world body it is part of (its label)
         self.key: tuple[float, float, float] | None = None
         self.bodies: list[int] = []
         self.gaps: list[tuple[int, float]] = []  # (body, how far its boxes are from the key's x, y)
@@ -126,7 +128,8 @@ def _aabb(cid: int, uid: int):
 
 
 def distances(cid: int, body: int, statics: list[int], robots: list[int], reach: float, floor: float,
-              known: dict[int, float] | None = None, static: tuple[float, frozenset] | None = None):
+              known: dict[int, float] | None = None, static: tuple[float, frozenset] | None = None,
+              groups: dict[int, str] | None = None):
     """(nearest static obstacle, {robot body: its distance}, bodies touched within CONTACT_SLOP):
     distances in m, negative when overlapping, ``reach`` when nothing is that near; support (at
     the bottom of a robot whose lowest point is at ``floor``) does not count. ``known``: robots
@@ -135,14 +138,22 @@ def distances(cid: int, body: int, statics: list[int], robots: list[int], reach:
     low_static, touching = static if static is not None else (reach, set())
     touching = set(touching)
     band = floor + SUPPORT_BAND
-    for other in statics if static is None else ():
-        found = p.getClosestPoints(body, other, reach, physicsClientId=cid)
-        # contactNormalOnB points from the static body into the robot: up is a floor, under
-        # the robot (not in its way) or holding it up; it is in the way only where it rises
-        # into the robot above its lowest band. Beside what holds it up, the edges of the same
-        # body's floor triangles are floor too (SEAM, as sim/contacts.py counts them).
-        support = max((c[6][2] for c in found if c[7][2] > SUPPORT_NORMAL_Z and (c[8] > 0.0 or c[5][2] <= band)),
-                      default=-math.inf) + SEAM
+    asked = [(other, p.getClosestPoints(body, other, reach, physicsClientId=cid))
+             for other in (statics if static is None else ())]
+    # contactNormalOnB points from the static body into the robot: up is a floor, under the
+    # robot (not in its way) or holding it up; it is in the way only where it rises into the
+    # robot above its lowest band. Beside what holds it up, the edges of the same world body's
+    # floor triangles are floor too (SEAM, as sim/contacts.py counts them; ``groups``: the world
+    # body of each PyBullet body, a mesh split into several being one floor).
+    groups = groups or {}
+    supports: dict = {}
+    for other, found in asked:
+        key = groups.get(other, other)
+        for c in found:
+            if c[7][2] > SUPPORT_NORMAL_Z and (c[8] > 0.0 or c[5][2] <= band):
+                supports[key] = max(supports.get(key, -math.inf), c[6][2])
+    for other, found in asked:
+        support = supports.get(groups.get(other, other), -math.inf) + SEAM
         for c in found:
             d = c[8]
             if (c[7][2] > SUPPORT_NORMAL_Z and (d > 0.0 or c[5][2] <= band)) or c[6][2] <= support:

@@ -40,7 +40,7 @@ def fit(cid: int, mover: Mover, distance: float, turn: float, others: list[Mover
         key = (x, y, z, yaw, mover.floor)
         static, before = seen.recall(key, others, known)
         found = distances(cid, body, near.within(x, y, reach), robots, QUERY_REACH, mover.floor,
-                          {**before, **known}, static)
+                          {**before, **known}, static, near.groups)
         seen.keep(key, found, robots, known, bodies)
         return found
 

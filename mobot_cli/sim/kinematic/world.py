@@ -142,7 +142,7 @@ class KinematicWorld(World):
             raise
         self._movers[robot.name] = mover
         self._reindex()
-        self._near[robot.name] = Near(self._cid, self._tops, self._boxes)
+        self._near[robot.name] = Near(self._cid, self._tops, self._boxes, self._statics)
 
     def remove(self, name: str) -> None:
         """Delete a robot from the world."""
