@@ -18,7 +18,7 @@ import functools
 import math
 from typing import Callable, Container, Iterable
 
-from mobot_cli.sim.contacts import SEAM, SUPPORT_NORMAL_Z
+from mobot_cli.sim.contacts import SEAM, SUPPORT_BAND, SUPPORT_NORMAL_Z
 from mobot_cli.sim.pb import p
 
 # How much further than the tightest clearance asked for the distances are measured.
@@ -29,6 +29,12 @@ REACH_MARGIN = 0.5  # m
 # six links at once) is slow and overflows the answer's buffer, which crashes the process.
 FIRST_REACH = 0.05  # m
 GROWTH = 1.5
+
+
+def _top(cid: int, uid: int) -> float:
+    """The highest point of a body's links' boxes."""
+    links = range(-1, p.getNumJoints(uid, physicsClientId=cid))
+    return max(p.getAABB(uid, link, physicsClientId=cid)[1][2] for link in links)
 
 
 def _gap(lo, hi, reach: float, box) -> float:
@@ -53,6 +59,15 @@ def nearest(cid: int, body: int, reach: float, robots: Iterable[int], label: Cal
     # PyBullet bodies (sim/static_shapes.py) is one floor, its chunks' seams included
     floors: dict[str, float] = {}
     label = functools.lru_cache(maxsize=None)(label)
+    # A static body wholly below the robot's support band is floor (a rug, a strip, a carpet mesh
+    # laid under the floor's surface), as the map and the kinematic engine count it: not asked
+    # about, its top the floor's height for the rest of its world body.
+    low = min(b[0][2] for b in boxes) + SUPPORT_BAND
+    for uid in sorted(near - robots):
+        top = _top(cid, uid)
+        if top <= low:
+            near.discard(uid)
+            floors[label(uid)] = max(floors.get(label(uid), -math.inf), top)
     found: list[tuple[float, int, float]] = []
     dense = []  # the static triangle meshes near it
     for other in sorted(near):

@@ -29,6 +29,11 @@ CONTACT_SLOP = 1e-3  # m
 # in the same sample or query, is floor too (below the 0.02 m where maps count obstacles; a
 # wall of the same mesh still counts above it).
 SEAM = 0.01  # m
+# A contact counts as support only this close above the robot's lowest point: a wheel rolls
+# onto a low step, but a floor rising into the chassis is in the way. A static body no higher
+# than this above the robot's lowest point is floor (a rug, a threshold strip): the map counts
+# obstacles from the same height (assets/world/floorplan.py's BAND).
+SUPPORT_BAND = 0.02  # m
 # A pair must be apart for this many samples (0.1 s at 50 Hz) before touching again counts as
 # a new collision, so solver jitter in one long scrape along a wall is not many collisions.
 RELEASE_SAMPLES = 5

@@ -109,3 +109,31 @@ def test_the_edges_of_a_mesh_floors_triangles_are_no_obstacle(tmp_path, engine):
     assert done.exit_code == 0, summary["expectations"]["results"]
     assert summary["robots"]["mobot"]["distance"] > 0.8  # it drove across many triangles' edges
     assert summary["expectations"]["results"][0]["happened"] == "stayed more than 1 m from everything"
+
+
+@pytest.mark.parametrize("engine", ["bullet", "kinematic"])
+def test_a_rug_and_a_carpet_under_the_floor_are_floor_not_obstacles(tmp_path, engine):
+    """Bodies wholly below the robot's support band (0.02 m: where the map starts counting
+    obstacles) are floor: a 1 cm rug beside the path, and a carpet laid just under the floor's
+    surface, as AWS's small house has its carpets (its clearance read 0.035 m to one). The wall
+    beyond still counts."""
+    box = ("<model name='{name}'><static>true</static><pose>{pose}</pose><link name='l'><collision name='c'>"
+           "<geometry><box><size>{size}</size></box></geometry></collision></link></model>")
+    models = "".join(box.format(name=n, pose=pose, size=size) for n, pose, size in (
+        ("floor", "0 0 -0.05 0 0 0", "8 8 0.1"),
+        ("rug", "0.5 0.6 0.005 0 0 0", "1.5 0.6 0.01"),  # its edge 0.3 m beside the robot's side
+        ("carpet", "0 0 -0.006 0 0 0", "4 4 0.004"),  # under the floor's top surface
+        ("wall", "2.2 0 0.5 0 0 0", "0.2 4 1"),  # its face 2.1 m ahead of the axle
+    ))
+    (tmp_path / "rug.sdf").write_text(f"<?xml version='1.0'?><sdf version='1.6'><world name='w'>{models}"
+                                      "</world></sdf>")
+    scenario = tmp_path / "s.yaml"
+    scenario.write_text(f"version: 1\nworld: rug.sdf\nduration: 1\nphysics: {{engine: {engine}}}\nrobots:\n"
+                        "  - name: mobot\n    description: mobot\n    pose: {x: 0.0, y: 0.0, z: auto}\n"
+                        "expect:\n  - {robot: mobot, clearance: {min: 3.0}}\n")
+    done = invoke(["run", scenario, "--out", tmp_path / "out", "--quiet"])
+    assert done.exit_code == 1, done.stderr
+    happened = json.loads((tmp_path / "out" / "summary.json").read_text())["expectations"]["results"][0]["happened"]
+    assert "of world model 'wall'" in happened, happened
+    closest = float(happened.split("came within ")[1].split(" m")[0])
+    assert closest == pytest.approx(2.1 - FRONT, abs=0.02)

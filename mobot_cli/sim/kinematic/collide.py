@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from mobot_cli.plan import WorldPlan
-from mobot_cli.sim.contacts import CONTACT_SLOP, SEAM, SUPPORT_NORMAL_Z
+from mobot_cli.sim.contacts import CONTACT_SLOP, SEAM, SUPPORT_BAND, SUPPORT_NORMAL_Z
 from mobot_cli.sim.pb import p
 
 # Static bodies are looked up in a box this much wider than the robot's reach around it and
@@ -23,9 +23,6 @@ NEAR_MARGIN = 0.5  # m
 # Closest points are asked for this far out: the measured clearance lets the robot move
 # this far without asking again (conservative advancement).
 QUERY_REACH = 0.25  # m
-# A contact counts as support only this close above the robot's lowest point: a wheel rolls
-# onto a low step, but a floor rising into the chassis is in the way.
-SUPPORT_BAND = 0.02  # m
 # Points no higher than this above a robot's lowest point carry it (wheels, casters): the
 # floor is looked for under them.
 FOOT_BAND = 0.005  # m, as sim/bullet/friction.py's CASTER_BAND
