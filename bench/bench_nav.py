@@ -5,8 +5,8 @@ The house's occupancy grid at 0.05 m (264 x 224 cells, as `mobot map house` writ
 by the bundled robot's footprint radius (0.26 m), then A* (timeline/planner.py) between every
 pair of the four rooms' centres and three far corners of the house (the longest searches),
 each pruned to its turns. CPU time per search, median and worst over ``--repeat`` rounds (goal:
-<= 50 ms); the grid's making (rasterising the floor plan, inflating it) is timed apart, as a goal
-pays it only when its world's grid is not cached yet.
+<= 50 ms); the grid's making (rasterising the floor plan, casting for the floor's edges, inflating
+it) is timed apart, as a goal pays it only when its world's grid is not cached yet.
 
     python3 bench/bench_nav.py [--repeat 20]
 """
@@ -23,9 +23,10 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from mobot_cli.assets.world import occupancy  # noqa: E402
+from mobot_cli.assets.world import dropoffs, occupancy  # noqa: E402
 from mobot_cli.assets.world.floorplan import BAND, body_shadows  # noqa: E402
 from mobot_cli.assets.world.worldplan import load_world  # noqa: E402
+from mobot_cli.sim.sensing import raycast  # noqa: E402
 from mobot_cli.timeline.planner import astar, prune  # noqa: E402
 
 CELL = 0.05
@@ -50,9 +51,11 @@ def main() -> None:
     for _ in range(max(3, args.repeat // 4)):
         body_shadows.cache_clear()
         occupancy._mask.cache_clear()  # noqa: SLF001 - timing the uncached path on purpose
-        ms, blocked = cpu_ms(lambda: occupancy.occupancy(world, grid).inflated(RADIUS))
+        dropoffs._kept.cache_clear()  # noqa: SLF001
+        raycast.forget_kept()
+        ms, blocked = cpu_ms(lambda: occupancy.drivable(world, grid).inflated(RADIUS))
         making.append(ms)
-    print(f"grid {grid.nx} x {grid.ny} cells of {CELL} m, inflated by {RADIUS} m: "
+    print(f"grid {grid.nx} x {grid.ny} cells of {CELL} m, the floor's edges cast for, inflated by {RADIUS} m: "
           f"made in {statistics.median(making):.1f} ms CPU (median of {len(making)})")
     print(f"{'from':>11} {'to':>11} {'path m':>7} {'turns':>5} {'median ms':>9} {'worst ms':>8}")
     medians = []

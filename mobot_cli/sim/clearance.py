@@ -62,9 +62,10 @@ def nearest(cid: int, body: int, reach: float, robots: Iterable[int], label: Cal
     # A static body wholly below the robot's support band is floor (a rug, a strip, a carpet mesh
     # laid under the floor's surface), as the map and the kinematic engine count it: not asked
     # about, its top the floor's height for the rest of its world body.
-    low = min(b[0][2] for b in boxes) + SUPPORT_BAND
-    for uid in sorted(near - robots):
-        top = _top(cid, uid)
+    tops = {uid: _top(cid, uid) for uid in near - robots}
+    low = min(b[0][2] for b in boxes) + SUPPORT_BAND  # the boxes hold margins: at most this low
+    for uid in sorted(tops):
+        top = tops[uid]
         if top <= low:
             near.discard(uid)
             floors[label(uid)] = max(floors.get(label(uid), -math.inf), top)
@@ -80,9 +81,12 @@ def nearest(cid: int, body: int, reach: float, robots: Iterable[int], label: Cal
                    default=math.inf)
         _meshes(cid, body, links, lo, hi, reach, dense, min(reach, best), robots, floors, found, label)
     best, what = math.inf, ""
+    # ... and measured from what it stands on (its box's margins lie lower): a body no higher
+    # than the band above its highest support is floor too
+    low = max(floors.values(), default=-math.inf) + SUPPORT_BAND
     for distance, other, height in found:
-        if height <= floors.get(label(other), -math.inf) + SEAM:
-            continue  # an edge of the floor's own triangles
+        if height <= floors.get(label(other), -math.inf) + SEAM or tops.get(other, math.inf) <= low:
+            continue  # an edge of the floor's own triangles, or a body wholly within the band
         if distance < best:
             best, what = distance, label(other)
     return best, what

@@ -114,13 +114,16 @@ def test_the_edges_of_a_mesh_floors_triangles_are_no_obstacle(tmp_path, engine):
 @pytest.mark.parametrize("engine", ["bullet", "kinematic"])
 def test_a_rug_and_a_carpet_under_the_floor_are_floor_not_obstacles(tmp_path, engine):
     """Bodies wholly below the robot's support band (0.02 m: where the map starts counting
-    obstacles) are floor: a 1 cm rug beside the path, and a carpet laid just under the floor's
-    surface, as AWS's small house has its carpets (its clearance read 0.035 m to one). The wall
+    obstacles) are floor: a 1 cm rug beside the path, a carpet laid just under the floor's
+    surface, as AWS's small house has its carpets (its clearance read 0.035 m to one), and the
+    next floor slab, 1.5 cm higher than the one it stands on (a city's road tiles read 0.075 m).
+    The wall
     beyond still counts."""
     box = ("<model name='{name}'><static>true</static><pose>{pose}</pose><link name='l'><collision name='c'>"
            "<geometry><box><size>{size}</size></box></geometry></collision></link></model>")
     models = "".join(box.format(name=n, pose=pose, size=size) for n, pose, size in (
-        ("floor", "0 0 -0.05 0 0 0", "8 8 0.1"),
+        ("floor", "-1.85 0 -0.05 0 0 0", "4.3 8 0.1"),  # x -4 to 0.3: under the robot
+        ("tiles", "2.15 0 -0.035 0 0 0", "3.7 8 0.1"),  # x 0.3 to 4, 1.5 cm higher, its edge 0.2 m ahead
         ("rug", "0.5 0.6 0.005 0 0 0", "1.5 0.6 0.01"),  # its edge 0.3 m beside the robot's side
         ("carpet", "0 0 -0.006 0 0 0", "4 4 0.004"),  # under the floor's top surface
         ("wall", "2.2 0 0.5 0 0 0", "0.2 4 1"),  # its face 2.1 m ahead of the axle
