@@ -20,6 +20,7 @@ from typing import Callable, Container, Iterable
 
 from mobot_cli.sim.contacts import SEAM, SUPPORT_BAND, SUPPORT_NORMAL_Z
 from mobot_cli.sim.pb import p
+from mobot_cli.sim.placement import body_top
 
 # How much further than the tightest clearance asked for the distances are measured.
 REACH_MARGIN = 0.5  # m
@@ -31,10 +32,19 @@ FIRST_REACH = 0.05  # m
 GROWTH = 1.5
 
 
-def _top(cid: int, uid: int) -> float:
-    """The highest point of a body's links' boxes."""
-    links = range(-1, p.getNumJoints(uid, physicsClientId=cid))
-    return max(p.getAABB(uid, link, physicsClientId=cid)[1][2] for link in links)
+class Tops:
+    """Bodies' highest points for ``nearest``, those of ``statics`` kept: they never move."""
+
+    def __init__(self, statics: Container[int]):
+        self.statics, self.kept = statics, {}
+
+    def __call__(self, cid: int, uid: int) -> float:
+        top = self.kept.get(uid)
+        if top is None:
+            top = body_top(cid, uid)
+            if uid in self.statics:
+                self.kept[uid] = top
+        return top
 
 
 def _gap(lo, hi, reach: float, box) -> float:
@@ -45,10 +55,11 @@ def _gap(lo, hi, reach: float, box) -> float:
 
 
 def nearest(cid: int, body: int, reach: float, robots: Iterable[int], label: Callable[[int], str],
-            meshes: Container[int] = ()) -> tuple[float, str]:
+            meshes: Container[int] = (), top: Callable[[int, int], float] = body_top) -> tuple[float, str]:
     """The smallest distance (m, negative when overlapping) from ``body`` to anything within
     ``reach`` but its floor, and what that is; (inf, "") when nothing is that close. ``meshes``:
-    the static bodies that hold triangle meshes (PyBullet answers them a point per triangle)."""
+    the static bodies that hold triangle meshes (PyBullet answers them a point per triangle);
+    ``top(cid, uid)``: a body's highest point (a World keeps its static bodies')."""
     links = range(-1, p.getNumJoints(body, physicsClientId=cid))
     boxes = [p.getAABB(body, link, physicsClientId=cid) for link in links]
     lo = [min(b[0][i] for b in boxes) - reach for i in range(3)]
@@ -62,13 +73,12 @@ def nearest(cid: int, body: int, reach: float, robots: Iterable[int], label: Cal
     # A static body wholly below the robot's support band is floor (a rug, a strip, a carpet mesh
     # laid under the floor's surface), as the map and the kinematic engine count it: not asked
     # about, its top the floor's height for the rest of its world body.
-    tops = {uid: _top(cid, uid) for uid in near - robots}
+    tops = {uid: top(cid, uid) for uid in near - robots}
     low = min(b[0][2] for b in boxes) + SUPPORT_BAND  # the boxes hold margins: at most this low
     for uid in sorted(tops):
-        top = tops[uid]
-        if top <= low:
+        if tops[uid] <= low:
             near.discard(uid)
-            floors[label(uid)] = max(floors.get(label(uid), -math.inf), top)
+            floors[label(uid)] = max(floors.get(label(uid), -math.inf), tops[uid])
     found: list[tuple[float, int, float]] = []
     dense = []  # the static triangle meshes near it
     for other in sorted(near):

@@ -85,6 +85,12 @@ def lowest_points(probes: Probes, body: int, ground: int | None, probe_z: float 
 Bounds = tuple[tuple[float, float, float], tuple[float, float, float]]
 
 
+def body_top(cid: int, uid: int) -> float:
+    """The highest point of a body's links' collision boxes."""
+    return max(p.getAABB(uid, link, physicsClientId=cid)[1][2]
+               for link in range(-1, p.getNumJoints(uid, physicsClientId=cid)))
+
+
 def body_bounds(probes: Probes, body: int) -> Bounds:
     """Exact world bounds (lo, hi) of a body's collision shapes.
 

@@ -75,6 +75,7 @@ class World(MoversDoor, Settling, Placing):
         self._sensing: Sensing | None = None  # made when the first robot with sensors arrives
         self._stage: MoverStage | None = None  # the movers (sim/movers/stage.py), made with the first
         self._clearance: dict[str, float] = {}  # robot -> how far its clearance is measured (m)
+        self._clearance_tops: clearance.Tops | None = None  # the static bodies' highest points, for clearance
         self._health = Health(self._cid, physics.faults, physics.rate_hz)
         self._robot_boxes = RobotBoxes()  # the robots' boxes, for spawn checks (sim/broadphase.py)
         self._files: dict[str, Path] = {}  # URDF text -> the file PyBullet loads it from (_load)
@@ -343,12 +344,18 @@ class World(MoversDoor, Settling, Placing):
         robot = self._robot(name)
         state = robot.state(self._steps)
         if self._clearance and name in self._clearance:
-            state.clearance, state.nearest = clearance.nearest(
-                self._cid, robot.body, self._clearance[name], [r.body for r in self._robots.values()], self.label,
-                self._meshes)
+            state.clearance, state.nearest = self._nearest(name)
         if self._stage is not None:
             self._stage.social(robot, state, name in self._clearance)
         return state
+
+    def _nearest(self, name: str) -> tuple[float, str]:
+        """A watched robot's clearance and what it is to (sim/clearance.py)."""
+        tops = self._clearance_tops
+        if tops is None or tops.statics is not self._statics:  # the statics are made again by a reset
+            tops = self._clearance_tops = clearance.Tops(self._statics)
+        return clearance.nearest(self._cid, self._robot(name).body, self._clearance[name],
+                                 [r.body for r in self._robots.values()], self.label, self._meshes, tops)
 
     def states(self, names) -> dict[str, RobotState]:
         """``read`` of each robot named, by name."""

@@ -220,12 +220,6 @@ class Floor:
         return out
 
 
-def body_top(cid: int, uid: int) -> float:
-    """The highest point of a static body's collision box."""
-    return max(p.getAABB(uid, link, physicsClientId=cid)[1][2]
-               for link in range(-1, p.getNumJoints(uid, physicsClientId=cid)))
-
-
 def feet(probes, body: int, lo, pose: tuple[float, float, float]) -> list[tuple[float, float]]:
     """Where the robot stands on the floor, in its root frame: the lowest points of its links
     (wheels, casters), found against a plane under it (the world's probe shape, no body)."""

@@ -23,7 +23,6 @@ import numpy as np
 
 from mobot_cli.errors import SimulationFault, SpawnError
 from mobot_cli.plan import Physics, RobotPlan, SpawnPose, WorldPlan
-from mobot_cli.sim import clearance as clearance_mod
 from mobot_cli.sim.bullet.robot import HOLONOMIC, check_command
 from mobot_cli.sim.bullet.world import World
 from mobot_cli.sim.contacts import CONTACT_RATE_HZ, CONTACT_SLOP, RELEASE_SAMPLES, ContactCounter
@@ -34,7 +33,6 @@ from mobot_cli.sim.kinematic.collide import (
     SUPPORT_BAND,
     Floor,
     Near,
-    body_top,
     feet,
     static_boxes,
 )
@@ -42,7 +40,7 @@ from mobot_cli.sim.kinematic.fit import fit
 from mobot_cli.sim.kinematic.footprint import rectangle, shape
 from mobot_cli.sim.kinematic.holonomic import HolonomicMover
 from mobot_cli.sim.kinematic.pairs import robot_pairs, touched_pairs
-from mobot_cli.sim.placement import body_bounds
+from mobot_cli.sim.placement import body_bounds, body_top
 from mobot_cli.sim.state import RobotState
 
 # The floor under a robot changes only by more than this (rays in float32 jitter below it).
@@ -379,9 +377,7 @@ class KinematicWorld(World):
         state = self._movers[name].state() if name in self._movers else self._robot(name).state()
         if self._clearance and name in self._clearance:
             self._sync_all()
-            state.clearance, state.nearest = clearance_mod.nearest(
-                self._cid, self._robot(name).body, self._clearance[name],
-                [r.body for r in self._robots.values()], self.label, self._meshes)
+            state.clearance, state.nearest = self._nearest(name)
         if self._stage is not None:
             self._stage.social(self._robot(name), state, name in self._clearance)
         return state
