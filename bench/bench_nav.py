@@ -51,7 +51,7 @@ def main() -> None:
     for _ in range(max(3, args.repeat // 4)):
         body_shadows.cache_clear()
         occupancy._mask.cache_clear()  # noqa: SLF001 - timing the uncached path on purpose
-        dropoffs._kept.cache_clear()  # noqa: SLF001
+        dropoffs.edges.cache_clear()
         raycast.forget_kept()
         ms, blocked = cpu_ms(lambda: occupancy.drivable(world, grid).inflated(RADIUS))
         making.append(ms)

@@ -22,32 +22,24 @@ from mobot_cli.plan import WorldPlan
 DEPTH = 100.0  # m: no floor within this below a cell is no floor at all
 
 
+@functools.lru_cache(maxsize=8)  # a run's goals plan on the same world and grid again and again
 def edges(world: WorldPlan, grid: Grid, top: float, step: float) -> np.ndarray:
     """The cells of ``grid`` off the floor's edge (see the module's docstring), the floor looked
     for below ``top``; none where the static world cannot be cast at (a body PyBullet alone
-    knows, URDF text: its floor is unknown here, so no edge is made up)."""
-    try:
-        hash(world)
-    except TypeError:  # a world holding a list somewhere: not kept
-        return _edges(world, grid, top, step)
-    return _kept(world, grid, top, step)
-
-
-def _edges(world: WorldPlan, grid: Grid, top: float, step: float) -> np.ndarray:
+    knows, URDF text: its floor is unknown here, so no edge is made up). Cached: read-only."""
     heights = floor_heights(world, grid, top)
     if heights is None:
-        return grid.empty()
-    higher = np.full(heights.shape, -np.inf)  # the highest floor of the four neighbours
-    np.maximum(higher[1:, :], heights[:-1, :], out=higher[1:, :])
-    np.maximum(higher[:-1, :], heights[1:, :], out=higher[:-1, :])
-    np.maximum(higher[:, 1:], heights[:, :-1], out=higher[:, 1:])
-    np.maximum(higher[:, :-1], heights[:, 1:], out=higher[:, :-1])
-    void = ~np.isfinite(heights)
-    with np.errstate(invalid="ignore"):  # -inf - -inf between two cells of no floor: not a drop
-        return void | (higher - np.where(void, 0.0, heights) > step)
-
-
-_kept = functools.lru_cache(maxsize=8)(_edges)  # a run's goals plan on the same world and grid again
+        out = grid.empty()
+    else:
+        higher = np.full(heights.shape, -np.inf)  # the highest floor of the four neighbours
+        np.maximum(higher[1:, :], heights[:-1, :], out=higher[1:, :])
+        np.maximum(higher[:-1, :], heights[1:, :], out=higher[:-1, :])
+        np.maximum(higher[:, 1:], heights[:, :-1], out=higher[:, 1:])
+        np.maximum(higher[:, :-1], heights[:, 1:], out=higher[:, :-1])
+        with np.errstate(invalid="ignore"):  # -inf - -inf between two cells of no floor: not a drop
+            out = ~np.isfinite(heights) | (higher - heights > step)
+    out.flags.writeable = False
+    return out
 
 
 def floor_heights(world: WorldPlan, grid: Grid, top: float) -> np.ndarray | None:
