@@ -454,3 +454,16 @@ def test_many_missing_includes_make_one_warning(tmp_path, monkeypatch):
     few = world_file(tmp_path, "\n".join(includes[:2]) + box_model("crate"), name="few.world")
     notices = load_world(str(few), tmp_path, skip_missing=True).notices
     assert sum("include left out" in n for n in notices) == 2
+
+
+def test_an_entity_of_the_doctype_is_refused_not_read_as_nothing(tmp_path):
+    """Gazebo's SDF reader does not expand a DOCTYPE's entities; mobot's parser leaves them
+    unexpanded (no entity bombs, no files read through them), so a <size>&d; 1 1</size> read
+    as text would be a box of nothing, built as a default one: it is refused, naming the entity."""
+    world = tmp_path / "w.sdf"
+    world.write_text('<?xml version="1.0"?><!DOCTYPE sdf [<!ENTITY d "2">]>\n<sdf version="1.6"><world name="w">'
+                     '<model name="m"><static>true</static><link name="l"><collision name="c"><geometry><box>'
+                     '<size>&d; 1 1</size></box></geometry></collision></link></model></world></sdf>')
+    with pytest.raises(WorldError, match=r"the XML entity &d; is not expanded") as info:
+        load_world(str(world), tmp_path)
+    assert info.value.location.line == 2

@@ -138,6 +138,17 @@ def test_an_entity_bomb_behind_a_doctype_is_refused_as_sdf(live):
     assert "entity" in reply["message"]
 
 
+def test_sdf_text_with_an_entity_is_refused_not_spawned_as_a_default_box(live):
+    """An entity of the DOCTYPE is not expanded (as Gazebo's reader does not): refused, naming it."""
+    text = ('<?xml version="1.0"?><!DOCTYPE sdf [<!ENTITY d "0.3">]><sdf version="1.9"><model name="m"><link name="l">'
+            '<collision name="c"><geometry><box><size>&d; 1 1</size></box></geometry></collision></link></model></sdf>')
+    with live.client() as client:
+        reply = client.call("spawn", name="ent", urdf=text)
+        assert client.ping()["ok"]
+    assert reply["result"] == "RESOURCE_PARSE_ERROR", reply
+    assert "the XML entity &d; is not expanded" in reply["message"]
+
+
 def test_features_list_sdf(live):
     with live.client() as client:
         assert "sdf" in client.features()["spawn_formats"]

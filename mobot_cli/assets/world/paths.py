@@ -123,6 +123,11 @@ class SdfPaths:
         if expanded:  # lines of the expansion are not the file's: name none
             for element in root.iter():
                 element.sourceline = 0
+        entity = next(root.iter(etree.Entity), None)  # left unexpanded (resolve_entities=False)
+        if entity is not None:  # silently it would be no text: a <size> of nothing, a default box
+            raise WorldError(f"the XML entity {entity.text} is not expanded: Gazebo's SDF reader does not "
+                             "expand a DOCTYPE's entities", location=Location(file=path, line=entity.sourceline),
+                             hint="Write the value itself where the entity stands.")
         if root.tag != "sdf":
             raise WorldError(f"the root element is <{root.tag}>, not <sdf>",
                              location=Location(file=path, line=root.sourceline),
