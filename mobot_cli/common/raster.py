@@ -125,10 +125,16 @@ def fill_shapes(mask: np.ndarray, grid: Grid, shapes) -> None:
     for shape in shapes:
         if len(shape) > 3:
             fill_shape(mask, grid, shape)
-    if triangles:
-        _fill_triangles(mask, grid, np.asarray(triangles, dtype=float))
-    if segments:
-        _fill_segments(mask, grid, np.asarray(segments, dtype=float))
+    fill_arrays(mask, grid, np.asarray(triangles, dtype=float).reshape(-1, 3, 2),
+                np.asarray(segments, dtype=float).reshape(-1, 2, 2))
+
+
+def fill_arrays(mask: np.ndarray, grid: Grid, triangles: np.ndarray, segments: np.ndarray) -> None:
+    """``fill_shapes`` for triangles (n, 3, 2) and segments (m, 2, 2) held as arrays."""
+    if len(triangles):
+        _fill_triangles(mask, grid, triangles)
+    if len(segments):
+        _fill_segments(mask, grid, segments)
 
 
 def _spans(low: np.ndarray, high: np.ndarray, origin: float, cell: float, n: int):

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from PIL import Image, ImageDraw, ImageFont
 
-from mobot_cli.assets.world.floorplan import Polygon
+from mobot_cli.assets.world.floorplan import MeshShadow, Part
 from mobot_cli.common.files import write_bytes_atomic
 from mobot_cli.record.png import encode_rgb
 
@@ -53,7 +53,7 @@ class Track:
     swept: list[Swept] = field(default_factory=list)  # coverage: what its footprint swept
 
 
-def render(tracks: list[Track], floor: list[Polygon], out: Path, title: str, subtitle: str = "") -> None:
+def render(tracks: list[Track], floor: list[Part], out: Path, title: str, subtitle: str = "") -> None:
     """Draw the tracks over the floor plan and write the PNG atomically."""
     canvas = _Canvas(_bounds(tracks, floor))
     canvas.grid_and_axes(grid=True)
@@ -83,7 +83,7 @@ def render(tracks: list[Track], floor: list[Polygon], out: Path, title: str, sub
     write_bytes_atomic(out, png, durable=False)
 
 
-def placement(tracks: list[Track], floor: list[Polygon]):
+def placement(tracks: list[Track], floor: list[Part]):
     """Where a world point (x, y) lands in the picture ``render`` draws of these tracks and floor
     plan: a function to its pixel (x right, y down, of the saved image)."""
     canvas = _Canvas(_bounds(tracks, floor))
@@ -108,9 +108,15 @@ def _font(size: int):
         return ImageFont.load_default()
 
 
-def _bounds(tracks: list[Track], floor: list[Polygon]) -> tuple[float, float, float, float]:
+def _bounds(tracks: list[Track], floor: list[Part]) -> tuple[float, float, float, float]:
     areas = [p for t in tracks for s in t.swept for p in s.area]
-    points = [p for t in tracks for p in (*t.true, *t.odom, *t.scan)] + [p for poly in floor for p in poly] + areas
+    polygons = [part for part in floor if not isinstance(part, MeshShadow)]
+    points = [p for t in tracks for p in (*t.true, *t.odom, *t.scan)] + [p for poly in polygons for p in poly] + areas
+    for mesh in (part for part in floor if isinstance(part, MeshShadow)):
+        for shapes in (mesh.triangles, mesh.segments):
+            if len(shapes):  # its box's corners: the same extremes
+                points += [(float(shapes[:, :, 0].min()), float(shapes[:, :, 1].min())),
+                           (float(shapes[:, :, 0].max()), float(shapes[:, :, 1].max()))]
     xs = [p[0] for p in points]
     ys = [p[1] for p in points]
     if not xs:
@@ -183,15 +189,35 @@ class _Canvas:
         tile = tile.rotate(90, expand=True)
         self.image.paste(INK, (int(centre[0] * SS - tile.width / 2), int(centre[1] * SS - tile.height / 2)), tile)
 
-    def floor(self, polygons: list[Polygon]) -> None:
-        outline = len(polygons) < 2000  # a mesh's triangles are filled only: edges would be noise
-        for poly in polygons:
-            points = [self.px(p) for p in poly]
+    def floor(self, parts: list[Part]) -> None:
+        shapes = sum(len(part) if isinstance(part, MeshShadow) else 1 for part in parts)
+        outline = shapes < 2000  # a mesh's triangles are filled only: edges would be noise
+        for part in parts:
+            if isinstance(part, MeshShadow):
+                self._mesh(part, outline)
+                continue
+            points = [self.px(p) for p in part]
             if len(points) == 2:  # an upright face seen edge-on
                 self.draw.line(points, fill=FLOOR_EDGE, width=2 * SS)
             else:
                 self.draw.polygon(points, fill=FLOOR, outline=FLOOR_EDGE if outline else None,
                                   width=SS if outline else 0)
+
+    def _mesh(self, shadow: MeshShadow, outline: bool) -> None:
+        """A mesh's shadow: its triangles filled, then its faces seen edge-on as lines."""
+        for xy in self._pixels(shadow.triangles):
+            self.draw.polygon(xy, fill=FLOOR, outline=FLOOR_EDGE if outline else None, width=SS if outline else 0)
+        for xy in self._pixels(shadow.segments):
+            self.draw.line(xy, fill=FLOOR_EDGE, width=2 * SS)
+
+    def _pixels(self, shapes) -> list[list[float]]:
+        """``px`` of every corner of ``shapes`` (numpy (n, corners, 2)) at once, the same
+        arithmetic: each shape as a flat [x, y, x, y, ...] list."""
+        x = (self.box[0] + (shapes[:, :, 0] - self.x0) * self.scale) * SS
+        y = (self.box[3] - (shapes[:, :, 1] - self.y0) * self.scale) * SS
+        flat = shapes.copy()
+        flat[:, :, 0], flat[:, :, 1] = x, y
+        return flat.reshape(len(shapes), 2 * shapes.shape[1]).tolist()
 
     def swept(self, swept: Swept, color) -> None:
         """The swept cells, tinted in the robot's colour, and the area's outline."""

@@ -132,7 +132,7 @@ def preload() -> None:
 def draw(tracks: list[Drawn], world: WorldPlan | None, out: Path, title: str, subtitle: str) -> None:
     """Render ``tracks`` over ``world``'s floor plan to ``out``; the plan's height band is measured
     from the floor where the tracks start."""
-    from mobot_cli.assets.world.floorplan import floor_plan
+    from mobot_cli.assets.world.floorplan import floor_parts
     from mobot_cli.record.render import Swept, Track, render
 
     labels = [t.label for t in tracks]
@@ -140,7 +140,7 @@ def draw(tracks: list[Drawn], world: WorldPlan | None, out: Path, title: str, su
                          [Swept(x0, y0, cell, covered, list(area)) for x0, y0, cell, covered, area in t.swept])
                    for i, t in enumerate(tracks)]
     starts = [(*t.true[0], t.start_z) for t in tracks if t.true and t.start_z is not None]
-    render(plot_tracks, floor_plan(world, starts) if world is not None else [], out, title, subtitle)
+    render(plot_tracks, floor_parts(world, starts) if world is not None else [], out, title, subtitle)
 
 
 def _unique(label: str, before: list[str]) -> str:

@@ -3,7 +3,8 @@
 - a COLLADA/OBJ mesh with exporter debris 1e17 m away (chaolmu's pot_flower in office_env_large)
 - walls of a mesh that lean by micrometres (chaolmu's cpr_office): a gap on the map
 - a dense furniture mesh near a robot (chaolmu's office_small): PyBullet's closest-point answer
-  overflowed and the process crashed
+  overflowed and the process crashed; and its 50,000-triangle cups on a table, answered a point
+  per triangle at every clearance read once within the radius asked, took 0.29x real time
 - a floor plan of a million small triangles (office_small, office_env_large): minutes to map
 """
 
@@ -194,6 +195,64 @@ def test_a_static_triangle_mesh_is_asked_about_link_by_link(tmp_path, monkeypatc
     assert about_meshes and all(about_meshes)
 
 
+def _blob(n: int, half: float) -> str:
+    """An upright square of side 2 ``half`` at x = 0, 0.18-0.22 m up, of 2 n^2 triangles."""
+    g = np.linspace(-half, half, n + 1)
+    vertices = [(0.0, y, 0.2 + z) for z in g for y in g]
+    faces = []
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i
+            faces += [(a, a + 1, a + n + 2), (a, a + n + 2, a + n + 1)]
+    return obj(vertices, faces)
+
+
+@pytest.mark.parametrize("blob_x, nearest", [(-0.6, "wall"), (-0.35, "blob")])
+def test_a_dense_mesh_further_than_the_nearest_point_is_not_asked_for_its_triangles(
+        tmp_path, monkeypatch, blob_x, nearest):
+    """A 20,000-triangle blob 0.40 m behind the robot, a plain wall 0.399 m ahead: the blob lies
+    within the radius that finds the wall (0.57 m), and was answered a point per triangle (40,000
+    points, at every read). Asked nearest box first and only within the nearest point found, it
+    costs nothing; moved nearer than the wall, it is the answer."""
+    from mobot_cli.scenario.prepare import prepare
+    from mobot_cli.sim import clearance
+    from mobot_cli.sim.engine import open_world
+    from mobot_cli.sim.pb import p
+
+    (tmp_path / "wall.obj").write_text(_plate(2))
+    (tmp_path / "blob.obj").write_text(_blob(100, 0.02))
+    models = "".join(
+        f"<model name='{name}'><static>true</static><pose>{x} 0 0 0 0 0</pose><link name='l'><collision name='c'>"
+        f"<geometry><mesh><uri>{name}.obj</uri></mesh></geometry></collision></link></model>"
+        for name, x in (("wall", 0.5), ("blob", blob_x)))
+    (tmp_path / "w.sdf").write_text("<?xml version='1.0'?><sdf version='1.9'><world name='w'>"
+                                    f"<include><uri>model://ground_plane</uri></include>{models}</world></sdf>")
+    (tmp_path / "s.yaml").write_text("version: 1\nworld: w.sdf\nduration: 0.2\nrobots:\n"
+                                     "  - {name: mobot, description: mobot, pose: {x: 0.0, y: 0.0}}\n")
+    plan = prepare(tmp_path / "s.yaml").plan
+    answered: dict[int, int] = {}
+    real = p.getClosestPoints
+
+    def spy(a, b, radius, **kwargs):
+        points = real(a, b, radius, **kwargs)
+        answered[b] = answered.get(b, 0) + len(points or ())
+        return points
+
+    with open_world(plan.physics, plan.world) as world:
+        world.spawn(plan.robots[0])
+        body, meshes = world._robots["mobot"].body, world._meshes  # noqa: SLF001 - the world's own bookkeeping
+        blob = next(uid for uid in meshes if "'blob'" in world.label(uid))
+        cid = world._cid  # noqa: SLF001
+        exact = {world.label(uid).split("'")[1]: min(point[8] for link in range(-1, p.getNumJoints(body, physicsClientId=cid))
+                                                     for point in real(body, uid, 2.0, linkIndexA=link, physicsClientId=cid))
+                 for uid in meshes}  # every triangle within 2 m, link by link
+        monkeypatch.setattr(p, "getClosestPoints", spy)
+        found, what = clearance.nearest(cid, body, 2.0, [], world.label, meshes)
+    assert exact["wall"] == pytest.approx(0.399) and (exact["blob"] < exact["wall"]) == (nearest == "blob")
+    assert f"'{nearest}'" in what and found == exact[nearest]
+    assert (answered.get(blob, 0) == 0) == (nearest == "wall")
+
+
 # --- the same cells and triangles, faster ------------------------------------------------
 
 point = st.tuples(st.floats(-1.5, 1.8, allow_nan=False), st.floats(-1.5, 1.8, allow_nan=False))
@@ -210,6 +269,28 @@ def test_fill_shapes_sets_the_cells_fill_shape_sets(shapes):
         fill_shape(one, grid, polygon)
     fill_shapes(many, grid, shapes)
     assert (one == many).all()
+
+
+triangle = st.lists(st.one_of(point, snapped), min_size=3, max_size=3)
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.lists(triangle, min_size=1, max_size=30), st.one_of(point, snapped))
+def test_a_point_in_a_mesh_shadows_triangles_is_in_one_of_its_polygons(triangles, xy):
+    """obstacle_at reads a mesh's shadow as an array of triangles: the same answer as the
+    even-odd test of each triangle as a polygon, on their edges and corners too."""
+    from mobot_cli.assets.world.floorplan import MeshShadow
+    from mobot_cli.assets.world.freespace import _holds
+    from mobot_cli.common.polygon import contains
+
+    shadow = MeshShadow(np.array(triangles, dtype=float), np.zeros((0, 2, 2)))
+    one_by_one = any(_holds(polygon, *xy) for polygon in shadow.polygons())
+    assert _holds(shadow, *xy) == one_by_one == any(contains(t, *xy) for t in triangles if _boxed(t, *xy))
+
+
+def _boxed(polygon, x, y) -> bool:
+    return min(p[0] for p in polygon) <= x <= max(p[0] for p in polygon) and \
+        min(p[1] for p in polygon) <= y <= max(p[1] for p in polygon)
 
 
 @settings(max_examples=40, deadline=None)

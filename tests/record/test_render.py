@@ -12,7 +12,7 @@ from dataclasses import astuple
 import pytest
 from PIL import Image
 
-from mobot_cli.assets.world.floorplan import BAND, convex_hull, floor_plan
+from mobot_cli.assets.world.floorplan import BAND, MeshShadow, convex_hull, floor_parts, floor_plan
 from mobot_cli.cli import CommandResult, invoke
 from mobot_cli.plan import StaticBody, StaticShape, WorldPlan
 from mobot_cli.record.render import FLOOR, PALETTE, Track, dash_runs, nice_step, render
@@ -88,6 +88,35 @@ def test_floor_plan_projects_collision_shapes_from_above(tmp_path):
     assert (min(y for _, y in log), max(y for _, y in log)) == pytest.approx((2.5, 3.5))
     assert len(segments) == 8 and all(-3.0 <= y <= -2.9 for s in segments for _, y in s)  # the wall's sides
     assert BAND == (0.02, 2.0)
+
+
+@pytest.mark.parametrize("n", [6, 40])  # 144 triangles drawn with outlines; 6,400 filled only
+def test_a_meshs_shadow_kept_as_arrays_draws_the_pixels_of_its_polygons(tmp_path, n):
+    """trajectory.png draws meshes' shadows from arrays (a furnished office casts 800,000
+    triangles): pixel for pixel the picture of the same shadow as a list of polygons."""
+    import numpy as np
+
+    grid = np.linspace(0.0, 2.0, n + 1)
+    vertices = [(x, y, 0.5 * (x + y)) for y in grid for x in grid]  # a slope: no face is upright
+    faces = [(j * (n + 1) + i, j * (n + 1) + i + 1, (j + 1) * (n + 1) + i + 1) for j in range(n) for i in range(n)]
+    faces += [(a, c, c - 1) for a, _, c in faces]
+    wall = [(3.0, 0.0, 0.0), (3.0, 2.0, 0.0), (3.0, 2.0, 1.0), (3.0, 0.0, 1.0)]  # upright: drawn as a line
+    mesh = tmp_path / "m.obj"
+    mesh.write_text("".join(f"v {x} {y} {z}\n" for x, y, z in vertices + wall) +
+                    "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces) +
+                    f"f {len(vertices) + 1} {len(vertices) + 2} {len(vertices) + 3}\n")
+    world = WorldPlan(bodies=(
+        StaticBody(name="box", shapes=(StaticShape("box", (0.5, 0.5, 0.5), xyz=(-1, 0, 0.25)),)),
+        StaticBody(name="slope", xyz=(0.2, 0.1, 0.0), shapes=(StaticShape("mesh", (1.0, 1.0, 1.0), mesh=str(mesh)),)),
+    ))
+    parts = floor_parts(world)
+    shadow = next(part for part in parts if isinstance(part, MeshShadow))
+    assert len(shadow.triangles) == 2 * n * n and len(shadow.segments) == 1
+    tracks = [Track("a", [(0, 0), (1, 0)], [(0, 0), (1, 0.1)])]
+    render(tracks, parts, tmp_path / "arrays.png", "t")
+    render(tracks, floor_plan(world), tmp_path / "polygons.png", "t")
+    assert (tmp_path / "arrays.png").read_bytes() == (tmp_path / "polygons.png").read_bytes()
+    assert color_pixels(Image.open(tmp_path / "arrays.png").convert("RGB"), FLOOR, tol=2) > 20_000
 
 
 def test_floor_plan_is_drawn_under_the_paths(tmp_path):

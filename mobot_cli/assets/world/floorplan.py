@@ -13,6 +13,7 @@ from __future__ import annotations
 import functools
 import math
 import xml.etree.ElementTree as ET
+from dataclasses import dataclass
 
 from mobot_cli.assets.description.frames import LinkTree, floats, origin_frame
 from mobot_cli.common.transforms import Quat, Vec, compose_poses, pose_point, quat_from_matrix, quat_matrix
@@ -20,6 +21,26 @@ from mobot_cli.plan import StaticShape, WorldPlan
 
 Point = tuple[float, float]
 Polygon = list[Point]
+
+
+@dataclass(frozen=True, eq=False)
+class MeshShadow:
+    """A mesh's shadow as arrays, not polygons: a furnished world's meshes cast a million
+    triangles, and Python lists of each one's points took seconds to make and to read."""
+
+    triangles: object  # numpy (n, 3 corners, xy), read-only: the shadows of its faces
+    segments: object  # numpy (m, 2 ends, xy), read-only: its upright faces seen edge-on
+
+    def polygons(self) -> list[Polygon]:
+        """The same shadow as polygons: triangles, then segments."""
+        return [[tuple(p) for p in shape] for shape in self.triangles.tolist() + self.segments.tolist()]
+
+    def __len__(self) -> int:
+        """The shapes it holds."""
+        return len(self.triangles) + len(self.segments)
+
+
+Part = Polygon | MeshShadow  # what a shadow is made of
 
 BAND = (0.02, 2.0)  # metres above the floor: lower is floor, higher is ceiling
 ROUND = 24  # points on a projected circle
@@ -29,21 +50,28 @@ SLIVER = 1e-3  # m: a triangle's shadow thinner than this is drawn as its longes
 def floor_plan(world: WorldPlan, starts: list[tuple[float, float, float]] = ()) -> list[Polygon]:
     """Every static body's shadow in the band above the floor under ``starts`` (each robot's
     root link x, y, z where it started; the band is measured from z = 0 without them)."""
+    return [polygon for part in floor_parts(world, starts)
+            for polygon in (part.polygons() if isinstance(part, MeshShadow) else [part])]
+
+
+def floor_parts(world: WorldPlan, starts: list[tuple[float, float, float]] = ()) -> list[Part]:
+    """``floor_plan`` with meshes' shadows kept as arrays (what trajectory.png draws)."""
     from mobot_cli.assets.world.floorlevel import floor_level
 
     floor = floor_level(world, list(starts), body_shapes) if starts else 0.0
     band = (floor + BAND[0], floor + BAND[1])
-    return [polygon for _, polygons in body_shadows(world, band) for polygon in polygons]
+    return [part for _, parts in body_shadows(world, band) for part in parts]
 
 
 @functools.lru_cache(maxsize=4)  # a run plans its goals, checks coverage and draws the same world
-def body_shadows(world: WorldPlan, band: tuple[float, float] = BAND) -> tuple[tuple[str, tuple[Polygon, ...]], ...]:
-    """Each static body that reaches into the band: how messages name it, and its shadow.
+def body_shadows(world: WorldPlan, band: tuple[float, float] = BAND) -> tuple[tuple[str, tuple[Part, ...]], ...]:
+    """Each static body that reaches into the band: how messages name it, and its shadow
+    (polygons, and its meshes' shadows as arrays).
 
-    Cached: treat the polygons as read-only."""
+    Cached: treat the polygons and arrays as read-only."""
     out = []
     for body in world.bodies:
-        polygons: list[Polygon] = []
+        polygons: list[Part] = []
         for shape in body_shapes(body):
             xyz, quat = compose_poses((body.xyz, body.quat), (shape.xyz, shape.quat))
             polygons.extend(shape_shadow(shape, xyz, quat, band))
@@ -58,7 +86,7 @@ def body_shapes(body) -> list[StaticShape]:
 
 
 def shape_shadow(shape: StaticShape, xyz: Vec, quat: Quat,
-                 band: tuple[float, float] = BAND) -> list[Polygon]:
+                 band: tuple[float, float] = BAND) -> list[Part]:
     """The shadow of one shape posed in the world (none when it lies outside the band)."""
     if shape.kind == "mesh":
         return _mesh_shadow(shape.mesh, shape.size, xyz, quat, band)
@@ -87,7 +115,7 @@ def _outline_points(kind: str, size: tuple[float, ...]) -> list[Vec]:
 
 
 def _mesh_shadow(path: str, scale: tuple[float, ...], xyz: Vec, quat: Quat,
-                 band: tuple[float, float]) -> list[Polygon]:
+                 band: tuple[float, float]) -> list[MeshShadow]:
     import numpy as np
 
     from mobot_cli.common.meshfile import read_mesh
@@ -108,14 +136,15 @@ def _mesh_shadow(path: str, scale: tuple[float, ...], xyz: Vec, quat: Quat,
     # within SLIVER of upright (exported walls lean by a few micrometres), whose shadow is
     # too thin to hold a cell's centre
     flat = (area > 1e-6) & (area > SLIVER * sides.max(axis=1, initial=0.0))
-    out = [[(x0, y0), (x1, y1), (x2, y2)] for (x0, y0), (x1, y1), (x2, y2) in tri[flat].tolist()]
     edge_on = tri[~flat]
     ends = np.stack([edge_on, np.roll(edge_on, -1, axis=1)], axis=2)  # (n, 3 edges, 2 ends, xy)
     length = np.hypot(*(ends[:, :, 1] - ends[:, :, 0]).transpose(2, 0, 1))
     longest = ends[np.arange(len(ends)), length.argmax(axis=1)] if len(ends) else ends[:, 0]
     longest = longest[length.max(axis=1) > 1e-3] if len(ends) else longest
-    out += [[(x0, y0), (x1, y1)] for (x0, y0), (x1, y1) in longest.tolist()]
-    return out
+    shadow = MeshShadow(tri[flat], longest)
+    for array in (shadow.triangles, shadow.segments):
+        array.flags.writeable = False  # kept by body_shadows' cache
+    return [shadow] if len(shadow) else []
 
 
 def _urdf_shapes(urdf: str) -> list[StaticShape]:

@@ -11,9 +11,9 @@ import functools
 
 import numpy as np
 
-from mobot_cli.assets.world.floorplan import BAND, body_shadows, body_shapes, shape_shadow
+from mobot_cli.assets.world.floorplan import BAND, MeshShadow, body_shadows, body_shapes, shape_shadow
 from mobot_cli.common.polygon import contains
-from mobot_cli.common.raster import Grid, fill_shapes
+from mobot_cli.common.raster import Grid, fill_arrays, fill_shapes
 from mobot_cli.common.transforms import compose_poses
 from mobot_cli.plan import WorldPlan
 from mobot_cli.sim.parts import describe
@@ -49,8 +49,8 @@ def obstacle_at(world: WorldPlan, x: float, y: float) -> str | None:
     """How messages name the static body whose shadow holds (x, y), and which of its collisions
     (see sim/parts.py), or None in free space; the band above the probed floor."""
     band = ground_band(world)
-    for label, polygons in body_shadows(world, band):
-        if any(_holds(polygon, x, y) for polygon in polygons):
+    for label, parts in body_shadows(world, band):
+        if any(_holds(part, x, y) for part in parts):
             return label + _part(world, label, x, y, band)
     return None
 
@@ -69,8 +69,24 @@ def _part(world: WorldPlan, label: str, x: float, y: float, band: tuple[float, f
     return ""
 
 
-def _holds(polygon, x: float, y: float) -> bool:
-    return len(polygon) >= 3 and _near_box(polygon, x, y) and contains(polygon, x, y)
+def _holds(part, x: float, y: float) -> bool:
+    if isinstance(part, MeshShadow):
+        return _in_triangles(part.triangles, x, y)
+    return len(part) >= 3 and _near_box(part, x, y) and contains(part, x, y)
+
+
+def _in_triangles(triangles: np.ndarray, x: float, y: float) -> bool:
+    """Whether (x, y) lies in one of the triangles (n, 3, 2): ``contains``, for arrays."""
+    xs, ys = triangles[:, :, 0], triangles[:, :, 1]
+    near = triangles[(xs.min(axis=1) <= x) & (x <= xs.max(axis=1)) & (ys.min(axis=1) <= y) & (y <= ys.max(axis=1))]
+    if not len(near):
+        return False
+    a, b = near, np.roll(near, -1, axis=1)  # each corner and the next: the edges
+    ya, yb = a[:, :, 1], b[:, :, 1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        right = x < a[:, :, 0] + (y - ya) * (b[:, :, 0] - a[:, :, 0]) / (yb - ya)
+    crossings = (((ya > y) != (yb > y)) & right).sum(axis=1)  # edges crossed to the right of it
+    return bool((crossings % 2 == 1).any())
 
 
 def obstacle_mask(world: WorldPlan, grid: Grid, band: tuple[float, float] | None = None) -> np.ndarray:
@@ -79,14 +95,27 @@ def obstacle_mask(world: WorldPlan, grid: Grid, band: tuple[float, float] | None
     band = band or ground_band(world)
     mask = grid.empty()
     xmax, ymax = grid.x0 + grid.nx * grid.cell, grid.y0 + grid.ny * grid.cell
-    shapes = []
-    for _, polygons in body_shadows(world, band):
-        for shape in polygons:
+    shapes, triangles, segments = [], [], []
+    for _, parts in body_shadows(world, band):
+        for shape in parts:
+            if isinstance(shape, MeshShadow):
+                triangles.append(shape.triangles)
+                segments.append(shape.segments)
+                continue
             xs, ys = [p[0] for p in shape], [p[1] for p in shape]
             if max(xs) >= grid.x0 and min(xs) <= xmax and max(ys) >= grid.y0 and min(ys) <= ymax:
                 shapes.append(shape)
     fill_shapes(mask, grid, shapes)
+    within = [_within(np.concatenate(arrays) if arrays else np.zeros((0, n, 2)), grid.x0, xmax, grid.y0, ymax)
+              for arrays, n in ((triangles, 3), (segments, 2))]
+    fill_arrays(mask, grid, *within)
     return mask
+
+
+def _within(shapes: np.ndarray, x0: float, x1: float, y0: float, y1: float) -> np.ndarray:
+    """The shapes (n, corners, 2) whose bounding boxes meet the box x0..x1, y0..y1."""
+    xs, ys = shapes[:, :, 0], shapes[:, :, 1]
+    return shapes[(xs.max(axis=1) >= x0) & (xs.min(axis=1) <= x1) & (ys.max(axis=1) >= y0) & (ys.min(axis=1) <= y1)]
 
 
 def _near_box(polygon, x: float, y: float) -> bool:

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mobot_cli.assets.world.floorplan import BAND, body_shadows, body_shapes
+from mobot_cli.assets.world.floorplan import BAND, MeshShadow, body_shadows, body_shapes
 from mobot_cli.assets.world.freespace import obstacle_mask, probed_floor
 from mobot_cli.common.raster import Grid, dilate
 from mobot_cli.plan import WorldPlan
@@ -55,10 +55,20 @@ def floor_under(world: WorldPlan, starts: list[tuple[float, float, float]]) -> f
 
 def world_bounds(world: WorldPlan, band: tuple[float, float]) -> tuple[float, float, float, float] | None:
     """xmin, xmax, ymin, ymax of the static geometry in ``band`` (absolute heights), or None."""
-    points = [p for _, polygons in body_shadows(world, band) for poly in polygons for p in poly]
-    if not points:
+    xs: list[float] = []
+    ys: list[float] = []
+    for _, parts in body_shadows(world, band):
+        for part in parts:
+            if not isinstance(part, MeshShadow):
+                xs.extend(p[0] for p in part)
+                ys.extend(p[1] for p in part)
+                continue
+            for shapes in (part.triangles, part.segments):
+                if len(shapes):
+                    xs += [float(shapes[:, :, 0].min()), float(shapes[:, :, 0].max())]
+                    ys += [float(shapes[:, :, 1].min()), float(shapes[:, :, 1].max())]
+    if not xs:
         return None
-    xs, ys = [p[0] for p in points], [p[1] for p in points]
     return min(xs), max(xs), min(ys), max(ys)
 
 
