@@ -4,7 +4,10 @@
 1. scenarios/house_patrol.yaml (the bundled robot with its 180-beam lidar at 5 Hz, a patrol
    through the house's doorway, 28 simulated s) as it is (pure pursuit) and with ``local: dwb``
    on its goal, interleaved, medians of --repeat: wall and CPU ratios. The two runs drive
-   slightly different paths, so this is the cost of a whole run, not of the same motion.
+   slightly different paths, so this is the cost of a whole run, not of the same motion. Within
+   the dwb runs, the CPU of the controller's ticks (timeline/goals.py ``Driver._avoid``: the
+   points and path put in the robot's frame, then ``Dwb.command``) and of reading each scan as it
+   comes (``Driver.see``) is counted apart (median of the runs).
 2. One control tick of the controller alone, on a scan of the house taken in the living room:
    microseconds per call, with the path clear and with the path blocked (the wavefront).
 
@@ -31,6 +34,7 @@ from common import timed  # noqa: E402  (bench/common.py)
 from mobot_cli.plan import GoalControl, GoalStep  # noqa: E402
 from mobot_cli.run import execute  # noqa: E402
 from mobot_cli.scenario.prepare import prepare  # noqa: E402
+from mobot_cli.timeline.goals import Driver  # noqa: E402
 from mobot_cli.timeline.local import Dwb  # noqa: E402
 
 
@@ -41,14 +45,43 @@ def with_local(plan):
     return replace(plan, robots=(replace(robot, commands=commands),))
 
 
+class Counted:
+    """CPU seconds and calls of a Driver method, counted while installed (``with``)."""
+
+    def __init__(self, name: str):
+        self.name, self.seconds, self.calls = name, 0.0, 0
+
+    def __enter__(self):
+        self.real = real = getattr(Driver, self.name)
+
+        def counted(driver, *args):
+            started = time.process_time()
+            try:
+                return real(driver, *args)
+            finally:
+                self.seconds += time.process_time() - started
+                self.calls += 1
+        setattr(Driver, self.name, counted)
+        return self
+
+    def __exit__(self, *exc):
+        setattr(Driver, self.name, self.real)
+
+
 def whole_runs(repeat: int, work: Path) -> None:
     prepared = prepare(REPO / "scenarios" / "house_patrol.yaml")
     plans = {"pursuit": prepared.plan, "local: dwb": with_local(prepared.plan)}
     results = {name: [] for name in plans}
+    parts: list[tuple[Counted, Counted]] = []
     load = os.getloadavg()[0]
     for i in range(repeat):
         for name, plan in plans.items():
-            results[name].append(timed(execute, plan, prepared.resolved_yaml, work / f"run-{i}-{len(name)}"))
+            if name == "pursuit":
+                results[name].append(timed(execute, plan, prepared.resolved_yaml, work / f"run-{i}-{len(name)}"))
+                continue
+            with Counted("_avoid") as ticks, Counted("see") as scans:
+                results[name].append(timed(execute, plan, prepared.resolved_yaml, work / f"run-{i}-{len(name)}"))
+            parts.append((ticks, scans))
     base_wall = statistics.median(w for w, _ in results["pursuit"])
     base_cpu = statistics.median(c for _, c in results["pursuit"])
     for name, values in results.items():
@@ -59,6 +92,11 @@ def whole_runs(repeat: int, work: Path) -> None:
     print(f"  dwb / pursuit, CPU, run by run: median x{statistics.median(pairs):5.3f}, all "
           f"x{pairs[0]:5.3f}-x{pairs[-1]:5.3f} ({len(pairs)} pairs; load average {load:.1f} before, "
           f"{os.getloadavg()[0]:.1f} after)")
+    ticks = statistics.median(t.seconds for t, _ in parts)
+    calls = parts[0][0].calls
+    print(f"  within the dwb runs: the controller's ticks {ticks:.3f} s CPU ({calls} ticks, "
+          f"{1e6 * ticks / calls:.0f} us a tick in the run), reading the scans "
+          f"{statistics.median(s.seconds for _, s in parts):.3f} s ({parts[0][1].calls} scans)")
 
 
 def one_tick(calls: int = 400) -> None:
@@ -86,7 +124,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="mobot-bench-local-") as work:
         print("house_patrol.yaml, 28 simulated s, pursuit against local: dwb:")
         whole_runs(args.repeat, Path(work))
-    print("the controller alone (20 ticks a simulated second):")
+    print("the controller alone, one tick called over and over on a made-up scan (its caches warm):")
     one_tick()
 
 
