@@ -235,6 +235,7 @@ class RobotPlan:
     source: str = ""  # the description file, for messages
     sensors: tuple[SensorSpec, ...] = ()
     footprint: tuple[float, float, float, float] | None = None  # xmin, xmax, ymin, ymax in its root frame
+    heights: tuple[float, float] | None = None  # its collision geometry's lowest and highest z, root frame
     holds: tuple[JointHold, ...] = ()  # springs and held joints (sim/bullet/joints.py)
 
 

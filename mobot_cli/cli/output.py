@@ -154,7 +154,8 @@ def inspect_tree(env: Environment, summary: dict[str, Any]) -> None:
     wide.print(tree)
     fp = summary["footprint"]
     console.print(f"total mass {summary['total_mass']:.3f} kg; footprint {fp['length']:.3f} x {fp['width']:.3f} m "
-                  f"(x {fp['xmin']:.3f}..{fp['xmax']:.3f}, y {fp['ymin']:.3f}..{fp['ymax']:.3f})")
+                  f"(x {fp['xmin']:.3f}..{fp['xmax']:.3f}, y {fp['ymin']:.3f}..{fp['ymax']:.3f}, "
+                  f"z {summary['bottom_z']:.3f}..{summary['top_z']:.3f})")
     drive = summary["drive"]
     if drive is None and summary.get("refused_drive"):
         console.print(f"drive: mobot cannot drive its {summary['refused_drive']}: a passive body")

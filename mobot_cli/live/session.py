@@ -247,7 +247,7 @@ class Session:
             state = self.world.read(name)
             robots.append({"name": name, "namespace": self.robots[name].namespace,
                            "pose": spawning.pose_fields(state), "has_drive": self.world.has_drive(name),
-                           "cmd": self._cmd_fields(name, state)})
+                           "cmd": self._cmd_fields(name, state), "bounds": _bounds(self.robots[name])})
         return protocol.reply(request_id, step=self.step, t=self.step / self.rate_hz, robots=robots)
 
     def odometry(self, request_id: Any, name: str) -> dict[str, Any]:
@@ -317,3 +317,12 @@ def _healthy(world: World, name: str) -> bool:
     state = world.read(name)
     values = (state.true_x, state.true_y, state.true_z)
     return all(math.isfinite(v) for v in values) and state.true_z > FLOOR_OF_THE_WORLD
+
+
+def _bounds(robot) -> dict[str, list[float]] | None:
+    """The box round a robot's collision geometry in its root link's frame (joints at zero), or
+    None when its plan does not say."""
+    if robot.footprint is None or robot.heights is None:
+        return None
+    (xmin, xmax, ymin, ymax), (zmin, zmax) = robot.footprint, robot.heights
+    return {"min": [xmin, ymin, zmin], "max": [xmax, ymax, zmax]}

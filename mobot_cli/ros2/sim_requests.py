@@ -19,7 +19,7 @@ from mobot_cli.live.protocol import Refusal, Result
 # simulation_interfaces/msg/SimulatorFeatures: what works here, no more.
 FEATURES = {
     "SPAWNING": 0, "DELETING": 1, "SPAWNING_RESOURCE_STRING": 9, "ENTITY_STATE_GETTING": 10,
-    "ENTITY_STATE_SETTING": 11, "ENTITY_INFO_GETTING": 12, "SPAWNABLES": 14, "SIMULATION_RESET": 20,
+    "ENTITY_BOUNDS": 5, "ENTITY_STATE_SETTING": 11, "ENTITY_INFO_GETTING": 12, "SPAWNABLES": 14, "SIMULATION_RESET": 20,
     "SIMULATION_STATE_GETTING": 24,
     "SIMULATION_STATE_SETTING": 25, "SIMULATION_STATE_PAUSE": 26, "STEP_SIMULATION_SINGLE": 31,
     "STEP_SIMULATION_MULTIPLE": 32, "STEP_SIMULATION_ACTION": 33,
@@ -35,7 +35,7 @@ ALREADY_IN_TARGET_STATE = 101  # SetSimulationState's
 STATE_STOPPED, STATE_PLAYING, STATE_PAUSED, STATE_QUITTING = 0, 1, 2, 3
 SCOPE_DEFAULT, SCOPE_ALL = 0, 255
 CATEGORY_ROBOT = 1
-BOUNDS_EMPTY = 0
+BOUNDS_EMPTY, BOUNDS_BOX = 0, 1
 MAX_FILTER = 256  # characters of a GetEntities name filter
 # Matching can take exponential time when a quantified group holds a quantifier or an alternation
 # ((a+)+, (a|aa)*, ((a+))+); a name filter comes from anyone on the domain, so a pattern with a

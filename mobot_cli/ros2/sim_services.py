@@ -109,7 +109,7 @@ class SimulationServices:
                 "set_entity_state": self._set_state, "get_simulation_state": self._simulation_state,
                 "set_simulation_state": self._set_simulation_state, "step_simulation": self._step,
                 "reset_simulation": self._reset, "get_entity_info": self._entity_info,
-                "get_spawnables": self._spawnables}
+                "get_entity_bounds": self._entity_bounds, "get_spawnables": self._spawnables}
 
     def _wrap(self, service: str, handler: Callable[[Any, Any], Any]) -> Callable[[Any, Any], Any]:
         """A service callback: a refusal or any failure becomes the response's Result, never an exception."""
@@ -201,6 +201,24 @@ class SimulationServices:
             response.info.category.category = self.msg.EntityCategory.CATEGORY_ROBOT
             response.info.description = f"a robot in namespace {robot['namespace']}" + \
                 ("" if robot["has_drive"] else " (no drive: it does not take cmd_vel)")
+        return reply
+
+    def _entity_bounds(self, client: Client, request, response):
+        """TYPE_BOX round the robot's collision geometry in its root link's frame, joints at
+        zero: points[0] the upper corner, points[1] the lower one, as Bounds.msg lists them."""
+        reply = client.call("list")
+        if not reply.get("ok"):
+            return reply
+        robot = next((r for r in reply["robots"] if r["name"] == request.entity), None)
+        if robot is None:
+            return sr.refused(sr.NOT_FOUND, f"no robot named '{request.entity}' in the world")
+        if robot.get("bounds") is None:
+            return sr.refused(Result.OPERATION_FAILED, f"the collision geometry of '{request.entity}' is not known")
+        from geometry_msgs.msg import Vector3
+
+        response.bounds.type = sr.BOUNDS_BOX
+        response.bounds.points = [Vector3(x=float(x), y=float(y), z=float(z))
+                                  for x, y, z in (robot["bounds"]["max"], robot["bounds"]["min"])]
         return reply
 
     def _spawnables(self, client: Client, request, response):

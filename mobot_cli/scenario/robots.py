@@ -94,7 +94,7 @@ class RobotResolver:
                                  urdf=desc.urdf, root_link=desc.root_link, pose=pose, drive=drive,
                                  commands=commands, spawn_step=spawn_step, source=str(desc.source),
                                  sensors=sensors, footprint=tuple(desc.footprint),
-                                 holds=desc.holds))
+                                 heights=(desc.bottom_z, desc.top_z), holds=desc.holds))
         return out
 
     def check_local(self, spec: RobotSpec, path: tuple, commands, sensors) -> None:

@@ -37,6 +37,7 @@ def test_bundled_mobot():
     assert robot.total_mass == pytest.approx(4.651)
     assert robot.footprint == pytest.approx((-0.2, 0.1, -0.17, 0.17))
     assert robot.bottom_z == pytest.approx(0.0, abs=1e-9)  # wheels and caster touch the floor
+    assert robot.top_z == pytest.approx(0.15)  # the chassis box's top: 0.10 m high, centred 0.10 m up
     drive = robot.drive
     assert drive.left_joints + drive.right_joints == ("left_wheel_joint", "right_wheel_joint")
     assert (drive.wheel_radius, drive.wheel_separation, drive.source) == (0.05, 0.3, "plugin")

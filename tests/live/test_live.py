@@ -70,6 +70,12 @@ def test_five_robots_at_the_tutorials_positions(mobot):
         assert robot["pose"]["z"] == pytest.approx(0.0, abs=2e-3)  # z omitted: resting on the floor
     namespaces = [robot["namespace"] for robot in listed.values()]
     assert len(namespaces) == len(set(namespaces))
+    # each robot's box in its root link's frame: the footprint and heights `mobot inspect` measures
+    shape = json.loads(invoke(["inspect", "mobot", "--json"]).stdout)
+    footprint = shape["footprint"]
+    assert (shape["bottom_z"], shape["top_z"]) == (0.0, 0.15)  # wheels to the chassis' top
+    assert listed["tb_0"]["bounds"] == {"min": [footprint["xmin"], footprint["ymin"], 0.0],
+                                        "max": [footprint["xmax"], footprint["ymax"], 0.15]}
     code, out, _ = mobot("list")
     assert code == 0
     assert out.splitlines()[0].split() == ["NAME", "NAMESPACE", "X", "Y", "Z", "YAW", "LINEAR", "ANGULAR"]

@@ -122,6 +122,8 @@ def test_a_real_rclpy_client_calls_every_service(ros_py, tmp_path, tmp_path_fact
         ["info", "get_entity_info", {"entity": "rover"}],
         ["info_crate", "get_entity_info", {"entity": "xbox"}],
         ["info_unknown", "get_entity_info", {"entity": "nope"}],
+        ["bounds", "get_entity_bounds", {"entity": "xbox"}],
+        ["bounds_unknown", "get_entity_bounds", {"entity": "nope"}],
         ["spawnables", "get_spawnables", {"sources": ["/opt/models"]}],
         ["teleport_bad", "set_entity_state", {"entity": "crate", "state": {"pose": {"orientation": {"w": 0.0}}}}],
         ["entities", "get_entities", {}],
@@ -172,7 +174,7 @@ def test_a_real_rclpy_client_calls_every_service(ros_py, tmp_path, tmp_path_fact
     assert [v["bool_value"] for v in params["after_set"]["values"]] == [True]
 
     features = out["features"]["features"]
-    assert set(features["features"]) == {0, 1, 9, 10, 11, 12, 14, 20, 24, 25, 26, 31, 32, 33}
+    assert set(features["features"]) == {0, 1, 5, 9, 10, 11, 12, 14, 20, 24, 25, 26, 31, 32, 33}
     assert features["spawn_formats"] == ["urdf", "xacro", "sdf"]
     assert out["state0"]["state"]["state"] == 2 and code(out["state0"])[0] == OK  # started --paused
 
@@ -213,6 +215,11 @@ def test_a_real_rclpy_client_calls_every_service(ros_py, tmp_path, tmp_path_fact
     assert code(info) == (OK, "") and info["info"]["category"]["category"] == 1  # CATEGORY_ROBOT
     assert info["info"]["description"] == "a robot in namespace /rover" and info["info"]["tags"] == []
     assert out["info_crate"]["info"]["description"] == "a robot in namespace /xns (no drive: it does not take cmd_vel)"
+    bounds = out["bounds"]  # the xacro crate: a 0.3 x 0.3 x 0.6 m box round its base link's origin
+    assert code(bounds) == (OK, "") and bounds["bounds"]["type"] == 1  # TYPE_BOX
+    corners = [(p["x"], p["y"], p["z"]) for p in bounds["bounds"]["points"]]
+    assert corners == [pytest.approx((0.15, 0.15, 0.3)), pytest.approx((-0.15, -0.15, -0.3))]  # upper, lower
+    assert code(out["bounds_unknown"])[0] == NOT_FOUND
     assert code(out["info_unknown"])[0] == NOT_FOUND
     spawnables = out["spawnables"]
     result, message = code(spawnables)

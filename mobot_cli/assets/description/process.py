@@ -257,8 +257,8 @@ def apply_friction(robot: ET.Element) -> dict[str, float]:
 
 
 def collision_bounds(tree: LinkTree, source: Path,
-                     notices: list[Notice]) -> tuple[float, float, float, float, float]:
-    """(xmin, xmax, ymin, ymax, zmin) of all collision geometry in the root frame."""
+                     notices: list[Notice]) -> tuple[float, float, float, float, float, float]:
+    """(xmin, xmax, ymin, ymax, zmin, zmax) of all collision geometry in the root frame."""
     points: list[tuple[float, float, float]] = []
     for name, link in tree.links.items():
         link_frame = tree.frame(name)
@@ -266,10 +266,10 @@ def collision_bounds(tree: LinkTree, source: Path,
             frame = link_frame.compose(origin_frame(collision))
             points.extend(_geometry_points(frame, collision.find("geometry"), source, notices))
     if not points:
-        return (0.0, 0.0, 0.0, 0.0, 0.0)
+        return (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     xs, ys, zs = zip(*points)
     # Rounded to a nanometre: sin/cos noise (0.09999999999999999) helps nobody reading it.
-    return tuple(round(v, 9) + 0.0 for v in (min(xs), max(xs), min(ys), max(ys), min(zs)))
+    return tuple(round(v, 9) + 0.0 for v in (min(xs), max(xs), min(ys), max(ys), min(zs), max(zs)))
 
 
 def _geometry_points(frame: Frame, geometry: ET.Element | None, source: Path,

@@ -83,6 +83,7 @@ class RobotDescription:
     drive: DriveSpec | None
     notices: tuple[Notice, ...] = ()
     bottom_z: float = 0.0  # lowest collision point in the root frame, all joints at zero
+    top_z: float = 0.0  # highest collision point in the root frame, all joints at zero
     files: tuple[Path, ...] = field(default=())  # the description and every file it included
     sensors: tuple[DescribedSensor, ...] = ()  # from its <gazebo><sensor> blocks
     holds: tuple[JointHold, ...] = ()  # springs and held joints (assets/description/joints.py)
@@ -177,7 +178,7 @@ def _build(source: Path, expansion: Expansion, resolver: ResourceResolver,
     description = RobotDescription(
         source=source, name=robot.get("name", ""), urdf=urdf, root_link=root_link,
         links=links, joints=joints, total_mass=sum(link.mass for link in links),
-        footprint=bounds[:4], drive=drive, notices=tuple(notices), bottom_z=bounds[4],
+        footprint=bounds[:4], drive=drive, notices=tuple(notices), bottom_z=bounds[4], top_z=bounds[5],
         sensors=sensors, holds=holds, refused_drive=detected.refused)
     return description, found
 
@@ -255,7 +256,7 @@ def _from_document(document: dict[str, Any] | None) -> RobotDescription | None:
                                       for k, v in joint.items()})
                          for joint in document["joints"]),
             total_mass=document["total_mass"], footprint=tuple(document["footprint"]),
-            drive=drive, bottom_z=document["bottom_z"], refused_drive=document.get("refused_drive", ""),
+            drive=drive, bottom_z=document["bottom_z"], top_z=document["top_z"], refused_drive=document.get("refused_drive", ""),
             sensors=tuple(DescribedSensor(**{k: tuple(v) if isinstance(v, list) else v
                                              for k, v in sensor.items()})
                           for sensor in document["sensors"]),
@@ -292,6 +293,7 @@ def inspect_summary(desc: RobotDescription) -> dict[str, Any]:
         "footprint": {"xmin": xmin, "xmax": xmax, "ymin": ymin, "ymax": ymax,
                       "length": round(xmax - xmin, 9), "width": round(ymax - ymin, 9)},
         "bottom_z": desc.bottom_z,
+        "top_z": desc.top_z,
         "tree": desc.tree(),
         "drive": drive_summary(desc.drive),
         "drive_type": desc.drive.kind if desc.drive is not None else None,
