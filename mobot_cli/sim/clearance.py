@@ -112,7 +112,8 @@ def _meshes(cid: int, body: int, links, lo, hi, reach: float, meshes: list[int],
     beside the robot) is not asked for every triangle it has within the radius."""
     gaps: dict[str, list[tuple[float, int]]] = {}
     for other in meshes:
-        gaps.setdefault(label(other), []).append((_gap(lo, hi, reach, p.getAABB(other, -1, physicsClientId=cid)), other))
+        box = p.getAABB(other, -1, physicsClientId=cid)
+        gaps.setdefault(label(other), []).append((_gap(lo, hi, reach, box), other))
     order = sorted((min(gap for gap, _ in pieces), name, sorted(pieces)) for name, pieces in gaps.items())
     radius = min(reach, FIRST_REACH)
     while True:  # the nearest point is among those within the smallest radius that finds one

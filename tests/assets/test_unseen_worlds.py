@@ -243,9 +243,11 @@ def test_a_dense_mesh_further_than_the_nearest_point_is_not_asked_for_its_triang
         body, meshes = world._robots["mobot"].body, world._meshes  # noqa: SLF001 - the world's own bookkeeping
         blob = next(uid for uid in meshes if "'blob'" in world.label(uid))
         cid = world._cid  # noqa: SLF001
-        exact = {world.label(uid).split("'")[1]: min(point[8] for link in range(-1, p.getNumJoints(body, physicsClientId=cid))
-                                                     for point in real(body, uid, 2.0, linkIndexA=link, physicsClientId=cid))
-                 for uid in meshes}  # every triangle within 2 m, link by link
+        links = range(-1, p.getNumJoints(body, physicsClientId=cid))
+        exact = {}  # every triangle within 2 m, link by link
+        for uid in meshes:
+            points = [point for link in links for point in real(body, uid, 2.0, linkIndexA=link, physicsClientId=cid)]
+            exact[world.label(uid).split("'")[1]] = min(point[8] for point in points)
         monkeypatch.setattr(p, "getClosestPoints", spy)
         found, what = clearance.nearest(cid, body, 2.0, [], world.label, meshes)
     assert exact["wall"] == pytest.approx(0.399) and (exact["blob"] < exact["wall"]) == (nearest == "blob")

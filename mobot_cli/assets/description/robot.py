@@ -256,7 +256,8 @@ def _from_document(document: dict[str, Any] | None) -> RobotDescription | None:
                                       for k, v in joint.items()})
                          for joint in document["joints"]),
             total_mass=document["total_mass"], footprint=tuple(document["footprint"]),
-            drive=drive, bottom_z=document["bottom_z"], top_z=document["top_z"], refused_drive=document.get("refused_drive", ""),
+            drive=drive, bottom_z=document["bottom_z"], top_z=document["top_z"],
+            refused_drive=document.get("refused_drive", ""),
             sensors=tuple(DescribedSensor(**{k: tuple(v) if isinstance(v, list) else v
                                              for k, v in sensor.items()})
                           for sensor in document["sensors"]),
