@@ -116,6 +116,21 @@ def test_turn_in_place(plans, name, engine):
 
 
 @pytest.mark.parametrize("engine", ENGINES)
+def test_a_base_without_wheels_moved_by_planar_move_drives_diagonally(tmp_path, monkeypatch, engine):
+    """No wheel joint at all (neobotix's mpo_700: its wheels are fixed joints): held commanded for
+    longer than the stall watch waits (1 s), PyBullet's answer for no joints (None) once ended
+    the run with a traceback."""
+    monkeypatch.setenv("MOBOT_CACHE_DIR", str(tmp_path))
+    plan = _plan("box", "planar_box.urdf")
+    assert plan.drive is not None and plan.drive.kind == "omni" and not plan.drive.left_joints
+    before, after, tilt = drive(plan, (0.2, 0.2, 0.0), 2.0, engine)
+    forward, left, turn = moved(before, after)
+    assert forward == pytest.approx(0.4, rel=0.03) and left == pytest.approx(0.4, rel=0.03)
+    assert abs(math.degrees(turn)) < 0.5 and tilt < 1.0
+    assert after.odom_y - before.odom_y == pytest.approx(left, abs=0.005)  # the model's pose
+
+
+@pytest.mark.parametrize("engine", ENGINES)
 def test_arc_with_sideways_matches_the_exact_integration(plans, engine):
     vx, vy, wz, t = 0.2, 0.1, 0.3, 5.0
     before, after, _ = drive(plans["plugin"], (vx, vy, wz), t, engine)

@@ -123,9 +123,9 @@ class Health:
         """A notice when the robot's wheels have sat at their torque limit for STALL_SECONDS
         while it is commanded to move (once per robot), else None."""
         drive, w = robot.drive, self.watches[robot.name]
-        if w.stall_told or drive is None:
+        if w.stall_told or drive is None or not drive.wheels:  # no wheels (planar_move): no torque limit
             return None
-        if robot.cmd == (0.0, 0.0):
+        if robot.cmd == (0.0, 0.0) and not robot.cmd_y:
             w.at_limit_since = -1
             return None
         states = p.getJointStates(robot.body, drive.wheels, physicsClientId=self.cid)
