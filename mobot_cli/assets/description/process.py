@@ -5,6 +5,11 @@
   visual mesh nearly always means a wrong or incomplete package that the user should know
   about before trusting the run. With skip_missing (--skip-missing, as for worlds) the visual
   or collision that names it is left out instead, with one warning for all of them.
+* COLLADA collision meshes reach PyBullet as OBJ files, converted as a world's are
+  (assets/world/meshes.py: node transforms and <unit> applied, cached by content): PyBullet's
+  own COLLADA reader cannot read some that Gazebo reads ("cannot extract mesh"), and then
+  leaves the link without any collision shape, silently; RoverRobotics' wheels fell through
+  the floor. Visual meshes stay as they are.
 * Links without <inertial>, or with (near) zero mass or inertia, get 1 g and 1e-6 kg*m^2:
   PyBullet would silently give them 1 kg, which doubles a turtlebot's mass. Each one is
   reported as a notice.
@@ -77,6 +82,28 @@ def resolve_meshes(robot: ET.Element, resolver: ResourceResolver, source: Path,
             f"{'are' if len(left_out) > 1 else 'is'} left out (skip_missing): {named}. "
             f"The first: {left_out[0][1].message}", Location(file=source)))
     return found
+
+
+def readable_collisions(robot: ET.Element, source: Path) -> list[str]:
+    """Point every COLLADA collision <mesh> at an OBJ of the same triangles (cached by the
+    file's content); the OBJ files. A DescriptionError names a file nothing can read."""
+    from mobot_cli.assets.world.meshes import collision_mesh
+
+    converted: dict[str, str] = {}  # a robot's four wheels share one file
+    for link in robot.findall("link"):
+        for mesh in link.findall("collision/geometry/mesh"):
+            filename = mesh.get("filename", "")
+            if not filename.lower().endswith(".dae"):
+                continue
+            if filename not in converted:
+                where = Location(file=source, key=f"link.{link.get('name', '')}")
+                try:
+                    converted[filename] = collision_mesh(Path(filename), where).path
+                except MobotError as exc:
+                    raise DescriptionError(f"collision mesh of link '{link.get('name', '')}': {exc.message}",
+                                           location=where, hint=exc.hint) from None
+            mesh.set("filename", converted[filename])
+    return list(converted.values())
 
 
 def mesh_path_or_none(uri: str, resolver: ResourceResolver, source: Path) -> str | None:

@@ -26,6 +26,7 @@ from mobot_cli.assets.description.process import (
     fix_inertials,
     inertial_values,
     mesh_path_or_none,
+    readable_collisions,
     resolve_meshes,
 )
 from mobot_cli.assets.description.sanity import check_mesh_file, check_sanity
@@ -156,6 +157,8 @@ def _build(source: Path, expansion: Expansion, resolver: ResourceResolver,
     for link in robot.findall("link"):
         for mesh in link.findall("collision/geometry/mesh"):
             check_mesh_file(Path(mesh.get("filename", "")), link.get("name", ""), source)
+    for obj in readable_collisions(robot, source):  # an absolute path leads to itself under any search paths
+        found[obj] = obj  # kept with the entry: a converted file removed since makes it stale
     links = tuple(_link_info(link) for link in robot.findall("link"))
     joints = tuple(_joint_info(joint) for joint in robot.findall("joint"))
     notices += fix_inertials(robot, source)
