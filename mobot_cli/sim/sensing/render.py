@@ -169,8 +169,9 @@ class Renderer:
                 out = p.getCameraImage(w, h, view, projection, shadow=0, renderer=p.ER_BULLET_HARDWARE_OPENGL,
                                        flags=p.ER_NO_SEGMENTATION_MASK, physicsClientId=self.cid)
         else:
-            out = p.getCameraImage(w, h, view, projection, shadow=0, renderer=p.ER_TINY_RENDERER,
-                                   flags=p.ER_NO_SEGMENTATION_MASK, physicsClientId=self.cid)
+            with _hidden(self.cid, _around(self.cid, position, near)):
+                out = p.getCameraImage(w, h, view, projection, shadow=0, renderer=p.ER_TINY_RENDERER,
+                                       flags=p.ER_NO_SEGMENTATION_MASK, physicsClientId=self.cid)
         rgb = np.asarray(out[2], dtype=np.uint8).reshape(h, w, 4)[:, :, :3]
         buffer = np.asarray(out[3], dtype=np.float64).reshape(h, w)
         with np.errstate(divide="ignore"):
@@ -180,6 +181,37 @@ class Renderer:
             depth[depth > spec.depth_clip[1]] = np.inf
             depth[depth < spec.depth_clip[0]] = -np.inf
         return np.ascontiguousarray(rgb), depth.astype(np.float32)
+
+
+def _around(cid: int, eye, near: float) -> list[tuple[int, int, int, tuple]]:
+    """The visual shapes of robots' links whose boxes hold the camera (grown by its near clip):
+    (body, link, shape index, colour) each. TinyRenderer does not clip triangles at the near
+    plane: one whose corners lie on both sides of the camera is drawn across the image, and a
+    housing round the camera (Robotnik's Orbbec Astra on the Summit XL) took it minutes a frame,
+    in C, where Ctrl-C cannot stop it. Such a link is hidden from the camera inside it, as a
+    renderer that clips shows little of it."""
+    found = []
+    lo, hi = [v - near for v in eye], [v + near for v in eye]
+    for body, link in p.getOverlappingObjects(lo, hi, physicsClientId=cid) or ():
+        if p.getDynamicsInfo(body, link, physicsClientId=cid)[0] <= 0.0:
+            continue  # static world geometry: a camera under a table still sees it
+        low, high = p.getAABB(body, link, physicsClientId=cid)
+        if all(low[k] - near <= eye[k] <= high[k] + near for k in range(3)):
+            shapes = [s for s in p.getVisualShapeData(body, physicsClientId=cid) if s[1] == link]
+            found += [(body, link, k, tuple(s[7])) for k, s in enumerate(shapes)]
+    return found
+
+
+@contextmanager
+def _hidden(cid: int, shapes: list[tuple[int, int, int, tuple]]):
+    """Those visual shapes made transparent while the block runs, their colours put back after."""
+    for body, link, k, rgba in shapes:
+        p.changeVisualShape(body, link, shapeIndex=k, rgbaColor=(*rgba[:3], 0.0), physicsClientId=cid)
+    try:
+        yield
+    finally:
+        for body, link, k, rgba in shapes:
+            p.changeVisualShape(body, link, shapeIndex=k, rgbaColor=rgba, physicsClientId=cid)
 
 
 def encode(rgb: np.ndarray, encoding: str) -> np.ndarray:
