@@ -35,11 +35,13 @@ class Cameras:
         """The renderer added its rendering bodies to the world (sim/sensing/render.py)."""
         return self._renderer is not None
 
-    @property
-    def renderer(self) -> render.Renderer:
+    def renderer(self, spec: SensorSpec | None = None) -> render.Renderer:
+        """The world's renderer, made (and said, once per world) at the first image."""
         if self._renderer is None:
             self._renderer = render.Renderer(self.cid, self.wanted, self.world)
-            self.notices.append(self._renderer.notice)  # said once per world
+            first = f" (the first: '{spec.name}', {spec.width} x {spec.height})" if spec else ""
+            self.notices.append(f"{self._renderer.notice}; every image costs CPU time{first}: "
+                                "`sensors: {NAME: off}` in a scenario leaves a camera out")
         return self._renderer
 
     def close(self) -> None:
@@ -48,7 +50,7 @@ class Cameras:
 
     def take(self, spec: SensorSpec, rng: np.random.Generator, position, quat) -> tuple:
         """(rgb in the camera's encoding or None, depth or None), rendered now."""
-        rgb, depth = self.renderer.image(spec, position, quat)
+        rgb, depth = self.renderer(spec).image(spec, position, quat)
         self.rendered += 1
         noisy = spec.noise_stddev > 0.0 or spec.noise_mean != 0.0
         if spec.kind == "depth":
