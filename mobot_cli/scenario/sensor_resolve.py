@@ -89,8 +89,7 @@ def resolve_sensors(spec: RobotSpec, desc: RobotDescription, path: tuple,
         sensors[sensor.name] = _check(sensor, entry, where, desc, ctx)
         touched[sensor.name] = key
     out = tuple(_spec(s, touched.get(s.name), spec, desc, path, ctx) for s in sensors.values())
-    _unique_topics(out, spec, path, ctx)
-    return out
+    return _unique_topics(out, spec, touched, path, ctx)
 
 
 def _changed(sensor: DescribedSensor, entry: SensorOverride, where: tuple,
@@ -197,17 +196,37 @@ def _spec(sensor: DescribedSensor, key: str | None, spec: RobotSpec, desc: Robot
     return sensor.spec(every, source)
 
 
-def _unique_topics(sensors: tuple[SensorSpec, ...], spec: RobotSpec, path: tuple,
-                   ctx: Context) -> None:
+def _unique_topics(sensors: tuple[SensorSpec, ...], spec: RobotSpec, touched: dict[str, str], path: tuple,
+                   ctx: Context) -> tuple[SensorSpec, ...]:
+    """One sensor a topic: records, the bag and ROS 2 keep a sensor's readings by its topic. Two
+    that the description puts on one topic (a sonar array, as Gazebo allows: one frame each) keep
+    it for the first, and the others get a numbered topic, said in a notice; a topic the scenario
+    gives twice is an error."""
+    taken = {sensor.topic for sensor in sensors}
     seen: dict[str, str] = {}
+    out = []
     for sensor in sensors:
         other = seen.setdefault(sensor.topic, sensor.name)
         if other != sensor.name:
-            raise ScenarioError(f"sensors '{other}' and '{sensor.name}' of robot '{spec.name}' both "
-                                f"publish on '{sensor.topic}'", location=ctx.locate_key(
-                                    path + ("sensors",) if spec.sensors else path),
-                                hint=f"Give one of them another topic, e.g. sensors: "
-                                     f"{{{sensor.name}: {{topic: {sensor.topic}_2}}}}.")
+            if any(touched.get(name) is not None and spec.sensors[touched[name]].topic is not None
+                   for name in (other, sensor.name)):  # the scenario chose that topic
+                raise ScenarioError(f"sensors '{other}' and '{sensor.name}' of robot '{spec.name}' both "
+                                    f"publish on '{sensor.topic}'", location=ctx.locate_key(
+                                        path + ("sensors",) if spec.sensors else path),
+                                    hint=f"Give one of them another topic, e.g. sensors: "
+                                         f"{{{sensor.name}: {{topic: {sensor.topic}_2}}}}.")
+            number = 2
+            while f"{sensor.topic}_{number}" in taken:
+                number += 1
+            topic = f"{sensor.topic}_{number}"
+            ctx.notices.append(f"robot '{spec.name}': sensors '{other}' and '{sensor.name}' of its description both "
+                               f"publish on '{sensor.topic}'; mobot keeps one sensor a topic, so '{sensor.name}' "
+                               f"publishes on '{topic}' (sensors: {{{sensor.name}: {{topic: ...}}}} chooses another)")
+            taken.add(topic)
+            sensor = replace(sensor, topic=topic)
+            seen[topic] = sensor.name
+        out.append(sensor)
+    return tuple(out)
 
 
 def _choices(key: str, desc: RobotDescription, adding: bool) -> str:

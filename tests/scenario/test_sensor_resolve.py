@@ -359,3 +359,47 @@ def test_a_world_robot_takes_sensors_too(corpus, tmp_path):
     laser, = plan.robots[0].sensors
     assert (laser.name, laser.topic, laser.link, laser.every, laser.horizontal.samples) == \
         ("sensor_ray", "laser_scan", "chassis", 5, 200)
+
+
+SONARS = """<?xml version="1.0"?>
+<robot name="sonars">
+  <link name="base_link">
+    <inertial><mass value="5"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial>
+    <collision><origin xyz="0 0 0.1"/><geometry><box size="0.4 0.3 0.2"/></geometry></collision>
+  </link>
+  {sonars}
+</robot>
+"""
+SONAR = """<link name="{name}_link"/>
+  <joint name="{name}_joint" type="fixed"><parent link="base_link"/><child link="{name}_link"/>
+    <origin xyz="0.2 {y} 0.1"/></joint>
+  <gazebo reference="{name}_link"><sensor type="ray" name="{name}"><update_rate>10</update_rate>
+    <ray><scan><horizontal><samples>5</samples><min_angle>-0.1</min_angle><max_angle>0.1</max_angle></horizontal>
+    </scan><range><min>0.02</min><max>3</max></range></ray>
+    <plugin name="{name}_plugin" filename="libgazebo_ros_ray_sensor.so">
+      <ros><remapping>~/out:=sonar_base</remapping></ros><output_type>sensor_msgs/Range</output_type>
+    </plugin></sensor></gazebo>"""
+
+
+def test_description_sensors_on_one_topic_get_numbered_topics(tmp_path):
+    """A sonar array on one topic, each sonar with its frame (PAL's PMB2), as Gazebo allows: the
+    first keeps the topic, the others get numbered ones, said; a topic the scenario gives twice
+    is still an error."""
+    sonars = "\n  ".join(SONAR.format(name=f"sonar_{k}", y=y) for k, y in ((1, 0.1), (2, 0.0), (3, -0.1)))
+    (tmp_path / "sonars.urdf").write_text(SONARS.format(sonars=sonars))
+    plan = prepare(scenario(tmp_path, """\
+        robots:
+          - {name: r, description: sonars.urdf}
+        """)).plan
+    found = sensors(plan)
+    assert [(s.kind, s.topic) for s in found.values()] == [("range", "sonar_base"), ("range", "sonar_base_2"),
+                                                          ("range", "sonar_base_3")]
+    said = [n for n in plan.notices if "publish on" in n]
+    assert len(said) == 2 and "'sonar_2' publishes on 'sonar_base_2'" in said[0]
+    with pytest.raises(ScenarioError, match="both publish on 'sonar_base'"):
+        prepare(scenario(tmp_path, """\
+            robots:
+              - name: r
+                description: sonars.urdf
+                sensors: {sonar_2: {topic: sonar_base}}
+            """))
