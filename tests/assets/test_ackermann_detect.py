@@ -90,14 +90,26 @@ def test_drives_mobot_cannot_simulate_are_refused_in_one_notice(gazebo, named):
         f"mobot cannot drive this robot's {named}: it is a passive body and refuses velocity commands"]
 
 
-def test_steered_wheels_without_a_radius_are_refused(tmp_path):
+def test_mesh_tyres_are_measured_as_a_diff_drives_are(tmp_path):
+    """A car on meshed tyres (AgileX's Hunter 2.0) is driven: the radius is the mesh's farthest
+    vertex from the spin axis. It was refused as "mesh-only wheels", and drive: overrides could not
+    make it drivable."""
     trimesh = pytest.importorskip("trimesh")
-    trimesh.creation.cylinder(radius=0.1, height=0.05, sections=32).export(tmp_path / "tyre.stl")
+    trimesh.creation.cylinder(radius=0.1, height=0.05, sections=64).export(tmp_path / "tyre.stl")
     path = tmp_path / "meshcar.urdf"
     path.write_text(car(mesh=str(tmp_path / "tyre.stl")))
+    spec = load_robot(str(path)).drive
+    assert (spec.kind, spec.source) == ("ackermann", "urdf")
+    assert (spec.left_joints, spec.right_joints, spec.steering_joints) == (*REAR, STEERING)
+    assert spec.wheel_radius == pytest.approx(0.1, abs=1e-6)
+
+
+def test_steered_wheels_without_a_radius_are_refused(tmp_path):
+    path = tmp_path / "boxcar.urdf"
+    path.write_text(car().replace('<cylinder radius="0.1" length="0.05"/>', '<box size="0.2 0.05 0.2"/>'))
     robot = load_robot(str(path))
     assert robot.drive is None
-    assert robot.refused_drive.startswith("Ackermann steering with mesh-only wheels")
+    assert robot.refused_drive.startswith("Ackermann steering with wheels of no measurable radius")
     said = [str(n) for n in robot.notices]
     assert sum("mobot cannot drive" in n for n in said) == 1 and not any(NO_DRIVE in n for n in said)
 

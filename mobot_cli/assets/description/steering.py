@@ -245,11 +245,12 @@ def _steered_wheel(tree: LinkTree, joint: JointRow) -> JointRow | None:
 
 
 def _wheel(tree: LinkTree, joint: JointRow) -> Wheel:
-    """The wheel on a joint, its radius from a cylinder or sphere only (None for a mesh)."""
+    """The wheel on a joint, its radius from a cylinder, a sphere or a mesh (its farthest vertex from
+    the spin axis, as a diff drive's wheels are measured)."""
     found = wheel(tree, joint.name, strict=False)
     frame = tree.frame(joint.child)
     axis = mat_vec(frame.rot, joint.axis)
-    radius = wheel_radius(tree, joint.child, frame.pos, axis, meshes=False)
+    radius = wheel_radius(tree, joint.child, frame.pos, axis, meshes=True)
     return Wheel(joint=joint.name, x=found.x, y=found.y, radius=radius, sign=found.sign)  # type: ignore[union-attr]
 
 
@@ -262,13 +263,13 @@ def _car(left: list[Wheel], right: list[Wheel], steering: list[JointRow], tree: 
     if radius is None:
         radii = [w.radius for w in left + right]
         if not all(radii):
-            return refusal("Ackermann steering with mesh-only wheels", label or "no cylinder or sphere "
-                           "collision to measure a radius on " + ", ".join(w.joint for w in left + right
-                                                                            if not w.radius),
+            return refusal("Ackermann steering with wheels of no measurable radius", label or "no cylinder, "
+                           "sphere or mesh collision to measure a radius on " + ", ".join(w.joint for w in left + right
+                                                                                         if not w.radius),
                            notices, file)
         radius = sum(radii) / len(radii)  # type: ignore[arg-type]
     if any(s is not None and _wheel(tree, s).radius is None for s in steered) and source == "urdf":
-        return refusal("Ackermann steering with mesh-only wheels", "steered wheels " + ", ".join(
+        return refusal("Ackermann steering with wheels of no measurable radius", "steered wheels " + ", ".join(
             s.name for s in steered if s is not None), notices, file)
     rear_x = sum(w.x for w in left + right) / len(left + right)
     rear_y = sum(w.y for w in left + right) / len(left + right)
