@@ -167,6 +167,9 @@ def inspect_tree(env: Environment, summary: dict[str, Any]) -> None:
                       f"{drive['wheel_radius']:.4f} m, track {drive['wheel_separation']:.4f} m, wheelbase "
                       f"{drive['wheelbase']:.4f} m; max steering {drive['max_steering_angle']:.4f} rad, "
                       f"min turning radius {drive['min_turning_radius']:.3f} m; odometry {drive['odometry']}")
+    elif drive.get("kind") in ("mecanum", "omni") and not (drive["left_joints"] or drive["right_joints"]):
+        console.print(f"{drive['kind']} drive ({drive['source']}, holonomic: takes linear_y): no wheel joints, the "
+                      f"body is moved as gazebo_ros's planar_move moves it; odometry {drive['odometry']}")
     elif drive.get("kind") in ("mecanum", "omni"):
         left, right = ", ".join(drive["left_joints"]) or "none", ", ".join(drive["right_joints"]) or "none"
         console.print(f"{drive['kind']} drive ({drive['source']}, holonomic: takes linear_y): "

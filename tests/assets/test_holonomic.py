@@ -158,3 +158,15 @@ def test_roller_friction_split_over_two_gazebo_blocks():
     robot = ET.fromstring(four_wheels(split))
     assert roller_links(robot) == frozenset(CORNERS)
     assert gazebo_friction(robot) == dict.fromkeys(CORNERS, 1.2)  # the later block's mu1 wins
+
+
+def test_inspect_of_a_base_without_wheel_joints_says_so(tmp_path, monkeypatch):
+    """neobotix's mpo_700 (wheels on fixed joints, moved by planar_move): not "left none; right
+    none; wheel radius 0.0000 m"."""
+    from mobot_cli.cli import invoke
+
+    monkeypatch.setenv("MOBOT_CACHE_DIR", str(tmp_path))
+    done = invoke(["inspect", str(Path(__file__).resolve().parents[1] / "sim" / "robots" / "planar_box.urdf")])
+    assert done.exit_code == 0
+    assert ("omni drive (plugin, holonomic: takes linear_y): no wheel joints, the body is moved as gazebo_ros's "
+            "planar_move moves it; odometry ground_truth") in " ".join(done.stdout.split())
