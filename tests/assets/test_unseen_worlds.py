@@ -98,10 +98,15 @@ def test_a_mesh_wall_leaning_by_micrometres_is_a_whole_wall_on_the_map(tmp_path,
 
 def _plate(n: int) -> str:
     """A 1 m x 0.5 m upright plate of 2 n^2 triangles, facing x, at x = 0."""
-    ys, zs = np.linspace(-0.5, 0.5, n + 1), np.linspace(0.0, 0.5, n + 1)
+    return _upright(np.linspace(-0.5, 0.5, n + 1), np.linspace(0.0, 0.5, n + 1))
+
+
+def _upright(ys, zs) -> str:
+    """An upright grid at x = 0 over ``ys`` by ``zs``, two triangles a square."""
+    n, m = len(ys) - 1, len(zs) - 1
     vertices = [(0.0, y, z) for z in zs for y in ys]
     faces = []
-    for j in range(n):
+    for j in range(m):
         for i in range(n):
             a = j * (n + 1) + i
             faces += [(a, a + 1, a + n + 2), (a, a + n + 2, a + n + 1)]
@@ -198,13 +203,7 @@ def test_a_static_triangle_mesh_is_asked_about_link_by_link(tmp_path, monkeypatc
 def _blob(n: int, half: float) -> str:
     """An upright square of side 2 ``half`` at x = 0, 0.18-0.22 m up, of 2 n^2 triangles."""
     g = np.linspace(-half, half, n + 1)
-    vertices = [(0.0, y, 0.2 + z) for z in g for y in g]
-    faces = []
-    for j in range(n):
-        for i in range(n):
-            a = j * (n + 1) + i
-            faces += [(a, a + 1, a + n + 2), (a, a + n + 2, a + n + 1)]
-    return obj(vertices, faces)
+    return _upright(g, 0.2 + g)
 
 
 @pytest.mark.parametrize("blob_x, nearest", [(-0.6, "wall"), (-0.35, "blob")])

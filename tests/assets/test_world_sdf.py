@@ -12,6 +12,7 @@ from mobot_cli.assets.world import build as world_build
 from mobot_cli.assets.world.worldplan import load_world
 from mobot_cli.cli import invoke
 from mobot_cli.errors import WorldError
+from tests.collada import collada
 
 CONFIG = '<?xml version="1.0"?><model><name>{name}</name><sdf version="1.5">old.sdf</sdf>' \
          '<sdf version="1.6">model.sdf</sdf></model>'
@@ -300,25 +301,7 @@ def _collada_box(meter: float, size, lift: float) -> str:
     corners = [(sx * x, sy * y, sz * z) for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]
     faces = [(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1),
              (2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3)]
-    floats = " ".join(f"{v:g}" for c in corners for v in c)
-    indices = " ".join(str(i) for f in faces for i in f)
-    return f"""<?xml version="1.0"?>
-<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
-  <asset><unit meter="{meter}" name="centimeter"/><up_axis>Z_UP</up_axis></asset>
-  <library_geometries><geometry id="g"><mesh>
-    <source id="p"><float_array id="pa" count="24">{floats}</float_array>
-      <technique_common><accessor source="#pa" count="8" stride="3">
-        <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
-      </accessor></technique_common></source>
-    <vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
-    <triangles count="12"><input semantic="VERTEX" source="#v" offset="0"/><p>{indices}</p></triangles>
-  </mesh></geometry></library_geometries>
-  <library_visual_scenes><visual_scene id="s"><node id="n">
-    <matrix>1 0 0 0 0 1 0 0 0 0 1 {lift + z:g} 0 0 0 1</matrix>
-    <instance_geometry url="#g"/></node></visual_scene></library_visual_scenes>
-  <scene><instance_visual_scene url="#s"/></scene>
-</COLLADA>
-"""
+    return collada(corners, faces, meter, matrix=f"1 0 0 0 0 1 0 0 0 0 1 {lift + z:g} 0 0 0 1")
 
 
 def test_pose_helpers_round_trip():

@@ -14,6 +14,7 @@ import pytest
 from mobot_cli.plan import Physics, RobotPlan, SpawnPose, WorldPlan
 from mobot_cli.sim.engine import open_world
 from mobot_cli.sim.pb import p
+from tests.collada import collada
 
 
 def instanced_wheel(radius: float, width: float, unit: float) -> str:
@@ -22,25 +23,7 @@ def instanced_wheel(radius: float, width: float, unit: float) -> str:
     import trimesh
 
     m = trimesh.creation.cylinder(radius=radius / unit, height=width / unit, sections=32)
-    positions = " ".join(f"{v:.9g}" for v in m.vertices.ravel())
-    triangles = " ".join(str(i) for i in m.faces.ravel())
-    return f"""<?xml version="1.0" encoding="UTF-8" standalone="no" ?>
-<COLLADA version="1.4.1" xmlns="http://www.collada.org/2005/11/COLLADASchema">
-  <asset><unit meter="{unit}" name="u"/><up_axis>Z_UP</up_axis></asset>
-  <library_geometries><geometry id="G"><mesh>
-    <source id="P"><float_array id="PA" count="{m.vertices.size}">{positions}</float_array>
-      <technique_common><accessor count="{len(m.vertices)}" source="#PA" stride="3">
-        <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
-      </accessor></technique_common></source>
-    <vertices id="V"><input semantic="POSITION" source="#P"/></vertices>
-    <triangles count="{len(m.faces)}"><input offset="0" semantic="VERTEX" source="#V"/><p>{triangles}</p></triangles>
-  </mesh></geometry></library_geometries>
-  <library_nodes><node id="N"><instance_geometry url="#G"/></node></library_nodes>
-  <library_visual_scenes><visual_scene id="S"><node id="R"><instance_node url="#N"/></node></visual_scene>
-  </library_visual_scenes>
-  <scene><instance_visual_scene url="#S"/></scene>
-</COLLADA>
-"""
+    return collada(m.vertices.tolist(), m.faces.tolist(), unit, instanced=True)
 
 
 ROBOT = """<?xml version="1.0"?>
