@@ -113,10 +113,9 @@ def _bounds(tracks: list[Track], floor: list[Part]) -> tuple[float, float, float
     polygons = [part for part in floor if not isinstance(part, MeshShadow)]
     points = [p for t in tracks for p in (*t.true, *t.odom, *t.scan)] + [p for poly in polygons for p in poly] + areas
     for mesh in (part for part in floor if isinstance(part, MeshShadow)):
-        for shapes in (mesh.triangles, mesh.segments):
-            if len(shapes):  # its box's corners: the same extremes
-                points += [(float(shapes[:, :, 0].min()), float(shapes[:, :, 1].min())),
-                           (float(shapes[:, :, 0].max()), float(shapes[:, :, 1].max()))]
+        extent = mesh.extent()
+        if extent is not None:  # its box's corners: the same extremes
+            points += [(extent[0], extent[2]), (extent[1], extent[3])]
     xs = [p[0] for p in points]
     ys = [p[1] for p in points]
     if not xs:

@@ -191,12 +191,20 @@ class SimulationServices:
         response.entities, response.states = entities, states
         return reply
 
+    def _listed(self, client: Client, entity: str) -> tuple[dict[str, Any], dict[str, Any] | None]:
+        """The live listing and the robot named ``entity`` in it (None when the world did not
+        answer); a Refusal (NOT_FOUND) when the world holds no such robot."""
+        reply = client.call("list")
+        if not reply.get("ok"):
+            return reply, None
+        robot = next((r for r in reply["robots"] if r["name"] == entity), None)
+        if robot is None:
+            raise Refusal(Result.NOT_FOUND, f"no robot named '{entity}' in the world")
+        return reply, robot
+
     def _entity_info(self, client: Client, request, response):
         """Every entity mobot lists is a robot (CATEGORY_ROBOT), without tags."""
-        reply = client.call("list")
-        robot = next((r for r in reply.get("robots", ()) if r["name"] == request.entity), None)
-        if reply.get("ok") and robot is None:
-            return sr.refused(sr.NOT_FOUND, f"no robot named '{request.entity}' in the world")
+        reply, robot = self._listed(client, request.entity)
         if robot is not None:
             response.info.category.category = self.msg.EntityCategory.CATEGORY_ROBOT
             response.info.description = f"a robot in namespace {robot['namespace']}" + \
@@ -206,12 +214,9 @@ class SimulationServices:
     def _entity_bounds(self, client: Client, request, response):
         """TYPE_BOX round the robot's collision geometry in its root link's frame, joints at
         zero: points[0] the upper corner, points[1] the lower one, as Bounds.msg lists them."""
-        reply = client.call("list")
-        if not reply.get("ok"):
-            return reply
-        robot = next((r for r in reply["robots"] if r["name"] == request.entity), None)
+        reply, robot = self._listed(client, request.entity)
         if robot is None:
-            return sr.refused(sr.NOT_FOUND, f"no robot named '{request.entity}' in the world")
+            return reply
         if robot.get("bounds") is None:
             return sr.refused(Result.OPERATION_FAILED, f"the collision geometry of '{request.entity}' is not known")
         from geometry_msgs.msg import Vector3

@@ -39,6 +39,15 @@ class MeshShadow:
         """The shapes it holds."""
         return len(self.triangles) + len(self.segments)
 
+    def extent(self) -> tuple[float, float, float, float] | None:
+        """xmin, xmax, ymin, ymax of its shapes' corners (None when it holds none)."""
+        corners = [shapes.reshape(-1, 2) for shapes in (self.triangles, self.segments) if len(shapes)]
+        if not corners:
+            return None
+        low = min(float(c[:, 0].min()) for c in corners), min(float(c[:, 1].min()) for c in corners)
+        high = max(float(c[:, 0].max()) for c in corners), max(float(c[:, 1].max()) for c in corners)
+        return low[0], high[0], low[1], high[1]
+
 
 Part = Polygon | MeshShadow  # what a shadow is made of
 

@@ -63,10 +63,10 @@ def world_bounds(world: WorldPlan, band: tuple[float, float]) -> tuple[float, fl
                 xs.extend(p[0] for p in part)
                 ys.extend(p[1] for p in part)
                 continue
-            for shapes in (part.triangles, part.segments):
-                if len(shapes):
-                    xs += [float(shapes[:, :, 0].min()), float(shapes[:, :, 0].max())]
-                    ys += [float(shapes[:, :, 1].min()), float(shapes[:, :, 1].max())]
+            extent = part.extent()
+            if extent is not None:
+                xs += extent[:2]
+                ys += extent[2:]
     if not xs:
         return None
     return min(xs), max(xs), min(ys), max(ys)
