@@ -6,8 +6,10 @@
    on its goal, interleaved, medians of --repeat: wall and CPU ratios. The two runs drive
    slightly different paths, so this is the cost of a whole run, not of the same motion. Within
    the dwb runs, the CPU of the controller's ticks (timeline/goals.py ``Driver._avoid``: the
-   points and path put in the robot's frame, then ``Dwb.command``) and of reading each scan as it
-   comes (``Driver.see``) is counted apart (median of the runs).
+   points and path put in the robot's frame, then ``Dwb.command``) and of taking each scan's
+   points as it comes (``Driver.see``; the scan itself is cast before the clock starts, as the
+   pursuit's run casts it for its records) is counted apart (median of the runs); what is left
+   of the difference is the run's own work on the drive the controller chose.
 2. One control tick of the controller alone, on a scan of the house taken in the living room:
    microseconds per call, with the path clear and with the path blocked (the wavefront).
 
@@ -35,7 +37,7 @@ from mobot_cli.plan import GoalControl, GoalStep  # noqa: E402
 from mobot_cli.run import execute  # noqa: E402
 from mobot_cli.scenario.prepare import prepare  # noqa: E402
 from mobot_cli.timeline.goals import Driver  # noqa: E402
-from mobot_cli.timeline.local import Dwb  # noqa: E402
+from mobot_cli.timeline.local import Cloud, Dwb  # noqa: E402
 
 
 def with_local(plan):
@@ -46,15 +48,18 @@ def with_local(plan):
 
 
 class Counted:
-    """CPU seconds and calls of a Driver method, counted while installed (``with``)."""
+    """CPU seconds and calls of a Driver method, counted while installed (``with``); ``first``
+    runs before the clock starts (with the method's arguments)."""
 
-    def __init__(self, name: str):
-        self.name, self.seconds, self.calls = name, 0.0, 0
+    def __init__(self, name: str, first=None):
+        self.name, self.first, self.seconds, self.calls = name, first, 0.0, 0
 
     def __enter__(self):
         self.real = real = getattr(Driver, self.name)
 
         def counted(driver, *args):
+            if self.first is not None:
+                self.first(*args)
             started = time.process_time()
             try:
                 return real(driver, *args)
@@ -79,7 +84,9 @@ def whole_runs(repeat: int, work: Path) -> None:
             if name == "pursuit":
                 results[name].append(timed(execute, plan, prepared.resolved_yaml, work / f"run-{i}-{len(name)}"))
                 continue
-            with Counted("_avoid") as ticks, Counted("see") as scans:
+            # A scan is cast when first read (sim/sensing/readings.py): cast it before the clock
+            # starts, as the pursuit's run casts it for its records.
+            with Counted("_avoid") as ticks, Counted("see", lambda sensor, data: data.ranges) as scans:
                 results[name].append(timed(execute, plan, prepared.resolved_yaml, work / f"run-{i}-{len(name)}"))
             parts.append((ticks, scans))
     base_wall = statistics.median(w for w, _ in results["pursuit"])
@@ -93,10 +100,13 @@ def whole_runs(repeat: int, work: Path) -> None:
           f"x{pairs[0]:5.3f}-x{pairs[-1]:5.3f} ({len(pairs)} pairs; load average {load:.1f} before, "
           f"{os.getloadavg()[0]:.1f} after)")
     ticks = statistics.median(t.seconds for t, _ in parts)
+    scans = statistics.median(s.seconds for _, s in parts)
     calls = parts[0][0].calls
+    extra = statistics.median(c for _, c in results["local: dwb"]) - base_cpu
     print(f"  within the dwb runs: the controller's ticks {ticks:.3f} s CPU ({calls} ticks, "
-          f"{1e6 * ticks / calls:.0f} us a tick in the run), reading the scans "
-          f"{statistics.median(s.seconds for _, s in parts):.3f} s ({parts[0][1].calls} scans)")
+          f"{1e6 * ticks / calls:.0f} us a tick in the run), taking the scans' points "
+          f"{scans:.3f} s ({parts[0][1].calls} scans); the rest of the {extra:.3f} s more, "
+          f"{extra - ticks - scans:.3f} s, is the run's own work on the different drive")
 
 
 def one_tick(calls: int = 400) -> None:
@@ -110,9 +120,10 @@ def one_tick(calls: int = 400) -> None:
     for name, points, path in (("path clear", walls, clear), ("path blocked", np.vstack([walls, chair]), blocked)):
         dwb = Dwb(GoalControl(), 0.05, 0.26)
         dwb.v = 0.2
+        cloud = Cloud(points)  # as a run keeps a scan's points from tick to tick
         started = time.process_time()
         for _ in range(calls):
-            dwb.command(points, path)
+            dwb.command(cloud, path)
             dwb.v, dwb.w = 0.2, 0.0
         print(f"  one tick, {name:<13} {1e6 * (time.process_time() - started) / calls:7.0f} us CPU")
 

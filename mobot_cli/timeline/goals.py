@@ -109,7 +109,7 @@ class Driver:
         self.footprint = footprint
         self.sees = any(isinstance(item, GoalStep) and item.control.local for item in self.items)
         self.scans: dict[str, object] = {}
-        self.cloud = None  # the scans joined: (n, 2) world points
+        self.cloud = None  # the scans joined (local.Cloud of world points)
         self.local = None
         self.progress_steps = max(1, round(PROGRESS_SECONDS * rate_hz))
         self.progress: tuple[int, float, float] = (0, 0.0, 0.0)  # step, true x, y: the progress check
@@ -237,13 +237,12 @@ class Driver:
 
     def _avoid(self, pose: PlanarPose, state: RobotState) -> tuple[float, float]:
         """The local controller's twist: lidar points and the route ahead in the robot's frame."""
-        from mobot_cli.timeline.local import WAVE_REACH, in_frame, joined, path_in_frame
+        from mobot_cli.timeline.local import WAVE_REACH, Cloud, joined, path_in_frame
 
         if self.cloud is None:
-            self.cloud = joined(list(self.scans.values()))
-        points = in_frame(self.cloud, state.true_x, state.true_y, state.true_yaw)
+            self.cloud = Cloud(joined(list(self.scans.values())))
         path = path_in_frame(self.pursuit.ahead(pose, WAVE_REACH), pose.x, pose.y, pose.yaw)
-        choice = self.local.command(points, path, (state.true_x, state.true_y, state.true_yaw))
+        choice = self.local.command(self.cloud, path, (state.true_x, state.true_y, state.true_yaw))
         # It stands because nothing free is better, not because something holds it: stuck if it lasts.
         self.stood = not choice.admissible or (abs(choice.linear) < STILL_LINEAR and abs(choice.angular) < BLOCKED_TURN)
         stop = self.pursuit.route[self.pursuit.stop]

@@ -90,55 +90,71 @@ class Dwb:
         self.v = self.w = 0.0  # the twist last commanded
         self.spun = 0.0  # the sign of the last turn on the spot (0: none since the reset)
         self.spun_at = (0.0, 0.0, 0.0)  # world x, y, yaw where it was (for the reset)
-        ramp = np.arange(1, STEPS + 1) * (SIM_TIME / STEPS)
-        self._ramp = ramp  # s: the time of each pose
+        # How far each speed can move by each pose (its time t = 1..STEPS steps), times the step
+        # (rollouts integrate v h and w h).
+        h = SIM_TIME / STEPS
+        ramp = np.arange(1, STEPS + 1) * h
+        self._v_ramp, self._w_ramp = control.linear_acceleration * ramp * h, control.angular_acceleration * ramp * h
         # The window and its rollouts depend on the current twist alone: kept for the twists seen
         # (a robot cruising or turning at its limits meets the same one tick after tick).
         self._fans: dict[tuple[float, float], _Fan] = {}
 
-    def command(self, obstacles: np.ndarray, path: np.ndarray, pose=(0.0, 0.0, 0.0)) -> Choice:
-        """The twist for this tick. ``obstacles``: (n, 2) lidar points in the robot frame;
+    def command(self, obstacles, path: np.ndarray, pose=(0.0, 0.0, 0.0)) -> Choice:
+        """The twist for this tick. ``obstacles``: lidar points, a ``Cloud`` or (n, 2) world x, y;
         ``path``: (m, 2) the path ahead in the robot frame, its last point the local goal;
-        ``pose``: the robot's world x, y, yaw (for the oscillation critic's reset only)."""
+        ``pose``: the robot's world x, y, yaw (the points are put in its frame; the oscillation
+        critic's reset). With the default pose the points are in the robot's frame."""
         fan = self._fan()
-        vs, ws, xs, ys = fan.vs, fan.ws, fan.xs, fan.ys
+        vs, ws = fan.vs, fan.ws
+        cloud = obstacles if isinstance(obstacles, Cloud) else Cloud(obstacles)
+        # The points in the robot's frame and their squared distances from it (3, n), one product.
+        mine = cloud.seen_from(pose)
         reach = SIM_TIME * max(self.control.max_linear, abs(self.v)) + self.radius + INFLATION
-        d2 = np.einsum("ij,ij->i", obstacles, obstacles)
-        near = obstacles[d2 <= reach * reach]
+        near = mine[:, mine[2] <= reach * reach]
         cost, ok = self._obstacle_cost(fan, near)
         if self.spun:
             ok &= self._not_oscillating(vs, ws, pose)
         path, beyond = _cut(path, LOCAL_PLAN)
-        blocked = self._path_blocked(path, near)
-        score = WEIGHTS["BaseObstacle"] * cost if len(near) else np.zeros(len(vs))
-        fx, fy = fan.fx, fan.fy
-        # The align critics aim the robot's nose (the point ahead of it) at the goal moved
-        # FORWARD_POINT on along the line from the robot, as nav2's GoalAlign does: a robot that
-        # stops on the goal facing it scores zero.
-        seen = obstacles[d2 <= WAVE_REACH * WAVE_REACH] if blocked else near
-        goal = self._past(beyond, seen) if blocked else path[-1]
-        along = math.hypot(goal[0], goal[1])
-        nose = goal + FORWARD_POINT * (goal / along if along > 1e-9 else np.array([1.0, 0.0]))
+        route = path.tolist()
+        goal = route[-1]
+        nose = _nose(goal)
+        # One pass gives every distance the path critics and the path's check read: of the last
+        # poses, the points ahead of them and the near lidar points, from each segment of the path,
+        # from the stretch on from the goal to the nose target, and from the goal and the nose.
+        count, segments = len(vs), max(1, len(route) - 1)
+        ends = _segment_rows(route, nose)
+        far = _segment_d2(np.concatenate((fan.ends, near[:2]), axis=1), ends)
+        from_path = far[0] if segments == 1 else far[:segments].min(axis=0)
+        slack = self.radius - MARGIN - PATH_SLACK
+        # The path ahead runs into a point when it passes nearer than the footprint's radius less
+        # PATH_SLACK. A planned path keeps that radius from the map's obstacles on the planner's
+        # grid, so a doorway or a gap it threads is not blocked; something new on it is.
+        blocked = near.shape[1] > 0 and len(route) >= 2 and slack > 0.0 and bool(
+            (from_path[2 * count:] < slack * slack).any())
+        score = cost
         if blocked:  # a path through an obstacle is no guide: the wavefront leads round it
+            # The align critics aim the robot's nose (the point ahead of it) at the goal moved
+            # FORWARD_POINT on along the line from the robot, as nav2's GoalAlign does.
+            seen = mine[:2, mine[2] <= WAVE_REACH * WAVE_REACH].T
+            goal = self._past(beyond, seen)
+            nose = _nose(goal)
             field = Wavefront(goal, seen, self.radius)
-            score += WEIGHTS["GoalDist"] * field.at(xs[:, -1], ys[:, -1]) / CELL
-            score += WEIGHTS["GoalAlign"] * field.at(fx - nose[0] + goal[0], fy - nose[1] + goal[1]) / CELL
+            score += WEIGHTS["GoalDist"] * field.at(fan.ex, fan.ey) / CELL
+            score += WEIGHTS["GoalAlign"] * field.at(fan.fx - nose[0] + goal[0], fan.fy - nose[1] + goal[1]) / CELL
         else:
-            route = path.tolist()
-            # PathDist of the last poses and PathAlign of the points ahead of them in one call; the
-            # align critic's path goes on to the nose target: one more segment.
-            both = _to_polyline(fan.efx, fan.efy, route)
-            count = len(vs)
-            align = np.minimum(both[count:], _to_polyline(fx, fy, [route[-1], nose.tolist()]))
-            score += (WEIGHTS["PathDist"] / CELL) * both[:count]
-            score += (WEIGHTS["PathAlign"] / CELL) * align
-            score += WEIGHTS["GoalDist"] * np.hypot(fan.ex - goal[0], fan.ey - goal[1]) / CELL
-            score += WEIGHTS["GoalAlign"] * np.hypot(fx - nose[0], fy - nose[1]) / CELL
+            # PathDist of the last poses; PathAlign of the points ahead of them, its path going on
+            # to the nose target (one more segment); GoalDist and GoalAlign from the goal and the nose.
+            parts = np.empty((4, count))
+            parts[0] = from_path[:count]
+            np.minimum(from_path[count:2 * count], far[segments, count:2 * count], out=parts[1])
+            parts[2] = far[segments + 1, :count]
+            parts[3] = far[segments + 2, count:2 * count]
+            score += _CRITICS @ np.sqrt(parts, out=parts)
         if not ok.any():
             self._step(0.0, 0.0)
             return Choice(self.v, self.w, False, blocked)
-        score = np.where(ok, score, np.inf)
-        best = int(np.argmin(score))
+        score[~ok] = np.inf
+        best = int(score.argmin())
         self._step(float(vs[best]), float(ws[best]))
         if abs(self.v) < SPIN and abs(self.w) > 1e-3 and np.sign(self.w) != self.spun:
             self.spun, self.spun_at = float(np.sign(self.w)), tuple(pose)
@@ -150,57 +166,58 @@ class Dwb:
         if fan is None:
             if len(self._fans) >= FANS_KEPT:
                 self._fans.clear()
-            vs, ws = self._window()
-            fan = self._fans[key] = _Fan(vs, ws, *self._rollouts(vs, ws))
+            fan = self._fans[key] = self._rollouts(*self._window())
         return fan
 
-    def _window(self) -> tuple[np.ndarray, np.ndarray]:
-        """The target (v, w) pairs: a grid over the reachable window, flattened."""
+    def _window(self) -> tuple[list, list]:
+        """The target speeds v and turn rates w sampled over the reachable window."""
         c = self.control
         v_lo = max(0.0, self.v - c.linear_acceleration * SIM_TIME)
         v_hi = min(c.max_linear, self.v + c.linear_acceleration * SIM_TIME)
         w_lo = max(-c.max_angular, self.w - c.angular_acceleration * SIM_TIME)
         w_hi = min(c.max_angular, self.w + c.angular_acceleration * SIM_TIME)
-        v = _spaced(v_lo, v_hi, _V_INDEX)
-        w = _spaced(w_lo, w_hi, _W_INDEX)
+        v, w = _spaced(v_lo, v_hi, V_SAMPLES), _spaced(w_lo, w_hi, W_SAMPLES)
         if w_lo < 0.0 < w_hi:  # straight on is always a sample
-            w[np.argmin(np.abs(w))] = 0.0
-        return np.repeat(v, W_SAMPLES), np.tile(w, V_SAMPLES)
+            w[min(range(W_SAMPLES), key=lambda k: abs(w[k]))] = 0.0
+        return v, w
 
-    def _rollouts(self, vs: np.ndarray, ws: np.ndarray):
-        """Poses (T, STEPS) of each target driven from the current twist, speeds ramping at the
+    def _rollouts(self, v: list, w: list) -> "_Fan":
+        """Each (v, w) target driven for SIM_TIME from the current twist, speeds ramping at the
         acceleration limits (Euler steps, as nav2's generator integrates)."""
-        c, t, h = self.control, self._ramp, SIM_TIME / STEPS
-        v = _toward(self.v, vs[:, None], c.linear_acceleration * t[None, :])
-        w = _toward(self.w, ws[:, None], c.angular_acceleration * t[None, :])
-        yaw = np.cumsum(w * h, axis=1)
-        heading = yaw - w * h  # the heading at the start of each step
-        xs = np.cumsum(v * np.cos(heading) * h, axis=1)
-        ys = np.cumsum(v * np.sin(heading) * h, axis=1)
-        return xs, ys, yaw
+        h = SIM_TIME / STEPS
+        vs, ws = np.array([a for a in v for _ in w]), np.array(w * V_SAMPLES)
+        vh = np.minimum(np.maximum(vs[:, None] * h, self.v * h - self._v_ramp), self.v * h + self._v_ramp)
+        wh = np.minimum(np.maximum(ws[:, None] * h, self.w * h - self._w_ramp), self.w * h + self._w_ramp)
+        yaw = np.cumsum(wh, axis=1)
+        heading = yaw - wh  # the heading at the start of each step
+        xy = np.empty((2,) + heading.shape)
+        np.cos(heading, out=xy[0])
+        np.sin(heading, out=xy[1])
+        xy *= vh
+        return _Fan(vs, ws, np.cumsum(xy, axis=2, out=xy), yaw[:, -1])
 
-    def _obstacle_cost(self, fan: "_Fan", points: np.ndarray):
-        """BaseObstacle: (cost of the last pose, admissible) per rollout."""
+    def _obstacle_cost(self, fan: "_Fan", near: np.ndarray):
+        """BaseObstacle: (weighted cost of the last pose, admissible) per rollout, from the points
+        ``near`` the robot: (3, n) x, y and squared distance from it."""
         count = len(fan.vs)
-        if not len(points):
+        if not near.shape[1]:
             return np.zeros(count), np.ones(count, dtype=bool)
-        squares = np.einsum("ij,ij->i", points, points)
-        start = float(squares.min())
-        # Only a point within the farthest pose's reach plus the radius can touch a pose: every
-        # pose is checked against those; only the last poses cost, against the points they reach.
-        touch = squares <= (fan.reach + self.radius) ** 2
-        cost_near = squares <= (fan.reach + self.radius + INFLATION) ** 2
-        if not cost_near.any():
-            return np.zeros(count), np.ones(count, dtype=bool)
-        last = np.sqrt(np.maximum(_min_d2(fan.last32, fan.last_sq, points[cost_near], squares[cost_near]), 0.0))
+        # Each pose's squared distance to its nearest point, |p|^2 + min over q of (|q|^2 - 2 p.q):
+        # one product of the points (x, y, |q|^2) with the poses (-2x, -2y, 1), in float32, laid
+        # out so that the minimum runs down columns (numpy's fast way).
+        nearest = (near.T.astype(np.float32) @ fan.poses).min(axis=0)
+        nearest += fan.poses_sq
+        nearest = nearest.reshape(fan.shape)
+        last = np.sqrt(np.maximum(nearest[:, -1], 0.0))
+        start = float(near[2].min())
         if start < self.radius * self.radius:  # already within reach of a point: moving away is allowed
             ok = last >= math.sqrt(start)
-        elif touch.any():
-            nearest = _min_d2(fan.poses32, fan.poses_sq, points[touch], squares[touch]).reshape(fan.xs.shape)
-            ok = (nearest >= self.radius * self.radius).all(axis=1)
         else:
-            ok = np.ones(count, dtype=bool)
-        cost = np.where(last < self.radius + INFLATION, 252.0 * np.exp(-COST_SCALING * (last - self.radius)), 0.0)
+            ok = (nearest >= self.radius * self.radius).all(axis=1)
+        # nav2's inflation: 252 exp(-COST_SCALING (d - radius)) within INFLATION, weighted.
+        cost = np.exp(last * -COST_SCALING + COST_SCALING * self.radius)
+        cost *= 252.0 * WEIGHTS["BaseObstacle"]
+        cost[last >= self.radius + INFLATION] = 0.0
         return cost, ok
 
     def _not_oscillating(self, vs: np.ndarray, ws: np.ndarray, pose) -> np.ndarray:
@@ -213,15 +230,6 @@ class Dwb:
         if not self.spun:
             return np.ones(len(vs), dtype=bool)
         return ~((vs < SPIN) & (np.sign(ws) == -self.spun))
-
-    def _path_blocked(self, path: np.ndarray, points: np.ndarray) -> bool:
-        """Whether the path ahead runs into a point: passes nearer than the footprint's radius
-        less ``PATH_SLACK``. A planned path keeps that radius from the map's obstacles on the
-        planner's grid, so a doorway or a gap it threads is not blocked; something new on it is."""
-        if not len(points) or len(path) < 2:
-            return False
-        reach = self.radius - MARGIN - PATH_SLACK
-        return bool((_to_polyline(points[:, 0], points[:, 1], path.tolist()) < reach).any())
 
     def _past(self, path: np.ndarray, points: np.ndarray) -> np.ndarray:
         """The local goal when the path ahead is blocked: its first point clear of every lidar
@@ -244,17 +252,26 @@ class Dwb:
 class _Fan:
     """The rollouts of one window: targets, poses, and what the critics read of them."""
 
-    def __init__(self, vs: np.ndarray, ws: np.ndarray, xs: np.ndarray, ys: np.ndarray, yaws: np.ndarray):
-        self.vs, self.ws, self.xs, self.ys = vs, ws, xs, ys
-        self.poses32 = np.stack([xs.ravel(), ys.ravel()], axis=1).astype(np.float32)
-        self.poses_sq = (self.poses32 * self.poses32).sum(axis=1)
-        self.reach = float(np.sqrt(self.poses_sq.max()))  # m: the farthest pose from the robot
-        self.fx = xs[:, -1] + FORWARD_POINT * np.cos(yaws[:, -1])
-        self.fy = ys[:, -1] + FORWARD_POINT * np.sin(yaws[:, -1])
-        self.ex, self.ey = xs[:, -1].copy(), ys[:, -1].copy()
-        self.efx, self.efy = np.concatenate([self.ex, self.fx]), np.concatenate([self.ey, self.fy])
-        self.last32 = np.stack([self.ex, self.ey], axis=1).astype(np.float32)
-        self.last_sq = (self.last32 * self.last32).sum(axis=1)
+    def __init__(self, vs: np.ndarray, ws: np.ndarray, xy: np.ndarray, yaw: np.ndarray):
+        """``xy``: (2, T, STEPS) the poses' x and y; ``yaw``: (T,) the last poses' yaw."""
+        self.vs, self.ws, self.shape = vs, ws, xy.shape[1:]
+        count = len(vs)
+        # Each pose as (-2x, -2y, 1) (3, T * STEPS, float32) and its |p|^2: its distances to
+        # points in one matrix product.
+        self.poses = np.empty((3, count * STEPS), dtype=np.float32)
+        np.multiply(xy.reshape(2, -1), -2.0, out=self.poses[:2], casting="same_kind")
+        self.poses[2] = 1.0
+        self.poses_sq = np.einsum("ij,ij->j", xy.reshape(2, -1), xy.reshape(2, -1)).astype(np.float32)
+        # The last poses (ex, ey) and the points FORWARD_POINT ahead of them (fx, fy): (2, 2T).
+        self.ends = np.empty((2, 2 * count))
+        self.ends[:, :count] = xy[:, :, -1]
+        ahead = self.ends[:, count:]
+        np.cos(yaw, out=ahead[0])
+        np.sin(yaw, out=ahead[1])
+        ahead *= FORWARD_POINT
+        ahead += self.ends[:, :count]
+        self.ex, self.ey = self.ends[0, :count], self.ends[1, :count]
+        self.fx, self.fy = self.ends[0, count:], self.ends[1, count:]
 
 
 def _cut(path: np.ndarray, length: float) -> tuple[np.ndarray, np.ndarray]:
@@ -290,76 +307,99 @@ def _nearest(samples: np.ndarray, points: np.ndarray) -> np.ndarray:
     return np.sqrt(np.maximum(d2.min(axis=1), 0.0))
 
 
-_V_INDEX = np.arange(V_SAMPLES, dtype=float)
-_W_INDEX = np.arange(W_SAMPLES, dtype=float)
+def _spaced(lo: float, hi: float, count: int) -> list:
+    """np.linspace(lo, hi, count).tolist(), the same numbers, without numpy."""
+    step = (hi - lo) / (count - 1)
+    return [k * step + lo for k in range(count - 1)] + [hi]
 
 
-def _spaced(lo: float, hi: float, index: np.ndarray) -> np.ndarray:
-    """np.linspace(lo, hi, len(index)), the same numbers, without its per-call overhead."""
-    values = index * ((hi - lo) / (len(index) - 1)) + lo
-    values[-1] = hi
-    return values
+def _nose(goal: list) -> list:
+    """The align critics' target: the goal moved FORWARD_POINT on along the line from the robot
+    (a robot that stops on the goal facing it scores zero, as nav2's GoalAlign)."""
+    along = math.hypot(goal[0], goal[1])
+    if along <= 1e-9:
+        return [goal[0] + FORWARD_POINT, goal[1]]
+    return [goal[0] * (1.0 + FORWARD_POINT / along), goal[1] * (1.0 + FORWARD_POINT / along)]
 
 
-def _min_d2(poses32: np.ndarray, poses_sq: np.ndarray, points: np.ndarray, squares: np.ndarray) -> np.ndarray:
-    """Each pose's squared distance (float32) to its nearest point."""
-    d2 = poses_sq[:, None] + squares.astype(np.float32)[None, :] - 2.0 * (poses32 @ points.astype(np.float32).T)
-    return d2.min(axis=1)
-
-
-def _toward(current, target, step):
-    return np.minimum(np.maximum(target, current - step), current + step)
-
-
-def _to_polyline(px: np.ndarray, py: np.ndarray, path: list) -> np.ndarray:
-    """Distance of each point (px, py) from the polyline ``path`` ([[x, y], ...]; one point:
-    from it), vectorised over the points and the segments at once."""
-    if len(path) < 2:
-        return np.hypot(px - path[0][0], py - path[0][1])
-    if len(path) == 2:  # one segment (most ticks): fewer numpy calls than the general form
-        (ax, ay), (bx, by) = path
+def _segment_rows(route: list, nose: list) -> np.ndarray:
+    """(5, k, 1) start x, start y, dx, dy and 1/length^2 (0: no length) of the route's segments
+    (one point: that point), the segment from its end to ``nose``, and the end and ``nose`` as
+    points."""
+    pairs = list(zip(route[:-1], route[1:])) or [(route[0], route[0])]
+    pairs += [(route[-1], nose), (route[-1], route[-1]), (nose, nose)]
+    rows = []
+    for (ax, ay), (bx, by) in pairs:
         dx, dy = bx - ax, by - ay
-        rx, ry = px - ax, py - ay
         length2 = dx * dx + dy * dy
-        if length2 > 1e-12:
-            t = np.minimum(np.maximum((rx * dx + ry * dy) / length2, 0.0), 1.0)
-            rx, ry = rx - t * dx, ry - t * dy
-        return np.sqrt(rx * rx + ry * ry)
-    ends = np.asarray(path, dtype=float)
-    ax, ay = ends[:-1, 0:1], ends[:-1, 1:2]
-    dx, dy = ends[1:, 0:1] - ax, ends[1:, 1:2] - ay
-    length2 = dx * dx + dy * dy
-    rx, ry = px[None, :] - ax, py[None, :] - ay
-    # A segment of no length: t = 0 (its end point), from a zero numerator over 1.
-    t = np.minimum(np.maximum((rx * dx + ry * dy) / np.where(length2 > 1e-12, length2, 1.0), 0.0), 1.0)
-    rx, ry = rx - t * dx, ry - t * dy
-    return np.sqrt((rx * rx + ry * ry).min(axis=0))
+        rows.append((ax, ay, dx, dy, 1.0 / length2 if length2 > 1e-12 else 0.0))
+    return np.array(rows).T[:, :, None]
+
+
+def _segment_d2(points: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """(k, n) squared distance of each point (2, n) from each segment of ``_segment_rows``."""
+    ax, ay, dx, dy, inverse = rows
+    rx, ry = points[0] - ax, points[1] - ay
+    t = rx * dx
+    t += ry * dy
+    t *= inverse
+    np.maximum(t, 0.0, out=t)
+    np.minimum(t, 1.0, out=t)
+    rx -= t * dx
+    ry -= t * dy
+    rx *= rx
+    ry *= ry
+    rx += ry
+    return rx
+
+
+_CRITICS = np.array([WEIGHTS["PathDist"], WEIGHTS["PathAlign"], WEIGHTS["GoalDist"], WEIGHTS["GoalAlign"]]) / CELL
+
+
+class Cloud:
+    """Lidar points (world x, y), kept as rows x, y, 1, x^2 + y^2 (4, n): put in a robot's frame
+    with their distances from it by one small matrix product per control tick."""
+
+    def __init__(self, points: np.ndarray):
+        points = np.asarray(points, dtype=float).reshape(-1, 2)
+        self.lifted = np.empty((4, len(points)))
+        self.lifted[:2] = points.T
+        self.lifted[2] = 1.0
+        self.lifted[3] = np.einsum("ij,ij->i", points, points)
+
+    def seen_from(self, pose) -> np.ndarray:
+        """(3, n): each point's x and y in the frame of a robot at ``pose`` (world x, y, yaw) and
+        its squared distance from the robot."""
+        x, y, yaw = pose
+        c, s = math.cos(yaw), math.sin(yaw)
+        frame = np.array([[c, s, -c * x - s * y, 0.0],
+                          [-s, c, s * x - c * y, 0.0],
+                          [-2.0 * x, -2.0 * y, x * x + y * y, 1.0]])
+        return frame @ self.lifted
 
 
 def level_points(scan) -> np.ndarray:
     """A lidar scan's returns as world (x, y) points (n, 2): a 3D lidar gives its beam row
     nearest the horizontal (its floor and ceiling returns are not obstacles)."""
     beams = scan.beams
-    row = int(np.argmin(np.abs(beams.vertical)))
-    ranges = scan.ranges[row].astype(float)
-    keep = np.isfinite(ranges)
+    row = 0 if len(beams.vertical) == 1 else int(np.argmin(np.abs(beams.vertical)))
     count = len(beams.horizontal)
-    local = beams.directions[row * count:(row + 1) * count][keep] * ranges[keep, None]
+    ranges = scan.ranges[row]
     x, y, z, w = scan.quat
-    rotation = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                         [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)]])
-    return local @ rotation.T + np.array(scan.position[:2])
+    # The beams' directions in the world's x and y (the lidar may be tilted), times their ranges.
+    rotation = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y + z * w)],
+                         [2 * (x * y - z * w), 1 - 2 * (x * x + z * z)],
+                         [2 * (x * z + y * w), 2 * (y * z - x * w)]])
+    keep = np.isfinite(ranges)
+    points = beams.directions[row * count:(row + 1) * count][keep] @ rotation
+    points *= ranges[keep, None]
+    points += scan.position[:2]
+    return points
 
 
 def joined(clouds: list) -> np.ndarray:
     """Point clouds (each (n, 2)) as one array."""
     return np.concatenate(clouds) if clouds else np.zeros((0, 2))
-
-
-def in_frame(points: np.ndarray, x: float, y: float, yaw: float) -> np.ndarray:
-    """World (x, y) points (n, 2) in the frame of a robot at (x, y, yaw)."""
-    c, s = math.cos(yaw), math.sin(yaw)
-    return (points - (x, y)) @ np.array([[c, -s], [s, c]])
 
 
 def path_in_frame(points: list, x: float, y: float, yaw: float) -> np.ndarray:
