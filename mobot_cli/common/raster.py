@@ -88,15 +88,35 @@ def fill_segment(mask: np.ndarray, grid: Grid, a: Point, b: Point) -> None:
 
 
 def fill_shape(mask: np.ndarray, grid: Grid, shape) -> None:
-    """A floor-plan shape: a polygon (3 points or more) or a segment (2 points)."""
+    """A floor-plan shape: a polygon (3 points or more) or a segment (2 points). A polygon
+    thinner than a cell may hold no cell's centre: its corners' cells are set too, and for the
+    outline of a solid (more than 3 points) the cells along its longest extent (``_spine``), so a
+    glass pane still blocks. A mesh's faces are triangles: floorplan.py draws those seen nearly
+    edge-on as segments."""
     if len(shape) >= 3:
         fill_polygon(mask, grid, shape)
         for point in shape:  # a sliver thinner than a cell still blocks the cell it is in
             cell = grid.cell_of(*point)
             if cell is not None:
                 mask[cell[1], cell[0]] = True
+        spine = _spine(np.asarray(shape, dtype=float), grid.cell) if len(shape) > 3 else None
+        if spine is not None:
+            fill_segment(mask, grid, *spine)
     elif len(shape) == 2:
         fill_segment(mask, grid, shape[0], shape[1])
+
+
+def _spine(pts: np.ndarray, cell: float):
+    """The two points of a polygon farthest apart when it is longer than ``cell`` and thinner
+    (twice its area over that distance: a triangle's height over its longest side, about twice a
+    strip's width), else None: a smaller one lies in its corners' cells."""
+    gaps = np.hypot(pts[:, None, 0] - pts[None, :, 0], pts[:, None, 1] - pts[None, :, 1])
+    i, j = np.unravel_index(int(gaps.argmax()), gaps.shape)
+    x, y = pts[:, 0], pts[:, 1]
+    area2 = abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+    if gaps[i, j] <= cell or area2 >= cell * gaps[i, j]:
+        return None
+    return tuple(pts[i]), tuple(pts[j])
 
 
 def dilate(mask: np.ndarray, cells: float) -> np.ndarray:

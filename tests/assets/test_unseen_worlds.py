@@ -1,7 +1,9 @@
 """Classes of trouble public Gazebo worlds gave mobot, each on a small world written here.
 
 - a COLLADA/OBJ mesh with exporter debris 1e17 m away (chaolmu's pot_flower in office_env_large)
-- walls of a mesh that lean by micrometres (chaolmu's cpr_office): a gap on the map
+- walls of a mesh that lean by micrometres (chaolmu's cpr_office), or by the 0.8 mrad of a
+  roll of 1.57 for pi/2 (fetch_gazebo's test_zone): a gap on the map and for the planner
+- a glass pane thinner than a cell (a box 1 cm thick): only its corners were on the map
 - a dense furniture mesh near a robot (chaolmu's office_small): PyBullet's closest-point answer
   overflowed and the process crashed; and its 50,000-triangle cups on a table, answered a point
   per triangle at every clearance read once within the radius asked, took 0.29x real time
@@ -11,6 +13,7 @@
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import sys
@@ -79,11 +82,12 @@ def test_a_mesh_whose_triangles_all_lie_far_away_is_a_located_error(tmp_path):
     assert err.value.location.key == "model[thing].link[l].collision[c]"
 
 
-@pytest.mark.parametrize("lean", [0.0, 3e-5, 4e-4])
+@pytest.mark.parametrize("lean", [0.0, 3e-5, 4e-4, 2.4e-3, 0.015])
 def test_a_mesh_wall_leaning_by_micrometres_is_a_whole_wall_on_the_map(tmp_path, lean):
     """A 2 m wall along y = 1, 1 m tall, its top edge `lean` off the vertical: its shadow is a
     sliver thinner than any cell's centre can fall in, so it is drawn as its side, as an
-    upright wall is (cpr_office's walls lean by 3e-5 m; before, only their ends were mapped)."""
+    upright wall is (cpr_office's walls lean by 3e-5 m; a 3 m wall stood up by a roll of 1.57,
+    as test_zone's, by 2.4 mm; 0.015 m is 0.86 degrees. Before, only their ends were mapped)."""
     wall = [(0.0, 1.0, 0.0), (2.0, 1.0, 0.0), (2.0, 1.0 + lean, 1.0), (0.0, 1.0 + lean, 1.0)]
     path = mesh_world(tmp_path, obj(wall, [(0, 1, 2), (0, 2, 3)]))
     done = invoke(["map", path, "--out", tmp_path / "map", "--origin", "-1,-1", "--size", "4,4"])
@@ -94,6 +98,28 @@ def test_a_mesh_wall_leaning_by_micrometres_is_a_whole_wall_on_the_map(tmp_path,
     columns = np.nonzero(row == 0)[0]
     assert len(columns) == 41 and columns[0] == 20 and columns[-1] == 60  # x = 0 .. 2 m, every cell
     assert (image == 0).sum() == 41
+
+
+def test_a_glass_pane_thinner_than_a_cell_is_a_whole_wall_on_the_map(tmp_path):
+    """A 3 m x 1 cm box standing at 0.3 rad: no cell's centre lies in its shadow, yet every cell
+    along it is occupied (before: its four corners' cells)."""
+    path = tmp_path / "w.sdf"
+    path.write_text(
+        "<?xml version='1.0'?><sdf version='1.9'><world name='w'><model name='pane'><static>true</static>"
+        "<pose>0 0 0.5 0 0 0.3</pose><link name='l'><collision name='c'><geometry><box><size>3 0.01 1</size>"
+        "</box></geometry></collision></link></model></world></sdf>")
+    done = invoke(["map", path, "--out", tmp_path / "map", "--origin", "-2,-1", "--size", "4,2"])
+    assert done.exit_code == 0, done.stderr
+    data = (tmp_path / "map" / "map.pgm").read_bytes()
+    image = np.frombuffer(data[len(b"P5\n80 40\n255\n"):], dtype=np.uint8).reshape(40, 80)[::-1]
+    # the occupied cells' centres, along the pane and across it: end to end without a gap, and
+    # none further from it than a cell
+    rows, columns = np.nonzero(image == 0)
+    x, y = -2.0 + (columns + 0.5) * 0.05, -1.0 + (rows + 0.5) * 0.05
+    along = np.sort(np.cos(0.3) * x + np.sin(0.3) * y)
+    across = np.abs(-np.sin(0.3) * x + np.cos(0.3) * y)
+    assert along[0] < -1.45 and along[-1] > 1.45 and np.diff(along).max() < 0.05 * math.sqrt(2.0)  # neighbours
+    assert across.max() < 0.05 and 60 <= len(rows) <= 100
 
 
 def _plate(n: int) -> str:

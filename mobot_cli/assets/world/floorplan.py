@@ -54,6 +54,10 @@ Part = Polygon | MeshShadow  # what a shadow is made of
 BAND = (0.02, 2.0)  # metres above the floor: lower is floor, higher is ceiling
 ROUND = 24  # points on a projected circle
 SLIVER = 1e-3  # m: a triangle's shadow thinner than this is drawn as its longest side
+# and so is a face leaning less than this off upright (sin of 1 degree): a wall stood up by a
+# rounded roll (Gazebo poses often give 1.57 for pi/2) casts a shadow a few millimetres wide,
+# which holds no cell's centre, and would vanish from the map if it were filled
+UPRIGHT = math.sin(math.radians(1.0))
 
 
 def floor_plan(world: WorldPlan, starts: list[tuple[float, float, float]] = ()) -> list[Polygon]:
@@ -137,14 +141,17 @@ def _mesh_shadow(path: str, scale: tuple[float, ...], xyz: Vec, quat: Quat,
     tri = world[faces]  # (n, 3 corners, xyz)
     z = tri[:, :, 2]
     keep = (z.max(axis=1) >= band[0]) & (z.min(axis=1) <= band[1])
-    tri = tri[keep][:, :, :2]
-    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
-    area = np.abs((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
+    tri = tri[keep]
+    # twice each face's area in 3D; its shadow's (the normal's z) is ``area`` below
+    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    tri = tri[:, :, :2]
+    area = np.abs(normal[:, 2])
     sides = np.stack([np.hypot(*(np.roll(tri, -1, axis=1) - tri)[:, k].T) for k in range(3)], axis=1)
     # the rest are upright faces seen edge-on: a wall's sides, drawn as lines; so are faces
-    # within SLIVER of upright (exported walls lean by a few micrometres), whose shadow is
-    # too thin to hold a cell's centre
-    flat = (area > 1e-6) & (area > SLIVER * sides.max(axis=1, initial=0.0))
+    # within SLIVER of upright (exported walls lean by a few micrometres) or leaning less than
+    # UPRIGHT, whose shadow is too thin to hold a cell's centre
+    flat = (area > 1e-6) & (area > SLIVER * sides.max(axis=1, initial=0.0)) & \
+        (area >= UPRIGHT * np.sqrt(np.einsum("ij,ij->i", normal, normal)))
     edge_on = tri[~flat]
     ends = np.stack([edge_on, np.roll(edge_on, -1, axis=1)], axis=2)  # (n, 3 edges, 2 ends, xy)
     length = np.hypot(*(ends[:, :, 1] - ends[:, :, 0]).transpose(2, 0, 1))
