@@ -57,12 +57,17 @@ def _execute(args: list[str], env: Environment) -> int:
             with contextlib.redirect_stdout(env.stdout), contextlib.redirect_stderr(env.stderr):
                 from mobot_cli.cli.app import dispatch
 
-                return dispatch(args, env)
+                code = dispatch(args, env)
+            # What is still buffered goes out now, where a reader that has gone is OutputClosed,
+            # not at the interpreter's exit (an "Exception ignored" and exit 120).
+            env.stdout.flush()
+            return code
         except MobotError as exc:
             if env.traceback:
                 raise
             try:
                 report_error(env, exc)
+                env.stdout.flush()
             except OutputClosed as closed:  # the error's exit code still says what went wrong
                 closed.stream.discard()
             return exc.exit_code

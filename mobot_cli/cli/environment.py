@@ -29,15 +29,44 @@ class Environment:
 
     @classmethod
     def from_process(cls) -> "Environment":
-        """The real streams of this process, each asked once whether it is a terminal."""
+        """The real streams of this process, each asked once whether it is a terminal. Standard
+        output is kept for mobot alone (``_own_stdout``): what C libraries write there goes to
+        standard error."""
+        stdout_isatty = _isatty(sys.stdout)
+        _own_stdout()
         return cls(stdin=sys.stdin, stdout=ProcessStream(sys.stdout), stderr=ProcessStream(sys.stderr),
-                   stdout_isatty=_isatty(sys.stdout), stderr_isatty=_isatty(sys.stderr))
+                   stdout_isatty=stdout_isatty, stderr_isatty=_isatty(sys.stderr))
 
     @classmethod
     def captured(cls, stdin: str = "", **decisions: Any) -> "Environment":
         """Fresh io.StringIO streams: plain 80-column text unless `decisions` say otherwise."""
         decisions = {"color": False, "width": 80, **decisions}
         return cls(stdin=io.StringIO(stdin), stdout=io.StringIO(), stderr=io.StringIO(), **decisions)
+
+
+def _own_stdout() -> None:
+    """Give ``sys.stdout`` a descriptor of its own and point descriptor 1 at standard error.
+
+    PyBullet, its mesh importers and other C code print warnings to descriptor 1 themselves
+    (``b3Warning ... Unsupported texture image format``), where they would land inside
+    ``--json`` answers, CSV on stdout and piped output. Silencing each call that might print
+    misses the next one; this way whatever C code prints goes to standard error, and only what
+    mobot writes through ``sys.stdout`` reaches standard output."""
+    stream = sys.stdout
+    try:
+        if stream is None or stream.fileno() != 1:
+            return
+        stream.flush()
+        own = os.dup(1)
+        os.dup2(2, 1)
+    except (OSError, ValueError, AttributeError, io.UnsupportedOperation):  # no real descriptor 1: nothing to guard
+        return
+    raw = io.FileIO(own, "w", closefd=True)
+    # buffered, line-buffered or written through as the stream it replaces (PYTHONUNBUFFERED, a tty)
+    binary = raw if isinstance(getattr(stream, "buffer", None), io.RawIOBase) else io.BufferedWriter(raw)
+    sys.stdout = io.TextIOWrapper(binary, encoding=stream.encoding, errors=stream.errors,
+                                  line_buffering=stream.line_buffering,
+                                  write_through=getattr(stream, "write_through", False))
 
 
 def _isatty(stream: Optional[TextIO]) -> bool:

@@ -46,6 +46,13 @@ def first_line_then_close(command: list[str]) -> tuple[str, int, str]:
         process.stderr.close()
 
 
+@pytest.fixture(autouse=True)
+def buffered(monkeypatch):
+    """The commands' stdout buffered, as a user's shell leaves it: PYTHONUNBUFFERED (set on some
+    CI machines) would write every line at once and hide output still buffered at exit."""
+    monkeypatch.delenv("PYTHONUNBUFFERED", raising=False)
+
+
 @pytest.fixture(scope="module")
 def live(tmp_path_factory):
     """A --fast live world with a robot 'r' and a robot 'lid' that carries a lidar."""
@@ -111,3 +118,33 @@ def test_sweep_json_into_a_closed_pipe(tiny, tmp_path):
     command = mobot("sweep", tiny, "--grid", "robots.r.pose.x=0,1", "--jobs", "1", "--json", "--out", tmp_path / "s")
     assert into_a_closed_pipe(command) == (0, "")
     assert len((tmp_path / "s" / "results.csv").read_text().splitlines()) == 3  # header and both runs
+
+
+def test_what_c_code_prints_stays_out_of_a_json_answer(tmp_path):
+    """PyBullet's mesh importer prints `b3Warning ... Unsupported texture image format` to file
+    descriptor 1 itself when a mesh's material names a 1-bit colormap PNG (husarion_gz_worlds'
+    walls): `mobot run --json` stays JSON, and the warning goes to stderr."""
+    from PIL import Image
+
+    image = Image.new("P", (8, 8))
+    image.putpalette([255, 255, 255, 0, 0, 0])
+    image.save(tmp_path / "wall.png", bits=1)
+    (tmp_path / "wall.mtl").write_text("newmtl m\nKd 1 1 1\nmap_Kd wall.png\n")
+    corners = [(x, y, z) for x in (-1.0, 1.0) for y in (0.0, 0.1) for z in (0.0, 1.0)]
+    faces = [(1, 2, 4), (1, 4, 3), (5, 7, 8), (5, 8, 6), (1, 5, 6), (1, 6, 2),
+             (3, 4, 8), (3, 8, 7), (1, 3, 7), (1, 7, 5), (2, 6, 8), (2, 8, 4)]
+    vertices = "".join(f"v {x} {y} {z}\n" for x, y, z in corners)
+    (tmp_path / "wall.obj").write_text("mtllib wall.mtl\nusemtl m\n" + vertices
+                                       + "".join(f"f {a} {b} {c}\n" for a, b, c in faces))
+    (tmp_path / "w.sdf").write_text(
+        "<?xml version='1.0'?><sdf version='1.9'><world name='w'><include><uri>model://ground_plane</uri></include>"
+        "<model name='wall'><static>true</static>"
+        "<pose>0 2 0 0 0 0</pose><link name='l'><collision name='c'><geometry><mesh><uri>wall.obj</uri></mesh>"
+        "</geometry></collision></link></model></world></sdf>")
+    (tmp_path / "s.yaml").write_text(TINY.replace("name: tiny\n", "name: tiny\nworld: w.sdf\n"))
+    done = subprocess.run(mobot("run", tmp_path / "s.yaml", "--json", "--out", tmp_path / "out"), capture_output=True,
+                          text=True, cwd=REPO, timeout=WAIT,
+                          env={**os.environ, "MOBOT_CACHE_DIR": str(tmp_path / "cache")})
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["status"] == "ok"
+    assert "Unsupported texture image format" in done.stderr
