@@ -108,13 +108,13 @@ def fill_shape(mask: np.ndarray, grid: Grid, shape) -> None:
 
 def _spine(pts: np.ndarray, cell: float):
     """The two points of a polygon farthest apart when it is longer than ``cell`` and thinner
-    (twice its area over that distance: a triangle's height over its longest side, about twice a
-    strip's width), else None: a smaller one lies in its corners' cells."""
+    (its area over that distance: a strip's width), else None: a smaller one lies in its
+    corners' cells."""
     gaps = np.hypot(pts[:, None, 0] - pts[None, :, 0], pts[:, None, 1] - pts[None, :, 1])
     i, j = np.unravel_index(int(gaps.argmax()), gaps.shape)
     x, y = pts[:, 0], pts[:, 1]
     area2 = abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
-    if gaps[i, j] <= cell or area2 >= cell * gaps[i, j]:
+    if gaps[i, j] <= cell or area2 >= 2.0 * cell * gaps[i, j]:
         return None
     return tuple(pts[i]), tuple(pts[j])
 

@@ -450,3 +450,23 @@ def test_an_entity_of_the_doctype_is_refused_not_read_as_nothing(tmp_path):
     with pytest.raises(WorldError, match=r"the XML entity &d; is not expanded") as info:
         load_world(str(world), tmp_path)
     assert info.value.location.line == 2
+
+
+@pytest.mark.parametrize("joint, scenery", [
+    ("<joint name='j' type='revolute'><parent>world</parent><child>l</child>"
+     "<axis><xyz>0 0 1</xyz><limit><lower>0</lower><upper>0</upper></limit></axis></joint>", True),
+    ("<joint name='j' type='fixed'><parent>world</parent><child>l</child></joint>", True),
+    ("<joint name='j' type='revolute'><parent>world</parent><child>l</child>"
+     "<axis><xyz>0 0 1</xyz><limit><lower>-1</lower><upper>1</upper></limit></axis></joint>", False),
+])
+def test_a_model_hung_from_world_by_a_joint_that_cannot_move_is_scenery(tmp_path, joint, scenery):
+    """husarion_office's glass walls: a non-static model held by a zero-range revolute joint to
+    `world` is a wall, not a robot to leave out (its planned goto drove through it)."""
+    wall = ("<model name='glass'><pose>2 0 0 0 0 0</pose><link name='l'><pose>0 0 1.1 0 0 0</pose>"
+            "<inertial><mass>50</mass></inertial><collision name='c'><geometry><box><size>0.03 3 2.2</size>"
+            f"</box></geometry></collision></link>{joint}</model>")
+    world = load_world(str(world_file(tmp_path, wall)), tmp_path)
+    assert (world.plan.robot_models == ()) is scenery
+    assert any(b.name == "glass" for b in world.plan.bodies) is scenery
+    if scenery:
+        assert any("model(s) without joints that move are held fixed" in n and "glass" in n for n in world.notices)

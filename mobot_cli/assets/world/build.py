@@ -51,10 +51,10 @@ class _Builder:
                              "typo", model.location)
             self.skipped.append(model.name)
             return
-        if not model.static and model.joints:
+        if not model.static and any(_moves(joint) for joint in model.joints):
             self.robot(model)
             return
-        if not model.static:
+        if not model.static:  # nothing in it can move: a wall hung from `world` is scenery
             self.held_fixed.append(model.name)
         self.static_models.append(model.name)
         self.static(model)
@@ -181,8 +181,8 @@ def build_world(path: Path, resolver: ResourceResolver,
         notices.append(f"{path.name} has no collision geometry and no ground plane: robots have "
                        "nothing to stand on" + (f" ({', '.join(left)} left out)" if left else ""))
     if builder.held_fixed:
-        notices.append(f"{path.name}: {len(builder.held_fixed)} non-static model(s) without joints "
-                       f"are held fixed, as the world is static: {', '.join(builder.held_fixed[:5])}"
+        notices.append(f"{path.name}: {len(builder.held_fixed)} non-static model(s) without joints that "
+                       f"move are held fixed, as the world is static: {', '.join(builder.held_fixed[:5])}"
                        + (", ..." if len(builder.held_fixed) > 5 else ""))
     bounds = None
     if np.isfinite(builder.lo).all():
@@ -238,3 +238,13 @@ def ignored_line(file: str, ignored: dict[str, int], max_step: float | None) -> 
 def count(counter: Counter) -> dict[str, int]:
     """A Counter as a plain dict sorted by key (stable JSON)."""
     return {k: counter[k] for k in sorted(counter)}
+
+
+def _moves(joint) -> bool:
+    """Whether a joint lets its child move: not fixed, and not a revolute or prismatic joint
+    whose limits are both zero (husarion_office's glass walls hang from `world` by such a
+    joint, as Gazebo worlds anchor scenery)."""
+    if joint.type == "fixed":
+        return False
+    lower, upper = joint.limits[:2]
+    return not (joint.type in ("revolute", "prismatic") and abs(lower) < 1e-9 and abs(upper) < 1e-9)

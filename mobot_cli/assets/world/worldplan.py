@@ -1,8 +1,9 @@
 """A world (bundled name or Gazebo SDF file) to a WorldPlan, cached by content.
 
 Each static top-level model becomes one static body holding all of its collision shapes
-(so a spawn that hits it can name it); non-static models without joints are held fixed too
-(mobot's worlds are static); non-static models with joints are robots, simulated only when a
+(so a spawn that hits it can name it); non-static models without joints that move (none, fixed
+ones, zero-range ones hung from `world`) are held fixed too (mobot's worlds are static);
+non-static models with joints that move are robots, simulated only when a
 scenario lists them by name. An upward plane through z = 0 is the world's ground plane.
 A warm load reads one JSON document and checks the files it was built from.
 """
