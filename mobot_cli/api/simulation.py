@@ -167,8 +167,10 @@ class Simulation:
         tolerance = settings.pop("tolerance", None)
         try:
             fields = GoalFields(goto=GotoSpec(x=x, y=y, yaw=yaw, tolerance=tolerance), **settings)
+            state = self._world.read(name)
             goal = goal_step(fields, self.step_count, -1, self.rate_hz, self.plan.world,
-                             self._timeline.robots[name].footprint, lambda key: None, [])
+                             self._timeline.robots[name].footprint, lambda key: None, [],
+                             start=(state.true_x, state.true_y, state.true_z))
         except ValidationError as exc:
             first = exc.errors()[0]
             raise UsageError(f"goto '{name}': {'.'.join(str(p) for p in first['loc'])}: {first['msg']}") from None

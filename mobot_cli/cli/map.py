@@ -26,6 +26,9 @@ def map_(
     origin: Optional[str] = typer.Option(None, "--origin", metavar="X,Y",
                                          help="World x, y of the map's lower-left corner, m."),
     robot_radius: float = typer.Option(0.0, "--robot-radius", help="Inflate obstacles by this radius, m."),
+    floor: Optional[float] = typer.Option(None, "--floor", metavar="Z",
+                                          help="Height of the floor the band is measured from, m (default: the "
+                                               "floor under a scenario's robots, else under the origin)."),
     out: Path = typer.Option(Path("."), "--out", help="Folder for map.yaml and map.pgm."),
     skip_missing: bool = typer.Option(False, "--skip-missing", help="Leave out world models whose files are "
                                       "missing (Fuel includes, meshes), with a warning, instead of stopping."),
@@ -43,8 +46,11 @@ def map_(
     if extent and min(extent) <= 0:
         raise UsageError(f"--size {size}: width and height must be positive", hint="e.g. --size 12,10")
     corner = _pair("--origin", origin, "X,Y") if origin else None
-    loaded = _world(world, skip_missing)
-    floor = occupancy.floor_under(loaded.plan, [])
+    if floor is not None:
+        _check("--floor", floor, -1e4, 1e4)
+    loaded, starts = _world(world, skip_missing)
+    if floor is None:
+        floor = _floor(loaded.plan, starts)
     try:
         grid = occupancy.grid_for(loaded.plan, resolution, (floor + low, floor + high), corner, extent)
     except ValueError as exc:
@@ -64,15 +70,27 @@ def map_(
 
 def _world(world: str, skip_missing: bool):
     """The world to map: a world (name or file) loaded, or a scenario's world (its ``world:``,
-    generated ones included) with the notices loading it gave."""
+    generated ones included) with the notices loading it gave; and where the scenario's robots
+    are spawned (x, y, z as asked), none for a world."""
     from mobot_cli.assets.world.loaded import LoadedWorld
     from mobot_cli.assets.world.worldplan import load_world
     from mobot_cli.scenario.prepare import SCENARIO_SUFFIXES, prepare
 
     if world.endswith(SCENARIO_SUFFIXES):
         plan = prepare(world, ["skip_missing=true"] if skip_missing else []).plan
-        return LoadedWorld(plan=plan.world, notices=plan.notices)
-    return load_world(world, Path.cwd(), skip_missing=skip_missing)
+        return LoadedWorld(plan=plan.world, notices=plan.notices), [tuple(r.pose.xyz) for r in plan.robots]
+    return load_world(world, Path.cwd(), skip_missing=skip_missing), []
+
+
+def _floor(world, starts: list) -> float:
+    """The floor the band is measured from: the one a scenario's robots stand on (the lowest), or
+    the world's under the origin."""
+    from mobot_cli.assets.world import occupancy
+    from mobot_cli.assets.world.freespace import robot_floor
+
+    if starts:
+        return min(robot_floor(world, start) for start in starts)
+    return occupancy.floor_under(world, [])
 
 
 def _pair(option: str, text: str, form: str) -> tuple[float, float]:

@@ -163,8 +163,10 @@ class Session:
                                 timeout=request.timeout, localization=request.localization,
                                 max_linear=request.max_linear, max_angular=request.max_angular,
                                 planner=request.planner, inflation=request.inflation)
+            state = self.world.read(request.name)
             goal = goal_step(fields, self.step, LIVE_GOAL, self.rate_hz, self.plan.world,
-                             self.robots[request.name].footprint, lambda key: None, [])
+                             self.robots[request.name].footprint, lambda key: None, [],
+                             start=(state.true_x, state.true_y, state.true_z))
         except (MobotError, ValueError) as exc:
             message = exc.message if isinstance(exc, MobotError) else str(exc).splitlines()[-1].strip()
             raise Refusal(Result.INVALID_REQUEST, f"goto request: {message}") from None

@@ -27,19 +27,26 @@ Locate = Callable[[tuple], "Location | None"]
 
 def goal_step(cmd: GoalFields, step: int, index: int, rate: int, world: WorldPlan | None,
               footprint: tuple[float, float, float, float] | None, locate: Locate,
-              notices: list[str]) -> GoalStep:
+              notices: list[str], start: tuple[float, float, float] | None = None) -> GoalStep:
     """One goal command as a GoalStep starting at ``step``; ``locate`` turns a key path below
-    the command into a Location (None for a live request)."""
+    the command into a Location (None for a live request). ``start``: where the robot is (x, y
+    and its root link's z) or is spawned (z as asked, 0 when left to the floor): goal points are
+    checked in the band above the floor it stands on (freespace.robot_floor)."""
     kind = cmd.goal
     control = _control(cmd, rate, footprint)
+    floor = None
+    if world is not None and start is not None and kind != "coverage":
+        from mobot_cli.assets.world.freespace import robot_floor
+
+        floor = robot_floor(world, start)
     if kind == "goto":
         point = (float(cmd.goto.x), float(cmd.goto.y))
-        _free(world, point, kind, locate((kind,)))
+        _free(world, point, kind, locate((kind,)), floor)
         return GoalStep(step=step, index=index, kind=kind, points=(point,), yaw=cmd.goto.yaw, control=control)
     if kind in ("path", "patrol"):
         points = tuple((float(x), float(y)) for x, y in getattr(cmd, kind))
         for i, point in enumerate(points):
-            _free(world, point, f"{kind} point {i}", locate((kind, i)))
+            _free(world, point, f"{kind} point {i}", locate((kind, i)), floor)
         return GoalStep(step=step, index=index, kind=kind, points=points, laps=cmd.laps, control=control)
     polygon = area_polygon(cmd.coverage.area)
     try:
@@ -73,13 +80,15 @@ def _control(cmd: GoalFields, rate: int, footprint) -> GoalControl:
         danger_distance=DEFAULT.danger_distance if cmd.danger_distance is None else float(cmd.danger_distance))
 
 
-def _free(world: WorldPlan | None, point: tuple[float, float], what: str, where: Location | None) -> None:
-    """A located error when ``point`` lies inside a static body of the world."""
+def _free(world: WorldPlan | None, point: tuple[float, float], what: str, where: Location | None,
+          floor: float | None = None) -> None:
+    """A located error when ``point`` lies inside a static body of the world, in the band above
+    ``floor`` (the robot's; None: the world's probed floor)."""
     if world is None:
         return
     from mobot_cli.assets.world.freespace import obstacle_at  # the floor plan: only for goals
 
-    inside = obstacle_at(world, *point)
+    inside = obstacle_at(world, *point, floor=floor)
     if inside is not None:
         raise ScenarioError(f"{what} ({point[0]:g}, {point[1]:g}) is inside {inside}", location=where, hint=HINT)
 

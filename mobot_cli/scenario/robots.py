@@ -250,6 +250,16 @@ class RobotResolver:
                                        joint_signs=named.joint_signs + steering)
         return named
 
+    def start_of(self, spec: RobotSpec) -> tuple[float, float, float]:
+        """Where a robot (its first, for a count) is spawned: x, y, and z as asked (0: to the floor)."""
+        in_world = self.world_robot(spec)
+        if in_world is not None and "pose" not in spec.model_fields_set:
+            return in_world.xyz
+        if spec.count is not None and spec.poses:
+            x, y, _ = spec.poses[0]
+            return (float(x), float(y), 0.0)
+        return spawn_pose(spec.pose).xyz
+
     def commands(self, spec: RobotSpec, path: tuple, spawn_step: int = 0,
                  footprint: tuple[float, float, float, float] | None = None,
                  drive: DriveSpec | None = None) -> tuple:
@@ -290,7 +300,8 @@ class RobotResolver:
             if cmd.goal is not None:
                 world = self.world.plan if self.world is not None else None
                 out.append(goal_step(cmd, at, i, rate, world, footprint,
-                                     lambda k, key=key: self.locate_key(key + k), self.notices))
+                                     lambda k, key=key: self.locate_key(key + k), self.notices,
+                                     start=self.start_of(spec)))
                 goal_seen = True
             elif goal_seen:
                 hold = None if cmd.for_ is None else max(1, steps(cmd.for_, rate))

@@ -10,6 +10,11 @@
   mecanum controller's ``kinematics.sum_of_robot_center_projection_on_X_Y_axis`` was not read.
 * A mecanum plugin or controller whose radius disagrees with the wheels warned that the robot
   "drives 52 % more than commanded", but mobot moves a holonomic base as commanded.
+* An inertia no rigid body can have (osrf's create: izz 1.53 kg m^2 against ixx + iyy 0.12):
+  PyBullet stood the robot 19 degrees pitched at rest, and it rolled on after it was stopped
+  (checked by hand on that model, which the corpus does not hold: mended, it stands level and its
+  goto ends 2 cm from the goal; a robot of our own with such a tensor happens to stand level
+  either way, so the test here is of the mending).
 """
 
 from __future__ import annotations
@@ -359,3 +364,24 @@ def test_a_coarse_range_resolution_keeps_returns_within_the_span(tmp_path, res, 
         sim.spawn("c", str(path))
         sim.run_for(0.5)
         assert float(sim.scan("c", "cliff").ranges.ravel()[0]) == pytest.approx(reads, abs=1e-6)
+
+
+def impossible(tmp_path, izz: str, products: str = 'ixy="0" ixz="0" iyz="0"'):
+    """diff_robot with a base whose izz is ``izz`` against ixx = iyy = 0.02."""
+    path = tmp_path / f"impossible_{izz}.urdf"
+    path.write_text(diff_robot(0.0).replace(
+        INERTIAL.format(m=3.0, i=0.02), f'<inertial><mass value="3"/><inertia ixx="0.02" iyy="0.02" izz="{izz}" '
+        f'{products}/></inertial>', 1))
+    return path
+
+
+def test_an_inertia_no_body_can_have_is_mended_and_said(tmp_path):
+    robot = load_robot(str(impossible(tmp_path, "0.5", 'ixy="0.001" ixz="0" iyz="0.002"')))
+    notice = next(n for n in robot.notices if "no rigid body can have" in n.message)
+    assert "ixx 0.02, iyy 0.02, izz 0.5 and products of inertia; now ixx 0.25, iyy 0.25, izz 0.5, products 0" \
+        in notice.message and notice.location.key == "link.base"
+    inertia = ET.fromstring(robot.urdf).find("link[@name='base']/inertial/inertia")
+    assert [float(inertia.get(k)) for k in ("ixx", "iyy", "izz", "ixy", "iyz")] == [0.25, 0.25, 0.5, 0.0, 0.0]
+    possible = load_robot(str(impossible(tmp_path, "0.04")))  # izz = ixx + iyy: a flat plate, possible
+    assert not [n for n in possible.notices if "no rigid body" in n.message]
+

@@ -4,6 +4,8 @@
 - walls of a mesh that lean by micrometres (chaolmu's cpr_office), or by the 0.8 mrad of a
   roll of 1.57 for pi/2 (fetch_gazebo's test_zone): a gap on the map and for the planner
 - a glass pane thinner than a cell (a box 1 cm thick): only its corners were on the map
+- a raised floor slab over a ground plane (gazebo's cafe): every goal on it was refused as
+  inside the slab, and its map was solid
 - a dense furniture mesh near a robot (chaolmu's office_small): PyBullet's closest-point answer
   overflowed and the process crashed; and its 50,000-triangle cups on a table, answered a point
   per triangle at every clearance read once within the radius asked, took 0.29x real time
@@ -342,3 +344,49 @@ def test_read_mesh_keeps_a_file_until_it_changes(tmp_path):
     assert len(meshfile.read_mesh(str(path))[1]) == 2
     code, *_ = astuple(invoke(["check", mesh_world(tmp_path, obj(CUBE_V, CUBE_F), name="n.obj")]))
     assert code == 0
+
+
+RAISED = ("<?xml version='1.0'?><sdf version='1.9'><world name='w'><include><uri>model://ground_plane</uri></include>"
+          "<model name='building'><static>true</static><link name='l'>"
+          "<collision name='floor'><pose>0 0 0.095 0 0 0</pose><geometry><box><size>6 6 0.19</size></box></geometry>"
+          "</collision><collision name='crate'><pose>2 1 0.44 0 0 0</pose><geometry><box><size>0.5 0.5 0.5</size>"
+          "</box></geometry></collision></link></model></world></sdf>")
+
+
+def test_goals_on_a_raised_floor_slab_are_on_its_floor(tmp_path):
+    """Gazebo's cafe stands its floor, a 0.19 m slab, on a ground plane: the robot spawned over it
+    stands on it, and its goals are checked in the band above it (not inside the slab)."""
+    (tmp_path / "w.sdf").write_text(RAISED)
+    scenario = {"version": 1, "name": "cafe", "world": "w.sdf", "duration": 8, "physics": {"engine": "kinematic"},
+                "robots": [{"name": "r", "pose": {"x": -1.0, "y": 0.0},
+                            "commands": [{"at": 0.5, "goto": {"x": 1.0, "y": 0.0}}]}]}
+    path = tmp_path / "s.yaml"
+    path.write_text(json.dumps(scenario))
+    done = invoke(["run", path, "--out", tmp_path / "run", "--quiet"])
+    assert done.exit_code == 0, done.stderr
+    goal = json.loads((tmp_path / "run" / "summary.json").read_text())["robots"]["r"]["goals"][0]
+    assert goal["status"] == "reached" and goal["error"] < 0.1
+    # a goal in the crate on the slab is still refused, naming it
+    scenario["robots"][0]["commands"][0]["goto"] = {"x": 2.0, "y": 1.0}
+    path.write_text(json.dumps(scenario))
+    refused = invoke(["run", path, "--out", tmp_path / "refused"])
+    assert refused.exit_code == 2 and "goto (2, 1) is inside world model 'building'" in refused.stderr
+    assert "building::l::crate" in refused.stderr
+
+
+@pytest.mark.parametrize("how", ["scenario", "--floor"])
+def test_the_map_of_a_raised_floor_is_measured_from_it(tmp_path, how):
+    """`mobot map` of the scenario (its robots' floor) or of the world with --floor 0.19: the
+    slab's area free, the crate on it occupied; from the ground plane it was all occupied."""
+    (tmp_path / "w.sdf").write_text(RAISED)
+    (tmp_path / "s.yaml").write_text(json.dumps({"version": 1, "name": "cafe", "world": "w.sdf", "duration": 1,
+                                                 "robots": [{"name": "r", "pose": {"x": -1.0, "y": 0.0}}]}))
+    args = [tmp_path / "s.yaml"] if how == "scenario" else [tmp_path / "w.sdf", "--floor", "0.19"]
+    done = invoke(["map", *args, "--out", tmp_path / "map", "--origin", "-3,-3", "--size", "6,6"])
+    assert done.exit_code == 0, done.stderr
+    assert "above the floor at z = 0.19 m" in done.stdout
+    data = (tmp_path / "map" / "map.pgm").read_bytes()
+    image = np.frombuffer(data[len(b"P5\n120 120\n255\n"):], dtype=np.uint8).reshape(120, 120)[::-1]
+    # the crate's 0.5 m square round (2, 1): its 10 x 10 cells, and the cells its corners touch
+    assert (image[75:85, 95:105] == 0).sum() == 100
+    assert (image == 0).sum() == (image[74:86, 94:106] == 0).sum() <= 121

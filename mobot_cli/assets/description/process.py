@@ -138,6 +138,7 @@ def fix_inertials(robot: ET.Element, source: Path) -> list[Notice]:
     """Give links without a usable <inertial> a tiny one; a notice per link, or one for many."""
     light: list[tuple[str, str]] = []  # (link, problem): given TINY_MASS
     stiff: list[tuple[str, str]] = []  # (link, diagonal): inertia raised
+    bent: list[tuple[str, str]] = []  # (link, what was wrong and what it became): no body has such inertia
     for link in robot.findall("link"):
         name = link.get("name", "")
         inertial = link.find("inertial")
@@ -152,6 +153,9 @@ def fix_inertials(robot: ET.Element, source: Path) -> list[Notice]:
             stiff.append((name, " ".join(f"{d:g}" for d in diagonal)))
             continue
         else:
+            fixed = _impossible_inertia(inertial)
+            if fixed:
+                bent.append((name, fixed))
             continue
         if inertial is not None:
             link.remove(inertial)
@@ -166,7 +170,13 @@ def fix_inertials(robot: ET.Element, source: Path) -> list[Notice]:
             *_grouped(stiff, source, lambda name, shown: f"link '{name}' has a near-zero inertia "
                       f"(diagonal {shown}): mobot raises it to {raised}",
                       lambda names: f"{names} have a near-zero inertia: mobot raises it to "
-                      f"{raised}")]
+                      f"{raised}"),
+            *_grouped(bent, source, lambda name, shown: f"link '{name}' has an inertia no rigid body can "
+                      f"have ({shown}; each principal moment must be at most the sum of the other two): "
+                      "PyBullet would tilt and spin it, so mobot uses the moments shown",
+                      lambda names: f"{names} have inertias no rigid body can have (a principal moment "
+                      "larger than the sum of the other two): PyBullet would tilt and spin them, so mobot "
+                      "raises the smaller moments until they add up")]
 
 
 def _grouped(links: list[tuple[str, str]], source: Path, one, many) -> list[Notice]:
@@ -176,6 +186,41 @@ def _grouped(links: list[tuple[str, str]], source: Path, one, many) -> list[Noti
                 for name, detail in links]
     names = f"{len(links)} links ({', '.join(name for name, _ in links)})"
     return [Notice(many(names), Location(file=source))]
+
+
+def _impossible_inertia(inertial: ET.Element) -> str:
+    """Mend an inertia tensor no rigid body has (not positive definite, or a principal moment over
+    the sum of the other two: osrf's create model, izz 1.53 against ixx + iyy 0.12): its products
+    dropped and the smaller moments raised until each is at most the sum of the others, as a
+    body of that mass could have. "" when it was possible; else what it was and became."""
+    import numpy as np
+
+    inertia = inertial.find("inertia")
+    if inertia is None:
+        return ""
+    value = {k: floats(inertia.get(k), 1, (0.0,))[0] for k in ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")}
+    tensor = np.array([[value["ixx"], value["ixy"], value["ixz"]], [value["ixy"], value["iyy"], value["iyz"]],
+                       [value["ixz"], value["iyz"], value["izz"]]])
+    if not np.isfinite(tensor).all():
+        return ""
+    moments = np.linalg.eigvalsh(tensor)  # ascending
+    slack = 1e-6 * float(moments[-1])
+    if moments[0] > 0.0 and moments[2] <= moments[0] + moments[1] + slack:
+        return ""
+    diagonal = [value["ixx"], value["iyy"], value["izz"]]
+    top = max(range(3), key=lambda k: diagonal[k])
+    rest = [k for k in range(3) if k != top]
+    short = diagonal[top] - sum(diagonal[k] for k in rest)
+    for k in rest:
+        diagonal[k] += max(short, 0.0) / 2.0
+    for key, new in zip(("ixx", "iyy", "izz"), diagonal):
+        inertia.set(key, f"{new:.9g}")
+    for key in ("ixy", "ixz", "iyz"):
+        inertia.set(key, "0")
+    was = ", ".join(f"{k} {value[k]:g}" for k in ("ixx", "iyy", "izz"))
+    products = any(abs(value[k]) > 0.0 for k in ("ixy", "ixz", "iyz"))
+    now = ", ".join(f"{k} {v:.6g}" for k, v in zip(("ixx", "iyy", "izz"), diagonal))
+    return f"{was}{' and products of inertia' if products else ''}; now {now}" + (", products 0" if products else "")
 
 
 def _raise_diagonal(inertial: ET.Element) -> None:

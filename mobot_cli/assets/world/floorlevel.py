@@ -21,6 +21,9 @@ ABOVE_ROOT = 0.05  # m
 # above z = 0 (AWS's racetrack: 0.06 m) is the floor, not its underside far below.
 RAISED = 0.25  # m: how far above z = 0 such a top may be
 FAR_BELOW = 0.1  # m: a floor found this far below z = 0 gives way to it
+# A robot spawned over a surface up to this high comes to rest on it (sim/placement.py probes
+# from above the robot's own height): a floor slab or a stage it stands on, not an obstacle.
+SPAWN_REACH = 0.25  # m
 Start = tuple[float, float, float]  # x, y, z of a robot's root link when it started
 
 

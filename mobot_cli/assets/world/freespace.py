@@ -45,10 +45,22 @@ def ground_band(world: WorldPlan) -> tuple[float, float]:
     return (floor + BAND[0], floor + BAND[1])
 
 
-def obstacle_at(world: WorldPlan, x: float, y: float) -> str | None:
+def robot_floor(world: WorldPlan, start: tuple[float, float, float]) -> float:
+    """The floor a robot at ``start`` (x, y and its root link's z, or the z it was asked to spawn
+    at: 0 when left to the floor) stands on: the floor under it, as its run's planner finds it
+    once the robot has come to rest there, up to floorlevel.SPAWN_REACH above ``start``. A raised
+    floor slab in a world with a ground plane (Gazebo's cafe) is then the floor it drives on."""
+    from mobot_cli.assets.world.floorlevel import SPAWN_REACH, floor_level
+
+    x, y, z = start
+    return floor_level(world, [(x, y, z + SPAWN_REACH)], body_shapes)
+
+
+def obstacle_at(world: WorldPlan, x: float, y: float, floor: float | None = None) -> str | None:
     """How messages name the static body whose shadow holds (x, y), and which of its collisions
-    (see sim/parts.py), or None in free space; the band above the probed floor."""
-    band = ground_band(world)
+    (see sim/parts.py), or None in free space; the band above ``floor`` (a robot's, robot_floor),
+    else above the probed floor."""
+    band = ground_band(world) if floor is None else (floor + BAND[0], floor + BAND[1])
     for label, parts in body_shadows(world, band):
         if any(_holds(part, x, y) for part in parts):
             return label + _part(world, label, x, y, band)

@@ -76,8 +76,9 @@ def grid_for(world: WorldPlan, resolution: float, band: tuple[float, float],
              origin: tuple[float, float] | None = None, size: tuple[float, float] | None = None,
              also: list[tuple[float, float]] = ()) -> Grid:
     """The grid a map covers: from ``origin`` (its lower-left corner) over ``size`` (m) when
-    given, else the world's geometry (and the points ``also``) with MARGIN around it."""
-    bounds = world_bounds(world, band)
+    given, else the world's geometry in the band (and the points ``also``) with MARGIN around
+    it; with nothing in the band, all of its geometry (a bare floor's extent)."""
+    bounds = world_bounds(world, band) or world_bounds(world, (-math.inf, math.inf))
     xs = [p[0] for p in also] + (list(bounds[:2]) if bounds else [])
     ys = [p[1] for p in also] + (list(bounds[2:]) if bounds else [])
     if not xs:
