@@ -15,6 +15,7 @@ from mobot_cli.assets.description.describe import load_robot
 from mobot_cli.assets.description.drive import drive_from_joints
 from mobot_cli.assets.description.holonomic import wheelbase_of
 from mobot_cli.assets.description.robot import NO_DRIVE, RobotDescription
+from mobot_cli.assets.description.steering import CANNOT_DRIVE
 from mobot_cli.assets.description.torque import mass_torque
 from mobot_cli.assets.world.loaded import LoadedWorld, WorldRobot
 from mobot_cli.common.transforms import quat_from_rpy
@@ -66,15 +67,18 @@ class RobotResolver:
         sensors = resolve_sensors(spec, desc, path, self)
         commands = self.commands(spec, path, spawn_step, desc.footprint, drive)
         if drive is None:  # said here, not by describe(): a drive: naming the wheels silences it
-            self.notices.extend(str(n) for n in desc.notices if n.message.startswith(NO_DRIVE))
+            self.notices.extend(str(n) for n in desc.notices if n.message.startswith((NO_DRIVE, CANNOT_DRIVE)))
         if commands and drive is None and desc.refused_drive:
             raise ScenarioError(f"robot '{spec.name}' has commands but mobot cannot drive its "
                                 f"{desc.refused_drive}", location=self.locate_key(path + ("commands",)),
-                                hint="Leave its commands out: it is simulated as a passive body.")
+                                hint="If its wheels turn on joints, name them to drive it as a differential "
+                                     "drive: drive: {left_joints: [...], right_joints: [...]}. Otherwise leave its "
+                                     "commands out: it is simulated as a passive body.")
         if commands and drive is None:
             raise ScenarioError(f"robot '{spec.name}' has commands but no drive wheels were detected in "
                                 f"'{spec.description}'", location=self.locate_key(path + ("commands",)),
-                                hint="Add drive: {left_joints, right_joints, wheel_radius, wheel_separation}.")
+                                hint="Name its wheel joints: drive: {left_joints: [...], right_joints: [...]} "
+                                     "(wheel_radius and wheel_separation too when its wheels cannot be measured).")
         self.check_sideways(spec, drive, path)
         self.check_local(spec, path, commands, sensors)
         in_world = self.world_robot(spec)
@@ -367,8 +371,8 @@ def holonomic_drive(drive: DriveSpec, desc: RobotDescription, kind: str, given: 
 
 
 def _shown(desc: RobotDescription) -> list[str]:
-    """The description's notices but the missing drive, which plans() says when it applies."""
-    return [str(n) for n in desc.notices if not n.message.startswith(NO_DRIVE)]
+    """The description's notices but the missing or refused drive, which plans() says when it applies."""
+    return [str(n) for n in desc.notices if not n.message.startswith((NO_DRIVE, CANNOT_DRIVE))]
 
 
 def unlisted_robots(world: LoadedWorld, robots) -> list[str]:

@@ -10,6 +10,8 @@
   mecanum controller's ``kinematics.sum_of_robot_center_projection_on_X_Y_axis`` was not read.
 * A mecanum plugin or controller whose radius disagrees with the wheels warned that the robot
   "drives 52 % more than commanded", but mobot moves a holonomic base as commanded.
+* Gazebo classic's own skid-steer plugin (``libSkidSteerDrivePlugin.so``, osrf's pioneer3at:
+  ``<left_front>``, ``<right_rear>``, ...) was "a drive plugin of a kind mobot does not know".
 * An inertia no rigid body can have (osrf's create: izz 1.53 kg m^2 against ixx + iyy 0.12):
   PyBullet stood the robot 19 degrees pitched at rest, and it rolled on after it was stopped
   (checked by hand on that model, which the corpus does not hold: mended, it stands level and its
@@ -385,3 +387,28 @@ def test_an_inertia_no_body_can_have_is_mended_and_said(tmp_path):
     possible = load_robot(str(impossible(tmp_path, "0.04")))  # izz = ixx + iyy: a flat plate, possible
     assert not [n for n in possible.notices if "no rigid body" in n.message]
 
+
+
+STOCK_SKID = ('<plugin name="SkidSteerDrivePlugin" filename="libSkidSteerDrivePlugin.so"><right_front>rf_joint'
+              '</right_front><right_rear>rr_joint</right_rear><left_front>lf_joint</left_front>'
+              '<left_rear>lr_joint</left_rear><MaxForce>5.0</MaxForce></plugin>')
+
+
+def four_by_four(plugin: str) -> str:
+    """A 0.4 x 0.3 m box on four 0.05 m wheels, 0.36 m apart across."""
+    return (f'<robot name="p"><link name="base">{INERTIAL.format(m=4.0, i=0.03)}<collision><geometry>'
+            '<box size="0.4 0.3 0.08"/></geometry></collision></link>'
+            + "".join(_wheel(n, "base", xyz) for n, xyz in (("lf", "0.15 0.18 -0.02"), ("lr", "-0.15 0.18 -0.02"),
+                                                            ("rf", "0.15 -0.18 -0.02"), ("rr", "-0.15 -0.18 -0.02")))
+            + f"<gazebo>{plugin}</gazebo></robot>")
+
+
+def test_gazebo_classics_stock_skid_steer_plugin_drives_its_four_wheels(tmp_path):
+    spec = detect_drive(four_by_four(STOCK_SKID))
+    assert spec.source == "plugin"
+    assert sorted(spec.left_joints) == ["lf_joint", "lr_joint"]
+    assert sorted(spec.right_joints) == ["rf_joint", "rr_joint"]
+    assert spec.wheel_radius == pytest.approx(0.05) and spec.wheel_separation == pytest.approx(0.36)
+    path = tmp_path / "p.urdf"
+    path.write_text(four_by_four(STOCK_SKID))
+    assert travelled(path, 0.3, 2.0) == pytest.approx(0.6, abs=0.05)

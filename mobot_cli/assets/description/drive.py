@@ -36,8 +36,9 @@ from mobot_cli.assets.description.wheels import Wheel, wheel
 from mobot_cli.errors import Location, Notice
 from mobot_cli.plan import DriveSpec
 
-_LEFT_TAGS = ("leftJoint", "left_joint", "leftFrontJoint", "leftRearJoint")
-_RIGHT_TAGS = ("rightJoint", "right_joint", "rightFrontJoint", "rightRearJoint")
+# the last two: gazebo classic's stock libSkidSteerDrivePlugin.so (osrf's pioneer3at)
+_LEFT_TAGS = ("leftJoint", "left_joint", "leftFrontJoint", "leftRearJoint", "left_front", "left_rear")
+_RIGHT_TAGS = ("rightJoint", "right_joint", "rightFrontJoint", "rightRearJoint", "right_front", "right_rear")
 
 
 def detect_drive(urdf: ET.Element | str, *, notices: list[Notice] | None = None,
@@ -131,7 +132,7 @@ def _drive_plugin(robot: ET.Element) -> ET.Element | None:
     for gazebo in robot.findall("gazebo"):
         for plugin in gazebo.findall("plugin"):
             label = (plugin.get("filename", "") + " " + plugin.get("name", "")).lower()
-            if any(k in label for k in ("diff_drive", "diff-drive", "diffdrive", "skid_steer")):
+            if any(k in label for k in ("diff_drive", "diff-drive", "diffdrive", "skid_steer", "skidsteer")):
                 return plugin
     return None
 

@@ -32,7 +32,7 @@ GZ_STEERING_LIMIT = 0.5
 # Plugins named like drives that mobot cannot simulate: (what the label holds, the drive type).
 UNSUPPORTED = (("track", "tracked vehicle"), ("tricycle", "tricycle drive"))
 # Drive plugins handled elsewhere (drive.py and the holonomic drives): never "unknown".
-KNOWN = ("diff_drive", "diff-drive", "diffdrive", "skid_steer", "ackermann", "mecanum",
+KNOWN = ("diff_drive", "diff-drive", "diffdrive", "skid_steer", "skidsteer", "ackermann", "mecanum",
          "planar_move", "omni", "holonomic")
 DRIVE_WORDS = ("drive", "steer", "locomotion")
 
@@ -45,10 +45,13 @@ class Detected:
     refused: str = ""
 
 
+CANNOT_DRIVE = "mobot cannot drive this robot's"  # how a refusal's notice begins
+
+
 def refusal(what: str, label: str, notices: list[Notice], file: Path | None) -> Detected:
     """Refuse a drive in one notice that names it."""
     named = f"{what} ({label})" if label else what
-    notices.append(Notice(f"mobot cannot drive this robot's {named}: it is a passive body and refuses "
+    notices.append(Notice(f"{CANNOT_DRIVE} {named}: it is a passive body and refuses "
                           "velocity commands", Location(file=file)))
     return Detected(None, named)
 
