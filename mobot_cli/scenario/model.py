@@ -183,6 +183,9 @@ class RobotSpec(Strict):
     args: dict[str, Union[str, bool, int, float]] = {}
     pose: PoseSpec = PoseSpec.model_construct()  # all defaults (see Scenario.physics)
     drive: Optional[DriveOverrides] = None
+    # joints a position controller holds, as a vendor's plugin does in Gazebo (an arm): "all" holds
+    # every joint its description leaves free where it starts (0), {joint: position} the ones named
+    hold: Union[Literal["all"], dict[str, Annotated[Float, Field(ge=-1000, le=1000)]], None] = None
     sensors: dict[SensorKey, SensorEntry] = {}  # see sensor_model.py
     commands: list[CommandSpec] = []
     count: Optional[Annotated[Int, Field(ge=1, le=1000)]] = None

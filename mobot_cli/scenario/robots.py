@@ -14,6 +14,7 @@ from typing import Any
 from mobot_cli.assets.description.describe import load_robot
 from mobot_cli.assets.description.drive import drive_from_joints
 from mobot_cli.assets.description.holonomic import wheelbase_of
+from mobot_cli.assets.description.joints import FREE
 from mobot_cli.assets.description.robot import NO_DRIVE, RobotDescription
 from mobot_cli.assets.description.steering import CANNOT_DRIVE
 from mobot_cli.assets.description.torque import mass_torque
@@ -22,6 +23,7 @@ from mobot_cli.common.transforms import quat_from_rpy
 from mobot_cli.errors import Location, MobotError, ScenarioError
 from mobot_cli.plan import CommandStep, DriveSpec, GoalStep, RobotPlan, SpawnPose, TwistStep
 from mobot_cli.scenario.goals import goal_step
+from mobot_cli.scenario.holds import resolve_holds
 from mobot_cli.scenario.model import DriveOverrides, RobotSpec
 from mobot_cli.scenario.sensor_resolve import resolve_sensors
 from mobot_cli.scenario.sensor_switches import arg_text
@@ -68,6 +70,7 @@ class RobotResolver:
         commands = self.commands(spec, path, spawn_step, desc.footprint, drive)
         if drive is None:  # said here, not by describe(): a drive: naming the wheels silences it
             self.notices.extend(str(n) for n in desc.notices if n.message.startswith((NO_DRIVE, CANNOT_DRIVE)))
+        holds = resolve_holds(spec, desc, drive, self.locate_key(path + ("hold",)), self.notices)
         if commands and drive is None and desc.refused_drive:
             raise ScenarioError(f"robot '{spec.name}' has commands but mobot cannot drive its "
                                 f"{desc.refused_drive}", location=self.locate_key(path + ("commands",)),
@@ -98,7 +101,7 @@ class RobotResolver:
                                  urdf=desc.urdf, root_link=desc.root_link, pose=pose, drive=drive,
                                  commands=commands, spawn_step=spawn_step, source=str(desc.source),
                                  sensors=sensors, footprint=tuple(desc.footprint),
-                                 heights=(desc.bottom_z, desc.top_z), holds=desc.holds))
+                                 heights=(desc.bottom_z, desc.top_z), holds=holds))
         return out
 
     def check_local(self, spec: RobotSpec, path: tuple, commands, sensors) -> None:
@@ -371,8 +374,9 @@ def holonomic_drive(drive: DriveSpec, desc: RobotDescription, kind: str, given: 
 
 
 def _shown(desc: RobotDescription) -> list[str]:
-    """The description's notices but the missing or refused drive, which plans() says when it applies."""
-    return [str(n) for n in desc.notices if not n.message.startswith((NO_DRIVE, CANNOT_DRIVE))]
+    """The description's notices but the missing or refused drive and the joints left free, which
+    plans() says when they apply."""
+    return [str(n) for n in desc.notices if not n.message.startswith((NO_DRIVE, CANNOT_DRIVE, FREE))]
 
 
 def unlisted_robots(world: LoadedWorld, robots) -> list[str]:

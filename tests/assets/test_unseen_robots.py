@@ -412,3 +412,60 @@ def test_gazebo_classics_stock_skid_steer_plugin_drives_its_four_wheels(tmp_path
     path = tmp_path / "p.urdf"
     path.write_text(four_by_four(STOCK_SKID))
     assert travelled(path, 0.3, 2.0) == pytest.approx(0.6, abs=0.05)
+
+
+def mast_robot() -> str:
+    """diff_robot with a 0.6 m mast and, on a continuous joint about x at its top, a 3 kg pole
+    standing 0.5 m up: free, it falls aside and pulls the robot over; held, it stands."""
+    mast = (f'<link name="mast">{INERTIAL.format(m=0.5, i=0.001)}<collision><origin xyz="0 0 0.3"/><geometry>'
+            '<box size="0.04 0.04 0.6"/></geometry></collision></link><joint name="mast_joint" type="fixed">'
+            '<parent link="base"/><child link="mast"/><origin xyz="0 0 0.03"/></joint>'
+            f'<link name="pole"><inertial><origin xyz="0 0 0.5"/><mass value="3"/><inertia ixx="0.01" iyy="0.01" '
+            'izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial><collision><origin xyz="0 0 0.5"/><geometry>'
+            '<sphere radius="0.05"/></geometry></collision></link><joint name="roll_joint" type="continuous">'
+            '<parent link="mast"/><child link="pole"/><origin xyz="0 0 0.6"/><axis xyz="1 0 0"/>'
+            '<limit effort="200" velocity="2"/></joint>')
+    return diff_robot(0.0).replace("</robot>", mast + "</robot>")
+
+
+@pytest.mark.parametrize("hold", [None, "all", {"roll_joint": 0.0}])
+def test_hold_keeps_a_free_arm_from_pulling_the_robot_over(tmp_path, hold):
+    """Fetch's arm, held in Gazebo by its vendor's plugin, swung free in PyBullet and tipped the
+    robot while it stood: ``hold:`` holds such joints with a position controller."""
+    import json
+
+    import yaml
+
+    from mobot_cli.cli import invoke
+
+    (tmp_path / "mast.urdf").write_text(mast_robot())
+    robot = {"name": "r", "description": "mast.urdf", "commands": [{"at": 0.5, "linear": 0.2, "for": 1.0}]}
+    if hold is not None:
+        robot["hold"] = hold
+    (tmp_path / "s.yaml").write_text(yaml.safe_dump({"version": 1, "name": "mast", "world": "empty",
+                                                     "duration": 3, "robots": [robot]}))
+    done = invoke(["run", tmp_path / "s.yaml", "--out", tmp_path / "run"])
+    if hold is None:
+        assert done.exit_code == 3 and "tipped over" in done.stderr and "hold: all" in done.stderr
+        return
+    assert done.exit_code == 0, done.stderr
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["status"] == "ok"
+    rows = (tmp_path / "run" / "odom" / "r.csv").read_text().splitlines()
+    header = rows[0].split(",")
+    roll = [abs(float(r.split(",")[header.index("true_roll")])) for r in rows[1:]]
+    assert max(roll) < math.radians(2.0)
+
+
+def test_hold_names_only_joints_it_can_hold(tmp_path):
+    import yaml
+
+    from mobot_cli.cli import invoke
+
+    (tmp_path / "mast.urdf").write_text(mast_robot())
+    (tmp_path / "s.yaml").write_text(yaml.safe_dump({"version": 1, "name": "mast", "world": "empty", "duration": 1,
+                                                     "robots": [{"name": "r", "description": "mast.urdf",
+                                                                 "hold": {"rol_joint": 0, "left_joint": 0}}]}))
+    done = invoke(["run", tmp_path / "s.yaml", "--out", tmp_path / "run"])
+    assert done.exit_code == 2 and "key 'robots.r.hold': hold names 'left_joint', 'rol_joint': no joint of " \
+        "'mast.urdf' a position controller can hold. Did you mean 'roll_joint'?" in done.stderr

@@ -57,10 +57,49 @@ def read_holds(robot: ET.Element, drive: DriveSpec | None, notices: list[Notice]
     free = [name for name, joint in joints.items()
             if name not in wheels and name not in holds and joint.get("type") in LIMITED]
     if free:
-        notices.append(Notice(
-            f"joints left free (no spring, position controller or plugin holds them): {', '.join(free)}",
-            Location(file=source)))
+        notices.append(Notice(f"{FREE}{', '.join(free)}", Location(file=source)))
     return tuple(holds.values())
+
+
+FREE = "joints left free (no spring, position controller or plugin holds them): "  # the notice's start
+
+
+# m above the robot's lowest point: a continuous joint higher than this turns no wheel or caster
+# (an arm's roll joint), and ``hold: all`` holds it too
+WHEEL_HEIGHT = 0.3
+
+
+def asked_holds(urdf: str, drive: DriveSpec | None, held: tuple[JointHold, ...], asked,
+                bottom: float = 0.0) -> tuple[tuple[JointHold, ...], list[str], list[str], list[str]]:
+    """A scenario's ``hold:`` ("all", or {joint: position}) added to the joints held already:
+    (every hold, the names that are no joint a hold can take, the joints still left free, the
+    joints a hold can take).
+    Each asked joint is held by a position controller with its <limit effort>, as a vendor's
+    plugin holds an arm in Gazebo. "all": every revolute or prismatic joint left free, and every
+    continuous joint more than WHEEL_HEIGHT above ``bottom`` (the robot's lowest point, root
+    frame): Fetch's arm rolls, not its casters."""
+    from mobot_cli.assets.description.frames import LinkTree
+
+    robot = ET.fromstring(urdf)
+    joints = {j.get("name", ""): j for j in robot.findall("joint") if j.get("type") in MOVABLE}
+    wheels = set() if drive is None else {*drive.left_joints, *drive.right_joints,
+                                          *getattr(drive, "steering_joints", ())}
+    holds = {h.joint: h for h in held}
+    free = [n for n, joint in joints.items() if n not in wheels and n not in holds and joint.get("type") in LIMITED]
+    wanted = dict(asked) if asked != "all" else {n: 0.0 for n in free}
+    if asked == "all":
+        tree = LinkTree(robot)
+        for name, joint in joints.items():
+            child = joint.find("child")
+            if joint.get("type") == "continuous" and name not in wheels and name not in holds and \
+                    child is not None and tree.frame(child.get("link", "")).pos[2] > bottom + WHEEL_HEIGHT:
+                wanted[name] = 0.0
+    unknown = [n for n in wanted if n not in joints or n in wheels]
+    for name, position in wanted.items():
+        if name not in unknown:
+            holds[name] = JointHold(joint=name, kind="position", target=float(position),
+                                    effort=_effort(joints[name]), source="hold")
+    return tuple(holds.values()), unknown, [n for n in free if n not in wanted], [n for n in joints if n not in wheels]
 
 
 def _springs(robot: ET.Element):

@@ -98,7 +98,8 @@ class Health:
                 f"robot '{robot.name}' tipped over at step {step}: tilted {tilt:.0f} deg (roll "
                 f"{math.degrees(roll):.0f} deg, pitch {math.degrees(pitch):.0f} deg), beyond faults.max_tilt "
                 f"{math.degrees(limits.max_tilt):g} deg", robot=robot.name, step=step, kind="tipped_over",
-                hint="Lower its speed or acceleration, or check its centre of mass and the ground; "
+                hint="Lower its speed or acceleration, or check its centre of mass, the ground and any "
+                     "joints left free (an arm Gazebo's plugins would hold: hold: all holds them); "
                      "faults.max_tilt sets the limit.")
         linear = p.getBaseVelocity(robot.body, physicsClientId=cid)[0]
         speed = math.sqrt(linear[0] ** 2 + linear[1] ** 2 + linear[2] ** 2)
