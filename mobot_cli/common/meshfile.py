@@ -41,6 +41,23 @@ def _kept(key: tuple[str, int, int]) -> tuple[np.ndarray, np.ndarray]:
     return vertices, faces
 
 
+def load_quietly(path, **options):
+    """``trimesh.load`` with trimesh's logging held back: it logs a whole traceback for every
+    texture or material it cannot read (rmf_demos' Caddy: "unable to load bumpmap"), which looks
+    like a crash to a user, and collisions need no textures."""
+    import logging
+
+    import trimesh
+
+    logger = logging.getLogger("trimesh")  # its modules' loggers inherit the level
+    level = logger.level
+    logger.setLevel(logging.CRITICAL + 1)
+    try:
+        return trimesh.load(str(path), **options)
+    finally:
+        logger.setLevel(level)
+
+
 def _read(path: str) -> tuple[np.ndarray, np.ndarray]:
     suffix = Path(path).suffix.lower()
     try:
@@ -48,9 +65,7 @@ def _read(path: str) -> tuple[np.ndarray, np.ndarray]:
             return _obj(Path(path).read_text(encoding="utf-8", errors="replace"))
         if suffix == ".stl":
             return _stl(Path(path).read_bytes())
-        import trimesh
-
-        mesh = trimesh.load(path, force="mesh", process=False)
+        mesh = load_quietly(path, force="mesh", process=False)
         return np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces, dtype=int)
     except Exception:  # noqa: BLE001 - the world loader already vetted it; the plan is drawn anyway
         return np.zeros((0, 3)), np.zeros((0, 3), dtype=int)

@@ -88,6 +88,8 @@ def _shape_mesh(shape: StaticShape) -> tuple[np.ndarray, np.ndarray] | None:
     """One shape's triangles in its own frame (None: a plane, drawn as the grid, or no file)."""
     import trimesh
 
+    from mobot_cli.common.meshfile import load_quietly
+
     size = shape.size
     if shape.kind == "box":
         m = trimesh.creation.box(extents=size[:3])
@@ -99,7 +101,7 @@ def _shape_mesh(shape: StaticShape) -> tuple[np.ndarray, np.ndarray] | None:
         m = trimesh.creation.icosphere(subdivisions=2, radius=size[0])
     elif shape.kind == "mesh":
         try:
-            m = trimesh.load(shape.mesh, force="mesh", process=False)
+            m = load_quietly(shape.mesh, force="mesh", process=False)
         except Exception:  # noqa: BLE001 - the world loader vetted it; draw the rest anyway
             return None
         return np.asarray(m.vertices, float) * np.asarray(size[:3], float), np.asarray(m.faces, np.int64)

@@ -469,3 +469,28 @@ def test_hold_names_only_joints_it_can_hold(tmp_path):
     done = invoke(["run", tmp_path / "s.yaml", "--out", tmp_path / "run"])
     assert done.exit_code == 2 and "key 'robots.r.hold': hold names 'left_joint', 'rol_joint': no joint of " \
         "'mast.urdf' a position controller can hold. Did you mean 'roll_joint'?" in done.stderr
+
+
+def test_trimesh_tracebacks_stay_out_of_a_users_terminal(tmp_path, caplog, monkeypatch):
+    """rmf_demos' Caddy: trimesh logs a whole traceback for each texture it cannot read
+    ("unable to load bumpmap") while mobot reads the mesh's triangles. Every trimesh load goes
+    through load_quietly, which holds trimesh's loggers back for the load, and only then."""
+    import logging
+
+    import trimesh
+
+    from mobot_cli.common import meshfile
+
+    def load(path, **options):
+        try:
+            raise ValueError("'../materials/textures/bump.png' escapes resolver root")
+        except ValueError:
+            logging.getLogger("trimesh.exchange.dae").error("unable to load bumpmap", exc_info=True)
+        return trimesh.creation.box()
+
+    monkeypatch.setattr(trimesh, "load", load)
+    caplog.set_level(logging.WARNING)
+    assert len(meshfile.load_quietly(tmp_path / "cart.dae", force="mesh").faces) == 12
+    assert not caplog.records
+    logging.getLogger("trimesh.exchange.dae").error("after the load: said")
+    assert [r.getMessage() for r in caplog.records] == ["after the load: said"]

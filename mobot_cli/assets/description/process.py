@@ -373,12 +373,12 @@ def _mesh_points(frame: Frame, mesh: ET.Element, source: Path,
                  notices: list[Notice]) -> list[tuple[float, float, float]]:
     # Only collision meshes on a cold load get here; trimesh is imported for them alone.
     # trimesh ignores COLLADA <unit>: scaled by it here, as PyBullet loads the mesh.
-    import trimesh
+    from mobot_cli.common.meshfile import load_quietly
 
     unit = collada_unit_of(mesh.get("filename", ""))
     scale = tuple(v * unit for v in floats(mesh.get("scale"), 3, (1.0, 1.0, 1.0)))
     try:
-        loaded = trimesh.load(mesh.get("filename"), force="mesh")
+        loaded = load_quietly(mesh.get("filename"), force="mesh")
         (x0, y0, z0), (x1, y1, z1) = loaded.bounds
     except Exception as exc:  # noqa: BLE001 - a footprint is informative only
         notices.append(Notice(f"footprint ignores mesh {mesh.get('filename')}: {exc}",

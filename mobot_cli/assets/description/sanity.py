@@ -48,11 +48,11 @@ def check_sanity(robot: ET.Element, source: Path) -> None:
 
 def check_mesh_file(path: Path, link: str, source: Path) -> None:
     """A collision mesh that is not a mesh (empty, garbage, no triangles) is an error."""
-    import trimesh  # cold loads only: a description is checked once and then cached
+    from mobot_cli.common.meshfile import load_quietly  # trimesh: cold loads only (then cached)
 
     where = f"collision mesh {path} of link '{link}'"
     try:
-        loaded = trimesh.load(str(path), force="mesh")
+        loaded = load_quietly(path, force="mesh")
         faces = len(loaded.faces)
         finite = bool(faces) and bool(abs(loaded.vertices).max() < math.inf)
     except Exception as exc:  # noqa: BLE001 - trimesh raises whatever its parsers raise

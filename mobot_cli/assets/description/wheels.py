@@ -181,10 +181,11 @@ def _off_axis(point: Vec, centre: Vec, axis: Vec) -> float:
 def _mesh_radius(mesh: ET.Element, frame, centre: Vec, axis: Vec) -> float | None:
     """The farthest vertex of a mesh from the axis through ``centre`` (None when unreadable)."""
     import numpy as np
-    import trimesh  # the cold load path only, for a wheel named in drive: with a mesh collision
+
+    from mobot_cli.common.meshfile import load_quietly  # trimesh: the cold load path only
 
     try:
-        loaded = trimesh.load(mesh.get("filename", ""), force="mesh")
+        loaded = load_quietly(mesh.get("filename", ""), force="mesh")
         vertices = np.asarray(loaded.vertices, dtype=float)
     except Exception:  # noqa: BLE001 - an unreadable mesh simply gives no radius
         return None

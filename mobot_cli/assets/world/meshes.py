@@ -13,7 +13,6 @@ left out (counted in ``MeshFile.dropped`` for a warning) and the rest is written
 from __future__ import annotations
 
 import hashlib
-import logging
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -121,23 +120,19 @@ def _from_meta(meta, source: Path, path, collada: bool) -> MeshFile | None:
 def _load(source: Path, data: bytes, collada: bool, where: Location):
     """Vertices (metres) and triangle indices of a mesh file."""
     import numpy as np
-    import trimesh
 
-    # trimesh logs a traceback for every texture it cannot find; collisions need no textures.
-    logger = getattr(trimesh.util, "log", None) or logging.getLogger("trimesh")
-    was_disabled, logger.disabled = logger.disabled, True
+    from mobot_cli.common.meshfile import load_quietly
+
     try:
         with warnings.catch_warnings():  # trimesh's merging casts debris at 1e17 m to int64
             warnings.simplefilter("ignore", RuntimeWarning)
-            loaded = trimesh.load(str(source), force="scene")
+            loaded = load_quietly(source, force="scene")
         merged = loaded.to_geometry() if hasattr(loaded, "to_geometry") else \
             loaded.dump(concatenate=True)
     except Exception as exc:  # noqa: BLE001 - any parser failure is a broken mesh to the user
         raise WorldError(f"cannot read mesh {source.name}: {type(exc).__name__}: {exc}",
                          location=where, hint="Open and re-export the mesh (COLLADA, STL or OBJ).") \
             from None
-    finally:
-        logger.disabled = was_disabled
     vertices = np.asarray(getattr(merged, "vertices", np.zeros((0, 3))), dtype=float)
     faces = np.asarray(getattr(merged, "faces", np.zeros((0, 3))), dtype=np.int64)
     if len(faces) == 0 or len(vertices) == 0:

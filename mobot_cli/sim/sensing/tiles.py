@@ -158,9 +158,9 @@ def _triangles(shape: StaticShape, body: StaticBody) -> np.ndarray | None:
 
 
 def _mesh(path: str) -> np.ndarray:
-    import trimesh  # only worlds with meshes and a TinyRenderer camera load it
+    from mobot_cli.common.meshfile import load_quietly  # trimesh: only meshed worlds with a TinyRenderer camera
 
-    return np.asarray(trimesh.load(path, force="mesh", process=False).triangles, dtype=float)
+    return np.asarray(load_quietly(path, force="mesh", process=False).triangles, dtype=float)
 
 
 def _mesh_bodies(cid: int, triangles: np.ndarray, rgba) -> None:
