@@ -470,3 +470,18 @@ def test_a_model_hung_from_world_by_a_joint_that_cannot_move_is_scenery(tmp_path
     assert any(b.name == "glass" for b in world.plan.bodies) is scenery
     if scenery:
         assert any("model(s) without joints that move are held fixed" in n and "glass" in n for n in world.notices)
+
+
+def test_a_submesh_collision_warns_that_the_whole_mesh_collides(tmp_path):
+    """rmf_demos' Caddy collides its steering wheel with <submesh> Steering_Wheel of the whole
+    cart's mesh: mobot collides with all of it, and says which part was asked and what follows."""
+    (tmp_path / "worlds").mkdir()
+    (tmp_path / "worlds" / "cart.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+                                                  "f 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n")
+    path = world_file(tmp_path, "<model name='cart'><static>true</static><link name='l'><collision name='wheel'>"
+                                "<geometry><mesh><uri>cart.obj</uri><submesh><name>Steering_Wheel</name>"
+                                "<center>true</center></submesh></mesh></geometry></collision></link></model>")
+    world = load_world(str(path), tmp_path)
+    warning = next(n for n in world.notices if "<submesh>" in n)
+    assert "selects <submesh> 'Steering_Wheel' of 'cart.obj': mobot collides with the whole mesh" in warning
+    assert len(world.plan.bodies) == 1

@@ -150,7 +150,11 @@ def _mesh(reader, shape: Shape, mesh, file: Path, collision: bool, what: str) ->
                         "flattens it: left out", key_of(mesh.find("scale"), file))
         return False
     if mesh.find("submesh") is not None and collision:
-        reader.warn(f"{what} selects a <submesh>: mobot collides with the whole mesh", where)
+        part = (mesh.findtext("submesh/name") or "").strip()
+        reader.warn(f"{what} selects <submesh> {part!r} of '{uri}': mobot collides with the whole mesh, "
+                    "placed where the part would be, which may reach far beyond it (see the footprint "
+                    "`mobot inspect` gives). Export the part as a mesh of its own to collide with it alone",
+                    where)
     try:
         shape.mesh = reader.paths.mesh_path(uri, file, where)
     except MobotError as exc:
