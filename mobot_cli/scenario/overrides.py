@@ -20,6 +20,12 @@ def read_ready(path: Path | str, overrides: Iterable[str] = ()) -> Source:
     return ready(read_source(path), overrides)
 
 
+# Keys only a scenario has at its top: a YAML file with none of them is something else (an RMF
+# .building.yaml, a ROS parameter file), and "missing 'version'" would mislead.
+SCENARIO_KEYS = {"version", "name", "world", "skip_missing", "physics", "duration", "seed", "settle", "log",
+                 "faults", "robots", "events", "expect", "ros2", "movers"}
+
+
 def ready(source: Source, overrides: Iterable[str] = ()) -> Source:
     """Check what needs no model and apply the overrides to ``source`` (changed in place); returns it."""
     if source.data is None:
@@ -31,6 +37,12 @@ def ready(source: Source, overrides: Iterable[str] = ()) -> Source:
     for item in overrides:
         apply_override(source, item)
     version = source.data.get("version")
+    if version is None and source.data and not SCENARIO_KEYS & set(source.data):
+        keys = ", ".join(str(k) for k in list(source.data)[:4])
+        raise ScenarioError(f"this is not a mobot scenario: none of its keys ({keys}) is a scenario's "
+                            "(version, robots, world, duration, ...)", location=source.locate(()),
+                            hint="Give mobot a scenario (scenarios/quickstart.yaml shows one); a world goes "
+                                 "under its world: key, as a Gazebo .world or .sdf file.")
     if version != 1 or isinstance(version, bool):  # True == 1 in Python
         raise ScenarioError(
             "missing 'version'" if version is None else f"unsupported version {shown(version)}",
