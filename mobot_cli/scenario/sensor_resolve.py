@@ -56,6 +56,9 @@ def sensor_keys(sensors: tuple[DescribedSensor, ...]) -> list[str]:
     return sorted({k for s in sensors for k in (s.name, s.topic, s.topic.rsplit("/", 1)[-1])})
 
 
+GROUP_RATES = 3  # more description sensors than this at rates between whole steps: one warning
+
+
 def resolve_sensors(spec: RobotSpec, desc: RobotDescription, path: tuple,
                     ctx: Context) -> tuple[SensorSpec, ...]:
     """The plan's sensors of one robot entry (shared by every member of a fleet)."""
@@ -88,7 +91,18 @@ def resolve_sensors(spec: RobotSpec, desc: RobotDescription, path: tuple,
         sensor = _changed(found[0], entry, where, ctx) if found else _added(key, entry, where, ctx)
         sensors[sensor.name] = _check(sensor, entry, where, desc, ctx)
         touched[sensor.name] = key
-    out = tuple(_spec(s, touched.get(s.name), spec, desc, path, ctx) for s in sensors.values())
+    rounded: list[tuple[str, float, int]] = []  # description sensors at rates between whole steps
+    out = tuple(_spec(s, touched.get(s.name), spec, desc, path, ctx, rounded) for s in sensors.values())
+    rate = ctx.rate_hz
+    if len(rounded) > GROUP_RATES:  # one warning, not one a sensor (TurtleBot 4 has 14 at 62 Hz)
+        ctx.notices.append(f"robot '{spec.name}': {len(rounded)} sensors of {desc.source.name} read at rates that "
+                           f"are not a whole number of physics steps at {rate} Hz, each every whole number of "
+                           "steps instead: " + ", ".join(f"'{name}' {wanted:g} Hz -> {rate / every:.4g} Hz"
+                                                          for name, wanted, every in rounded))
+    else:
+        ctx.notices.extend(f"robot '{spec.name}': sensor '{name}' of {desc.source.name} at {wanted:g} Hz is not a "
+                           f"whole number of physics steps at {rate} Hz: reading every {every} steps "
+                           f"({rate / every:.4g} Hz)" for name, wanted, every in rounded)
     return _unique_topics(out, spec, touched, path, ctx)
 
 
@@ -170,8 +184,9 @@ def _check(sensor: DescribedSensor, entry: SensorOverride, where: tuple, desc: R
 
 
 def _spec(sensor: DescribedSensor, key: str | None, spec: RobotSpec, desc: RobotDescription,
-          path: tuple, ctx: Context) -> SensorSpec:
-    """``sensor`` reading every whole number of steps; ``key`` is the entry that touched it."""
+          path: tuple, ctx: Context, rounded: list) -> SensorSpec:
+    """``sensor`` reading every whole number of steps; ``key`` is the entry that touched it. A
+    description's rate that falls between whole steps goes to ``rounded`` (said together)."""
     rate, wanted = ctx.rate_hz, sensor.rate_hz
     where = path + ("sensors", key, "rate_hz") if key is not None else None
     # Not the scenario's file and line: a resolved scenario must reload to an equal plan.
@@ -191,8 +206,11 @@ def _spec(sensor: DescribedSensor, key: str | None, spec: RobotSpec, desc: Robot
         return sensor.spec(1, source)
     every = max(1, steps(1.0 / wanted, rate))
     if abs(rate / every - wanted) > 1e-9:
-        ctx.notices.append(f"{what} is not a whole number of physics steps at {rate} Hz: reading "
-                           f"every {every} steps ({rate / every:.4g} Hz)")
+        if where is not None and spec.sensors[key].rate_hz is not None:  # type: ignore[index]
+            ctx.notices.append(f"{what} is not a whole number of physics steps at {rate} Hz: reading "
+                               f"every {every} steps ({rate / every:.4g} Hz)")
+        else:
+            rounded.append((sensor.name, wanted, every))
     return sensor.spec(every, source)
 
 

@@ -232,6 +232,26 @@ def test_description_rates_against_the_physics_rate(tmp_path):
                                     "whole number of physics steps at 1000 Hz: reading every 8 steps (125 Hz)"]
 
 
+@pytest.mark.parametrize("count", [3, 5])
+def test_many_description_sensors_between_whole_steps_make_one_warning(tmp_path, count):
+    """TurtleBot 4 has 14 sensors at 62 Hz: one warning lists them all, not 14 lines (up to three
+    get a line each, as one does)."""
+    lidars = "".join(LIDAR.format(f"l{i}", f"l{i}").replace("<update_rate>10<", "<update_rate>62<")
+                     for i in range(count))
+    path = tmp_path / "many.urdf"
+    path.write_text(TWO_LIDARS.format(lidars))
+    plan = prepare(scenario(tmp_path, f"robots:\n  - {{name: r, description: {path}}}\n")).plan
+    assert [s.every for s in plan.robots[0].sensors] == [4] * count
+    said = [n for n in plan.notices if "whole number of physics steps" in n]
+    if count == 3:
+        assert said == [f"robot 'r': sensor 'l{i}' of many.urdf at 62 Hz is not a whole number of physics steps "
+                        "at 240 Hz: reading every 4 steps (60 Hz)" for i in range(3)]
+    else:
+        assert said == ["robot 'r': 5 sensors of many.urdf read at rates that are not a whole number of physics "
+                        "steps at 240 Hz, each every whole number of steps instead: "
+                        + ", ".join(f"'l{i}' 62 Hz -> 60 Hz" for i in range(5))]
+
+
 def test_fleets_and_spawned_robots_get_their_sensors(tmp_path):
     plan = prepare(scenario(tmp_path, """\
         robots:
