@@ -485,3 +485,37 @@ def test_a_submesh_collision_warns_that_the_whole_mesh_collides(tmp_path):
     warning = next(n for n in world.notices if "<submesh>" in n)
     assert "selects <submesh> 'Steering_Wheel' of 'cart.obj': mobot collides with the whole mesh" in warning
     assert len(world.plan.bodies) == 1
+
+
+ZERO = "<axis><xyz>0 0 1</xyz><limit><lower>0</lower><upper>0</upper></limit></axis>"
+TURNS = "<axis><xyz>0 0 1</xyz><limit><lower>-1</lower><upper>1</upper></limit></axis>"
+
+
+@pytest.mark.parametrize("first, second, kept", [
+    ("type='fixed'>", f"type='revolute'>{ZERO}", "j1"),  # osrf's turtlebot: two that cannot move
+    ("type='fixed'>", f"type='revolute'>{TURNS}", "j2"),  # the one that moves stays
+    (f"type='revolute'>{TURNS}", f"type='revolute'>{TURNS}", None),  # a loop that moves: refused
+])
+def test_a_link_held_by_two_joints_keeps_one_when_the_other_cannot_move(tmp_path, first, second, kept):
+    """osrf's turtlebot bolts its rack on by two zero-range revolute joints, a loop SDF allows and
+    Gazebo loads: the one that adds nothing is left out, with a warning. Two that move stay refused."""
+    from mobot_cli.assets.description.sdf import expand_sdf
+    from mobot_cli.assets.resources import ResourceResolver
+    from mobot_cli.errors import DescriptionError
+
+    (tmp_path / "r.sdf").write_text(sdf(f"""<model name='r'>
+      <link name='base'><collision name='c'><geometry><box><size>0.3 0.2 0.1</size></box></geometry></collision></link>
+      <link name='rack'><pose>0 0 0.2 0 0 0</pose><collision name='c'><geometry><box><size>0.2 0.2 0.01</size>
+        </box></geometry></collision></link>
+      <joint name='j1' {first}<parent>base</parent><child>rack</child></joint>
+      <joint name='j2' {second}<parent>base</parent><child>rack</child></joint>
+    </model>""", version="1.8"))
+    if kept is None:
+        with pytest.raises(DescriptionError, match="link 'rack' is the child of two joints that move"):
+            expand_sdf(tmp_path / "r.sdf", ResourceResolver(tmp_path))
+        return
+    expansion = expand_sdf(tmp_path / "r.sdf", ResourceResolver(tmp_path))
+    dropped = "j2" if kept == "j1" else "j1"
+    assert f"joint '{dropped}' also holds link 'rack', which joint '{kept}' holds: it cannot move, so it is " \
+        "left out" in " ".join(str(n) for n in expansion.notices)
+    assert f'name="{dropped}"' not in expansion.text and f'name="{kept}"' in expansion.text

@@ -51,7 +51,7 @@ class _Builder:
                              "typo", model.location)
             self.skipped.append(model.name)
             return
-        if not model.static and any(_moves(joint) for joint in model.joints):
+        if not model.static and any(joint.moves for joint in model.joints):
             self.robot(model)
             return
         if not model.static:  # nothing in it can move: a wall hung from `world` is scenery
@@ -238,13 +238,3 @@ def ignored_line(file: str, ignored: dict[str, int], max_step: float | None) -> 
 def count(counter: Counter) -> dict[str, int]:
     """A Counter as a plain dict sorted by key (stable JSON)."""
     return {k: counter[k] for k in sorted(counter)}
-
-
-def _moves(joint) -> bool:
-    """Whether a joint lets its child move: not fixed, and not a revolute or prismatic joint
-    whose limits are both zero (husarion_office's glass walls hang from `world` by such a
-    joint, as Gazebo worlds anchor scenery)."""
-    if joint.type == "fixed":
-        return False
-    lower, upper = joint.limits[:2]
-    return not (joint.type in ("revolute", "prismatic") and abs(lower) < 1e-9 and abs(upper) < 1e-9)

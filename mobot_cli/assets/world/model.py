@@ -48,6 +48,16 @@ class Joint:
     location: Location
     spring: tuple[float, float] = (0.0, 0.0)  # <dynamics><spring_stiffness>, <spring_reference>
 
+    @property
+    def moves(self) -> bool:
+        """Whether it lets its child move: not fixed, and not a revolute or prismatic joint whose
+        limits are both zero (how Gazebo worlds anchor scenery to `world`, and osrf's turtlebot
+        bolts its rack on)."""
+        if self.type == "fixed":
+            return False
+        lower, upper = self.limits[:2]
+        return not (self.type in ("revolute", "prismatic") and abs(lower) < 1e-9 and abs(upper) < 1e-9)
+
 
 @dataclass
 class Model:

@@ -45,9 +45,22 @@ def model_to_urdf(model: Model, source: Path) -> tuple[str, list[Notice]]:
                                        "does not have", location=joint.location,
                                        hint="Links of nested models are named MODEL::LINK.")
         if joint.child in children:
-            raise DescriptionError(f"link '{joint.child}' is the child of two joints",
-                                   location=joint.location, hint="Links must form a tree.")
+            # SDF allows a closed loop; a URDF is a tree. A second joint that cannot move (fixed,
+            # or limits both 0: osrf's turtlebot holds its rack by two) adds nothing: left out.
+            first = children[joint.child]
+            if joint.moves and first.moves:
+                raise DescriptionError(f"link '{joint.child}' is the child of two joints that move "
+                                       f"('{first.name}' and '{joint.name}'): a closed loop",
+                                       location=joint.location,
+                                       hint="mobot simulates links that form a tree: fix one of the joints.")
+            dropped, children[joint.child] = (first, joint) if first.moves is False and joint.moves else \
+                (joint, first)
+            notices.append(Notice(f"joint '{dropped.name}' also holds link '{joint.child}', which joint "
+                                  f"'{children[joint.child].name}' holds: it cannot move, so it is left out "
+                                  "(links form a tree in mobot)", dropped.location))
+            continue
         children[joint.child] = joint
+    joints = list(children.values())
     roots = [name for name in links if name not in children]
     if not roots:
         raise DescriptionError(f"the joints of model '{model.name}' form a loop",
