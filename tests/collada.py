@@ -31,3 +31,31 @@ def collada(vertices, faces, meter: float = 1.0, matrix: str | None = None, inst
   <scene><instance_visual_scene url="#s"/></scene>
 </COLLADA>
 """
+
+
+def collada_parts(parts: dict, meter: float = 1.0) -> str:
+    """A COLLADA document of named meshes, each {name: (vertices, faces, matrix or None)}: a
+    <geometry name=NAME> under a <node name=NAME> placed by the matrix (16 numbers, row major),
+    as a model's parts are exported (an SDF <submesh> names one)."""
+    geometries, nodes = [], []
+    for i, (name, (vertices, faces, matrix)) in enumerate(parts.items()):
+        positions = " ".join(f"{float(v):.9g}" for corner in vertices for v in corner)
+        indices = " ".join(str(int(k)) for face in faces for k in face)
+        geometries.append(f"""<geometry id="g{i}" name="{name}"><mesh>
+    <source id="p{i}"><float_array id="pa{i}" count="{3 * len(vertices)}">{positions}</float_array>
+      <technique_common><accessor source="#pa{i}" count="{len(vertices)}" stride="3">
+        <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+      </accessor></technique_common></source>
+    <vertices id="v{i}"><input semantic="POSITION" source="#p{i}"/></vertices>
+    <triangles count="{len(faces)}"><input semantic="VERTEX" source="#v{i}" offset="0"/><p>{indices}</p></triangles>
+  </mesh></geometry>""")
+        transform = f"<matrix>{matrix}</matrix>" if matrix else ""
+        nodes.append(f'<node id="n{i}" name="{name}">{transform}<instance_geometry url="#g{i}"/></node>')
+    return f"""<?xml version="1.0"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><unit meter="{meter}" name="unit"/><up_axis>Z_UP</up_axis></asset>
+  <library_geometries>{"".join(geometries)}</library_geometries>
+  <library_visual_scenes><visual_scene id="s">{"".join(nodes)}</visual_scene></library_visual_scenes>
+  <scene><instance_visual_scene url="#s"/></scene>
+</COLLADA>
+"""

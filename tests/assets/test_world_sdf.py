@@ -472,19 +472,41 @@ def test_a_model_hung_from_world_by_a_joint_that_cannot_move_is_scenery(tmp_path
         assert any("model(s) without joints that move are held fixed" in n and "glass" in n for n in world.notices)
 
 
-def test_a_submesh_collision_warns_that_the_whole_mesh_collides(tmp_path):
+CUBE = ([(x, y, z) for x in (0.0, 1.0) for y in (0.0, 1.0) for z in (0.0, 1.0)],
+        [(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1),
+         (2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3)])
+
+
+@pytest.mark.parametrize("part, center, bounds", [
+    ("Steering_Wheel", "true", ([-10.0, -10.0, -10.0], [10.0, 10.0, 10.0])),  # centred on its box
+    ("Steering_Wheel", "false", ([100.0, 0.0, 50.0], [120.0, 20.0, 70.0])),  # where its node puts it
+    ("Wheel", "false", ([0.0, 0.0, 0.0], [300.0, 100.0, 100.0])),  # no such part: the whole mesh, said
+])
+def test_a_submesh_collision_collides_with_that_part_alone(tmp_path, part, center, bounds):
     """rmf_demos' Caddy collides its steering wheel with <submesh> Steering_Wheel of the whole
-    cart's mesh: mobot collides with all of it, and says which part was asked and what follows."""
+    cart's mesh: it was the whole cart, 3.6 m long, sticking out of the robot. Now the part, in
+    centimetres as the file's <unit> says, centred when <center> asks."""
+    from tests.collada import collada_parts
+
+    vertices, faces = CUBE
     (tmp_path / "worlds").mkdir()
-    (tmp_path / "worlds" / "cart.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
-                                                  "f 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n")
+    (tmp_path / "worlds" / "cart.dae").write_text(collada_parts({
+        "Body": ([(300 * x, 100 * y, 100 * z) for x, y, z in vertices], faces, None),
+        "Steering_Wheel": ([(20 * x, 20 * y, 20 * z) for x, y, z in vertices], faces,
+                           "1 0 0 100 0 1 0 0 0 0 1 50 0 0 0 1")}, meter=0.01))
     path = world_file(tmp_path, "<model name='cart'><static>true</static><link name='l'><collision name='wheel'>"
-                                "<geometry><mesh><uri>cart.obj</uri><submesh><name>Steering_Wheel</name>"
-                                "<center>true</center></submesh></mesh></geometry></collision></link></model>")
+                                f"<geometry><mesh><uri>cart.dae</uri><submesh><name>{part}</name>"
+                                f"<center>{center}</center></submesh></mesh></geometry></collision></link></model>")
     world = load_world(str(path), tmp_path)
-    warning = next(n for n in world.notices if "<submesh>" in n)
-    assert "selects <submesh> 'Steering_Wheel' of 'cart.obj': mobot collides with the whole mesh" in warning
-    assert len(world.plan.bodies) == 1
+    low, high = ([v / 100 for v in corner] for corner in bounds)
+    box = world.summary["bounds"]
+    assert box["min"] == pytest.approx(low) and box["max"] == pytest.approx(high)
+    said = [n for n in world.notices if "<submesh>" in n]
+    if part == "Wheel":
+        assert said and "selects <submesh> 'Wheel' of 'cart.dae', which has no part of that name (its parts: " \
+            "'Body', 'Steering_Wheel'): mobot collides with the whole mesh" in said[0]
+    else:
+        assert not said
 
 
 ZERO = "<axis><xyz>0 0 1</xyz><limit><lower>0</lower><upper>0</upper></limit></axis>"

@@ -149,12 +149,6 @@ def _mesh(reader, shape: Shape, mesh, file: Path, collision: bool, what: str) ->
             reader.warn(f"{what}: mesh '{uri}' has a zero in its <scale> ({scale}), which "
                         "flattens it: left out", key_of(mesh.find("scale"), file))
         return False
-    if mesh.find("submesh") is not None and collision:
-        part = (mesh.findtext("submesh/name") or "").strip()
-        reader.warn(f"{what} selects <submesh> {part!r} of '{uri}': mobot collides with the whole mesh, "
-                    "placed where the part would be, which may reach far beyond it (see the footprint "
-                    "`mobot inspect` gives). Export the part as a mesh of its own to collide with it alone",
-                    where)
     try:
         shape.mesh = reader.paths.mesh_path(uri, file, where)
     except MobotError as exc:
@@ -172,7 +166,26 @@ def _mesh(reader, shape: Shape, mesh, file: Path, collision: bool, what: str) ->
                              hint="Convert the mesh to one of those formats.")
         reader.missing_visuals.append((uri, where))
         return False
+    if mesh.find("submesh") is not None and collision:
+        _submesh(reader, shape, mesh.find("submesh"), uri, what, where)
     return True
+
+
+def _submesh(reader, shape: Shape, element, uri: str, what: str, where: Location) -> None:
+    """A collision <submesh>: the part of the mesh file it names (world/meshes.py), as Gazebo cuts
+    it; the whole mesh, with a warning, when the file has no part of that name."""
+    from mobot_cli.assets.world import meshes
+
+    part = (element.findtext("name") or "").strip()
+    center = (element.findtext("center") or "").strip().lower() in ("true", "1")
+    cut, parts = meshes.submesh(shape.mesh, part, center, where)
+    if cut is None:
+        shown = ", ".join(repr(p) for p in parts[:8]) + (", ..." if len(parts) > 8 else "")
+        reader.warn(f"{what} selects <submesh> {part!r} of '{uri}', which has no part of that name "
+                    f"(its parts: {shown or 'none named'}): mobot collides with the whole mesh", where)
+        return
+    reader.paths.files[cut] = None  # a dependency of the cached world: made again when it is gone
+    shape.mesh = cut
 
 
 def _friction(reader, element, file: Path) -> float | None:

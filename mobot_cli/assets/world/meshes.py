@@ -121,14 +121,11 @@ def _load(source: Path, data: bytes, collada: bool, where: Location):
     """Vertices (metres) and triangle indices of a mesh file."""
     import numpy as np
 
-    from mobot_cli.common.meshfile import load_quietly
-
+    loaded = _scene(source, where)
     try:
         with warnings.catch_warnings():  # trimesh's merging casts debris at 1e17 m to int64
             warnings.simplefilter("ignore", RuntimeWarning)
-            loaded = load_quietly(source, force="scene")
-        merged = loaded.to_geometry() if hasattr(loaded, "to_geometry") else \
-            loaded.dump(concatenate=True)
+            merged = loaded.to_geometry() if hasattr(loaded, "to_geometry") else loaded.dump(concatenate=True)
     except Exception as exc:  # noqa: BLE001 - any parser failure is a broken mesh to the user
         raise WorldError(f"cannot read mesh {source.name}: {type(exc).__name__}: {exc}",
                          location=where, hint="Open and re-export the mesh (COLLADA, STL or OBJ).") \
@@ -141,3 +138,74 @@ def _load(source: Path, data: bytes, collada: bool, where: Location):
     if collada:
         vertices = vertices * collada_unit(data)
     return vertices, faces
+
+
+def submesh(source: Path, name: str, center: bool, where: Location) -> tuple[Path | None, list[str]]:
+    """The part of a mesh file an SDF ``<submesh><name>`` selects, as Gazebo cuts it: the
+    geometry of that name (or of the node of that name), its node transforms and the COLLADA
+    unit applied, moved so its box's centre is the origin when ``center``; written once as an
+    OBJ in the cache, keyed by the file's content, the name and ``center``. (None, the parts'
+    names) when the file holds no part of that name."""
+    import numpy as np
+
+    source = Path(source)
+    data = source.read_bytes()
+    key = cache.digest("submesh", data, name, "centred" if center else "")
+    meta = cache.load("meshes", key)
+    if isinstance(meta, dict):
+        kept = cache.load_file("meshes", f"{key}.obj", str(meta.get("obj_sha256")))
+        if kept is not None:
+            return Path(kept), []
+    scene = _scene(source, where)
+    named = _collada_names(data) if source.suffix.lower() == ".dae" else {}
+    parts, names = [], []
+    for node in scene.graph.nodes_geometry:
+        transform, geometry = scene.graph[node]
+        mesh = scene.geometry[geometry]
+        # trimesh keys COLLADA parts by their ids; a <submesh> may give the id or the name
+        called = {node, geometry, geometry.removeprefix("geom-"), named.get(node, ""), named.get(geometry, "")}
+        names.append(named.get(geometry) or geometry.removeprefix("geom-"))
+        if name in called:
+            vertices = np.asarray(mesh.vertices, dtype=float) @ transform[:3, :3].T + transform[:3, 3]
+            parts.append((vertices, np.asarray(mesh.faces, dtype=np.int64)))
+    if not parts:
+        return None, sorted(set(names))
+    offsets = np.cumsum([0] + [len(v) for v, _ in parts[:-1]])
+    vertices = np.vstack([v for v, _ in parts])
+    faces = np.vstack([f + o for (_, f), o in zip(parts, offsets)])
+    if source.suffix.lower() == ".dae":
+        vertices = vertices * collada_unit(data)
+    if center:
+        vertices = vertices - (vertices.min(axis=0) + vertices.max(axis=0)) / 2.0
+    text = obj_text(vertices, faces, f"<submesh> {name} of {source.name}").encode("utf-8")
+    try:
+        path = cache.store_file("meshes", f"{key}.obj", text)
+    except OSError as exc:
+        raise WorldError(f"cannot write the <submesh> {name} of {source.name}: {exc.strerror}",
+                         location=where, hint="Free some disk space or set TMPDIR.") from None
+    cache.store("meshes", key, {"obj_sha256": hashlib.sha256(text).hexdigest()})
+    return Path(path), []
+
+
+def _collada_names(data: bytes) -> dict[str, str]:
+    """The name attribute of each <geometry> and <node> of a COLLADA document, by its id."""
+    from lxml import etree
+
+    try:
+        root = etree.fromstring(data, etree.XMLParser(resolve_entities=False, no_network=True, huge_tree=True))
+    except etree.XMLSyntaxError:
+        return {}
+    return {e.get("id"): e.get("name") for e in root.iter("{*}geometry", "{*}node") if e.get("id") and e.get("name")}
+
+
+def _scene(source: Path, where: Location):
+    """The mesh file as a trimesh scene; a located error when it cannot be parsed."""
+    from mobot_cli.common.meshfile import load_quietly
+
+    try:
+        with warnings.catch_warnings():  # trimesh's merging casts debris at 1e17 m to int64
+            warnings.simplefilter("ignore", RuntimeWarning)
+            return load_quietly(source, force="scene")
+    except Exception as exc:  # noqa: BLE001 - any parser failure is a broken mesh to the user
+        raise WorldError(f"cannot read mesh {source.name}: {type(exc).__name__}: {exc}",
+                         location=where, hint="Open and re-export the mesh (COLLADA, STL or OBJ).") from None
