@@ -380,7 +380,8 @@ def impossible(tmp_path, izz: str, products: str = 'ixy="0" ixz="0" iyz="0"'):
 def test_an_inertia_no_body_can_have_is_mended_and_said(tmp_path):
     robot = load_robot(str(impossible(tmp_path, "0.5", 'ixy="0.001" ixz="0" iyz="0.002"')))
     notice = next(n for n in robot.notices if "no rigid body can have" in n.message)
-    assert "ixx 0.02, iyy 0.02, izz 0.5 and products of inertia; now ixx 0.25, iyy 0.25, izz 0.5, products 0" \
+    assert "ixx 0.02, iyy 0.02, izz 0.5 and products of inertia, principal moments 0.019, 0.021, 0.5; " \
+        "now ixx 0.25, iyy 0.25, izz 0.5, products 0" \
         in notice.message and notice.location.key == "link.base"
     inertia = ET.fromstring(robot.urdf).find("link[@name='base']/inertial/inertia")
     assert [float(inertia.get(k)) for k in ("ixx", "iyy", "izz", "ixy", "iyz")] == [0.25, 0.25, 0.5, 0.0, 0.0]

@@ -219,8 +219,10 @@ def _impossible_inertia(inertial: ET.Element) -> str:
         inertia.set(key, "0")
     was = ", ".join(f"{k} {value[k]:g}" for k in ("ixx", "iyy", "izz"))
     products = any(abs(value[k]) > 0.0 for k in ("ixy", "ixz", "iyz"))
+    principal = ", ".join(f"{m:.4g}" for m in moments)
     now = ", ".join(f"{k} {v:.6g}" for k, v in zip(("ixx", "iyy", "izz"), diagonal))
-    return f"{was}{' and products of inertia' if products else ''}; now {now}" + (", products 0" if products else "")
+    return (f"{was}{' and products of inertia' if products else ''}, principal moments {principal}; now {now}"
+            + (", products 0" if products else ""))
 
 
 def _raise_diagonal(inertial: ET.Element) -> None:
