@@ -78,8 +78,9 @@ class RobotResolver:
                                      "drive: drive: {left_joints: [...], right_joints: [...]}. Otherwise leave its "
                                      "commands out: it is simulated as a passive body.")
         if commands and drive is None:
+            what = f"world model '{spec.name}'" if self.world_robot(spec) is not None else f"'{spec.description}'"
             raise ScenarioError(f"robot '{spec.name}' has commands but no drive wheels were detected in "
-                                f"'{spec.description}'", location=self.locate_key(path + ("commands",)),
+                                f"{what}", location=self.locate_key(path + ("commands",)),
                                 hint="Name its wheel joints: drive: {left_joints: [...], right_joints: [...]} "
                                      "(wheel_radius and wheel_separation too when its wheels cannot be measured).")
         self.check_sideways(spec, drive, path)

@@ -452,24 +452,30 @@ def test_an_entity_of_the_doctype_is_refused_not_read_as_nothing(tmp_path):
     assert info.value.location.line == 2
 
 
-@pytest.mark.parametrize("joint, scenery", [
+@pytest.mark.parametrize("joint, kind", [
     ("<joint name='j' type='revolute'><parent>world</parent><child>l</child>"
-     "<axis><xyz>0 0 1</xyz><limit><lower>0</lower><upper>0</upper></limit></axis></joint>", True),
-    ("<joint name='j' type='fixed'><parent>world</parent><child>l</child></joint>", True),
-    ("<joint name='j' type='revolute'><parent>world</parent><child>l</child>"
-     "<axis><xyz>0 0 1</xyz><limit><lower>-1</lower><upper>1</upper></limit></axis></joint>", False),
+     "<axis><xyz>0 0 1</xyz><limit><lower>0</lower><upper>0</upper></limit></axis></joint>", "fixed"),
+    ("<joint name='j' type='fixed'><parent>world</parent><child>l</child></joint>", "fixed"),
+    ("<joint name='j' type='revolute'><parent>world</parent><child>l</child>"  # a door on its hinge
+     "<axis><xyz>0 0 1</xyz><limit><lower>-1</lower><upper>1</upper></limit></axis></joint>", "anchored"),
+    ("<link name='flap'><collision name='c'><geometry><box><size>0.1 0.1 0.1</size></box></geometry></collision>"
+     "</link><joint name='j' type='revolute'><parent>l</parent><child>flap</child>"
+     "<axis><xyz>0 0 1</xyz><limit><lower>-1</lower><upper>1</upper></limit></axis></joint>", "robot"),
 ])
-def test_a_model_hung_from_world_by_a_joint_that_cannot_move_is_scenery(tmp_path, joint, scenery):
+def test_a_model_hung_from_world_is_scenery(tmp_path, joint, kind):
     """husarion_office's glass walls: a non-static model held by a zero-range revolute joint to
-    `world` is a wall, not a robot to leave out (its planned goto drove through it)."""
+    `world` is a wall, not a robot to leave out (its planned goto drove through it); gz-sim's
+    pendulum (or a door) hangs from the world by a joint that moves: held still where it starts,
+    not a robot that falls when spawned free. A model whose own joints move is a robot."""
     wall = ("<model name='glass'><pose>2 0 0 0 0 0</pose><link name='l'><pose>0 0 1.1 0 0 0</pose>"
             "<inertial><mass>50</mass></inertial><collision name='c'><geometry><box><size>0.03 3 2.2</size>"
             f"</box></geometry></collision></link>{joint}</model>")
     world = load_world(str(world_file(tmp_path, wall)), tmp_path)
-    assert (world.plan.robot_models == ()) is scenery
-    assert any(b.name == "glass" for b in world.plan.bodies) is scenery
-    if scenery:
-        assert any("model(s) without joints that move are held fixed" in n and "glass" in n for n in world.notices)
+    assert (world.plan.robot_models == ("glass",)) is (kind == "robot")
+    assert any(b.name == "glass" for b in world.plan.bodies) is (kind != "robot")
+    said = " ".join(world.notices)
+    assert ("model(s) without joints that move are held fixed" in said) is (kind == "fixed")
+    assert ("1 model(s) hang from the world by a joint that moves" in said) is (kind == "anchored")
 
 
 CUBE = ([(x, y, z) for x in (0.0, 1.0) for y in (0.0, 1.0) for z in (0.0, 1.0)],
@@ -541,3 +547,21 @@ def test_a_link_held_by_two_joints_keeps_one_when_the_other_cannot_move(tmp_path
     assert f"joint '{dropped}' also holds link 'rack', which joint '{kept}' holds: it cannot move, so it is " \
         "left out" in " ".join(str(n) for n in expansion.notices)
     assert f'name="{dropped}"' not in expansion.text and f'name="{kept}"' in expansion.text
+
+
+def test_a_world_robot_without_wheels_is_named_as_the_worlds_in_the_error(tmp_path):
+    """The error named the bundled 'mobot' (the description a listed world robot does not give)."""
+    import yaml
+
+    arm = ("<model name='arm'><link name='l'><collision name='c'><geometry><box><size>0.2 0.2 0.2</size></box>"
+           "</geometry></collision></link><link name='flap'><pose>0 0 0.3 0 0 0</pose><collision name='c'><geometry>"
+           "<box><size>0.1 0.1 0.1</size></box></geometry></collision></link><joint name='j' type='revolute'>"
+           "<parent>l</parent><child>flap</child><axis><xyz>0 0 1</xyz><limit><lower>-1</lower><upper>1</upper>"
+           "</limit></axis></joint></model>")
+    path = world_file(tmp_path, "<include><uri>model://ground_plane</uri></include>" + arm)
+    robot = {"name": "arm", "commands": [{"at": 0.5, "linear": 0.1}]}
+    (tmp_path / "s.yaml").write_text(yaml.safe_dump({"version": 1, "name": "s", "world": str(path), "duration": 2,
+                                                     "robots": [robot]}))
+    done = invoke(["check", tmp_path / "s.yaml"])
+    assert done.exit_code == 2 and "robot 'arm' has commands but no drive wheels were detected in world model 'arm'" \
+        in done.stderr

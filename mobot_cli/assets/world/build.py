@@ -40,6 +40,7 @@ class _Builder:
         self.lo = np.full(3, math.inf)
         self.hi = np.full(3, -math.inf)
         self.held_fixed: list[str] = []
+        self.anchored: list[str] = []  # models hung from the world by a joint that moves, held still
         self.skipped: list[str] = []
 
     def model(self, model: Model) -> None:
@@ -51,11 +52,13 @@ class _Builder:
                              "typo", model.location)
             self.skipped.append(model.name)
             return
-        if not model.static and any(joint.moves for joint in model.joints):
+        moving = [joint for joint in model.joints if joint.moves]
+        if not model.static and moving and not any(joint.parent == "world" for joint in moving):
             self.robot(model)
             return
-        if not model.static:  # nothing in it can move: a wall hung from `world` is scenery
-            self.held_fixed.append(model.name)
+        if not model.static:  # nothing in it moves (a wall hung from `world`), or it hangs from the
+            # world by a joint that moves (a door on its hinge): scenery, held where it starts
+            (self.anchored if moving else self.held_fixed).append(model.name)
         self.static_models.append(model.name)
         self.static(model)
 
@@ -180,6 +183,11 @@ def build_world(path: Path, resolver: ResourceResolver,
         left = sorted(kind for kind in world.ignored if kind.endswith(" geometry"))  # a heightmap floor
         notices.append(f"{path.name} has no collision geometry and no ground plane: robots have "
                        "nothing to stand on" + (f" ({', '.join(left)} left out)" if left else ""))
+    if builder.anchored:
+        notices.append(f"{path.name}: {len(builder.anchored)} model(s) hang from the world by a joint that moves "
+                       f"(a door on its hinge, a pendulum) and are held still where they start, as mobot's worlds "
+                       f"are static: {', '.join(builder.anchored[:5])}"
+                       + (", ..." if len(builder.anchored) > 5 else ""))
     if builder.held_fixed:
         notices.append(f"{path.name}: {len(builder.held_fixed)} non-static model(s) without joints that "
                        f"move are held fixed, as the world is static: {', '.join(builder.held_fixed[:5])}"
