@@ -135,11 +135,12 @@ class Latest:
 
 def robot_plan(name: str, description: str, *, rate_hz: int = 240, x: float = 0.0, y: float = 0.0,
                z: float | None = None, yaw: float = 0.0, args: Mapping[str, str] | None = None,
-               namespace: str | None = None, base_dir: Path | None = None) -> RobotPlan:
-    """A robot resolved as a live spawn resolves it (description expanded, drive and sensors found)."""
+               namespace: str | None = None, base_dir: Path | None = None, hold=None) -> RobotPlan:
+    """A robot resolved as a live spawn resolves it (description expanded, drive and sensors found);
+    ``hold``: "all" or {joint: position}, as a scenario's robot's ``hold:``."""
     pose = {"x": x, "y": y, "yaw": yaw, "z": "auto" if z is None else z}
     try:
-        spec = RobotSpec(name=name, description=description, args=dict(args or {}), pose=pose,
+        spec = RobotSpec(name=name, description=description, args=dict(args or {}), pose=pose, hold=hold,
                          **({"namespace": namespace} if namespace is not None else {}))
     except ValidationError as exc:
         first = exc.errors()[0]

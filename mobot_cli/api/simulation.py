@@ -189,11 +189,13 @@ class Simulation:
             self._goals[record.robot] = record
 
     def spawn(self, name: str, description: str, *, x: float = 0.0, y: float = 0.0, z: float | None = None,
-              yaw: float = 0.0, args: Mapping[str, str] | None = None, namespace: str | None = None) -> None:
-        """Place a robot now (bundled name or .urdf/.xacro path), resting on the floor unless ``z``."""
+              yaw: float = 0.0, args: Mapping[str, str] | None = None, namespace: str | None = None,
+              hold=None) -> None:
+        """Place a robot now (bundled name or .urdf/.xacro path), resting on the floor unless ``z``;
+        ``hold``: "all" or {joint: position} holds joints its description leaves free (an arm)."""
         self._open()
         plan = robot_plan(name, description, rate_hz=self.rate_hz, x=x, y=y, z=z, yaw=yaw, args=args,
-                          namespace=namespace, base_dir=self._base_dir)
+                          namespace=namespace, base_dir=self._base_dir, hold=hold)
         self._timeline.spawn(dataclasses.replace(plan, spawn_step=self.step_count), "request")
 
     def spawn_plan(self, plan: RobotPlan) -> None:

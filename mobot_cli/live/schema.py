@@ -21,7 +21,7 @@ from mobot_cli.scenario.limits import (
     at_most,
 )
 from mobot_cli.scenario.limits import Speed as LinearSpeed
-from mobot_cli.scenario.model import NAME_RE, NAMESPACE_RE, PoseSpec
+from mobot_cli.scenario.model import NAME_RE, NAMESPACE_RE, HoldField, PoseSpec
 from mobot_cli.scenario.mover_model import MoverSpec
 
 MAX_NAME = 256
@@ -108,6 +108,7 @@ class Spawn(Request):
     reference_frame: Optional[str] = None  # a robot's name; None, "" or "world": the world
     allow_renaming: bool = False
     base_dir: Optional[str] = None  # the client's folder: relative paths resolve against it
+    hold: HoldField = None  # joints held as a scenario's robot holds them (docs/scenarios.md)
 
 
 class Pause(Request):

@@ -61,7 +61,8 @@ def load_plan(request: Spawn, rate_hz: int, bounds: tuple[int, int] | None = Non
     else:
         roots.append(_package_of(_check_format(description, base_dir)))
     roots.extend(ResourceResolver(base_dir).roots)
-    spec = RobotSpec(name=request.name, description=description, args=request.args, pose=request.pose)
+    spec = RobotSpec(name=request.name, description=description, args=request.args, pose=request.pose,
+                     hold=request.hold)
     resolver = RobotResolver(rate_hz, 0, NO_END, base_dir=base_dir)
     try:
         with sandbox.confined(roots, files):

@@ -174,6 +174,12 @@ class CommandSpec(GoalFields):
         return self
 
 
+# Joints a position controller holds, as a vendor's plugin does in Gazebo (an arm): "all" holds every
+# joint the description leaves free where it starts (0), {joint: position} the ones named. A
+# scenario's robot, a live spawn and the Python API's spawn take it.
+HoldField = Union[Literal["all"], dict[str, Annotated[Float, Field(ge=-1000, le=1000)]], None]
+
+
 class RobotSpec(Strict):
     name: str
     namespace: Optional[str] = None
@@ -183,9 +189,7 @@ class RobotSpec(Strict):
     args: dict[str, Union[str, bool, int, float]] = {}
     pose: PoseSpec = PoseSpec.model_construct()  # all defaults (see Scenario.physics)
     drive: Optional[DriveOverrides] = None
-    # joints a position controller holds, as a vendor's plugin does in Gazebo (an arm): "all" holds
-    # every joint its description leaves free where it starts (0), {joint: position} the ones named
-    hold: Union[Literal["all"], dict[str, Annotated[Float, Field(ge=-1000, le=1000)]], None] = None
+    hold: HoldField = None  # see HoldField
     sensors: dict[SensorKey, SensorEntry] = {}  # see sensor_model.py
     commands: list[CommandSpec] = []
     count: Optional[Annotated[Int, Field(ge=1, le=1000)]] = None

@@ -495,3 +495,21 @@ def test_trimesh_tracebacks_stay_out_of_a_users_terminal(tmp_path, caplog, monke
     assert not caplog.records
     logging.getLogger("trimesh.exchange.dae").error("after the load: said")
     assert [r.getMessage() for r in caplog.records] == ["after the load: said"]
+
+
+@pytest.mark.parametrize("hold", [None, "all"])
+def test_the_python_apis_spawn_takes_hold(tmp_path, hold):
+    """Simulation.spawn(hold=...) as a scenario's hold: free, the mast robot's pole pulls it over
+    (the run's fault); held, it stands."""
+    from mobot_cli.api import Simulation
+    from mobot_cli.errors import SimulationFault
+
+    (tmp_path / "mast.urdf").write_text(mast_robot())
+    with Simulation.open("empty") as sim:
+        sim.spawn("r", str(tmp_path / "mast.urdf"), hold=hold)
+        if hold is None:
+            with pytest.raises(SimulationFault, match="tipped over"):
+                sim.run_for(3.0)
+            return
+        sim.run_for(3.0)
+        assert abs(sim.state("r").true_roll) < math.radians(2.0)

@@ -6,6 +6,7 @@ import json
 import math
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -281,3 +282,22 @@ def test_cmd_linear_y_moves_a_mecanum_base_and_a_diff_robot_refuses_it(mobot):
                           "sideways (linear_y 0.1 m/s)")
     code, out, _ = mobot("odom", "sideless", "--json")
     assert json.loads(out)["cmd"] == {"linear": 0.0, "angular": 0.0}  # refused: nothing changed
+
+
+def test_a_live_spawn_holds_joints_as_a_scenario_robot_does(live, tmp_path):
+    """`hold` in a spawn request, as a scenario's robot's hold: the mast robot's pole stays up (free,
+    it falls aside and pulls the robot over: tests/assets/test_unseen_robots.py); a name that is no
+    joint is refused, naming the closest."""
+    from tests.assets.test_unseen_robots import mast_robot
+
+    path = tmp_path / "mast.urdf"
+    path.write_text(mast_robot())
+    with live.client() as client:
+        client.spawn("mast_held", description=str(path), pose={"x": 30.0, "y": 30.0}, hold="all")
+        started = client.odom("mast_held")["t"]
+        while client.odom("mast_held")["t"] < started + 2.0:  # --fast: two simulated seconds
+            time.sleep(0.05)
+        truth = client.odom("mast_held")["truth"]
+        assert abs(truth["roll"]) < math.radians(2.0) and abs(truth["pitch"]) < math.radians(2.0)
+        with pytest.raises(Exception, match="hold names 'rol_joint'.*Did you mean 'roll_joint'"):
+            client.spawn("mast_bad", description=str(path), pose={"x": 33.0, "y": 30.0}, hold={"rol_joint": 0})
