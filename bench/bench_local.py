@@ -37,7 +37,8 @@ from mobot_cli.plan import GoalControl, GoalStep  # noqa: E402
 from mobot_cli.run import execute  # noqa: E402
 from mobot_cli.scenario.prepare import prepare  # noqa: E402
 from mobot_cli.timeline.goals import Driver  # noqa: E402
-from mobot_cli.timeline.local import Cloud, Dwb  # noqa: E402
+from mobot_cli.timeline.local import Dwb  # noqa: E402
+from mobot_cli.timeline.scan_points import Cloud  # noqa: E402
 
 
 def with_local(plan):

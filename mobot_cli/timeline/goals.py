@@ -230,14 +230,15 @@ class Driver:
         """A lidar reading of this robot (the timeline hands every one over while ``sees``)."""
         if sensor.kind != "lidar":
             return
-        from mobot_cli.timeline.local import level_points
+        from mobot_cli.timeline.scan_points import level_points
 
         self.scans[sensor.name] = level_points(data)
         self.cloud = None  # joined again at the next tick
 
     def _avoid(self, pose: PlanarPose, state: RobotState) -> tuple[float, float]:
         """The local controller's twist: lidar points and the route ahead in the robot's frame."""
-        from mobot_cli.timeline.local import WAVE_REACH, Cloud, joined, path_in_frame
+        from mobot_cli.timeline.scan_points import Cloud, joined, path_in_frame
+        from mobot_cli.timeline.wavefront import WAVE_REACH
 
         if self.cloud is None:
             self.cloud = Cloud(joined(list(self.scans.values())))
