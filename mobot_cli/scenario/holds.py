@@ -23,7 +23,8 @@ def resolve_holds(spec: RobotSpec, desc: RobotDescription, drive: DriveSpec | No
         return desc.holds
     holds, unknown, free, holdable = asked_holds(desc.urdf, drive, desc.holds, spec.hold, desc.bottom_z)
     if unknown:
-        raise ScenarioError(f"hold names {', '.join(repr(n) for n in unknown)}: no joint of "
+        shown = ", ".join(repr(n) for n in unknown[:5]) + (f" and {len(unknown) - 5} more" if len(unknown) > 5 else "")
+        raise ScenarioError(f"hold names {shown}: no joint of "
                             f"'{spec.description}' a position controller can hold", location=where,
                             hint=f"{did_you_mean(unknown[0], holdable)} Name revolute, continuous or prismatic "
                                  "joints that are not drive wheels (mobot inspect lists the joints), or give "
